@@ -1,0 +1,28 @@
+"""Errors that reach the user as one line, and the warning categories acid emits."""
+
+from __future__ import annotations
+
+
+class AcidError(Exception):
+    """A user-facing error: its message is printed as one line and the CLI exits non-zero.
+
+    The message should name the file, channel or option at fault.
+    """
+
+    exit_code = 2
+
+
+class DataError(AcidError):
+    """A dataset or parameter file is missing, malformed or physically implausible."""
+
+
+class ConfigError(AcidError):
+    """A configuration (plant, excitation, controller) is invalid."""
+
+
+class IdentifiabilityWarning(UserWarning):
+    """The data do not excite a parameter (rank deficiency or severe ill-conditioning)."""
+
+
+class SolverWarning(UserWarning):
+    """A numerical solver failed or returned an inaccurate solution; a fallback was used."""

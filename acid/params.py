@@ -1,0 +1,187 @@
+"""Parameters of the control-oriented model (paper eqs. 1-5) as a named, unit-carrying table.
+
+gamma1..gamma7 and tau1..tau3 parameterise eqs. 1-3 with **temperatures in kelvin** and W_bl
+in kg/s at Ts = 5 s; beta1..beta3 the blower power curve (eq. 5, W with W_bl in kg/s).
+``paper()`` is the set identified from CoolSim in the paper (section II-B-2 and eq. 5).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from acid._io import write_json
+from acid.errors import DataError
+
+UNITS_CONVENTION = (
+    "temperatures in kelvin, W_bl in kg/s, Ts = 5 s; "
+    "gamma1,2 [1], gamma3 [s/kg], gamma4,5 [1], gamma6 [1], gamma7 [K s/kg], "
+    "tau1,2,3 [K]; beta1 [W s^2/kg^2], beta2 [W s/kg], beta3 [W]"
+)
+
+#: (name, unit, meaning) of every parameter, in the order of the vectors.
+PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
+    ("gamma1", "1", "cabin air <- interior conductance per step (eq. 1)"),
+    ("gamma2", "1", "cabin air <- shell conductance per step (eq. 1)"),
+    ("gamma3", "s/kg", "cabin air <- inlet air, per unit blower flow (eq. 1)"),
+    ("gamma4", "1", "evaporator wall memory (eq. 2)"),
+    ("gamma5", "1", "evaporator wall <- set-point error gain (eq. 2)"),
+    ("gamma6", "1", "inlet air <- evaporator wall (eq. 3)"),
+    ("gamma7", "K s/kg", "inlet air <- blower flow (eq. 3)"),
+    ("tau1", "K", "cabin air offset (eq. 1)"),
+    ("tau2", "K", "evaporator wall offset (eq. 2)"),
+    ("tau3", "K", "inlet air offset (eq. 3)"),
+    ("beta1", "W s^2/kg^2", "blower power, quadratic (eq. 5)"),
+    ("beta2", "W s/kg", "blower power, linear (eq. 5)"),
+    ("beta3", "W", "blower power, constant (eq. 5)"),
+)
+
+PAPER_GAMMA = (0.2451, 0.0867, 1.2999, 1.0047, -0.5176, 0.4553, 34.9579)
+PAPER_TAU = (-0.1842, -1.3226, 154.4995)
+PAPER_BETA = (24156.0, -1974.2, 49.318)
+
+
+@dataclass(frozen=True)
+class ModelParams:
+    """Parameters of eqs. 1-5.
+
+    Attributes
+    ----------
+    gamma : tuple of 7 floats (units in ``PARAMETER_TABLE``), kelvin convention.
+    tau : tuple of 3 floats, K.
+    beta : tuple of 3 floats, blower power coefficients (W, W_bl in kg/s).
+    c_p : specific heat of air, J/(kg K) (Table II: 1008).
+    eta_cop : COP used by the compressor power model eq. 4 (Table II: 3.5).
+    Ts : sample time, s.
+    name : a label for tables and figures.
+    provenance : where the values came from (data file, method, ...).
+    """
+
+    gamma: tuple[float, ...]
+    tau: tuple[float, ...]
+    beta: tuple[float, ...] = PAPER_BETA
+    c_p: float = 1008.0
+    eta_cop: float = 3.5
+    Ts: float = 5.0
+    name: str = "custom"
+    provenance: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        for attr, n in (("gamma", 7), ("tau", 3), ("beta", 3)):
+            vals = tuple(float(v) for v in getattr(self, attr))
+            if len(vals) != n:
+                raise DataError(f"parameter {attr!r} needs {n} numbers, got {len(vals)}")
+            if not all(math.isfinite(v) for v in vals):
+                raise DataError(f"parameter {attr!r} has a non-finite value: {vals}")
+            object.__setattr__(self, attr, vals)
+        for attr in ("c_p", "eta_cop", "Ts"):
+            v = float(getattr(self, attr))
+            if not (math.isfinite(v) and v > 0):
+                raise DataError(f"parameter {attr!r} must be a positive number, got {v}")
+            object.__setattr__(self, attr, v)
+
+    # ------------------------------------------------------------------ views
+    @property
+    def theta(self) -> np.ndarray:
+        """All 13 parameters as one vector, in ``PARAMETER_TABLE`` order."""
+        return np.array(self.gamma + self.tau + self.beta)
+
+    def as_dict(self) -> dict[str, float]:
+        """{name: value} for the 13 parameters."""
+        return {row[0]: float(v) for row, v in zip(PARAMETER_TABLE, self.theta, strict=True)}
+
+    def replace(self, **changes) -> ModelParams:
+        """A copy with some fields changed (frozen dataclass helper)."""
+        return dataclasses.replace(self, **changes)
+
+    def perturbed(self, rel: float, rng: np.random.Generator) -> ModelParams:
+        """A copy with every gamma/tau scaled by (1 + rel * N(0, 1)); for mismatch studies."""
+        g = np.array(self.gamma) * (1 + rel * rng.standard_normal(7))
+        t = np.array(self.tau) * (1 + rel * rng.standard_normal(3))
+        return self.replace(gamma=tuple(g), tau=tuple(t), name=f"{self.name}-perturbed")
+
+    # ------------------------------------------------------------------- I/O
+    def to_json_dict(self) -> dict:
+        return {
+            "name": self.name,
+            "gamma": list(self.gamma),
+            "tau": list(self.tau),
+            "beta": list(self.beta),
+            "c_p": self.c_p,
+            "eta_cop": self.eta_cop,
+            "Ts": self.Ts,
+            "units": UNITS_CONVENTION,
+            "provenance": self.provenance,
+        }
+
+    def to_json(self, path: str | Path, extra: dict | None = None) -> Path:
+        """Write ``params.json`` atomically; ``extra`` adds keys (e.g. the fit report)."""
+        d = self.to_json_dict()
+        if extra:
+            d.update(extra)
+        return write_json(path, d)
+
+    @classmethod
+    def from_json_dict(cls, d: dict, source: str = "params") -> ModelParams:
+        if not isinstance(d, dict):
+            raise DataError(f"{source}: expected a JSON object with gamma, tau, beta")
+        for key in ("gamma", "tau"):
+            if key not in d:
+                raise DataError(f"{source}: missing key {key!r}")
+        units = d.get("units", UNITS_CONVENTION)
+        if isinstance(units, str) and "celsius" in units.lower():
+            raise DataError(f"{source}: parameters in a Celsius convention are not supported "
+                            "(acid's gamma/tau are in kelvin)")
+        try:
+            return cls(
+                gamma=tuple(d["gamma"]),
+                tau=tuple(d["tau"]),
+                beta=tuple(d.get("beta", PAPER_BETA)),
+                c_p=d.get("c_p", 1008.0),
+                eta_cop=d.get("eta_cop", 3.5),
+                Ts=d.get("Ts", 5.0),
+                name=str(d.get("name", Path(source).stem)),
+                provenance=d.get("provenance", {}) or {},
+            )
+        except DataError as exc:
+            raise DataError(f"{source}: {exc}") from None
+        except (TypeError, ValueError) as exc:
+            raise DataError(f"{source}: malformed parameter values ({exc})") from None
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> ModelParams:
+        """Read and validate a ``params.json`` (one-line ``DataError`` on any problem)."""
+        path = Path(path)
+        if not path.is_file():
+            raise DataError(f"{path}: parameter file not found")
+        try:
+            d = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise DataError(f"{path}: not valid JSON ({exc.__class__.__name__}: {exc})") from None
+        return cls.from_json_dict(d, source=str(path))
+
+
+def paper() -> ModelParams:
+    """The paper's identified parameters (section II-B-2, eq. 5 and Table II), kelvin convention."""
+    return ModelParams(
+        gamma=PAPER_GAMMA,
+        tau=PAPER_TAU,
+        beta=PAPER_BETA,
+        c_p=1008.0,
+        eta_cop=3.5,
+        Ts=5.0,
+        name="paper",
+        provenance={"source": "Wang et al., ACC 2018, section II-B-2, eq. 5, Table II"},
+    )
+
+
+def load_params(spec: str | Path | None) -> ModelParams:
+    """``None`` or ``"paper"`` gives the paper preset; anything else is a params.json path."""
+    if spec is None or str(spec) == "paper":
+        return paper()
+    return ModelParams.from_json(spec)

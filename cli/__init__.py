@@ -1,0 +1,1 @@
+"""acid's command-line interface: a thin Typer layer over the ``acid`` library."""
