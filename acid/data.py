@@ -404,10 +404,15 @@ class ChannelMap:
     def from_dict(cls, d: dict, source: str = "channel map") -> ChannelMap:
         if "time" not in d or "channels" not in d:
             raise DataError(f"{source}: needs 'time' and a [channels] table")
+        if not isinstance(d["channels"], Mapping):
+            raise DataError(f"{source}: [channels] must be a table of channel = column entries")
         chans = {}
         for name, spec in d["channels"].items():
             if isinstance(spec, str):
                 spec = {"column": spec}
+            if not isinstance(spec, Mapping):
+                raise DataError(f"{source}: channel {name!r} must be a column name or "
+                                f"{{ column = ..., unit = ... }}, got {spec!r}")
             col = spec.get("column")
             unit = spec.get("unit", CHANNELS[name].unit if name in CHANNELS else None)
             if col is None or unit is None:
@@ -446,6 +451,15 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
     return Dataset(time=time, channels=chans, units=units, Ts=Ts, metadata=meta, source=source)
 
 
+def _to_degC(ds: Dataset) -> Dataset:
+    """Store temperatures in degC (the layout's convention) once they passed validation."""
+    for name, unit in list(ds.units.items()):
+        if unit == "K":
+            ds.channels[name] = convert(ds.channels[name], "K", "degC")
+            ds.units[name] = "degC"
+    return ds
+
+
 def from_csv(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
     """Import a CSV file (header row of column names) through an explicit channel map."""
     import pandas as pd
@@ -463,7 +477,7 @@ def from_csv(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
             cols[str(c).strip()] = pd.to_numeric(df[c], errors="raise").to_numpy(dtype=float)
         except (ValueError, TypeError):
             continue  # non-numeric columns are only an error if the map asks for them
-    return _assemble(cols, cmap, str(path), {"imported_from": "csv"}).validate()
+    return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "csv"}).validate())
 
 
 def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
@@ -505,4 +519,4 @@ def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
                     cols[key] = np.asarray(f[h5key][()], dtype=float).ravel()
     except (ValueError, OSError) as exc:
         raise DataError(f"{path}: cannot read as a MAT file ({exc})") from None
-    return _assemble(cols, cmap, str(path), {"imported_from": "mat"}).validate()
+    return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "mat"}).validate())

@@ -1,0 +1,211 @@
+"""Random excitation of a plant into an identification dataset (paper section II-B-2).
+
+``ExcitationSpec`` says what to do (signals, Table II bounds in degC, dwell times, duration,
+seed, speed profile, T_int/T_shell variation for the model plant); ``make_schedule`` turns it
+into an ``InputSchedule`` (kelvin inside), deterministically from the seed; ``excite`` runs a
+plant through it and returns a ``Dataset`` whose metadata carries the spec, the seed, the plant
+and its configuration.
+
+Randomness: one ``numpy.random.SeedSequence(seed)`` with a fixed child stream per signal
+(``STREAMS``), so adding or changing one signal never changes the others.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from acid import signals
+from acid.data import Dataset
+from acid.errors import ConfigError
+from acid.plant.base import InputSchedule, Plant
+from acid.units import C2K
+
+SIGNAL_TYPES = ("aprbs", "prbs", "multisine")
+
+#: Fixed child-stream index of every random source (never renumber; append new ones).
+STREAMS = {"W_bl": 0, "T_evap_set": 1, "T_int": 2, "T_shell": 3, "noise": 4}
+
+#: Table II input bounds.
+W_BL_BOUNDS = (0.05, 0.15)          # kg/s
+T_EVAP_SET_BOUNDS_C = (3.0, 10.0)   # degC
+
+
+@dataclass(frozen=True)
+class ExcitationSpec:
+    """How to excite a plant. Temperatures in degC (the edge); converted to K inside.
+
+    Attributes
+    ----------
+    signal : generator for both inputs, one of ``SIGNAL_TYPES``; ``signal_T_evap_set``
+        overrides it for the set-point when given.
+    W_bl_bounds : (low, high) blower flow, kg/s (Table II: 0.05-0.15).
+    T_evap_set_bounds : (low, high) evaporator set-point, degC (Table II: 3-10).
+    min_dwell, max_dwell : APRBS dwell range, s. The defaults (20-300 s) mix steps shorter
+        than the evaporator/cabin time constants (~10-30 s) with holds long enough to settle.
+    levels : APRBS level count (``None``: continuous uniform levels).
+    prbs_dwell : PRBS clock period, s.
+    band : multisine band (f_lo, f_hi), Hz (Nyquist at Ts = 5 s is 0.1 Hz).
+    n_sines : number of multisine components.
+    duration : record length, s (rounded to whole samples).
+    Ts : sample time, s (paper: 0.2 Hz).
+    seed : seed of every random stream.
+    speed : constant vehicle speed, m/s (ignored when ``cycle`` is given).
+    cycle : drive-cycle name from ``datasets/drive_cycles`` (repeated to fill the record).
+    vary_exogenous : vary T_int and T_shell (model plant only; the high-fidelity plant
+        computes its own) so that gamma1 and gamma2 are identifiable.
+    T_int_bounds, T_shell_bounds : their ranges, degC (the shell is hotter on average).
+    exogenous_dwell : (min, max) dwell of their underlying steps, s.
+    exogenous_time_constant : their first-order lag, s.
+    noise : measurement noise standard deviation on recorded temperatures, K (applied by
+        the plant; recorded here for provenance).
+    """
+
+    signal: str = "aprbs"
+    signal_T_evap_set: str | None = None
+    W_bl_bounds: tuple[float, float] = W_BL_BOUNDS
+    T_evap_set_bounds: tuple[float, float] = T_EVAP_SET_BOUNDS_C
+    min_dwell: float = 20.0
+    max_dwell: float = 300.0
+    levels: int | None = None
+    prbs_dwell: float = 30.0
+    band: tuple[float, float] = (1 / 1800, 1 / 40)
+    n_sines: int = 24
+    duration: float = 7200.0
+    Ts: float = 5.0
+    seed: int = 0
+    speed: float = 0.0
+    cycle: str | None = None
+    vary_exogenous: bool = True
+    T_int_bounds: tuple[float, float] = (25.0, 45.0)
+    T_shell_bounds: tuple[float, float] = (30.0, 50.0)
+    exogenous_dwell: tuple[float, float] = (600.0, 1800.0)
+    exogenous_time_constant: float = 600.0
+    noise: float = 0.0
+
+    def __post_init__(self):
+        for name in ("signal", "signal_T_evap_set"):
+            value = getattr(self, name)
+            if value is not None and value not in SIGNAL_TYPES:
+                raise ConfigError(f"--signal: unknown signal {value!r} "
+                                  f"(choose {', '.join(SIGNAL_TYPES)})")
+        if not (math.isfinite(self.duration) and self.duration > 0):
+            raise ConfigError(f"--duration must be a positive number of seconds, "
+                              f"got {self.duration}")
+        if not self.Ts > 0:
+            raise ConfigError(f"sample time must be positive, got {self.Ts}")
+        if self.n_samples < 2:
+            raise ConfigError(f"--duration {self.duration:g} s gives {self.n_samples} samples "
+                              f"at Ts = {self.Ts:g} s; at least 2 are needed")
+        if not 0 < self.min_dwell <= self.max_dwell:
+            raise ConfigError(f"dwell times must satisfy 0 < min <= max, "
+                              f"got {self.min_dwell:g} .. {self.max_dwell:g} s")
+        if not (math.isfinite(self.noise) and self.noise >= 0):
+            raise ConfigError(f"--noise must be >= 0 K, got {self.noise}")
+        if not (math.isfinite(self.speed) and self.speed >= 0):
+            raise ConfigError(f"--speed must be >= 0 m/s, got {self.speed}")
+        if int(self.seed) < 0:
+            raise ConfigError(f"--seed must be >= 0, got {self.seed}")
+        for name in ("W_bl_bounds", "T_evap_set_bounds", "T_int_bounds", "T_shell_bounds"):
+            lo, hi = getattr(self, name)
+            if not lo < hi:
+                raise ConfigError(f"{name} must satisfy low < high, got ({lo}, {hi})")
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples of the record."""
+        return int(round(self.duration / self.Ts))
+
+    def replace(self, **changes) -> ExcitationSpec:
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable fields (tuples become lists), with units in the key names' doc."""
+        d = dataclasses.asdict(self)
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+
+    def rng(self, stream: str) -> np.random.Generator:
+        """The independent random generator of one named stream (see ``STREAMS``)."""
+        return np.random.default_rng(
+            np.random.SeedSequence(int(self.seed), spawn_key=(STREAMS[stream],)))
+
+
+def _input_signal(kind: str, rng: np.random.Generator, spec: ExcitationSpec, low: float,
+                  high: float) -> tuple[np.ndarray, dict]:
+    n, Ts = spec.n_samples, spec.Ts
+    if kind == "aprbs":
+        lo_d = max(1, int(round(spec.min_dwell / Ts)))
+        hi_d = max(lo_d, int(round(spec.max_dwell / Ts)))
+        return signals.aprbs(rng, n, low, high, lo_d, hi_d, levels=spec.levels)
+    if kind == "prbs":
+        return signals.prbs(rng, n, low, high, max(1, int(round(spec.prbs_dwell / Ts))))
+    return signals.multisine(rng, n, Ts, low, high, band=spec.band, n_sines=spec.n_sines,
+                             phases="random")
+
+
+def make_schedule(spec: ExcitationSpec) -> InputSchedule:
+    """The input schedule of ``spec`` (W_bl in kg/s, temperatures in K), reproducible.
+
+    ``schedule.spec`` records the excitation settings and each generator's own spec; it
+    becomes the dataset's ``metadata["excitation"]``.
+    """
+    n, Ts = spec.n_samples, spec.Ts
+    W_bl, W_spec = _input_signal(spec.signal, spec.rng("W_bl"), spec, *spec.W_bl_bounds)
+    lo, hi = (C2K(t) for t in spec.T_evap_set_bounds)
+    T_set, T_spec = _input_signal(spec.signal_T_evap_set or spec.signal,
+                                  spec.rng("T_evap_set"), spec, lo, hi)
+    if spec.cycle is not None:
+        v, v_spec = signals.drive_cycle(spec.cycle, n=n, Ts=Ts, repeat=True)
+    else:
+        v, v_spec = signals.constant_speed(n, Ts, spec.speed)
+    T_int = T_shell = None
+    generators = {"W_bl": W_spec, "T_evap_set": {**T_spec, "unit": "K"}, "v_veh": v_spec}
+    if spec.vary_exogenous:
+        kw = {"dwell_s": spec.exogenous_dwell, "time_constant_s": spec.exogenous_time_constant}
+        T_int, generators["T_int"] = signals.slow_exogenous(
+            spec.rng("T_int"), n, Ts, *(C2K(t) for t in spec.T_int_bounds), **kw)
+        T_shell, generators["T_shell"] = signals.slow_exogenous(
+            spec.rng("T_shell"), n, Ts, *(C2K(t) for t in spec.T_shell_bounds), **kw)
+    record = {**spec.to_dict(), "n_samples": n, "units": _SPEC_UNITS,
+              "generators": generators}
+    return InputSchedule(W_bl=W_bl, T_evap_set=T_set, v_veh=v, Ts=Ts, T_int=T_int,
+                         T_shell=T_shell, spec=record)
+
+
+_SPEC_UNITS = {"W_bl_bounds": "kg/s", "T_evap_set_bounds": "degC", "min_dwell": "s",
+               "max_dwell": "s", "prbs_dwell": "s", "band": "Hz", "duration": "s", "Ts": "s",
+               "speed": "m/s", "T_int_bounds": "degC", "T_shell_bounds": "degC",
+               "exogenous_dwell": "s", "exogenous_time_constant": "s", "noise": "K"}
+
+
+def uses_exogenous_schedule(plant: Plant) -> bool:
+    """Whether the plant takes T_int / T_shell from the schedule (only the model plant)."""
+    return getattr(plant, "name", "") == "model"
+
+
+def excite(plant: Plant, spec: ExcitationSpec,
+           progress: Callable[[int, int], None] | None = None) -> Dataset:
+    """Run ``plant`` through the schedule of ``spec`` and return the dataset (degC storage).
+
+    On the model plant with ``spec.vary_exogenous`` the T_int/T_shell schedules drive it and
+    its initial T_int/T_shell are their first values; other plants compute their own.
+    ``progress(done, total)`` is called after every sample.
+    """
+    if abs(plant.Ts - spec.Ts) > 1e-9:
+        raise ConfigError(f"excitation sample time {spec.Ts:g} s differs from the plant's "
+                          f"{plant.Ts:g} s")
+    schedule = make_schedule(spec)
+    initial = None
+    if uses_exogenous_schedule(plant):
+        if schedule.T_int is not None:
+            initial = {"T_int": float(schedule.T_int[0]), "T_shell": float(schedule.T_shell[0])}
+    else:
+        schedule.T_int = schedule.T_shell = None
+        schedule.spec["exogenous"] = "computed by the plant"
+    return plant.simulate(schedule, initial=initial, progress=progress,
+                          metadata={"seed": int(spec.seed)})

@@ -1,0 +1,1 @@
+"""Figures and reports drawn from result objects (no computation here)."""

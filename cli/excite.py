@@ -1,0 +1,118 @@
+"""``acid excite``: random excitation of a plant into an HDF5 identification dataset."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import typer
+
+from acid.data import Dataset
+from acid.errors import ConfigError
+from acid.excite import SIGNAL_TYPES, ExcitationSpec
+from acid.excite import excite as run_excitation
+from acid.units import C2K
+from acid_cli._common import handle_errors, print_table, progress_bar, write_summary
+
+PLANTS = ("hifi", "model")
+
+
+def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
+                plant_config: Path | None, T_amb: float | None):
+    """The plant chosen by ``--plant``, with the spec's noise and the noise stream's seed.
+
+    A plant that is not available in this installation (``--plant hifi`` before the
+    high-fidelity modules exist, or without their dependencies) is a one-line ``ConfigError``.
+    """
+    from acid.plant import make_plant
+
+    if name not in PLANTS:
+        raise ConfigError(f"--plant: unknown plant {name!r} (choose {' or '.join(PLANTS)})")
+    if name == "hifi" and params is not None:
+        raise ConfigError("--params applies to --plant model only (the high-fidelity plant "
+                          "is configured with --plant-config)")
+    if name == "model" and plant_config is not None:
+        raise ConfigError("--plant-config applies to --plant hifi only (the model plant "
+                          "takes --params)")
+    if plant_config is not None and not Path(plant_config).is_file():
+        raise ConfigError(f"--plant-config: file not found: {plant_config}")
+    model_params = None
+    if name == "model":
+        from acid.params import load_params
+
+        model_params = load_params(params)
+    try:
+        return make_plant(name, config_path=plant_config, params=model_params,
+                          meas_noise_std=spec.noise, rng=spec.rng("noise"),
+                          T_amb=None if T_amb is None else C2K(T_amb))
+    except ImportError as exc:
+        raise ConfigError(f"--plant {name}: not available in this installation ({exc}); "
+                          f"use --plant model") from None
+
+
+def _summary_rows(ds: Dataset) -> list[list[str]]:
+    rows = []
+    for name, values in ds.channels.items():
+        rows.append([name, ds.units[name], f"{values.min():.3g}", f"{values.mean():.3g}",
+                     f"{values.max():.3g}"])
+    return rows
+
+
+@handle_errors
+def excite(
+    out: Path = typer.Option(..., "--out", "-o", help="HDF5 dataset to write (atomically)."),
+    plant: str = typer.Option("hifi", "--plant",
+                              help="Plant to excite: 'hifi' (high-fidelity) or 'model' "
+                                   "(paper eqs. 1-5)."),
+    duration: float = typer.Option(7200.0, "--duration", help="Record length, s."),
+    signal: str = typer.Option("aprbs", "--signal",
+                               help=f"Input signal: {', '.join(SIGNAL_TYPES)}."),
+    seed: int = typer.Option(0, "--seed", help="Seed of every random stream."),
+    speed: float = typer.Option(0.0, "--speed", help="Constant vehicle speed, m/s."),
+    cycle: str | None = typer.Option(None, "--cycle",
+                                     help="Drive cycle from datasets/drive_cycles (e.g. "
+                                          "udds), repeated to fill the record."),
+    min_dwell: float = typer.Option(20.0, "--min-dwell", help="APRBS minimum dwell, s."),
+    max_dwell: float = typer.Option(300.0, "--max-dwell", help="APRBS maximum dwell, s."),
+    noise: float = typer.Option(0.0, "--noise",
+                                help="Measurement noise std on recorded temperatures, K."),
+    params: Path | None = typer.Option(None, "--params",
+                                       help="params.json for --plant model (default: the "
+                                            "paper's values)."),
+    vary_exogenous: bool = typer.Option(True, "--vary-exogenous/--no-vary-exogenous",
+                                        help="Vary T_int/T_shell (model plant only)."),
+    plant_config: Path | None = typer.Option(None, "--plant-config",
+                                             help="TOML configuration of --plant hifi."),
+    t_amb: float | None = typer.Option(None, "--t-amb",
+                                       help="Ambient temperature, degC (default: the "
+                                            "plant's, 30 degC in Table II)."),
+    json_out: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+) -> None:
+    """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
+    if cycle is not None and speed != 0.0:
+        raise ConfigError("--speed and --cycle are exclusive (give one speed profile)")
+    spec = ExcitationSpec(signal=signal, duration=duration, seed=seed, speed=speed,
+                          cycle=cycle, min_dwell=min_dwell, max_dwell=max_dwell, noise=noise,
+                          vary_exogenous=vary_exogenous)
+    if cycle is not None:
+        from acid.signals import drive_cycle
+
+        drive_cycle(cycle, n=1, Ts=spec.Ts)  # unknown names fail before the plant is built
+    the_plant = build_plant(plant, spec, params, plant_config, t_amb)
+    t0 = time.perf_counter()
+    with progress_bar(f"exciting {plant} plant", spec.n_samples) as update:
+        ds = run_excitation(the_plant, spec, progress=update)
+    elapsed = time.perf_counter() - t0
+    ds.validate()
+    ds.to_hdf5(out)
+    print_table(f"{out}: {len(ds)} samples, {ds.duration:g} s at Ts = {ds.Ts:g} s, "
+                f"plant {plant}, seed {seed}",
+                ["channel", "unit", "min", "mean", "max"], _summary_rows(ds))
+    write_summary(json_out, {
+        "command": "excite", "out": str(out), "plant": plant, "samples": len(ds),
+        "duration_s": ds.duration, "Ts_s": ds.Ts, "seed": seed, "elapsed_s": elapsed,
+        "excitation": spec.to_dict(),
+        "ranges": {n: {"unit": ds.units[n], "min": float(np.min(v)), "max": float(np.max(v))}
+                   for n, v in ds.channels.items()},
+    })

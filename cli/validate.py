@@ -1,0 +1,121 @@
+"""``acid validate``: multi-start open-loop validation of the model (paper Figs. 5-6)."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import typer
+
+from acid import __version__
+from acid._io import file_sha256, save_figure
+from acid.data import MODEL_CHANNELS, Dataset
+from acid.params import load_params
+from acid.validate import validate as run_validation
+from acid_cli._common import console, handle_errors, print_table, write_summary
+
+
+def _default_held_out(provenance: dict, data_sha256: str) -> float | None:
+    """Held-out fraction implied by the fit's ``provenance.estimation_fraction``, if any.
+
+    ``None`` (the whole record) when the parameters were fitted on another file
+    (``provenance.data_sha256`` differs from this file's hash).
+    """
+    if not isinstance(provenance, dict):
+        return None
+    fitted_on = provenance.get("data_sha256")
+    if fitted_on is not None and fitted_on != data_sha256:
+        return None
+    frac = provenance.get("estimation_fraction")
+    try:
+        frac = float(frac)
+    except (TypeError, ValueError):
+        return None
+    return 1.0 - frac if math.isfinite(frac) and 0.0 < frac < 1.0 else None
+
+
+def _fmt(v: float, digits: int = 3) -> str:
+    return "n/a" if v is None or not math.isfinite(v) else f"{v:.{digits}f}"
+
+
+@handle_errors
+def validate(
+    data: Path = typer.Argument(..., help="Dataset (HDF5, from `acid excite` or `acid import`)."),
+    params: str = typer.Option("paper", "--params",
+                               help="params.json from `acid fit`, or 'paper' for the preset."),
+    starts: int = typer.Option(60, "--starts", help="Number of prediction start instants."),
+    horizon: int = typer.Option(300, "--horizon",
+                                help="Prediction steps per start (300 x 5 s = 1500 s)."),
+    exogenous: str = typer.Option(
+        "hold", "--exogenous",
+        help="T_int/T_shell over a prediction: 'hold' at the start value (paper) or "
+             "'measured'."),
+    held_out_fraction: float | None = typer.Option(
+        None, "--held-out-fraction",
+        help="Validate on the last F of the record only. Default: the part after "
+             "provenance.estimation_fraction of params.json when it was fitted on this "
+             "file, else the whole record."),
+    placement: str = typer.Option("even", "--placement",
+                                  help="Start instants 'even'ly spread or 'random'."),
+    seed: int = typer.Option(0, "--seed", help="Seed of --placement random."),
+    out: Path = typer.Option(Path("reports/validate"), "--out",
+                             help="Folder for the figures (fig5/fig6 PNG)."),
+    json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+) -> None:
+    """Predict open loop from many start instants and report the errors vs horizon.
+
+    Errors are in K; figures like the paper's Fig. 5 (one prediction) and Fig. 6 (errors of
+    all starts vs prediction time) go to --out.
+    """
+    from acid.report.validation import error_figure, prediction_figure
+
+    p = load_params(params)
+    ds = Dataset.from_hdf5(data, require=MODEL_CHANNELS)
+    data_sha256 = file_sha256(data)
+    fraction_source = "--held-out-fraction"
+    if held_out_fraction is None:
+        held_out_fraction = _default_held_out(p.provenance, data_sha256)
+        fraction_source = "params provenance" if held_out_fraction is not None else "whole record"
+
+    t0 = time.perf_counter()
+    result = run_validation(ds, p, starts=starts, horizon=horizon, exogenous=exogenous,
+                            held_out_fraction=held_out_fraction, placement=placement,
+                            seed=seed)
+    elapsed = time.perf_counter() - t0
+
+    lo, hi = result.settings["sample_range"]
+    console.print(f"{data}: {result.n_starts} starts x {result.horizon} steps "
+                  f"({result.horizon_s[-1]:g} s), samples {lo}..{hi - 1} ({fraction_source}), "
+                  f"T_int/T_shell {exogenous}, parameters {p.name!r} ({elapsed * 1e3:.0f} ms)")
+    rows = []
+    for name, m in result.metrics.items():
+        rows.append([name, _fmt(m["rmse"]), _fmt(m["mean_abs"]), _fmt(m["median_abs"]),
+                     _fmt(m["p90_abs"]), _fmt(m["p95_abs"]), _fmt(m["max_abs"]),
+                     _fmt(m["fit_percent"], 1), _fmt(m["fit_percent_pooled"], 1)])
+    print_table("Open-loop prediction error, all starts and steps: RMSE and |e| (K), fit (%)",
+                ["channel", "RMSE", "mean", "median", "p90", "p95", "max", "fit",
+                 "fit pooled"], rows)
+    hrows = [[f"{r['time_s']:g}"] + [f"{_fmt(r[c]['mean_abs'], 2)} / {_fmt(r[c]['p95_abs'], 2)}"
+                                     for c in result.channels]
+             for r in result.at_horizon()]
+    if hrows:
+        print_table("Error vs prediction time: mean / p95 of |e| over starts (K)",
+                    ["time (s)", *result.channels], hrows)
+
+    fig5 = save_figure(prediction_figure(result), out / "fig5_prediction.png")
+    fig6 = save_figure(error_figure(result), out / "fig6_errors.png")
+    console.print(f"figures written to {fig5} and {fig6}")
+
+    summary = {
+        "command": "validate",
+        "acid_version": __version__,
+        "inputs": {"data": str(data), "data_sha256": data_sha256,
+                   "params": params,
+                   "params_sha256": None if params == "paper" else file_sha256(params)},
+        "held_out_fraction_source": fraction_source,
+        "elapsed_s": elapsed,
+        "figures": {"fig5_prediction": str(fig5), "fig6_errors": str(fig6)},
+        **result.to_json_dict(),
+    }
+    write_summary(json_path, summary)

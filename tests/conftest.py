@@ -1,0 +1,44 @@
+"""Shared, seeded fixtures.
+
+``model_dataset``: 2 h (1440 samples at Ts = 5 s) of the paper-preset model plant excited
+with the default APRBS (``ExcitationSpec()``, seed 0), T_int/T_shell varied, no noise;
+temperatures in degC, so the true parameters are ``acid.params.paper()``.
+``noisy_model_dataset``: the same run with 0.05 K measurement noise on T_cab, T_evap, T_ain.
+Both are session-scoped (built once, ~20 ms each): treat them as read-only (use
+``ds.window(...)`` or copies before modifying).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from acid.excite import ExcitationSpec, excite
+from acid.plant import make_plant
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    """A fresh generator seeded with 0 for each test."""
+    return np.random.default_rng(0)
+
+
+@pytest.fixture(scope="session")
+def model_spec() -> ExcitationSpec:
+    """The excitation behind ``model_dataset`` (defaults: 7200 s APRBS, seed 0)."""
+    return ExcitationSpec(seed=0)
+
+
+@pytest.fixture(scope="session")
+def model_dataset(model_spec):
+    """2 h of noise-free paper-preset model-plant data with varied T_int/T_shell."""
+    plant = make_plant("model", rng=model_spec.rng("noise"))
+    return excite(plant, model_spec)
+
+
+@pytest.fixture(scope="session")
+def noisy_model_dataset(model_spec):
+    """As ``model_dataset`` with 0.05 K white measurement noise on the temperatures."""
+    spec = model_spec.replace(noise=0.05)
+    plant = make_plant("model", meas_noise_std=spec.noise, rng=spec.rng("noise"))
+    return excite(plant, spec)

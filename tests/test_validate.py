@@ -1,0 +1,226 @@
+"""Multi-start open-loop validation (acid/validate.py) and its figures (acid/report/validation.py).
+
+Data come from the control-oriented model itself (``ModelPlant``, noise-free), so the true
+parameters are known: the preset must predict its own data exactly, and a deliberately
+changed parameter set must not.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+from acid.data import Dataset
+from acid.errors import ConfigError, DataError
+from acid.params import paper
+from acid.plant import InputSchedule, ModelPlant
+from acid.signals import aprbs
+from acid.units import C2K
+from acid.validate import VALIDATED_CHANNELS, validate
+
+
+def model_data(n: int = 1500, seed: int = 0, vary_exogenous: bool = True,
+               params=None) -> Dataset:
+    """Noise-free data of the model plant under APRBS inputs (Table II bounds)."""
+    rng = np.random.default_rng(seed)
+    W_bl, _ = aprbs(rng, n, 0.05, 0.15, min_dwell=6, max_dwell=30)
+    T_set, _ = aprbs(rng, n, C2K(3.0), C2K(10.0), min_dwell=6, max_dwell=30)
+    k = np.arange(n)
+    if vary_exogenous:
+        T_int = C2K(35.0 + 3.0 * np.sin(2 * np.pi * k / 700.0))
+        T_shell = C2K(38.0 + 4.0 * np.cos(2 * np.pi * k / 900.0))
+    else:
+        T_int, T_shell = np.full(n, C2K(35.0)), np.full(n, C2K(38.0))
+    schedule = InputSchedule(W_bl, T_set, 0.0, T_int=T_int, T_shell=T_shell,
+                             spec={"seed": seed})
+    return ModelPlant(params or paper()).simulate(schedule)
+
+
+@pytest.fixture(scope="module")
+def varying():
+    return model_data(vary_exogenous=True)
+
+
+@pytest.fixture(scope="module")
+def constant():
+    return model_data(vary_exogenous=False)
+
+
+def test_preset_predicts_its_own_data_to_numerical_noise(varying, constant):
+    for ds, mode in ((varying, "measured"), (constant, "hold"), (constant, "measured")):
+        r = validate(ds, paper(), starts=60, horizon=300, exogenous=mode)
+        assert r.predicted.shape == (60, 301, 3) == r.measured.shape == r.errors.shape
+        assert np.abs(r.errors).max() <= 1e-9, mode
+        for name in VALIDATED_CHANNELS:
+            assert r.metrics[name]["max_abs"] <= 1e-9
+            assert r.metrics[name]["rmse"] <= 1e-9
+            assert r.metrics[name]["fit_percent"] == pytest.approx(100.0, abs=1e-6)
+
+
+def test_perturbed_model_errors_grow_with_horizon(constant):
+    p = paper()
+    truth = p.replace(gamma=(p.gamma[0] * 1.2,) + p.gamma[1:4] + (p.gamma[4] * 1.05,)
+                      + p.gamma[5:], tau=(p.tau[0] + 0.05,) + p.tau[1:], name="truth")
+    ds = model_data(vary_exogenous=False, params=truth)
+    r = validate(ds, p, starts=60, horizon=300)
+    # eqs. 1-2 are contractive (time constants of a few steps): the error rises from 0 at
+    # the measured initial state and settles at the mismatch's steady-state offset
+    e = r.envelope["T_cab"]["mean_abs"]
+    assert e[0] == 0.0
+    early, late = e[1:3].mean(), e[50:].mean()
+    assert late > 1.5 * early > 0, (early, late)
+    assert np.all(np.diff(e[:6]) > 0)
+    for name in ("T_evap", "T_ain"):
+        e = r.envelope[name]["mean_abs"]
+        assert e[100:].mean() > 1e-3 and r.metrics[name]["rmse"] > 1e-3
+    assert r.envelope["T_evap"]["mean_abs"][0] == 0.0
+    # T_ain(0) is already a model output: its error need not vanish at i = 0
+    assert np.all(np.isfinite(r.errors[:, 0, 2]))
+
+
+def test_hold_and_measured_exogenous_differ_when_T_int_varies(varying, constant):
+    held = validate(varying, paper(), starts=20, horizon=200, exogenous="hold")
+    meas = validate(varying, paper(), starts=20, horizon=200, exogenous="measured")
+    assert held.metrics["T_cab"]["max_abs"] > 0.1
+    assert meas.metrics["T_cab"]["max_abs"] <= 1e-9
+    e = held.envelope["T_cab"]["mean_abs"]  # holding a drifting T_int: error grows
+    assert e[150:].mean() > 2 * e[1:20].mean()
+    # the evaporator does not see T_int: identical either way
+    np.testing.assert_array_equal(held.predicted[..., 1], meas.predicted[..., 1])
+    assert np.ptp(held.exogenous[:, :, 0], axis=1).max() == 0.0
+    # with constant disturbances both modes are the same
+    a = validate(constant, paper(), starts=10, horizon=100, exogenous="hold")
+    b = validate(constant, paper(), starts=10, horizon=100, exogenous="measured")
+    np.testing.assert_array_equal(a.predicted, b.predicted)
+
+
+def test_windows_never_cross_an_experiment_boundary():
+    parts = [model_data(n, seed=s) for s, n in enumerate((400, 150, 520, 320))]
+    ds = Dataset.concatenate(parts)
+    r = validate(ds, paper(), starts=60, horizon=300, exogenous="measured")
+    idx = r.start_index[:, None] + np.arange(301)[None, :]
+    assert np.all(ds.experiment[idx] == ds.experiment[r.start_index][:, None])
+    assert 1 not in set(ds.experiment[r.start_index])  # 150 samples: no window fits
+    assert np.abs(r.errors).max() <= 1e-9  # each window is one consistent trajectory
+    assert r.start_index.size == 60 and np.all(np.diff(r.start_index) > 0)
+
+
+def test_start_placement_even_random_and_held_out(varying):
+    n = len(varying)
+    even = validate(varying, paper(), starts=60, horizon=300)
+    assert even.start_index[0] == 0 and even.start_index[-1] == n - 301
+    np.testing.assert_array_equal(even.start_index,
+                                  validate(varying, paper()).start_index)
+    np.testing.assert_allclose(even.start_time, varying.time[even.start_index])
+    r1 = validate(varying, paper(), placement="random", seed=3)
+    r2 = validate(varying, paper(), placement="random", seed=3)
+    r3 = validate(varying, paper(), placement="random", seed=4)
+    np.testing.assert_array_equal(r1.start_index, r2.start_index)
+    assert not np.array_equal(r1.start_index, r3.start_index)
+    held = validate(varying, paper(), starts=30, horizon=200, held_out_fraction=0.5)
+    assert held.start_index.min() >= n // 2
+    assert held.settings["sample_range"] == [n // 2, n]
+    ranged = validate(varying, paper(), starts=5, horizon=100, start_range=(100, 400))
+    assert ranged.start_index.min() >= 100 and ranged.start_index.max() + 100 < 400
+
+
+def test_few_admissible_starts_are_used_once_with_a_warning(varying):
+    short = varying.window(0, 310)  # 10 admissible starts for 300 steps
+    with pytest.warns(UserWarning, match="10 distinct start"):
+        r = validate(short, paper(), starts=60, horizon=300)
+    assert r.n_starts == 10 and r.settings["starts_requested"] == 60
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        overlapping = validate(varying.window(0, 1000), paper(), starts=60, horizon=300)
+    assert overlapping.n_starts == 60
+
+
+def test_record_too_short_is_a_one_line_data_error(varying):
+    ds = varying.window(0, 200)
+    ds.source = "short.h5"
+    with pytest.raises(DataError, match=r"short\.h5: record too short: 200 samples") as exc:
+        validate(ds, paper(), starts=60, horizon=300)
+    assert "\n" not in str(exc.value) and "301" in str(exc.value)
+    with pytest.raises(DataError, match="held-out part"):
+        validate(varying, paper(), horizon=300, held_out_fraction=0.1)
+
+
+def test_bad_options_and_inconsistent_data_are_refused(varying):
+    with pytest.raises(ConfigError, match="exogenous"):
+        validate(varying, paper(), exogenous="forecast")
+    with pytest.raises(ConfigError, match="starts"):
+        validate(varying, paper(), starts=0)
+    with pytest.raises(ConfigError, match="held-out-fraction"):
+        validate(varying, paper(), held_out_fraction=1.5)
+    with pytest.raises(DataError, match="sample time"):
+        validate(varying, paper().replace(Ts=1.0))
+    with pytest.raises(DataError, match="missing channel 'T_int'"):
+        validate(varying.select(["T_cab", "T_evap", "T_ain", "W_bl", "T_evap_set",
+                                 "T_shell"]), paper())
+
+
+def test_result_views_and_json(varying):
+    r = validate(varying, paper(), starts=12, horizon=60, exogenous="hold")
+    np.testing.assert_allclose(r.predicted_degC, r.predicted - 273.15)
+    np.testing.assert_allclose(r.measured_degC, r.measured - 273.15)
+    np.testing.assert_allclose(r.errors, r.predicted - r.measured)
+    np.testing.assert_allclose(r.horizon_s, np.arange(61) * 5.0)
+    assert np.all(r.errors[:, 0, :2] == 0.0)
+    env = r.envelope["T_cab"]
+    assert env["p5"].shape == (61,) and np.all(env["p5"] <= env["p95"])
+    np.testing.assert_allclose(env["max_abs"], np.abs(r.errors[..., 0]).max(axis=0))
+    assert r.per_start["T_cab"]["rmse"].shape == (12,)
+    d = json.loads(json.dumps(r.to_json_dict(), allow_nan=False))
+    for name in VALIDATED_CHANNELS:
+        for key in ("rmse", "max_abs", "p95_abs", "median_abs", "p90_abs", "mean_abs",
+                    "fit_percent", "fit_percent_pooled"):
+            assert key in d["channels"][name]
+    assert d["settings"]["exogenous"] == "hold" and d["settings"]["starts"] == 12
+    assert len(d["vs_horizon"]["horizon_s"]) == 61 and d["at_horizon"][0]["time_s"] == 60.0
+
+
+def test_constant_truth_gives_null_fit_not_nan():
+    n = 400
+    p = paper()
+    T_set = np.full(n, C2K(5.0))
+    x_evap = float(p.tau[1] - p.gamma[4] * T_set[0]) / (1 - p.gamma[3] - p.gamma[4])
+    sched = InputSchedule(np.full(n, 0.1), T_set, 0.0)
+    ds = ModelPlant(p).simulate(sched, initial={"T_evap": x_evap})
+    r = validate(ds, p, starts=5, horizon=100)
+    d = r.to_json_dict()
+    json.dumps(d, allow_nan=False)
+    assert d["channels"]["T_evap"]["fit_percent"] is None
+
+
+def test_sixty_starts_of_300_steps_are_fast(varying):
+    import time
+
+    t0 = time.perf_counter()
+    validate(varying, paper(), starts=60, horizon=300)
+    assert time.perf_counter() - t0 < 1.0
+
+
+def test_figures_have_the_papers_panels_and_units(varying):
+    from acid.report.validation import error_figure, prediction_figure
+
+    r = validate(varying, paper(), starts=8, horizon=100)
+    fig5 = prediction_figure(r)
+    labels = [ax.get_ylabel() for ax in fig5.axes]
+    assert sum("(°C)" in lab for lab in labels) == 4 and any("(kg/s)" in lab for lab in labels)
+    assert all(ax.get_xlabel() == "prediction time (s)" for ax in fig5.axes[3:4])
+    fig6 = error_figure(r)
+    assert len(fig6.axes) == 3 and all("(K)" in ax.get_ylabel() for ax in fig6.axes)
+    assert len(fig6.axes[0].lines) >= r.n_starts + 2  # every start, mean, zero line
+    with pytest.raises(IndexError):
+        prediction_figure(r, start=8)
+
+
+def test_shared_fixtures_noise_free_and_noisy(model_dataset, noisy_model_dataset):
+    exact = validate(model_dataset, paper(), exogenous="measured")
+    assert np.abs(exact.errors).max() <= 1e-9
+    noisy = validate(noisy_model_dataset, paper(), exogenous="measured")
+    for name in VALIDATED_CHANNELS:  # 0.05 K measurement noise, a contractive model
+        assert 0.03 < noisy.metrics[name]["rmse"] < 0.08, name
