@@ -441,14 +441,43 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
         bad = ~np.isfinite(time)
         if bad.any() or np.any(np.diff(time) <= 0):
             raise DataError(f"{source}: time column {cmap.time!r} is not strictly increasing")
-        grid = np.arange(time[0], time[-1] + 1e-9 * cmap.Ts, cmap.Ts)
-        chans = {k: np.interp(grid, time, v) for k, v in chans.items()}
-        time, Ts = grid, cmap.Ts
+        chans = _resample(time, chans, cmap.Ts, source)
+        time, Ts = np.arange(len(next(iter(chans.values())))) * cmap.Ts + time[0], cmap.Ts
     else:
         Ts = float(np.median(np.diff(time))) if time.size > 1 else 1.0
     meta = {"source": source, "channel_map": {k: list(v) for k, v in cmap.channels.items()}}
     meta.update(metadata)
     return Dataset(time=time, channels=chans, units=units, Ts=Ts, metadata=meta, source=source)
+
+
+def _is_interval_mean(name: str) -> bool:
+    """Outputs and powers are means over each sample interval (the sample convention)."""
+    spec = CHANNELS.get(name)
+    return (spec is not None and spec.role == "output") or name.startswith(("P_", "Q_"))
+
+
+def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
+              source: str) -> dict[str, np.ndarray]:
+    """Resample a finely sampled record onto a Ts grid following the sample convention.
+
+    States, inputs and exogenous signals are sampled at t_k (linear interpolation); outputs
+    and powers become their mean over [t_k, t_k + Ts), from the cumulative trapezoidal
+    integral, so energies are preserved (a CoolSim export at 0.01 s keeps its P * dt).
+    """
+    from scipy.integrate import cumulative_trapezoid
+
+    n = int(np.floor((time[-1] - time[0]) / Ts + 1e-9))
+    if n < 1:
+        raise DataError(f"{source}: record shorter than one sample period Ts = {Ts:g} s")
+    edges = time[0] + Ts * np.arange(n + 1)
+    out = {}
+    for name, v in chans.items():
+        if _is_interval_mean(name):
+            integral = np.interp(edges, time, cumulative_trapezoid(v, time, initial=0.0))
+            out[name] = np.diff(integral) / Ts
+        else:
+            out[name] = np.interp(edges[:-1], time, v)
+    return out
 
 
 def _to_degC(ds: Dataset) -> Dataset:

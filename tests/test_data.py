@@ -244,8 +244,8 @@ def test_csv_import_resamples_and_converts_kelvin(tmp_path):
     _write_csv(src, t, Tcabin=300 + 0.01 * t, blower=0.1 + 0 * t, Tevap=5 + 0 * t,
                comment=["x"] * t.size)
     ds = from_csv(src, _cmap(Ts=5.0))
-    assert ds.Ts == 5.0 and len(ds) == 21
-    np.testing.assert_allclose(ds.time, np.arange(21) * 5.0)
+    assert ds.Ts == 5.0 and len(ds) == 20  # 100 s hold 20 whole sample periods
+    np.testing.assert_allclose(ds.time, np.arange(20) * 5.0)
     assert ds.units["T_cab"] == "degC"
     np.testing.assert_allclose(ds["T_cab"], 300 + 0.01 * ds.time - 273.15)
     assert ds.units["T_evap"] == "degC"  # short form takes the standard unit
@@ -292,7 +292,7 @@ def test_mat_import_with_struct_fields(tmp_path):
         "W_bl": {"column": "sim.m_dot_blower", "unit": "kg/s"},
         "T_evap": {"column": "sim.T_evap_wall", "unit": "K"}}})
     ds = from_mat(src, cmap)
-    assert len(ds) == 13 and ds.Ts == 5.0
+    assert len(ds) == 12 and ds.Ts == 5.0
     np.testing.assert_allclose(ds["T_cab"], 30.0 - 0.05 * ds.time, atol=1e-9)
     np.testing.assert_allclose(ds["W_bl"], 0.05 + 0.001 * ds.time)
     assert ds.metadata["imported_from"] == "mat"
@@ -341,3 +341,18 @@ def test_channel_map_malformed_entries():
         ChannelMap.from_dict({"time": "t", "channels": {"T_cab": 3}})
     with pytest.raises(DataError, match="'extra' needs 'column' and 'unit'"):
         ChannelMap.from_dict({"time": "t", "channels": {"extra": "col"}})
+
+
+def test_resampling_averages_outputs_and_powers_over_each_period(tmp_path):
+    """Outputs and powers become interval means (energy kept), states are point samples."""
+    t = np.arange(0, 100.01, 0.01)
+    power = 1000.0 + 500.0 * np.sin(2 * np.pi * t / 7.0)
+    src = tmp_path / "run.csv"
+    _write_csv(src, t, Tcabin=300 + 0.01 * t, blower=0.1 + 0 * t, Tevap=5 + 0 * t, Pc=power)
+    cmap = ChannelMap.from_dict({"time": "t", "Ts": 5.0, "channels": {
+        "T_cab": {"column": "Tcabin", "unit": "K"}, "W_bl": "blower", "T_evap": "Tevap",
+        "P_comp": {"column": "Pc", "unit": "W"}}})
+    ds = from_csv(src, cmap)
+    energy_fine = np.trapezoid(power, t)
+    assert abs(ds["P_comp"].sum() * ds.Ts - energy_fine) < 1e-6 * energy_fine
+    np.testing.assert_allclose(ds["T_cab"], 300 + 0.01 * ds.time - 273.15)
