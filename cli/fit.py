@@ -1,0 +1,116 @@
+"""``acid fit``: identify gamma, tau, beta (paper eqs. 1-5) from a dataset; write params.json."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import typer
+
+from acid import __version__
+from acid.data import MODEL_CHANNELS, Dataset
+from acid.errors import ConfigError
+from acid.fit import EQUATION_CHANNEL, ModelFitter
+from acid.params import load_params
+from acid_cli._common import console, err_console, handle_errors, print_table, write_summary
+
+
+def _num(v: float, digits: int = 5) -> str:
+    return "-" if v is None or not math.isfinite(v) else f"{v:.{digits}g}"
+
+
+@handle_errors
+def fit(
+    data: Path = typer.Argument(..., help="Dataset (HDF5, from `acid excite` or `acid import`)."),
+    out: Path = typer.Option(Path("params.json"), "--out", help="Parameter file to write."),
+    method: str = typer.Option(
+        "ls", "--method",
+        help="'ls' equation-error least squares, 'cvx' constrained (CVXPY), 'oe' output "
+             "error (multi-step simulation error, started from the ls estimate)."),
+    loss: str = typer.Option("squared", "--loss",
+                             help="'squared' or 'huber' (robust to outliers; cvx or oe)."),
+    estimation_fraction: float = typer.Option(
+        1.0, "--estimation-fraction",
+        help="Fit on the first F of the record (e.g. 0.5); the rest is left for "
+             "`acid validate`."),
+    oe_window: int = typer.Option(300, "--oe-window",
+                                  help="Samples per output-error simulation window."),
+    reference: str = typer.Option(
+        "paper", "--reference",
+        help="Parameters shown beside ours and used for parameters the data do not excite: "
+             "'paper' or a params.json."),
+    strict: bool = typer.Option(False, "--strict",
+                                help="Refuse (instead of warn) when a parameter is not excited."),
+    no_blower: bool = typer.Option(False, "--no-blower",
+                                   help="Keep the reference beta instead of fitting P_bl."),
+    use_eta_cop: bool = typer.Option(
+        False, "--use-eta-cop",
+        help="Put the eta_cop estimated from P_comp (eq. 4) into params.json."),
+    json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+) -> None:
+    """Fit the control-oriented model and write params.json (kelvin convention).
+
+    Prints the parameter table with the reference (paper) values beside ours, the
+    conditioning of each regression and the one-step and multi-step fit %.
+    """
+    if not 0.0 < estimation_fraction <= 1.0:
+        raise ConfigError(f"--estimation-fraction must be in (0, 1], got {estimation_fraction}")
+    ref = load_params(reference)
+    ds = Dataset.from_hdf5(data, require=MODEL_CHANNELS, min_samples=20)
+    est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]
+    fitter = ModelFitter(method=method, loss=loss, fit_blower=not no_blower,
+                         oe_window=oe_window, use_eta_cop=use_eta_cop,
+                         on_rank_deficiency="raise" if strict else "fix", reference=ref)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the result carries them; printed below, once
+        result = fitter.fit(est)
+
+    provenance = dict(result.params.provenance)
+    provenance["estimation_fraction"] = estimation_fraction
+    provenance["reference"] = reference
+    params = result.params.replace(provenance=provenance)
+    report = result.to_json_dict()
+    params.to_json(out, extra={"fit": report})
+
+    console.print(f"{data}: {len(est)} of {len(ds)} samples ({est.duration:g} s), method "
+                  f"{method}, loss {loss} ({result.elapsed_s * 1e3:.0f} ms)")
+    rows = []
+    for (name, unit, ref_v, v, se, lo, hi), st in zip(result.table(),
+                                                      result.param_status + ("eq. 4",),
+                                                      strict=False):
+        ci = "-" if not math.isfinite(lo) else f"[{_num(lo)}, {_num(hi)}]"
+        rows.append([name, unit, _num(ref_v), _num(v), _num(se, 2), ci, st])
+    print_table(f"Parameters (kelvin convention), {reference} beside ours",
+                ["name", "unit", reference, "estimate", "stderr", "95 % interval", "status"],
+                rows)
+    eq_rows = []
+    for eq, ch in EQUATION_CHANNEL.items():
+        if eq not in result.rank:
+            eq_rows.append([f"eq. {eq[2:]}", ch, "-", "-", "-", "-", "-", "kept"])
+            continue
+        eq_rows.append([f"eq. {eq[2:]}", ch, f"{result.rank[eq]}/{result.n_regressors[eq]}",
+                        _num(result.condition_number[eq], 3),
+                        _num(result.condition_number_raw[eq], 3),
+                        _num(result.residual_std[eq], 3),
+                        f"{result.fit_percent_one_step.get(ch, math.nan):.2f}",
+                        result.solver_status[eq].split(" ")[0]])
+    print_table("Regressions: rank, condition number (centred+scaled / raw kelvin), "
+                "residual std (K; W for eq. 5), one-step fit (%)",
+                ["eq.", "channel", "rank", "cond", "cond raw", "resid", "fit %", "solver"],
+                eq_rows)
+    sim = ", ".join(f"{c} {v:.2f} %" for c, v in result.fit_percent_simulation.items())
+    console.print(f"{oe_window}-step simulation fit from measured states: {sim}")
+    if "oe" in result.solver_status:
+        console.print(f"output error: {result.solver_status['oe']}")
+    if result.active_constraints:
+        console.print("active constraints: " + "; ".join(result.active_constraints))
+    for line in result.notes:
+        console.print(f"note: {line}", highlight=False)
+    for line in result.warnings:
+        err_console.print(f"[bold yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
+    console.print(f"parameters written to {out}")
+    write_summary(json_path, {"command": "fit", "acid_version": __version__,
+                              "inputs": {"data": str(data), "reference": reference},
+                              "estimation_fraction": estimation_fraction, "out": str(out),
+                              "params": params.to_json_dict(), **report})

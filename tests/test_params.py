@@ -1,0 +1,105 @@
+"""``acid.params``: the paper preset makes physical sense in kelvin; params.json is checked."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from acid import model
+from acid.errors import DataError
+from acid.params import (
+    PAPER_BETA,
+    PAPER_GAMMA,
+    PAPER_TAU,
+    PARAMETER_TABLE,
+    ModelParams,
+    load_params,
+    paper,
+)
+from acid.units import C2K, K2C
+
+
+def test_paper_preset_holds_the_published_values():
+    p = paper()
+    assert p.gamma == (0.2451, 0.0867, 1.2999, 1.0047, -0.5176, 0.4553, 34.9579)
+    assert p.tau == (-0.1842, -1.3226, 154.4995)
+    assert p.beta == (24156.0, -1974.2, 49.318)
+    assert (p.c_p, p.eta_cop, p.Ts) == (1008.0, 3.5, 5.0)
+    assert len(PARAMETER_TABLE) == 13 and p.theta.shape == (13,)
+    assert list(p.as_dict()) == [row[0] for row in PARAMETER_TABLE]
+
+
+@pytest.mark.parametrize("T_set_C", [3.0, 6.0, 10.0])
+def test_evaporator_settles_near_its_set_point(T_set_C):
+    """Eq. 2 with the paper's values tracks the set-point in kelvin (the unit slip check)."""
+    p = paper()
+    T_set = C2K(T_set_C)
+    assert abs(model.evap_steady_state(T_set, p) - T_set) < 0.5
+    _, T_evap, _ = model.simulate([C2K(30.0), C2K(15.0)], np.full(60, 0.1), np.full(60, T_set),
+                                  C2K(35.0), C2K(40.0), p)
+    assert abs(T_evap[-1] - T_set) < 0.5
+    assert abs(p.gamma[3] + p.gamma[4]) < 1  # stable evaporator pole
+
+
+@pytest.mark.parametrize("T_evap_C", [3.0, 5.0, 10.0])
+def test_inlet_air_is_cool_at_nominal_blower_flow(T_evap_C):
+    T_ain = K2C(model.inlet_air(C2K(T_evap_C), 0.1, paper()))
+    assert 5.0 <= T_ain <= 20.0
+    # the same formula fed with degC gives an absurd supply temperature: the paper's slip
+    assert model.inlet_air(T_evap_C, 0.1, paper()) > 150.0
+
+
+def test_json_round_trip_keeps_values_units_and_provenance(tmp_path):
+    p = paper().replace(provenance={"method": "ls", "data_file": "x.h5"})
+    path = p.to_json(tmp_path / "params.json", extra={"fit": {"method": "ls"}})
+    d = json.loads(path.read_text())
+    assert "kelvin" in d["units"] and d["fit"] == {"method": "ls"}
+    q = ModelParams.from_json(path)
+    assert q == p and q.provenance == p.provenance
+    assert load_params(path) == p and load_params("paper") == paper() and load_params(None)
+
+
+def _write(tmp_path, text):
+    path = tmp_path / "params.json"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("text,fragment", [
+    ('{"tau": [0, 0, 0]}', "missing key 'gamma'"),
+    ('{"gamma": [1, 2, 3, 4, 5, 6, 7]}', "missing key 'tau'"),
+    ('{"gamma": [1, 2, 3], "tau": [0, 0, 0]}', "needs 7 numbers"),
+    ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": [0, 0]}', "needs 3 numbers"),
+    ('{"gamma": [1, 2, 3, 4, 5, 6, NaN], "tau": [0, 0, 0]}', "non-finite"),
+    ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": ["a", 0, 0]}', "malformed"),
+    ('{"gamma": 5, "tau": [0, 0, 0]}', "malformed"),
+    ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": [0, 0, 0], "eta_cop": -1}', "eta_cop"),
+    ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": [0, 0, 0], "units": "degC (Celsius)"}',
+     "Celsius"),
+    ("[1, 2, 3]", "JSON object"),
+    ("gamma = 1", "not valid JSON"),
+])
+def test_bad_params_json_is_a_one_line_data_error(tmp_path, text, fragment):
+    path = _write(tmp_path, text)
+    with pytest.raises(DataError, match=fragment) as info:
+        ModelParams.from_json(path)
+    msg = str(info.value)
+    assert str(path) in msg and "\n" not in msg
+
+
+def test_missing_file_is_a_data_error(tmp_path):
+    with pytest.raises(DataError, match="not found"):
+        load_params(tmp_path / "absent.json")
+
+
+def test_params_are_frozen_and_perturbation_is_seeded():
+    p = paper()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        p.gamma = (0.0,) * 7
+    a = p.perturbed(0.1, np.random.default_rng(1))
+    b = p.perturbed(0.1, np.random.default_rng(1))
+    assert a == b and a != p and a.beta == PAPER_BETA
+    assert p.gamma == PAPER_GAMMA and p.tau == PAPER_TAU
