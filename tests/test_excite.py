@@ -235,7 +235,7 @@ def test_cli_import_csv_and_mat(tmp_path):
                                      str(tmp_path / cmap), "--out", str(out)])
         assert result.exit_code == 0, result.output
         ds = Dataset.from_hdf5(out)
-        assert len(ds) == 61 and ds.units["T_cab"] == "degC"
+        assert len(ds) == 60 and ds.units["T_cab"] == "degC"  # 300 s = 60 whole periods
         np.testing.assert_allclose(ds["T_cab"], 30.0 - 0.01 * ds.time, atol=1e-9)
         assert len(ds.metadata["source_sha256"]) == 64
 
