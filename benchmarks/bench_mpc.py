@@ -1,0 +1,218 @@
+"""Per-step time of acid's NMPC against do-mpc on the same problem, states and machine.
+
+Run: ``/work/venv/bin/python benchmarks/bench_mpc.py [--repeats 3] [--json out.json]``
+(do-mpc is a dev extra: ``pip install do-mpc``).
+
+What is compared
+----------------
+1. acid's NMPC runs scenario (a) of ``acid mpc-check`` (125 s, both initial conditions) in
+   closed loop on the control-oriented model; every measured state and bound preview is
+   recorded.
+2. The *same* problem (paper eqs. 7-13 with acid's documented choices: slacks on x(1..N),
+   terminal power with u(N) = u(N-1), cost scaled by 1e-3 inside the NLP) is written in
+   do-mpc: a discrete model with states [T_cab, T_evap, W_last] (W_last carries u(N-1) to
+   the terminal cost), inputs [W_bl, T_evap_set], time-varying parameters [next upper
+   bound, T_int, T_shell], soft nonlinear constraints on the *next* state with penalty a_sl
+   (do-mpc puts one slack per constraint and step: equal optimum since the upper and lower
+   cabin bounds are never violated together), IPOPT with exact Hessian.
+3. Both controllers are replayed over the recorded sequence of states, in order (each
+   warm-starts from its previous solution, as in closed loop); the whole ``make_step`` wall
+   time is measured for each; first moves and objectives are compared.
+
+Prints median / p95 / max per-step time, the ratio do-mpc / acid, and the largest relative
+differences of the first move and of the objective.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+
+import casadi as ca
+import numpy as np
+
+from acid import model
+from acid.mpc.nmpc import NMPC, NMPCConfig
+from acid.mpc.scenarios import (
+    BOUND_STEPS,
+    MODEL_T_INT,
+    MODEL_T_SHELL,
+    run_model_scenario,
+    step_bound,
+)
+from acid.params import ModelParams, paper
+
+
+def record_states(params: ModelParams, config: NMPCConfig):
+    """Closed-loop states and bound previews of scenario (a) (both initial conditions)."""
+    res = run_model_scenario(params, config)
+    N = config.N
+    cases = []
+    for run in res.runs:
+        n = run.n_steps
+        # the bound preview the controller saw at step k: T_cab_max(t_k .. t_{k+N})
+        full = step_bound(np.arange(n + N + 1) * params.Ts, BOUND_STEPS)
+        for k in range(n):
+            cases.append((np.array([run.T_cab[k], run.T_evap[k]]), full[k: k + N + 1].copy(),
+                          k == 0))
+    return cases
+
+
+def build_dompc(params: ModelParams, config: NMPCConfig):
+    """The same NLP in do-mpc; returns (mpc, set_preview) where set_preview(ub) sets the tvp."""
+    import do_mpc
+
+    p, cfg, N = params, config, config.N
+    m = do_mpc.model.Model("discrete", "SX")
+    T_cab = m.set_variable("_x", "T_cab")
+    T_evap = m.set_variable("_x", "T_evap")
+    W_last = m.set_variable("_x", "W_last")
+    W_bl = m.set_variable("_u", "W_bl")
+    T_set = m.set_variable("_u", "T_evap_set")
+    ub_next = m.set_variable("_tvp", "T_cab_max_next")
+    T_int = m.set_variable("_tvp", "T_int")
+    T_shell = m.set_variable("_tvp", "T_shell")
+    T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p)
+    m.set_rhs("T_cab", T_cab_n)
+    m.set_rhs("T_evap", T_evap_n)
+    m.set_rhs("W_last", W_bl)
+    m.setup()
+    # after setup, build the cost and constraints from the model's own symbols
+    T_cab, T_evap, W_last = m.x["T_cab"], m.x["T_evap"], m.x["W_last"]
+    W_bl, T_set = m.u["W_bl"], m.u["T_evap_set"]
+    ub_next, T_int, T_shell = m.tvp["T_cab_max_next"], m.tvp["T_int"], m.tvp["T_shell"]
+    T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p)
+
+    mpc = do_mpc.controller.MPC(m)
+    mpc.settings.n_horizon = N
+    mpc.settings.t_step = p.Ts
+    mpc.settings.store_full_solution = False
+    mpc.settings.nlpsol_opts = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": 0,
+                                "ipopt.tol": cfg.tol}
+    s = cfg.cost_scale
+
+    def power(W, Ta):
+        return model.compressor_power(W, Ta, cfg.T_amb, p) + model.blower_power(W, p)
+
+    lterm = power(W_bl, T_ain) * s
+    mterm = power(W_last, model.inlet_air(T_evap, W_last, p)) * s
+    mpc.set_objective(lterm=lterm, mterm=mterm)
+    mpc.set_rterm(W_bl=0.0, T_evap_set=0.0)
+    mpc.bounds["lower", "_u", "W_bl"] = cfg.W_bl_min
+    mpc.bounds["upper", "_u", "W_bl"] = cfg.W_bl_max
+    mpc.bounds["lower", "_u", "T_evap_set"] = cfg.T_evap_set_min
+    mpc.bounds["upper", "_u", "T_evap_set"] = cfg.T_evap_set_max
+    pen = cfg.slack_penalty * s
+    mpc.set_nl_cons("cab_hi", T_cab_n - ub_next, ub=0.0, soft_constraint=True,
+                    penalty_term_cons=pen)
+    mpc.set_nl_cons("cab_lo", cfg.T_cab_min - T_cab_n, ub=0.0, soft_constraint=True,
+                    penalty_term_cons=pen)
+    mpc.set_nl_cons("evap_hi", T_evap_n - cfg.T_evap_max, ub=0.0, soft_constraint=True,
+                    penalty_term_cons=pen)
+    mpc.set_nl_cons("evap_lo", cfg.T_evap_min - T_evap_n, ub=0.0, soft_constraint=True,
+                    penalty_term_cons=pen)
+    tvp = mpc.get_tvp_template()
+    current = {"ub": np.full(N + 1, 300.0)}
+
+    def tvp_fun(t_now):
+        for k in range(N + 1):
+            tvp["_tvp", k, "T_cab_max_next"] = current["ub"][min(k + 1, N)]
+            tvp["_tvp", k, "T_int"] = MODEL_T_INT
+            tvp["_tvp", k, "T_shell"] = MODEL_T_SHELL
+        return tvp
+
+    mpc.set_tvp_fun(tvp_fun)
+    mpc.setup()
+
+    def set_preview(ub):
+        current["ub"] = np.asarray(ub, dtype=float)
+
+    return mpc, set_preview
+
+
+def dompc_solution(mpc, x0, ub, params: ModelParams, config: NMPCConfig):
+    """(first move, objective in W) of do-mpc's last solve, evaluated like acid's."""
+    N = config.N
+    U = np.array([np.asarray(mpc.opt_x_num_unscaled["_u", k, 0]).ravel() for k in range(N)])
+    T_cab, T_evap, T_ain = model.simulate(x0, U[:, 0], U[:, 1], MODEL_T_INT, MODEL_T_SHELL,
+                                          params)
+    P = (model.compressor_power(U[:, 0], T_ain, config.T_amb, params)
+         + model.blower_power(U[:, 0], params))
+    Ta_N = model.inlet_air(T_evap[-1], U[-1, 0], params)
+    P_N = (model.compressor_power(U[-1, 0], Ta_N, config.T_amb, params)
+           + model.blower_power(U[-1, 0], params))
+    viol_c = np.maximum.reduce([np.zeros(N), T_cab[1:] - ub[1:], config.T_cab_min - T_cab[1:]])
+    viol_e = np.maximum.reduce([np.zeros(N), T_evap[1:] - config.T_evap_max,
+                                config.T_evap_min - T_evap[1:]])
+    obj = float(P.sum() + P_N + config.slack_penalty * (viol_c.sum() + viol_e.sum()))
+    return U[0], obj
+
+
+def _stats(ms):
+    ms = np.asarray(ms)
+    return {"median": float(np.median(ms)), "p95": float(np.percentile(ms, 95)),
+            "max": float(ms.max()), "n": int(ms.size)}
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=3, help="replays of the state sequence")
+    ap.add_argument("--solver", default="fatrop", choices=("fatrop", "ipopt"))
+    ap.add_argument("--json", default=None, help="write the results here")
+    args = ap.parse_args(argv)
+
+    params = paper()
+    config = NMPCConfig(solver=args.solver)
+    cases = record_states(params, config)
+    ours = NMPC(params, config)
+    theirs, set_preview = build_dompc(params, config)
+
+    # one untimed call each: first-call set-up (allocation, do-mpc's data structures)
+    set_preview(cases[0][1])
+    ours.make_step(cases[0][0], cases[0][1], MODEL_T_INT, MODEL_T_SHELL)
+    theirs.make_step(np.array([cases[0][0][0], cases[0][0][1], 0.1]))
+    t_ours, t_theirs, du, dobj = [], [], [], []
+    for _ in range(args.repeats):
+        for x0, ub, first in cases:
+            if first:
+                ours.reset()
+            t0 = time.perf_counter()
+            ours.make_step(x0, ub, MODEL_T_INT, MODEL_T_SHELL)
+            t_ours.append((time.perf_counter() - t0) * 1e3)
+            sol = ours.log.solutions[-1]
+
+            set_preview(ub)
+            x_dm = np.array([x0[0], x0[1], 0.1])
+            t0 = time.perf_counter()
+            theirs.make_step(x_dm)
+            t_theirs.append((time.perf_counter() - t0) * 1e3)
+            u_dm, obj_dm = dompc_solution(theirs, x0, ub, params, config)
+            du.append(float(np.max(np.abs(sol.u - u_dm) / np.abs(u_dm))))
+            dobj.append(abs(sol.objective - obj_dm) / abs(obj_dm))
+
+    so, st = _stats(t_ours), _stats(t_theirs)
+    out = {
+        "machine": platform.processor() or platform.machine(),
+        "python": platform.python_version(), "casadi": ca.__version__,
+        "solver": args.solver, "states": len(cases), "repeats": args.repeats,
+        "acid_ms": so, "do_mpc_ms": st,
+        "ratio_median": st["median"] / so["median"], "ratio_p95": st["p95"] / so["p95"],
+        "max_rel_diff_first_move": float(max(du)), "max_rel_diff_objective": float(max(dobj)),
+        "same_optimum": bool(max(du) <= 1e-4 and max(dobj) <= 1e-4),
+    }
+    print(f"{len(cases)} closed-loop states x {args.repeats} replays, whole make_step (ms):")
+    for name, s in (("acid (" + args.solver + ")", so), ("do-mpc (ipopt)", st)):
+        print(f"  {name:<16} median {s['median']:7.3f}  p95 {s['p95']:7.3f}  max {s['max']:7.3f}")
+    print(f"  do-mpc / acid: {out['ratio_median']:.1f}x (median), {out['ratio_p95']:.1f}x (p95)")
+    print(f"  same optimum: first move max rel diff {out['max_rel_diff_first_move']:.1e}, "
+          f"objective {out['max_rel_diff_objective']:.1e} -> {out['same_optimum']}")
+    if args.json:
+        from acid._io import write_json
+
+        write_json(args.json, out)
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,42 @@
+"""``acid mpc-check`` through Typer's CliRunner."""
+
+from __future__ import annotations
+
+import json
+
+from typer.testing import CliRunner
+
+from acid_cli.main import app
+
+runner = CliRunner()
+
+
+def test_skip_plant_writes_the_summary_with_the_documented_keys(tmp_path):
+    out, js = tmp_path / "figs", tmp_path / "check.json"
+    res = runner.invoke(app, ["mpc-check", "--skip-plant", "--out", str(out), "--json", str(js)])
+    assert res.exit_code in (0, 1), res.output  # 1 only if this machine misses the timing
+    d = json.loads(js.read_text())
+    assert set(d["scenarios"]) == {"model", "plant", "cav"}
+    model = d["scenarios"]["model"]
+    for key in ("energy_MJ", "max_violation_K", "first_step_violation_K", "solve_ms",
+                "fallbacks", "passed", "criterion"):
+        assert key in model, key
+    assert set(model["solve_ms"]) >= {"median", "p95", "max"}
+    assert model["passed"] is True and model["max_violation_K"] <= 0.01
+    assert d["scenarios"]["plant"]["skipped"] and d["scenarios"]["cav"]["skipped"]
+    assert d["scenarios"]["cav"]["passed"] is None
+    assert isinstance(d["passed"], bool) and (d["passed"] == (res.exit_code == 0))
+    assert (out / "fig7_model.png").stat().st_size > 1000
+
+
+def test_bad_params_file_is_a_one_line_error(tmp_path):
+    bad = tmp_path / "params.json"
+    bad.write_text("{not json")
+    res = runner.invoke(app, ["mpc-check", "--skip-plant", "--params", str(bad)])
+    assert res.exit_code == 2
+    assert "not valid JSON" in res.output and "Traceback" not in res.output
+
+
+def test_unknown_solver_is_rejected():
+    res = runner.invoke(app, ["mpc-check", "--skip-plant", "--solver", "snopt"])
+    assert res.exit_code == 2 and "--solver" in res.output
