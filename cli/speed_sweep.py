@@ -1,0 +1,65 @@
+"""``acid speed-sweep``: the paper's speed-sensitivity study (Fig. 3, Table I) on the plant."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import typer
+
+from acid import __version__
+from acid._io import file_sha256, save_figure, write_json
+from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+
+
+def _fmt(v, digits: int = 3) -> str:
+    return "NA" if v is None or not math.isfinite(v) else f"{v:.{digits}f}"
+
+
+@handle_errors
+def speed_sweep(
+    config: Path | None = typer.Option(None, "--config",
+                                       help="Plant configuration (TOML, SI units, K)."),
+    duration: float = typer.Option(600.0, "--duration", help="Simulated time per speed, s."),
+    out: Path = typer.Option(Path("reports/speed-sweep"), "--out",
+                             help="Folder for the figure and the result JSON."),
+    json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+) -> None:
+    """Run the nominal controller at 0-25 m/s for --duration s and compare with Table I.
+
+    Energy is compressor + blower (as in the paper), in MJ and MJ/km.
+    """
+    from acid.errors import ConfigError
+    from acid.plant.config import PlantConfig
+    from acid.plant.sweep import PAPER_TABLE_I
+    from acid.plant.sweep import speed_sweep as run_sweep
+    from acid.report.plant import sweep_figure
+
+    if not math.isfinite(duration) or duration <= 0:
+        raise ConfigError(f"--duration must be a positive number of seconds, got {duration}")
+    cfg = PlantConfig.from_toml(config) if config is not None else PlantConfig()
+    speeds = PAPER_TABLE_I["speeds_mps"]
+    with progress_bar("speed sweep", total=len(speeds)) as update:
+        result = run_sweep(cfg, speeds=speeds, duration=duration, progress=update)
+
+    paper_E = PAPER_TABLE_I["energy_MJ"]
+    paper_km = PAPER_TABLE_I["energy_MJ_per_km"]
+    rows = [[f"{v:g}", _fmt(e), _fmt(pe, 2), _fmt(ek), _fmt(pk)]
+            for v, e, ek, pe, pk in zip(result.speeds_mps, result.energy_MJ,
+                                        result.energy_MJ_per_km, paper_E, paper_km,
+                                        strict=True)]
+    print_table(f"A/C energy over {result.duration_s:g} s (compressor + blower)",
+                ["speed (m/s)", "energy (MJ)", "paper (MJ)", "MJ/km", "paper MJ/km"], rows)
+    console.print(f"E({speeds[-1]:g})/E({speeds[0]:g}) = {result.ratio_last_first:.3f} "
+                  f"(paper {paper_E[-1] / paper_E[0]:.3f})"
+                  + ("" if duration == 600.0 else "  [paper values are for 600 s]"))
+
+    summary = result.to_json_dict()
+    summary.update(acid_version=__version__,
+                   config_path=str(config) if config is not None else None,
+                   config_sha256=file_sha256(config) if config is not None else None)
+    figure_path = save_figure(sweep_figure(result), out / "speed_sweep.png")
+    summary["figure"] = str(figure_path)
+    write_json(out / "speed_sweep.json", summary)
+    console.print(f"figure written to {figure_path}")
+    write_summary(json_path, summary)
