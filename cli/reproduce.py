@@ -1,0 +1,71 @@
+"""``acid reproduce``: every table and figure of the paper, in one command, with a report."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import typer
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from acid.errors import ConfigError
+from acid.pipeline import run_pipeline
+from acid.reproduce import ReproduceOptions, build_stages, write_outputs
+from acid_cli._common import console, err_console, handle_errors, print_table, write_summary
+
+
+@handle_errors
+def reproduce(
+    out: Path = typer.Option(Path("reports/paper"), "--out",
+                             help="Folder for the report, its figures and the stage cache."),
+    quick: bool = typer.Option(False, "--quick",
+                               help="A smaller study (shorter records, 12 starts) for tests "
+                                    "and first looks."),
+    jobs: int = typer.Option(2, "--jobs", min=1,
+                             help="Independent stages run in this many local processes."),
+    force: bool = typer.Option(False, "--force", help="Ignore the cache and redo every stage."),
+    json_path: Path | None = typer.Option(None, "--json",
+                                          help="Also write the summary here (it is always "
+                                               "written to OUT/summary.json)."),
+) -> None:
+    """Sweep (Table I), excite, fit, validate (Figs. 5-6) and NMPC checks (Figs. 7-10).
+
+    Stages are cached by their inputs under OUT/stages, so a second run redoes only what
+    changed. Writes OUT/report.html (self-contained) and OUT/summary.json.
+    """
+    if jobs > 8:
+        raise ConfigError(f"--jobs {jobs}: at most 8 local processes")
+    opts = ReproduceOptions.quick() if quick else ReproduceOptions()
+    stages = build_stages(opts)
+    t0 = time.perf_counter()
+    with Progress(TextColumn("[bold]{task.description:<48}"), BarColumn(),
+                  TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
+                  console=err_console, disable=not sys.stderr.isatty()) as prog:
+        tasks = {s.name: prog.add_task(s.title, total=1, start=False) for s in stages}
+
+        def on_start(name: str) -> None:
+            prog.start_task(tasks[name])
+
+        def on_progress(name: str, done: int, total: int) -> None:
+            prog.update(tasks[name], completed=done, total=max(total, 1))
+
+        def on_done(outcome) -> None:
+            label = "cached" if outcome.cached else f"{outcome.seconds:.1f} s"
+            prog.update(tasks[outcome.name], completed=1, total=1,
+                        description=f"{outcome.title} ({label})")
+
+        outcomes = run_pipeline(stages, out, jobs=jobs, on_start=on_start,
+                                on_progress=on_progress, on_done=on_done, force=force)
+    elapsed = time.perf_counter() - t0
+    html, summary_path, rows = write_outputs(out, outcomes, opts, elapsed)
+
+    print_table("Stages", ["stage", "time (s)", "cache"],
+                [[o.title, f"{o.seconds:.1f}", "reused" if o.cached else "computed"]
+                 for o in outcomes.values()])
+    verdict = {True: "yes", False: "NO", None: "n/a"}
+    print_table("Paper vs acid", ["result", "quantity", "paper", "acid", "agrees"],
+                [[r.section, r.quantity, r.paper, r.acid, verdict[r.agrees]] for r in rows])
+    console.print(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
+    if json_path is not None:
+        write_summary(json_path, __import__("json").loads(summary_path.read_text()))
