@@ -195,14 +195,6 @@ def test_constant_truth_gives_null_fit_not_nan():
     assert d["channels"]["T_evap"]["fit_percent"] is None
 
 
-def test_sixty_starts_of_300_steps_are_fast(varying):
-    import time
-
-    t0 = time.perf_counter()
-    validate(varying, paper(), starts=60, horizon=300)
-    assert time.perf_counter() - t0 < 1.0
-
-
 def test_figures_have_the_papers_panels_and_units(varying):
     from acid.report.validation import error_figure, prediction_figure
 
