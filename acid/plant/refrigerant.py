@@ -13,14 +13,20 @@ loop) on a uniform grid: 0.5 K for the one-dimensional properties, 1 K x 1 K for
 interpolated linearly with direct index arithmetic (a few hundred ns per lookup in plain
 Python). Linear interpolation on these grids is accurate to better than 0.05 % in enthalpy
 differences (checked in ``tests/test_plant_cycle.py`` against direct HEOS evaluations). The
-table is built once per (fluid, SH, SC) and process (``functools.lru_cache``); building takes
-about 0.3 s.
+table is built once per (fluid, SH, SC) and process (``functools.lru_cache``) and kept on
+disk (``ACID_CACHE_DIR``, else ``$XDG_CACHE_HOME/acid`` or ``~/.cache/acid``; keyed by fluid,
+SH, SC, grids and the CoolProp version), because importing CoolProp alone takes about 3 s:
+with the disk cache a plant starts without importing it. Building takes about 0.3 s.
 """
 
 from __future__ import annotations
 
 import functools
+import hashlib
+import os
 from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
 
 import numpy as np
 
@@ -80,6 +86,29 @@ def _lists(table: RefrigerantTable):
             table.h2s.ravel().tolist())
 
 
+_ARRAYS = ("T1", "p_sat", "rho1", "h1", "s1", "h3", "Te2", "Tc2", "h2s")
+
+
+def cache_dir() -> Path:
+    """Folder of the on-disk property tables."""
+    env = os.environ.get("ACID_CACHE_DIR")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "acid"
+
+
+def _cache_file(fluid: str, superheat: float, subcool: float) -> Path:
+    try:
+        cp_version = version("CoolProp")
+    except PackageNotFoundError:
+        cp_version = "unknown"
+    key = repr((fluid, float(superheat), float(subcool), T1_LO, T1_HI, DT1, TE_LO, TE_HI,
+                TC_LO, TC_HI, DT2, cp_version))
+    digest = hashlib.sha256(key.encode()).hexdigest()[:16]
+    return cache_dir() / f"refrigerant-{fluid}-{digest}.npz"
+
+
 @functools.lru_cache(maxsize=8)
 def table(fluid: str = "R134a", superheat: float = 5.0, subcool: float = 5.0
           ) -> RefrigerantTable:
@@ -91,6 +120,31 @@ def table(fluid: str = "R134a", superheat: float = 5.0, subcool: float = 5.0
     superheat : suction superheat above T_e, K.
     subcool : liquid-line subcooling below T_c, K.
     """
+    path = _cache_file(fluid, superheat, subcool)
+    if path.is_file():
+        try:
+            with np.load(path) as z:
+                arrays = {k: z[k] for k in _ARRAYS}
+        except (OSError, ValueError, KeyError):
+            arrays = None  # unreadable cache: rebuild below
+        if arrays is not None:
+            for arr in arrays.values():
+                arr.setflags(write=False)
+            return RefrigerantTable(fluid, float(superheat), float(subcool), **arrays)
+    tab = _build(fluid, superheat, subcool)
+    try:
+        from acid._io import atomic_path
+
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **{k: getattr(tab, k) for k in _ARRAYS})
+    except OSError:
+        pass  # a read-only home only costs the rebuild next time
+    return tab
+
+
+def _build(fluid: str, superheat: float, subcool: float) -> RefrigerantTable:
+    """Evaluate the table with CoolProp HEOS (about 0.3 s plus CoolProp's import)."""
     from CoolProp import CoolProp as CP
 
     AS = CP.AbstractState("HEOS", fluid)
