@@ -55,7 +55,7 @@ import scipy.optimize
 import scipy.stats
 
 from acid import __version__, model
-from acid._io import file_sha256
+from acid._io import file_sha256, json_safe
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError, DataError, IdentifiabilityWarning, SolverWarning
 from acid.metrics import fit_percent
@@ -209,21 +209,7 @@ class FitResult:
             "notes": list(self.notes),
             "eta_cop_estimate": {"value": self.eta_cop, "stderr": self.eta_cop_stderr},
         }
-        return _json_safe(d)
-
-
-def _json_safe(obj):
-    if isinstance(obj, dict):
-        return {str(k): _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _json_safe(obj.tolist())
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
+        return json_safe(d)
 
 
 # ------------------------------------------------------------------------ estimator

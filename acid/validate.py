@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acid import model
+from acid._io import json_safe
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError, DataError
 from acid.metrics import fit_percent
@@ -141,7 +142,7 @@ class ValidationResult:
         ``at_horizon``, ``vs_horizon`` (envelope per step), ``starts`` (indices, times and
         per-start metrics).
         """
-        return _finite({
+        return json_safe({
             "settings": self.settings,
             "units": {"errors": "K", "time": "s"},
             "channels": {name: {**m, "unit": "K"} for name, m in self.metrics.items()},
@@ -359,18 +360,3 @@ def _statistics(measured: np.ndarray, predicted: np.ndarray, errors: np.ndarray)
         per_start[name] = {"rmse": rmse_s[:, c], "max_abs": max_s[:, c],
                            "fit_percent": fit_s[:, c]}
     return envelope, metrics, per_start
-
-
-def _finite(obj):
-    """Recursively turn arrays into lists and non-finite floats into ``None`` (strict JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _finite(obj.tolist())
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj

@@ -8,6 +8,7 @@ import sys
 import h5py
 import numpy as np
 import pytest
+from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
 from acid.data import Dataset
@@ -121,16 +122,6 @@ def test_same_seed_gives_identical_hdf5(tmp_path):
 
 
 # ------------------------------------------------------------------------ CLI
-def _one_line_error(result, *words):
-    assert result.exit_code != 0
-    assert result.exception is None or isinstance(result.exception, SystemExit)
-    text = result.output.strip()
-    assert "Traceback" not in text
-    assert text.startswith("error:") and len(text.splitlines()) == 1, text
-    for w in words:
-        assert w in text, text
-
-
 def test_cli_help():
     for cmd in (["excite", "--help"], ["import", "--help"]):
         result = runner.invoke(app, cmd)
@@ -191,14 +182,14 @@ def test_cli_excite_bad_options_one_line(tmp_path, args, words):
     if "--plant" not in args:
         base += ["--plant", "model"]
     result = runner.invoke(app, base + args)
-    _one_line_error(result, *words)
+    assert_one_line_error(result, *words)
     assert not out.exists()
 
 
 def test_cli_excite_hifi_unavailable_is_one_line(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "acid.plant.hifi", None)  # import raises ImportError
     result = runner.invoke(app, ["excite", "--plant", "hifi", "--out", str(tmp_path / "d.h5")])
-    _one_line_error(result, "--plant hifi", "--plant model")
+    assert_one_line_error(result, "--plant hifi", "--plant model")
 
 
 def test_cli_excite_default_plant_is_hifi():
@@ -212,7 +203,7 @@ def test_cli_excite_default_plant_is_hifi():
 def test_cli_excite_hifi_params_conflict(tmp_path):
     result = runner.invoke(app, ["excite", "--plant", "hifi", "--params", "p.json",
                                  "--out", str(tmp_path / "d.h5")])
-    _one_line_error(result, "--params")
+    assert_one_line_error(result, "--params")
 
 
 # ---------------------------------------------------------------------- import
@@ -257,5 +248,5 @@ def test_cli_import_errors_one_line(tmp_path):
     for (src, cmap), words in cases:
         result = runner.invoke(app, ["import", str(tmp_path / src), "--map",
                                      str(tmp_path / cmap), "--out", str(out)])
-        _one_line_error(result, *words)
+        assert_one_line_error(result, *words)
         assert not out.exists()

@@ -7,6 +7,7 @@ import json
 import h5py
 import numpy as np
 import pytest
+from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
 from acid.params import ModelParams, paper
@@ -22,17 +23,6 @@ def data_file(model_dataset, tmp_path):
 
 def _invoke(*args):
     return runner.invoke(app, ["fit", *map(str, args)])
-
-
-def _assert_one_line_error(res, *fragments):
-    assert res.exit_code != 0
-    text = res.output
-    assert "Traceback" not in text
-    assert res.exception is None or isinstance(res.exception, SystemExit)
-    lines = [ln for ln in text.splitlines() if ln.strip()]
-    assert len(lines) == 1 and lines[0].startswith("error:"), text
-    for f in fragments:
-        assert f in " ".join(text.split()), text
 
 
 def test_writes_params_json_with_the_required_keys(data_file, tmp_path):
@@ -77,21 +67,21 @@ def test_bad_reference_params_give_a_one_line_error(data_file, tmp_path, content
     bad = tmp_path / "bad.json"
     bad.write_text(content)
     res = _invoke(data_file, "--out", tmp_path / "p.json", "--reference", bad)
-    _assert_one_line_error(res, fragment)
+    assert_one_line_error(res, fragment)
     assert not (tmp_path / "p.json").exists()
 
 
 def test_bad_data_paths_and_options_give_a_one_line_error(data_file, tmp_path):
-    _assert_one_line_error(_invoke(tmp_path / "nope.h5", "--out", tmp_path / "p.json"),
+    assert_one_line_error(_invoke(tmp_path / "nope.h5", "--out", tmp_path / "p.json"),
                            "not found")
     other = tmp_path / "other.h5"
     with h5py.File(other, "w") as f:
         f["x"] = np.arange(3.0)
-    _assert_one_line_error(_invoke(other, "--out", tmp_path / "p.json"), "not an acid dataset")
-    _assert_one_line_error(_invoke(data_file, "--method", "magic"), "magic")
-    _assert_one_line_error(_invoke(data_file, "--estimation-fraction", 1.5),
+    assert_one_line_error(_invoke(other, "--out", tmp_path / "p.json"), "not an acid dataset")
+    assert_one_line_error(_invoke(data_file, "--method", "magic"), "magic")
+    assert_one_line_error(_invoke(data_file, "--estimation-fraction", 1.5),
                            "--estimation-fraction")
-    _assert_one_line_error(_invoke(data_file, "--loss", "huber"), "Huber")
+    assert_one_line_error(_invoke(data_file, "--loss", "huber"), "Huber")
 
 
 def test_unexcited_parameter_warns_or_refuses_with_strict(model_dataset, tmp_path):
@@ -101,4 +91,4 @@ def test_unexcited_parameter_warns_or_refuses_with_strict(model_dataset, tmp_pat
     res = _invoke(path, "--out", tmp_path / "p.json")
     assert res.exit_code == 0, res.output
     assert "warning:" in res.output and "gamma7" in res.output
-    _assert_one_line_error(_invoke(path, "--out", tmp_path / "q.json", "--strict"), "gamma7")
+    assert_one_line_error(_invoke(path, "--out", tmp_path / "q.json", "--strict"), "gamma7")

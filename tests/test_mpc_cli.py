@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
 from acid_cli.main import app
@@ -34,9 +35,10 @@ def test_bad_params_file_is_a_one_line_error(tmp_path):
     bad.write_text("{not json")
     res = runner.invoke(app, ["mpc-check", "--skip-plant", "--params", str(bad)])
     assert res.exit_code == 2
-    assert "not valid JSON" in res.output and "Traceback" not in res.output
+    assert_one_line_error(res, "not valid JSON", str(bad))
 
 
 def test_unknown_solver_is_rejected():
     res = runner.invoke(app, ["mpc-check", "--skip-plant", "--solver", "snopt"])
-    assert res.exit_code == 2 and "--solver" in res.output
+    assert res.exit_code == 2
+    assert_one_line_error(res, "--solver", "snopt")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
 from acid_cli.main import app
@@ -40,7 +41,7 @@ def test_speed_sweep_bad_config_is_one_line_error(tmp_path):
     cfg.write_text("[cabin]\nC_cab = -1.0\n")
     result = runner.invoke(app, ["speed-sweep", "--config", str(cfg), "--out", str(tmp_path)])
     assert result.exit_code == 2
-    assert "C_cab must be positive" in result.output and "Traceback" not in result.output
+    assert_one_line_error(result, "C_cab must be positive", str(cfg))
     assert not (tmp_path / "speed_sweep.png").exists()
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
 from acid.params import paper
@@ -20,17 +21,6 @@ def data_file(model_dataset, tmp_path):
 
 def _invoke(*args):
     return runner.invoke(app, ["validate", *map(str, args)])
-
-
-def _assert_one_line_error(res, *fragments):
-    assert res.exit_code != 0
-    text = res.output  # stdout and stderr together
-    assert "Traceback" not in text
-    assert res.exception is None or isinstance(res.exception, SystemExit)
-    lines = [ln for ln in text.splitlines() if ln.strip()]
-    assert len(lines) == 1 and lines[0].startswith("error:"), text
-    for f in fragments:
-        assert f in " ".join(text.split()), text
 
 
 def test_writes_summary_json_and_both_figures(data_file, tmp_path):
@@ -70,27 +60,27 @@ def test_params_provenance_selects_the_held_out_part(data_file, tmp_path):
 def test_bad_params_json_is_a_one_line_error(data_file, tmp_path):
     bad = tmp_path / "params.json"
     bad.write_text("{not json")
-    _assert_one_line_error(_invoke(data_file, "--params", bad, "--out", tmp_path / "o"),
+    assert_one_line_error(_invoke(data_file, "--params", bad, "--out", tmp_path / "o"),
                            "params.json", "not valid JSON")
     bad.write_text(json.dumps({"gamma": [1, 2], "tau": [0, 0, 0]}))
-    _assert_one_line_error(_invoke(data_file, "--params", bad, "--out", tmp_path / "o"),
+    assert_one_line_error(_invoke(data_file, "--params", bad, "--out", tmp_path / "o"),
                            "gamma")
 
 
 def test_missing_file_is_a_one_line_error(tmp_path):
-    _assert_one_line_error(_invoke(tmp_path / "nope.h5", "--out", tmp_path / "o"),
+    assert_one_line_error(_invoke(tmp_path / "nope.h5", "--out", tmp_path / "o"),
                            "nope.h5", "not found")
 
 
 def test_missing_channel_is_a_one_line_error(model_dataset, tmp_path):
     path = model_dataset.select(["T_cab", "T_evap", "T_ain", "W_bl", "T_evap_set",
                                  "T_shell"]).to_hdf5(tmp_path / "no_tint.h5")
-    _assert_one_line_error(_invoke(path, "--out", tmp_path / "o"), "no_tint.h5", "T_int")
+    assert_one_line_error(_invoke(path, "--out", tmp_path / "o"), "no_tint.h5", "T_int")
 
 
 def test_too_short_record_is_a_one_line_error(model_dataset, tmp_path):
     path = model_dataset.window(0, 100).to_hdf5(tmp_path / "short.h5")
-    _assert_one_line_error(_invoke(path, "--out", tmp_path / "o"), "short.h5",
+    assert_one_line_error(_invoke(path, "--out", tmp_path / "o"), "short.h5",
                            "record too short: 100 samples")
     assert not (tmp_path / "o").exists()
 
