@@ -66,10 +66,15 @@ def write_summary(path: Path | None, summary: dict) -> None:
 
 
 def print_table(title: str, columns: list[str], rows: list[list], **kwargs) -> None:
-    """Print a rich table (cells are converted with ``str``)."""
+    """Print a rich table (cells are converted with ``str``).
+
+    Columns are right-aligned (numbers); a leading ``_`` in a column name asks for a
+    left-aligned column and is not shown.
+    """
     table = Table(title=title, **kwargs)
     for c in columns:
-        table.add_column(c, justify="right" if c and c[0] != "_" else "left")
+        left = c.startswith("_")
+        table.add_column(c[1:] if left else c, justify="left" if left else "right")
     for r in rows:
         table.add_row(*[str(c) for c in r])
     console.print(table)

@@ -26,3 +26,7 @@ app.command(name="fit")(fit.fit)
 app.command(name="validate")(validate.validate)
 app.command(name="mpc-check")(mpc_check.mpc_check)
 app.command(name="reproduce")(reproduce.reproduce)
+
+from acid_cli import cav_study  # noqa: E402
+
+app.command(name="cav-study")(cav_study.cav_study)

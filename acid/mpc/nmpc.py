@@ -23,6 +23,10 @@ Choices the paper leaves open, documented here
 * **Eq. 4 sign.** ``P_c = c_p / eta_cop * W_bl * (T_amb - T_ain)`` is used as published. It
   turns negative if ``T_ain > T_amb`` (never within Table II's bounds with the paper's
   parameters: ``T_ain`` stays below 21 degC), so the optimiser cannot profit from it there.
+* **Eq. 4 efficiency per stage.** ``eta_cop`` enters the NLP as a parameter per stage
+  ``i = 0 .. N`` (default ``params.eta_cop`` everywhere: the paper's model); ``solve`` and
+  ``make_step`` accept an ``eta_cop`` preview, used by the speed-aware controller of
+  :mod:`acid.mpc.speed_model` (beyond the paper, whose assumption 3 leaves speed out).
 * **Eq. 13, ``u(0|k) = u(k)``**, is ambiguous; both readings are supported
   (``NMPCConfig.first_move``):
 
@@ -244,12 +248,15 @@ class NMPC:
         T_int = ca.SX.sym("T_int", N)
         T_shell = ca.SX.sym("T_shell", N)
         T_amb = ca.SX.sym("T_amb")
+        # per-stage eta_cop of eq. 4 (default p.eta_cop at every stage; a speed-aware
+        # controller previews eta_cop(v(i|k)), see acid.mpc.speed_model)
+        eta = ca.SX.sym("eta_cop", N + 1)
         X = [ca.SX.sym(f"x_{i}", _NX) for i in range(N + 1)]
         U = [ca.SX.sym(f"u_{i}", _NU) for i in range(N)]
         S = [ca.SX.sym(f"s_{i + 1}", _NS) for i in range(N)]
 
-        def power(W_bl, T_ain):  # eqs. 4-5, W
-            return model.compressor_power(W_bl, T_ain, T_amb, p) + model.blower_power(W_bl, p)
+        def power(W_bl, T_ain, i):  # eqs. 4-5, W, with the stage-i eta_cop
+            return p.c_p / eta[i] * W_bl * (T_amb - T_ain) + model.blower_power(W_bl, p)
 
         w, g, eq, cost = [], [], [], 0
         for i in range(N):
@@ -261,9 +268,9 @@ class NMPC:
                 eq += [True] * _NX
             T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_set, T_int[i],
                                                   T_shell[i], p)  # eqs. 1-3
-            cost += power(W_bl, T_ain) + cfg.slack_penalty * (S[i][0] + S[i][1])
+            cost += power(W_bl, T_ain, i) + cfg.slack_penalty * (S[i][0] + S[i][1])
             if i == N - 1:  # stage i = N of eq. 7, with u(N|k) := u(N-1|k)
-                cost += power(W_bl, model.inlet_air(T_evap_n, W_bl, p))
+                cost += power(W_bl, model.inlet_air(T_evap_n, W_bl, p), N)
             # dynamics (eqs. 8-9) as gap constraints x(i+1) - f(x(i), u(i)) = 0
             g.append(X[i + 1] - ca.vertcat(T_cab_n, T_evap_n))
             eq += [True] * _NX
@@ -275,7 +282,7 @@ class NMPC:
         w.append(X[N])
         w = ca.vertcat(*w)
         g = ca.vertcat(*g)
-        par = ca.vertcat(x0, T_int, T_shell, T_amb)
+        par = ca.vertcat(x0, T_int, T_shell, T_amb, eta)
         nlp = {"x": w, "f": cost * cfg.cost_scale, "g": g, "p": par}
         if cfg.solver == "fatrop":
             opts = {"structure_detection": "auto", "equality": eq, "print_time": False,
@@ -376,7 +383,7 @@ class NMPC:
         return out[:n_total]
 
     def solve(self, x, T_cab_max, T_int, T_shell, u_prev=None, T_cab_min=None,
-              T_amb=None) -> MPCSolution:
+              T_amb=None, eta_cop=None) -> MPCSolution:
         """Solve eqs. 7-13 once from the measured state.
 
         Parameters
@@ -391,6 +398,8 @@ class NMPC:
             ``"pinned"`` mode (u(0|k) is fixed to it), otherwise only an initial guess.
         T_cab_min : lower cabin bound, K, scalar or (N+1,) preview (default: config).
         T_amb : ambient temperature for eq. 4, K (default: config).
+        eta_cop : efficiency of eq. 4 per stage i = 0 .. N, scalar or (N+1,) preview
+            (default: ``params.eta_cop`` at every stage, the paper's model).
 
         Returns
         -------
@@ -405,6 +414,10 @@ class NMPC:
         Ti = self._preview(T_int, N, "T_int")
         Tsh = self._preview(T_shell, N, "T_shell")
         amb = cfg.T_amb if T_amb is None else float(T_amb)
+        eta = self._preview(self.params.eta_cop if eta_cop is None else eta_cop, N + 1,
+                            "eta_cop")
+        if not np.all(eta > 0):
+            raise ConfigError(f"eta_cop preview must be positive, got {eta}")
         lbx, ubx = self._lbx0, self._ubx0
         if cfg.first_move == "pinned":
             lbx, ubx = lbx.copy(), ubx.copy()
@@ -418,7 +431,7 @@ class NMPC:
         lbg[self._ig_cab_lo] = lb[1:]
         w0 = self._initial_guess(x, Ti, Tsh, u_prev)
         args = {"x0": w0, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg,
-                "p": np.concatenate((x, Ti, Tsh, [amb]))}
+                "p": np.concatenate((x, Ti, Tsh, [amb], eta))}
         if self._lam_g_prev is not None:
             args["lam_g0"] = self._shift_duals(self._lam_g_prev, _NX, self._n_g, _NG)
             args["lam_x0"] = self._shift_duals(self._lam_x_prev, 0, self._n_w, _NW)
@@ -434,9 +447,9 @@ class NMPC:
             self._lam_g_prev = np.asarray(res["lam_g"]).ravel()
             self._lam_x_prev = np.asarray(res["lam_x"]).ravel()
         return self._solution(w, amb, str(stats.get("return_status", "")), success,
-                              int(stats.get("iter_count", -1)), dt)
+                              int(stats.get("iter_count", -1)), dt, eta)
 
-    def _solution(self, w, T_amb, status, success, iterations, dt) -> MPCSolution:
+    def _solution(self, w, T_amb, status, success, iterations, dt, eta=None) -> MPCSolution:
         """Unpack the NLP vector and evaluate the cost terms (eqs. 3-5, 7) in W."""
         cfg, p = self.config, self.params
         W = np.clip(w[self._iW], cfg.W_bl_min, cfg.W_bl_max)
@@ -444,7 +457,10 @@ class NMPC:
         T_cab, T_evap = w[self._iT_cab], w[self._iT_evap]
         W_ext = np.append(W, W[-1])  # u(N|k) := u(N-1|k)
         T_ain = model.inlet_air(T_evap, W_ext, p)
-        P_comp = model.compressor_power(W_ext, T_ain, T_amb, p)
+        if eta is None:
+            P_comp = model.compressor_power(W_ext, T_ain, T_amb, p)
+        else:
+            P_comp = p.c_p / np.asarray(eta, dtype=float) * W_ext * (T_amb - T_ain)
         P_bl = model.blower_power(W_ext, p)
         s_cab = np.maximum(w[self._is_cab], 0.0)
         s_evap = np.maximum(w[self._is_evap], 0.0)
@@ -456,7 +472,8 @@ class NMPC:
                            solve_time_s=dt)
 
     # ------------------------------------------------------------ closed loop
-    def make_step(self, x, T_cab_max, T_int, T_shell, T_cab_min=None, T_amb=None) -> np.ndarray:
+    def make_step(self, x, T_cab_max, T_int, T_shell, T_cab_min=None, T_amb=None,
+                  eta_cop=None) -> np.ndarray:
         """One closed-loop update: measure ``x``, return the input for ``[t_k, t_k + Ts)``.
 
         Never raises for a solver failure: the fallback (rest of the last successful plan,
@@ -472,7 +489,7 @@ class NMPC:
         try:
             sol = self.solve(x, T_cab_max, T_int, T_shell,
                              u_prev=self._committed if pinned else None,
-                             T_cab_min=T_cab_min, T_amb=T_amb)
+                             T_cab_min=T_cab_min, T_amb=T_amb, eta_cop=eta_cop)
             ok = sol.success
         except (RuntimeError, ValueError, FloatingPointError) as exc:  # CasADi eval errors
             status = f"error: {str(exc).splitlines()[0][:120]}"

@@ -1,0 +1,125 @@
+"""``acid cav-study``: speed preview on a real drive cycle, compared fairly (equal comfort,
+same start, end-state corrected, with a speed-blind twin plant)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import typer
+
+from acid import __version__
+from acid._io import file_sha256, save_figure
+from acid.errors import ConfigError
+from acid.params import load_params
+from acid.units import C2K, K2C
+from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+
+
+def _fmt(v, digits: int = 3) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "n/a"
+    return f"{v:.{digits}f}"
+
+
+@handle_errors
+def cav_study(
+    cycle: str = typer.Option("udds", "--cycle",
+                              help="Drive cycle from datasets/drive_cycles (udds, nycc, sc03...)."),
+    params: str = typer.Option("paper", "--params",
+                               help="params.json from `acid fit`, or 'paper' for the preset."),
+    horizon: int = typer.Option(6, "--horizon", help="NMPC horizon N (steps of 5 s)."),
+    T_low: float = typer.Option(22.0, "--t-low", help="Comfort band lower edge, degC."),
+    T_high: float = typer.Option(26.0, "--t-high", help="Comfort band upper edge, degC."),
+    warmup: float = typer.Option(1800.0, "--warmup", help="Warm-up before the cycle, s."),
+    tail: float = typer.Option(1200.0, "--tail",
+                               help="Common continuation measuring the end-state cost, s "
+                                    "(0: C_eff correction only)."),
+    speed_blind: bool = typer.Option(True, "--speed-blind/--no-speed-blind",
+                                     help="Also run the study on the speed-blind twin plant."),
+    identify_duration: float = typer.Option(
+        7200.0, "--identify-duration",
+        help="Length of the APRBS + UDDS record that identifies eta_cop(v), s."),
+    out: Path = typer.Option(Path("reports/cav-study"), "--out",
+                             help="Folder for the figure (cav_<cycle>.png)."),
+    json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figure."),
+) -> None:
+    """Compare (A) constant bound, (B) ICM bound, (C) speed-aware NMPC on a drive cycle.
+
+    All three run the NMPC on the high-fidelity plant from the same warmed-up state; (A) and
+    (C) are tuned to (B)'s mean cabin temperature. Reports energy (MJ, compressor + blower),
+    mean/max T_cab, comfort violation (K s outside the band), the end-state correction and
+    the savings vs (A), on the plant and on its speed-blind twin.
+    """
+    from acid.mpc.cav_study import CASE_LABELS, CASES, StudyConfig, estimated_steps
+    from acid.mpc.cav_study import cav_study as run_study
+    from acid.mpc.speed_model import identify_from_plant
+    from acid.signals import available_drive_cycles, drive_cycle
+
+    names = available_drive_cycles()
+    if cycle not in names:
+        raise ConfigError(f"--cycle: unknown drive cycle {cycle!r} (available: "
+                          f"{', '.join(names)})")
+    if not (math.isfinite(identify_duration) and identify_duration > 600.0):
+        raise ConfigError(f"--identify-duration must be more than 600 s, got {identify_duration}")
+    p = load_params(params)
+    config = StudyConfig(cycle=cycle, horizon=horizon, T_low=C2K(T_low), T_high=C2K(T_high),
+                         warmup_s=warmup, tail_s=tail, speed_blind=speed_blind)
+    eff = identify_from_plant(duration_s=identify_duration)
+    v, _ = drive_cycle(cycle, Ts=p.Ts)
+    with progress_bar(f"cav-study {cycle}", total=estimated_steps(config, v.size, p.Ts)) as up:
+        result = run_study(p, config, efficiency=eff, progress=up)
+
+    q = eff.quality
+    console.print(
+        f"eta_cop(v) = {eff.eta0:.3f} (+/- {eff.stderr[0]:.3f}) + {eff.eta1:.4f} "
+        f"(+/- {eff.stderr[1]:.4f}) v [v in m/s]; R^2 {q['r2']:.3f} (constant eta "
+        f"{q['const_eta']:.3f}: R^2 {q['const_r2']:.3f}), RMSE {q['rmse_W']:.0f} W, "
+        f"n = {q['n']}; eta(25)/eta(0) = {eff.ratio(25.0):.3f}", highlight=False)
+    studies = [result.main] + ([result.blind] if result.blind is not None else [])
+    rows, lines = [], []
+    for st in studies:
+        plant = "hifi" if st.plant == "hifi" else "blind"
+        for key in CASES:
+            c = st.cases[key]
+            ms = c.to_json_dict()["solve_ms"]
+            rows.append([plant, key, _fmt(c.energy_J / 1e6, 4),
+                         f"{K2C(c.mean_T_cab):.2f}", f"{K2C(c.max_T_cab):.2f}",
+                         _fmt(c.comfort_violation_Ks, 1), _fmt(c.correction_J / 1e6, 4),
+                         _fmt((c.tail_energy_J - st.cases["A"].tail_energy_J) / 1e6, 4),
+                         f"{ms['median']:.2f}"])
+        for key in ("B", "C"):
+            s = st.savings_pct(key)
+            lines.append(f"{st.plant}: {CASE_LABELS[key]} saves vs A: raw {_fmt(s['raw'], 2)} %,"
+                         f" C_eff-corrected {_fmt(s['corrected'], 2)} %, tail-corrected "
+                         f"{_fmt(s.get('tail_corrected'), 2)} %")
+    print_table(f"{cycle.upper()} ({v.size * p.Ts:g} s, mean {v.mean():.1f} m/s), N = {horizon}",
+                ["_plant", "_case", "E MJ", "mean C", "max C", "viol Ks", "Ceff MJ", "tail MJ",
+                 "ms"], rows)
+    console.print("A: constant bound, B: ICM bound, C: speed-aware NMPC; "
+                  "E: compressor + blower over the cycle; viol: K s outside the band; Ceff, "
+                  "tail: end-state corrections vs A; ms: median whole NMPC step", highlight=False)
+    for line in lines:
+        console.print(line, highlight=False)
+    d = result.to_json_dict()
+    if "saving_from_speed_pct" in d:
+        sp = d["saving_from_speed_pct"]
+        console.print("part of the saving owed to speed (plant minus speed-blind twin, "
+                      "points): " + "; ".join(
+                          f"{k}: " + ", ".join(f"{m} {_fmt(v_, 2)}" for m, v_ in sp[k].items())
+                          for k in ("B", "C")), highlight=False)
+
+    fig_path = None
+    if figures:
+        from acid.report.cav import cav_study_figure
+
+        fig_path = str(save_figure(cav_study_figure(result), out / f"cav_{cycle}.png"))
+        console.print(f"figure written to {fig_path}")
+    summary = {
+        "command": "cav-study", "acid_version": __version__,
+        "inputs": {"params": params,
+                   "params_sha256": None if params == "paper" else file_sha256(params)},
+        "figure": fig_path, **d,
+    }
+    write_summary(json_path, summary)
