@@ -16,7 +16,7 @@ pytestmark = pytest.mark.slow
 FIGURES = ("stages/sweep/fig3_speed_sweep.png", "stages/validate/fig5_prediction.png",
            "stages/validate/fig6_errors.png", "stages/mpc/fig7_model.png",
            "stages/mpc/fig8_plant.png", "stages/mpc/fig9_cav_bound.png",
-           "stages/mpc/fig10_cav_comparison.png")
+           "stages/mpc/fig10_cav_comparison.png", "stages/cav/cav_study_nycc.png")
 
 
 @pytest.fixture(scope="module")
