@@ -138,7 +138,7 @@ class _RecordingPlant:
         return row
 
     def measure(self) -> dict:
-        return dict(self.plant._states())
+        return dict(self.plant.measure())
 
     def end_state(self) -> dict:
         s = self.measure()

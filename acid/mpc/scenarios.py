@@ -285,19 +285,8 @@ class CheckResult:
 
 # ------------------------------------------------------------------------ the loop
 def _measure(plant: Plant) -> dict:
-    """The plant's current state (K) at the start of the next step.
-
-    The plant protocol's ``step`` returns the row of the step just taken (states *before*
-    it), so the closed loop reads the state after it: ``plant.measure()`` when the plant
-    has one, else the high-fidelity plant's state snapshot (``_states``), else the
-    ``T_cab``/``T_evap``/``T_int``/``T_shell`` attributes (``ModelPlant``).
-    """
-    for name in ("measure", "_states"):
-        fn = getattr(plant, name, None)
-        if callable(fn):
-            return dict(fn())
-    return {name: float(getattr(plant, name)) for name in ("T_cab", "T_evap", "T_int",
-                                                           "T_shell")}
+    """The plant's current state (K) at the start of the next step (``Plant.measure``)."""
+    return dict(plant.measure())
 
 
 def closed_loop(plant: Plant, mpc: NMPC, initial: dict, T_cab_max: np.ndarray,

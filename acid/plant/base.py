@@ -84,6 +84,14 @@ class Plant(abc.ABC):
         """Advance one sample period with inputs held; returns row k (see module docstring)."""
 
     @abc.abstractmethod
+    def measure(self) -> Measurement:
+        """The current state (K), i.e. what a closed loop measures before the next step.
+
+        ``step`` returns row k (the states *before* the step); a controller needs the states
+        after it, at t_{k+1}: at least T_cab, T_evap, T_int and T_shell.
+        """
+
+    @abc.abstractmethod
     def config(self) -> dict:
         """The plant's resolved configuration, JSON-serialisable (stored with datasets)."""
 

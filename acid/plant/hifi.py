@@ -176,9 +176,10 @@ class HifiPlant(Plant):
         self._comp.reset()
         self._blower.reset()
         self.t = 0.0
-        return self._states()
+        return self.measure()
 
-    def _states(self) -> Measurement:
+    def measure(self) -> Measurement:
+        """Current states (K; w_cab in kg/kg): cabin, evaporator and condenser walls, masses."""
         return {"T_cab": self.T_cab, "T_evap": self.T_ew, "T_int": self.T_int,
                 "T_shell": self.T_shell, "T_amb": self.cfg.T_amb, "w_cab": self.w_cab,
                 "T_cw": self.T_cw}
@@ -223,7 +224,7 @@ class HifiPlant(Plant):
             W_cmd = min(max(W_cmd, c.W_bl_min), c.W_bl_max)
         else:
             W_cmd = 0.0
-        row = self._states()
+        row = self.measure()
 
         # ---- constants over the step (plain floats for a lean substep loop)
         dt = c.dt_int

@@ -45,14 +45,18 @@ class ModelPlant(Plant):
                 "meas_noise_std_K": self.meas_noise_std,
                 "process_noise_std_K": self.process_noise_std}
 
+    def measure(self) -> Measurement:
+        """Current states T_cab, T_evap and exogenous T_int, T_shell, K (noise-free)."""
+        return {"T_cab": self.T_cab, "T_evap": self.T_evap, "T_int": self.T_int,
+                "T_shell": self.T_shell}
+
     def reset(self, initial: dict[str, float] | None = None) -> Measurement:
         init = {"T_cab": C2K(35.0), "T_evap": C2K(8.0), "T_int": C2K(35.0),
                 "T_shell": C2K(38.0)}
         init.update(initial or {})
         self.T_cab, self.T_evap = float(init["T_cab"]), float(init["T_evap"])
         self.T_int, self.T_shell = float(init["T_int"]), float(init["T_shell"])
-        return {"T_cab": self.T_cab, "T_evap": self.T_evap, "T_int": self.T_int,
-                "T_shell": self.T_shell}
+        return self.measure()
 
     def step(self, W_bl: float, T_evap_set: float, v_veh: float = 0.0, **exogenous) -> Measurement:
         p = self.params

@@ -1,7 +1,7 @@
 """Figure of the drive-cycle CAV study (:mod:`acid.mpc.cav_study`) from its result object.
 
 Builds a ``matplotlib.figure.Figure`` directly (no pyplot state); save with
-``acid._io.save_figure``. Speeds in m/s, temperatures in degC, powers in W, energies in kJ,
+``acid._io.save_figure``. Speeds in m/s, temperatures in °C, powers in W, energies in kJ,
 time in s.
 """
 
@@ -61,8 +61,8 @@ def cav_study_figure(result: CavStudyResult) -> Figure:
     for T in (cfg.T_low, cfg.T_high):
         axs[1].axhline(K2C(T), **_BAND)
     axs[1].axhline(K2C(study.target_mean_K), color="grey", linewidth=0.8,
-                   label=f"mean T_cab target {K2C(study.target_mean_K):.2f} degC")
-    axs[1].set_ylabel("cabin temperature T_cab (degC)")
+                   label=f"mean T_cab target {K2C(study.target_mean_K):.2f} °C")
+    axs[1].set_ylabel("cabin temperature $T_{cab}$ (°C)")
     axs[2].set_ylabel("P_comp + P_bl (W)")
     axs[3].set_ylabel("cumulative energy (kJ)")
     axs[3].set_xlabel("time (s)")
