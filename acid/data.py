@@ -518,34 +518,43 @@ def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: MAT file not found")
+    import scipy.io
+
     wanted = [cmap.time] + [c for c, _ in cmap.channels.values()]
-    cols: dict[str, np.ndarray] = {}
     try:
-        import scipy.io
-
-        mat = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
-        for key in wanted:
-            obj = mat
-            ok = True
-            for part in key.split("."):
-                if isinstance(obj, dict):
-                    ok = part in obj
-                    obj = obj.get(part)
-                else:
-                    ok = hasattr(obj, part)
-                    obj = getattr(obj, part, None)
-                if not ok:
-                    break
-            if ok:
-                cols[key] = np.asarray(obj, dtype=float).ravel()
-    except NotImplementedError:  # MATLAB v7.3 files are HDF5
-        import h5py
-
-        with h5py.File(path, "r") as f:
-            for key in wanted:
-                h5key = key.replace(".", "/")
-                if h5key in f:
-                    cols[key] = np.asarray(f[h5key][()], dtype=float).ravel()
+        major, _ = scipy.io.matlab.matfile_version(path)
+        cols = _read_mat73(path, wanted) if major == 2 else _read_mat5(path, wanted)
     except (ValueError, OSError) as exc:
         raise DataError(f"{path}: cannot read as a MAT file ({exc})") from None
     return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "mat"}).validate())
+
+
+def _read_mat5(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+    """Variables (``struct.field`` paths) of a MATLAB v4/v5/v7 file, via scipy."""
+    import scipy.io
+
+    mat = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
+    cols = {}
+    for key in wanted:
+        obj, ok = mat, True
+        for part in key.split("."):
+            ok = part in obj if isinstance(obj, dict) else hasattr(obj, part)
+            obj = obj.get(part) if isinstance(obj, dict) else getattr(obj, part, None)
+            if not ok:
+                break
+        if ok:
+            cols[key] = np.asarray(obj, dtype=float).ravel()
+    return cols
+
+
+def _read_mat73(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+    """Variables of a MATLAB v7.3 file (HDF5 inside; structs are groups), via h5py."""
+    import h5py
+
+    cols = {}
+    with h5py.File(path, "r") as f:
+        for key in wanted:
+            h5key = key.replace(".", "/")
+            if h5key in f:
+                cols[key] = np.asarray(f[h5key][()], dtype=float).ravel()
+    return cols

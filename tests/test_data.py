@@ -356,3 +356,23 @@ def test_resampling_averages_outputs_and_powers_over_each_period(tmp_path):
     energy_fine = np.trapezoid(power, t)
     assert abs(ds["P_comp"].sum() * ds.Ts - energy_fine) < 1e-6 * energy_fine
     np.testing.assert_allclose(ds["T_cab"], 300 + 0.01 * ds.time - 273.15)
+
+
+def test_mat_v73_import_reads_hdf5_inside(tmp_path):
+    """MATLAB v7.3 files are HDF5 with a 512-byte MAT header; structs are groups."""
+    import h5py
+
+    src = tmp_path / "run73.mat"
+    t = np.arange(0, 60.01, 0.5)
+    with h5py.File(src, "w", userblock_size=512) as f:
+        g = f.create_group("sim")
+        g["time"] = t
+        g["T_cabin_air"] = 303.15 - 0.05 * t
+    header = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: test HDF5 schema 1.00 ."
+    with open(src, "r+b") as fh:
+        fh.write(header.ljust(116, b" ") + b"\0" * 8 + b"\x00\x02" + b"IM")
+    cmap = ChannelMap.from_dict({"time": "sim.time", "Ts": 5.0, "channels": {
+        "T_cab": {"column": "sim.T_cabin_air", "unit": "K"}}})
+    ds = from_mat(src, cmap)
+    assert len(ds) == 12 and ds.metadata["imported_from"] == "mat"
+    np.testing.assert_allclose(ds["T_cab"], 30.0 - 0.05 * ds.time, atol=1e-9)
