@@ -35,6 +35,15 @@ Three methods, one result type (:class:`FitResult`):
     variables: the noisy T_cab, T_evap, T_ain appear among the regressors) while output error
     is consistent; the model is also judged on 300-step predictions, not one step.
 
+Standard errors (``covariance``): "white" is sigma^2 (X^T X)^-1 per equation and
+sigma^2 (J^T J)^-1 for output error, right only when the residuals are white; "hac" (the
+default) is the Newey & West (1987) sandwich with Bartlett weights and the automatic lag of
+Newey & West (1994), lag products kept inside each experiment. On high-fidelity plant data
+(model mismatch, strongly autocorrelated residuals) the white errors are ~3x too small (seed-
+to-seed spread / mean stderr 1.7-6.6 over 20 two-hour records), the HAC ones 0.3-2.1
+(median 0.7 least squares, 0.9 output error); on white-noise model-plant data both cover
+the truth ~95 % of the time (30 seeds: OE 0.96 / 0.97, LS with process noise 0.97 / 0.93).
+
 Rank deficiency (a parameter the data do not excite, e.g. W_bl constant makes gamma7
 collinear with tau3) emits :class:`acid.errors.IdentifiabilityWarning` naming the parameter
 and holds it at the reference value (the paper's by default), or raises ``DataError`` with
@@ -80,6 +89,9 @@ DYNAMIC_PARAMS: tuple[str, ...] = PARAM_NAMES[:10]
 
 METHODS = ("ls", "cvx", "oe")
 LOSSES = ("squared", "huber")
+COVARIANCES = ("white", "hac")
+#: The default of ``ModelFitter(covariance=...)`` and ``acid fit --covariance`` (see README).
+DEFAULT_COVARIANCE = "hac"
 
 _RANK_RTOL = 1e-8       # singular value ratio below which a direction counts as not excited
 _COND_WARN = 1e4        # scaled condition number above which the data excite a direction poorly
@@ -120,6 +132,10 @@ class FitResult:
         P_comp or T_amb); kept out of ``params`` unless the fitter was asked to use it.
     n_samples : samples in the estimation data; ``n_rows`` regression rows per equation.
     method, loss : the estimator and loss used; ``elapsed_s`` wall time of the fit, s.
+    covariance_kind : "white" (``sigma^2 (X^T X)^-1``, ``sigma^2 (J^T J)^-1``) or "hac"
+        (Newey-West sandwich); what ``stderr``, ``ci95`` and ``covariance`` are.
+    hac_bandwidth : {block: Bartlett truncation lag, samples} of the HAC estimate (empty for
+        "white").
     """
 
     params: ModelParams
@@ -150,6 +166,8 @@ class FitResult:
     method: str
     loss: str
     elapsed_s: float = field(default=float("nan"), compare=False)
+    covariance_kind: str = "white"
+    hac_bandwidth: dict[str, int] = field(default_factory=dict)
 
     def table(self) -> list[tuple[str, str, float, float, float, float, float]]:
         """Rows (name, unit, paper/reference value, estimate, stderr, ci_low, ci_high).
@@ -199,6 +217,7 @@ class FitResult:
             }
         d = {
             "method": self.method, "loss": self.loss, "n_samples": self.n_samples,
+            "covariance_kind": self.covariance_kind, "hac_bandwidth": self.hac_bandwidth,
             "elapsed_s": self.elapsed_s, "parameters": params, "equations": blocks,
             "covariance": {k: {"names": list(self.covariance_names[k]), "matrix": v}
                            for k, v in self.covariance.items()},
@@ -234,12 +253,37 @@ class ModelFitter:
     reference : parameter set used beside the estimates and for held parameters; the paper's
         by default.
     solver : CVXPY solver name for ``"cvx"`` (default: CVXPY's choice).
+    covariance : how standard errors and intervals are computed.
+
+        * ``"white"``: the textbook ``sigma^2 (X^T X)^-1`` per equation and
+          ``sigma^2 (J^T J)^-1`` for output error; right when the residuals are white
+          (model-plant data with white noise).
+        * ``"hac"``: the heteroskedasticity-and-autocorrelation-consistent sandwich of
+          Newey & West (1987), ``n/(n-p) B^-1 S B^-1`` with ``B = X^T X`` (``J^T J``) and
+          ``S`` the Bartlett-weighted long-run covariance of the scores ``x_t e_t`` (for
+          output error: the Jacobian rows times residuals, summed over the three channels of
+          one instant). Lag products never cross an experiment boundary; output-error
+          windows of one experiment are contiguous in time, so they do cross windows. Needed
+          when the model does not contain the plant (high-fidelity or real data): the
+          residuals are then strongly autocorrelated and white intervals far too narrow.
+    hac_bandwidth : Bartlett truncation lag L (weights ``1 - l/(L+1)``): ``"auto"`` (the
+        data-dependent rule of Newey & West 1994, per equation / for the output-error
+        block), ``"nw"`` (the fixed rule ``floor(4 (n/100)^(2/9))``) or an integer >= 0
+        (0: White's heteroskedasticity-consistent HC0 sandwich).
+
+    References
+    ----------
+    Newey, W. K. and West, K. D. (1987). A simple, positive semi-definite,
+    heteroskedasticity and autocorrelation consistent covariance matrix. Econometrica 55(3),
+    703-708. Newey, W. K. and West, K. D. (1994). Automatic lag selection in covariance
+    matrix estimation. Review of Economic Studies 61(4), 631-653.
     """
 
     def __init__(self, method: str = "ls", loss: str = "squared", fit_blower: bool = True,
                  oe_window: int = 300, oe_weighting: str = "noise", oe_estimate_x0: bool = True,
                  use_eta_cop: bool = False, on_rank_deficiency: str = "fix",
-                 reference: ModelParams | None = None, solver: str | None = None):
+                 reference: ModelParams | None = None, solver: str | None = None,
+                 covariance: str = DEFAULT_COVARIANCE, hac_bandwidth: str | int = "auto"):
         self.method = method
         self.loss = loss
         self.fit_blower = fit_blower
@@ -250,6 +294,8 @@ class ModelFitter:
         self.on_rank_deficiency = on_rank_deficiency
         self.reference = reference
         self.solver = solver
+        self.covariance = covariance
+        self.hac_bandwidth = hac_bandwidth
 
     def _check_options(self) -> None:
         if self.method not in METHODS:
@@ -265,6 +311,14 @@ class ModelFitter:
                               f"got {self.on_rank_deficiency!r}")
         if self.oe_weighting not in ("noise", "none"):
             raise ConfigError(f"oe_weighting must be 'noise' or 'none', got {self.oe_weighting!r}")
+        if self.covariance not in COVARIANCES:
+            raise ConfigError(f"unknown covariance {self.covariance!r} (choose from "
+                              f"{', '.join(COVARIANCES)})")
+        bw = self.hac_bandwidth
+        if not (bw in ("auto", "nw") or (isinstance(bw, (int, np.integer))
+                                         and not isinstance(bw, bool) and bw >= 0)):
+            raise ConfigError(f"hac_bandwidth must be 'auto', 'nw' or an integer >= 0, "
+                              f"got {bw!r}")
         if int(self.oe_window) < 5:
             raise ConfigError(f"oe_window must be at least 5 samples, got {self.oe_window}")
 
@@ -305,13 +359,14 @@ class ModelFitter:
         covariance = {eq: f.cov for eq, f in fits.items()}
         cov_names = {eq: f.names for eq, f in fits.items()}
         solver_status = {eq: f.status for eq, f in fits.items()}
+        bandwidths = {eq: f.bandwidth for eq, f in fits.items()}
         active = [c for f in fits.values() for c in f.active]
 
         if self.method == "oe":
             free = [n for n in DYNAMIC_PARAMS if status[_INDEX[n]] == "estimated"]
             oe = _output_error(data, theta, free, {eq: fits[eq] for eq in ("eq1", "eq2", "eq3")},
                                int(self.oe_window), self.oe_weighting, self.oe_estimate_x0,
-                               self.loss)
+                               self.loss, self.covariance, self.hac_bandwidth)
             theta = oe.theta
             for n, se in zip(free, oe.stderr, strict=True):
                 stderr[_INDEX[n]] = se
@@ -321,7 +376,10 @@ class ModelFitter:
             solver_status["oe"] = oe.status
             notes.append(f"output error over {oe.n_windows} windows of <= {self.oe_window} "
                          "samples from the least-squares start; consistent under measurement "
-                         "noise; standard errors from sigma^2 (J^T J)^-1 at the optimum")
+                         "noise; standard errors from " + (
+                             "sigma^2 (J^T J)^-1" if self.covariance == "white" else
+                             f"the Newey-West sandwich (lag {oe.bandwidth})") + " at the optimum")
+            bandwidths["oe"] = oe.bandwidth
             if not oe.success:
                 msg = f"output-error refinement did not converge ({oe.status})"
                 warnings.warn(msg, SolverWarning, stacklevel=2)
@@ -374,6 +432,8 @@ class ModelFitter:
             eta_cop=eta, eta_cop_stderr=eta_se, n_samples=len(ds),
             n_rows={eq: f.n_rows for eq, f in fits.items()}, method=self.method,
             loss=self.loss, elapsed_s=time.perf_counter() - t0,
+            covariance_kind=self.covariance,
+            hac_bandwidth={k: int(v) for k, v in bandwidths.items() if v is not None},
         )
         self.params_ = params
         self.result_ = result
@@ -384,8 +444,11 @@ class ModelFitter:
                       warn_lines: list[str], source: str) -> _EqFit:
         """One regression: rank check, (constrained / robust) solve, covariance.
 
-        Covariance sigma^2 (X^T X)^-1 over the free columns, sigma^2 = RSS / (N - p) (for the
-        Huber loss sigma is the MAD-based robust standard deviation of the residuals).
+        Covariance over the free columns: ``"white"`` sigma^2 (X^T X)^-1, sigma^2 = RSS / (N - p)
+        (for the Huber loss sigma is the MAD-based robust standard deviation of the
+        residuals); ``"hac"`` N/(N - p) (Z^T Z)^-1 S (Z^T Z)^-1 in the scaled variables, S the
+        Newey-West long-run covariance of the scores z_t e_t (Huber: psi(e_t) z_t, the bread
+        divided by the fraction of unclipped residuals), mapped back with the affine map.
         """
         names = EQUATIONS[eq]
         y, offset, X = _regression(eq, data)
@@ -429,6 +492,7 @@ class ModelFitter:
         free = ~fixed
         active: list[str] = []
         status = "fixed"
+        bandwidth = None
         cov = np.zeros((len(names), len(names)))
         sigma = 0.0
         n_rows = X.shape[0]
@@ -458,7 +522,22 @@ class ModelFitter:
                 sigma = float(np.sqrt(r @ r / dof))
             _, s, Vt = np.linalg.svd(Z, full_matrices=False)
             inv_ztz = (Vt.T / s**2) @ Vt
-            cov_phi = sigma**2 / sc.sy**2 * inv_ztz
+            if self.covariance == "hac":
+                rows = np.flatnonzero(data.transition) if eq in ("eq1", "eq2") \
+                    else np.arange(n_rows)
+                groups = _segment_ids(rows, data.segments)
+                e = r / sc.sy
+                frac = 1.0
+                if self.loss == "huber":  # M-estimator: scores psi(e) z, bread E[psi'] Z^T Z
+                    c = _HUBER_M * max(sigma / sc.sy, 1e-12)
+                    frac = max(float(np.mean(np.abs(e) <= c)), 1.0 / n_rows)
+                    e = np.clip(e, -c, c)
+                scores = Z * e[:, None]
+                bandwidth = _resolve_bandwidth(self.hac_bandwidth, scores, groups)
+                meat = _hac_meat(scores, groups, bandwidth)
+                cov_phi = n_rows / dof * (inv_ztz @ meat @ inv_ztz) / frac**2
+            else:
+                cov_phi = sigma**2 / sc.sy**2 * inv_ztz
             idx = np.flatnonzero(free)
             cov[np.ix_(idx, idx)] = sc.A @ cov_phi @ sc.A.T
         resid = target - X @ theta_eq
@@ -467,7 +546,8 @@ class ModelFitter:
         return _EqFit(names=names, theta=theta_eq, fixed=tuple(bool(f) for f in fixed),
                       stderr=np.sqrt(np.clip(np.diag(cov), 0, None)), cov=cov, dof=dof,
                       cond=diag.cond, cond_raw=diag.cond_raw, rank=diag.rank, status=status,
-                      active=tuple(active), n_rows=n_rows, residual_std=sigma)
+                      active=tuple(active), n_rows=n_rows, residual_std=sigma,
+                      bandwidth=bandwidth)
 
 
 def fit(ds: Dataset, method: str = "ls", **options) -> FitResult:
@@ -520,6 +600,7 @@ class _EqFit:
     active: tuple[str, ...]
     n_rows: int
     residual_std: float
+    bandwidth: int | None = None   # HAC truncation lag (None: white covariance)
 
 
 def _unit_params(values: dict[str, float]) -> ModelParams:
@@ -645,6 +726,73 @@ class _Affine:
 def _robust_std(r: np.ndarray) -> float:
     """1.4826 x median absolute deviation: a standard deviation immune to a few outliers."""
     return float(1.4826 * np.median(np.abs(r - np.median(r))))
+
+
+# ------------------------------------------------------------------ HAC covariance
+def _segment_ids(sample_idx: np.ndarray, segments) -> np.ndarray:
+    """Experiment number of each sample index (``segments`` as ``Dataset.segments()``)."""
+    starts = np.array([a for a, _ in segments])
+    return np.searchsorted(starts, sample_idx, side="right") - 1
+
+
+def _lag_products(h: np.ndarray, g: np.ndarray, lag: int) -> np.ndarray:
+    """sum_t h_t h_{t-lag}^T over the pairs in one experiment (rows ordered in time)."""
+    same = (g[lag:] == g[:-lag]).astype(float)
+    return (h[lag:] * same[:, None]).T @ h[:-lag]
+
+
+def _nw_bandwidth(h: np.ndarray, g: np.ndarray) -> int:
+    """Automatic Bartlett truncation lag of Newey & West (1994).
+
+    ``h`` (n, p) are time-ordered scores with the experiment labels ``g`` (lag products
+    never cross an experiment). The scores are standardised column by column and summed
+    (NW94's weight vector, equal weights); from the autocovariances ``sigma_j`` of that sum
+    up to the preliminary lag ``m = floor(4 (n/100)^(2/9))``,
+    ``s0 = sigma_0 + 2 sum sigma_j``, ``s1 = 2 sum j sigma_j``, and the lag is
+    ``floor(1.1447 (s1/s0)^(2/3) n^(1/3))``, capped below the longest experiment.
+    """
+    n = h.shape[0]
+    sd = h.std(axis=0)
+    keep = sd > 0
+    if not keep.any():
+        return 0
+    u = (h[:, keep] / sd[keep]).sum(axis=1, keepdims=True)
+    longest = int(np.max(np.bincount(g - g.min()))) if n else 0
+    m = min(int(4 * (n / 100.0) ** (2.0 / 9.0)), max(longest - 1, 0))
+    sig = [float(u[:, 0] @ u[:, 0]) / n]
+    sig += [float(_lag_products(u, g, j)[0, 0]) / n for j in range(1, m + 1)]
+    sig = np.array(sig)
+    j = np.arange(m + 1)
+    s0 = sig[0] + 2.0 * sig[1:].sum()
+    s1 = 2.0 * (j[1:] * sig[1:]).sum()
+    if s0 <= 0:
+        return m
+    lag = int(1.1447 * (abs(s1) / s0) ** (2.0 / 3.0) * n ** (1.0 / 3.0))
+    return int(min(lag, max(longest - 1, 0)))
+
+
+def _hac_meat(h: np.ndarray, g: np.ndarray, bandwidth: int) -> np.ndarray:
+    """Newey-West (1987) long-run covariance of the score sum, Bartlett weights.
+
+    ``S = G_0 + sum_{l=1..L} (1 - l/(L+1)) (G_l + G_l^T)`` with ``G_l`` the sum of
+    ``h_t h_{t-l}^T`` over pairs inside one experiment (``g`` labels; rows in time order).
+    Positive semi-definite by construction; ``L = 0`` is White's (1980) HC0 meat.
+    """
+    S = h.T @ h
+    for lag in range(1, min(int(bandwidth), h.shape[0] - 1) + 1):
+        G = _lag_products(h, g, lag)
+        S += (1.0 - lag / (bandwidth + 1.0)) * (G + G.T)
+    return S
+
+
+def _resolve_bandwidth(spec, h: np.ndarray, g: np.ndarray) -> int:
+    """The truncation lag: ``"auto"`` (Newey-West 1994), ``"nw"`` (floor(4 (n/100)^(2/9)))
+    or a non-negative integer."""
+    if spec == "auto":
+        return _nw_bandwidth(h, g)
+    if spec == "nw":
+        return int(4 * (h.shape[0] / 100.0) ** (2.0 / 9.0))
+    return int(spec)
 
 
 def _constraints(eq: str, th: dict, d: _Signals) -> list[tuple[str, object]]:
@@ -846,6 +994,7 @@ class _OEResult:
     success: bool
     channel_rms: dict[str, float]
     n_windows: int
+    bandwidth: int | None = None
 
 
 class _OEProblem:
@@ -935,8 +1084,14 @@ class _OEProblem:
 
 
 def _output_error(d: _Signals, theta0: np.ndarray, free: list[str], fits: dict, window: int,
-                  weighting: str, estimate_x0: bool, loss: str) -> _OEResult:
-    """Refine the free gamma/tau by minimising multi-step simulation errors (see module doc)."""
+                  weighting: str, estimate_x0: bool, loss: str, covariance: str = "white",
+                  hac_bandwidth="auto") -> _OEResult:
+    """Refine the free gamma/tau by minimising multi-step simulation errors (see module doc).
+
+    The covariance of the free parameters is ``sigma^2 (J^T J)^-1`` (``covariance="white"``)
+    or the Newey-West sandwich ``n/(n-p) (J^T J)^-1 S (J^T J)^-1`` over all decision
+    variables (parameters and window initial states), of which the parameter block is kept.
+    """
     prob = _OEProblem(d, theta0, free, fits, window, estimate_x0)
     z = prob.z0()
     if not free:
@@ -978,8 +1133,27 @@ def _output_error(d: _Signals, theta0: np.ndarray, free: list[str], fits: dict, 
     colnorm[colnorm == 0] = 1.0
     _, s, Vt = np.linalg.svd(J / colnorm, full_matrices=False)
     s_inv2 = np.where(s > 1e-12 * s[0], 1.0 / s**2, 0.0)
-    cov_z = sigma2 * ((Vt.T * s_inv2) @ Vt) / np.outer(colnorm, colnorm)
+    bread = ((Vt.T * s_inv2) @ Vt) / np.outer(colnorm, colnorm)   # (J^T J)^-1
     nf = len(free)
+    bandwidth = None
+    if covariance == "hac":
+        # residual rows are [T_cab | T_evap | T_ain], each the masked (window, step) samples
+        # in window-major order; the score of one instant sums its three channels (their
+        # errors are correlated), then lags run along time inside each experiment
+        n_obs = int(m.sum())
+        frac = 1.0
+        if loss == "huber":  # the last pass minimised Huber(r, f_scale=_HUBER_M)
+            frac = max(float(np.mean(np.abs(r) <= _HUBER_M)), 1.0 / r.size)
+            r = np.clip(r, -_HUBER_M, _HUBER_M)
+        h = (J * r[:, None]).reshape(3, n_obs, p).sum(axis=0)
+        sample = prob.w.idx[m]
+        order = np.argsort(sample, kind="stable")
+        h, groups = h[order], _segment_ids(sample[order], d.segments)
+        bandwidth = _resolve_bandwidth(hac_bandwidth, h[:, :nf], groups)
+        meat = _hac_meat(h, groups, bandwidth)
+        cov_z = n / dof * (bread @ meat @ bread) / frac**2
+    else:
+        cov_z = sigma2 * bread
     cov = prob.A @ cov_z[:nf, :nf] @ prob.A.T
     e = prob.channel_errors(z)[:, m]
     rms = np.sqrt(np.mean(e**2, axis=1))
@@ -987,4 +1161,4 @@ def _output_error(d: _Signals, theta0: np.ndarray, free: list[str], fits: dict, 
                      dof=dof, status=str(res.message), success=bool(res.status > 0),
                      channel_rms={f"oe_{c}": float(v) for c, v in
                                   zip(("T_cab", "T_evap", "T_ain"), rms, strict=True)},
-                     n_windows=prob.nw)
+                     n_windows=prob.nw, bandwidth=bandwidth)

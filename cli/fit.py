@@ -11,13 +11,17 @@ import typer
 from acid import __version__
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError
-from acid.fit import EQUATION_CHANNEL, ModelFitter
+from acid.fit import COVARIANCES, DEFAULT_COVARIANCE, EQUATION_CHANNEL, ModelFitter
 from acid.params import load_params
 from acid_cli._common import console, err_console, handle_errors, print_table, write_summary
 
 
 def _num(v: float, digits: int = 5) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.{digits}g}"
+
+
+def _lags(bandwidths: dict[str, int]) -> str:
+    return ", ".join(f"{k} {v}" for k, v in bandwidths.items())
 
 
 @handle_errors
@@ -47,6 +51,15 @@ def fit(
     use_eta_cop: bool = typer.Option(
         False, "--use-eta-cop",
         help="Put the eta_cop estimated from P_comp (eq. 4) into params.json."),
+    covariance: str = typer.Option(
+        DEFAULT_COVARIANCE, "--covariance",
+        help="Standard errors: 'white' (sigma^2 (X^T X)^-1, residuals assumed white) or 'hac' "
+             "(Newey-West 1987 sandwich, honest when the residuals are autocorrelated, "
+             "as on plant data)."),
+    hac_bandwidth: str = typer.Option(
+        "auto", "--hac-bandwidth",
+        help="HAC Bartlett lag: 'auto' (Newey-West 1994), 'nw' (floor(4 (n/100)^(2/9))) "
+             "or an integer >= 0."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
     """Fit the control-oriented model and write params.json (kelvin convention).
@@ -56,12 +69,22 @@ def fit(
     """
     if not 0.0 < estimation_fraction <= 1.0:
         raise ConfigError(f"--estimation-fraction must be in (0, 1], got {estimation_fraction}")
+    bandwidth: str | int = hac_bandwidth
+    if hac_bandwidth.strip().isdigit():
+        bandwidth = int(hac_bandwidth)
+    elif hac_bandwidth not in ("auto", "nw"):
+        raise ConfigError(f"--hac-bandwidth must be 'auto', 'nw' or an integer >= 0, "
+                          f"got {hac_bandwidth!r}")
+    if covariance not in COVARIANCES:
+        raise ConfigError(f"--covariance: unknown covariance {covariance!r} (choose from "
+                          f"{', '.join(COVARIANCES)})")
     ref = load_params(reference)
     ds = Dataset.from_hdf5(data, require=MODEL_CHANNELS, min_samples=20)
     est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]
     fitter = ModelFitter(method=method, loss=loss, fit_blower=not no_blower,
                          oe_window=oe_window, use_eta_cop=use_eta_cop,
-                         on_rank_deficiency="raise" if strict else "fix", reference=ref)
+                         on_rank_deficiency="raise" if strict else "fix", reference=ref,
+                         covariance=covariance, hac_bandwidth=bandwidth)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the result carries them; printed below, once
         result = fitter.fit(est)
@@ -74,7 +97,9 @@ def fit(
     params.to_json(out, extra={"fit": report})
 
     console.print(f"{data}: {len(est)} of {len(ds)} samples ({est.duration:g} s), method "
-                  f"{method}, loss {loss} ({result.elapsed_s * 1e3:.0f} ms)")
+                  f"{method}, loss {loss}, covariance {covariance}"
+                  + (f" (lags {_lags(result.hac_bandwidth)})" if result.hac_bandwidth else "")
+                  + f" ({result.elapsed_s * 1e3:.0f} ms)")
     rows = []
     for (name, unit, ref_v, v, se, lo, hi), st in zip(result.table(),
                                                       result.param_status + ("eq. 4",),
