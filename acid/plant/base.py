@@ -26,6 +26,9 @@ from acid.data import CHANNELS, Dataset
 from acid.errors import ConfigError
 from acid.units import K2C, is_temperature
 
+#: Optional per-sample exogenous inputs of a schedule, passed to ``Plant.step`` as keywords (K).
+EXOGENOUS = ("T_int", "T_shell", "T_amb")
+
 Measurement = dict[str, float]
 """Channel name -> value for one sample; temperatures in K, other units as in CHANNELS."""
 
@@ -42,6 +45,8 @@ class InputSchedule:
     Ts : sample time, s.
     T_int, T_shell : optional (n,) exogenous temperatures, K. Only the control-oriented
         model plant uses them (the high-fidelity plant computes its own).
+    T_amb : optional (n,) ambient temperature per sample, K (held over the sample); the
+        plant's configured ambient when None.
     spec : how the schedule was made (generator, bounds, seed), stored as dataset metadata.
     """
 
@@ -51,6 +56,7 @@ class InputSchedule:
     Ts: float = 5.0
     T_int: np.ndarray | None = None
     T_shell: np.ndarray | None = None
+    T_amb: np.ndarray | None = None
     spec: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -58,7 +64,7 @@ class InputSchedule:
         n = self.W_bl.shape[0]
         self.T_evap_set = np.broadcast_to(np.asarray(self.T_evap_set, dtype=float), (n,)).copy()
         self.v_veh = np.broadcast_to(np.asarray(self.v_veh, dtype=float), (n,)).copy()
-        for name in ("T_int", "T_shell"):
+        for name in EXOGENOUS:
             v = getattr(self, name)
             if v is not None:
                 setattr(self, name, np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy())
@@ -109,11 +115,8 @@ class Plant(abc.ABC):
         n = len(schedule)
         rows: list[Measurement] = []
         for k in range(n):
-            exo = {}
-            if schedule.T_int is not None:
-                exo["T_int"] = schedule.T_int[k]
-            if schedule.T_shell is not None:
-                exo["T_shell"] = schedule.T_shell[k]
+            exo = {name: getattr(schedule, name)[k] for name in EXOGENOUS
+                   if getattr(schedule, name) is not None}
             rows.append(self.step(schedule.W_bl[k], schedule.T_evap_set[k],
                                   schedule.v_veh[k], **exo))
             if progress is not None:

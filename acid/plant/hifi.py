@@ -47,7 +47,7 @@ MODES = ("direct", "nominal")
 #: Initial-condition keys accepted by ``HifiPlant.reset`` (K, except w_cab in kg/kg).
 INITIAL_KEYS = ("T_cab", "T_int", "T_shell", "T_evap", "T_cw", "w_cab")
 
-_STEP_KEYWORDS = ("T_cab_set", "compressor_enabled", "T_int", "T_shell")
+_STEP_KEYWORDS = ("T_cab_set", "compressor_enabled", "T_int", "T_shell", "T_amb")
 
 
 def saturation_humidity_ratio(T: float, p_atm: float = 101325.0) -> float:
@@ -170,6 +170,7 @@ class HifiPlant(Plant):
         self.T_cab, self.T_int, self.T_shell = init["T_cab"], init["T_int"], init["T_shell"]
         self.T_ew, self.T_cw = init["T_evap"], init["T_cw"]
         self.w_cab = init.get("w_cab", humidity_ratio(self.T_cab, c.RH_cab0, c.p_atm))
+        self.T_amb = c.T_amb
         self.w_amb = humidity_ratio(c.T_amb, c.RH_amb, c.p_atm)
         self.N = 0.0
         self.T_e, self.T_c = self.T_ew - 5.0, self.T_cw + 5.0
@@ -181,7 +182,7 @@ class HifiPlant(Plant):
     def measure(self) -> Measurement:
         """Current states (K; w_cab in kg/kg): cabin, evaporator and condenser walls, masses."""
         return {"T_cab": self.T_cab, "T_evap": self.T_ew, "T_int": self.T_int,
-                "T_shell": self.T_shell, "T_amb": self.cfg.T_amb, "w_cab": self.w_cab,
+                "T_shell": self.T_shell, "T_amb": self.T_amb, "w_cab": self.w_cab,
                 "T_cw": self.T_cw}
 
     def step(self, W_bl: float, T_evap_set: float, v_veh: float = 0.0, **kw) -> Measurement:
@@ -195,6 +196,8 @@ class HifiPlant(Plant):
         v_veh : vehicle speed, m/s, held over the step.
         T_cab_set : (keyword, nominal mode) cabin set-point, K; default ``config.T_cab_set``.
         compressor_enabled : (keyword) False forces the compressor off (open-loop shut-off).
+        T_amb : (keyword) ambient temperature over this step, K (default: the configured
+            ``T_amb``); the ambient humidity ratio follows it at the configured ``RH_amb``.
         T_int, T_shell : accepted and ignored (this plant computes its own).
 
         Returns
@@ -215,6 +218,14 @@ class HifiPlant(Plant):
         T_cab_set = float(kw.get("T_cab_set", c.T_cab_set))
         T_set = c.T_ew_set if nominal else float(T_evap_set)
         v = float(v_veh)
+        if "T_amb" in kw:
+            T_amb_k = float(kw["T_amb"])
+            if not 230.0 < T_amb_k < 330.0:
+                raise ConfigError(f"ambient temperature T_amb = {kw['T_amb']} K is implausible "
+                                  "(kelvin, -43 to 57 degC)")
+            if T_amb_k != self.T_amb:
+                self.T_amb = T_amb_k
+                self.w_amb = humidity_ratio(T_amb_k, c.RH_amb, c.p_atm)
         if not (math.isfinite(v) and v >= 0.0):
             raise ConfigError(f"vehicle speed must be a finite non-negative number, got {v_veh}")
         if not nominal:
@@ -230,7 +241,7 @@ class HifiPlant(Plant):
         dt = c.dt_int
         n = self.n_sub
         cp = c.c_p_air
-        T_amb, w_amb, p_atm = c.T_amb, self.w_amb, c.p_atm
+        T_amb, w_amb, p_atm = self.T_amb, self.w_amb, c.p_atm
         G_ca = condenser_air_conductance(c, v)  # eps_c m_ca c_p, W/K
         a_cw = math.exp(-G_ca * dt / c.C_cw)
         hA_ext = c.hA_ext0 + c.hA_ext_v * v ** 0.8

@@ -64,6 +64,8 @@ class ModelPlant(Plant):
             self.T_int = float(exogenous["T_int"])
         if "T_shell" in exogenous:
             self.T_shell = float(exogenous["T_shell"])
+        if "T_amb" in exogenous:
+            self.T_amb = float(exogenous["T_amb"])
         T_cab_next, T_evap_next, T_ain = model.step(
             self.T_cab, self.T_evap, W_bl, T_evap_set, self.T_int, self.T_shell, p)
         noise = (self.rng.standard_normal(3) * self.meas_noise_std if self.meas_noise_std
