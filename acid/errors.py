@@ -26,3 +26,7 @@ class IdentifiabilityWarning(UserWarning):
 
 class SolverWarning(UserWarning):
     """A numerical solver failed or returned an inaccurate solution; a fallback was used."""
+
+
+class ExtrapolationWarning(UserWarning):
+    """An identified map is evaluated outside the range of the data it was identified on."""

@@ -1,10 +1,17 @@
 """Random excitation of a plant into an identification dataset (paper section II-B-2).
 
 ``ExcitationSpec`` says what to do (signals, Table II bounds in degC, dwell times, duration,
-seed, speed profile, T_int/T_shell variation for the model plant); ``make_schedule`` turns it
-into an ``InputSchedule`` (kelvin inside), deterministically from the seed; ``excite`` runs a
-plant through it and returns a ``Dataset`` whose metadata carries the spec, the seed, the plant
-and its configuration.
+seed, speed profile, T_int/T_shell variation for the model plant, random vehicle speed and
+ambient temperature, steady-state holds); ``make_schedule`` turns it into an
+``InputSchedule`` (kelvin inside), deterministically from the seed; ``excite`` runs a plant
+through it and returns a ``Dataset`` whose metadata carries the spec, the seed, the plant and
+its configuration.
+
+What each model family needs (``MODEL_PRESETS``): the paper's model (eqs. 1-5) is identified
+at one speed and ambient; the economic model (:mod:`acid.econ`) has vehicle speed and ambient
+temperature in its compressor power map and its shell and humidity balances, so its data must
+vary them (``speed_bounds``, ``T_amb_bounds``) and should contain near-steady operating points
+(``steady_fraction``: some input steps held long enough for the interior to settle).
 
 Randomness: one ``numpy.random.SeedSequence(seed)`` with a fixed child stream per signal
 (``STREAMS``), so adding or changing one signal never changes the others.
@@ -28,7 +35,11 @@ from acid.units import C2K
 SIGNAL_TYPES = ("aprbs", "prbs", "multisine")
 
 #: Fixed child-stream index of every random source (never renumber; append new ones).
-STREAMS = {"W_bl": 0, "T_evap_set": 1, "T_int": 2, "T_shell": 3, "noise": 4}
+STREAMS = {"W_bl": 0, "T_evap_set": 1, "T_int": 2, "T_shell": 3, "noise": 4, "v_veh": 5,
+           "T_amb": 6}
+
+#: Levels of a random speed signal (equally spaced, both bounds included: standstill is one).
+SPEED_LEVELS = 7
 
 #: Table II input bounds.
 W_BL_BOUNDS = (0.05, 0.15)          # kg/s
@@ -63,6 +74,14 @@ class ExcitationSpec:
     exogenous_time_constant : their first-order lag, s.
     noise : measurement noise standard deviation on recorded temperatures, K (applied by
         the plant; recorded here for provenance).
+    speed_bounds : (low, high) m/s: the vehicle speed is a random step signal (APRBS on
+        ``SPEED_LEVELS`` equally spaced levels, so standstill and the top speed both occur)
+        with dwell ``speed_dwell`` (s); exclusive with ``cycle`` and ``speed``.
+    T_amb_bounds : (low, high) degC: the ambient temperature wanders slowly in this range
+        (long-dwell steps through a first-order lag: ``ambient_dwell`` s,
+        ``ambient_time_constant`` s); the plant's configured ambient when None.
+    steady_fraction : share of the W_bl and T_evap_set steps held for ``steady_dwell``
+        (s) instead of the APRBS dwell: near-steady operating points (0: none).
     """
 
     signal: str = "aprbs"
@@ -86,6 +105,13 @@ class ExcitationSpec:
     exogenous_dwell: tuple[float, float] = (600.0, 1800.0)
     exogenous_time_constant: float = 600.0
     noise: float = 0.0
+    speed_bounds: tuple[float, float] | None = None
+    speed_dwell: tuple[float, float] = (60.0, 600.0)
+    T_amb_bounds: tuple[float, float] | None = None
+    ambient_dwell: tuple[float, float] = (900.0, 2700.0)
+    ambient_time_constant: float = 600.0
+    steady_fraction: float = 0.0
+    steady_dwell: tuple[float, float] = (600.0, 1200.0)
 
     def __post_init__(self):
         for name in ("signal", "signal_T_evap_set"):
@@ -110,10 +136,30 @@ class ExcitationSpec:
             raise ConfigError(f"--speed must be >= 0 m/s, got {self.speed}")
         if int(self.seed) < 0:
             raise ConfigError(f"--seed must be >= 0, got {self.seed}")
-        for name in ("W_bl_bounds", "T_evap_set_bounds", "T_int_bounds", "T_shell_bounds"):
-            lo, hi = getattr(self, name)
-            if not lo < hi:
+        for name in ("W_bl_bounds", "T_evap_set_bounds", "T_int_bounds", "T_shell_bounds",
+                     "speed_bounds", "T_amb_bounds", "speed_dwell", "ambient_dwell",
+                     "steady_dwell"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            lo, hi = value
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                 raise ConfigError(f"{name} must satisfy low < high, got ({lo}, {hi})")
+        if self.speed_bounds is not None:
+            if self.cycle is not None or self.speed != 0.0:
+                raise ConfigError("random speed (--speed-range) excludes --speed and --cycle")
+            if self.speed_bounds[0] < 0:
+                raise ConfigError(f"--speed-range must be >= 0 m/s, got {self.speed_bounds}")
+        if self.T_amb_bounds is not None and not (-40.0 < self.T_amb_bounds[0]
+                                                  and self.T_amb_bounds[1] < 55.0):
+            raise ConfigError(f"--t-amb-range must lie within -40..55 degC, got "
+                              f"{self.T_amb_bounds}")
+        if not 0.0 <= self.steady_fraction < 1.0:
+            raise ConfigError(f"--steady-fraction must lie in [0, 1), got "
+                              f"{self.steady_fraction}")
+        if min(self.speed_dwell[0], self.ambient_dwell[0], self.steady_dwell[0]) <= 0 \
+                or self.ambient_time_constant < 0:
+            raise ConfigError("dwell times must be positive and time constants >= 0 s")
 
     @property
     def n_samples(self) -> int:
@@ -135,13 +181,20 @@ class ExcitationSpec:
             np.random.SeedSequence(int(self.seed), spawn_key=(STREAMS[stream],)))
 
 
+def _samples(dwell_s: tuple[float, float], Ts: float) -> tuple[int, int]:
+    """A (min, max) dwell in seconds as whole samples (at least one)."""
+    lo = max(1, int(round(dwell_s[0] / Ts)))
+    return lo, max(lo, int(round(dwell_s[1] / Ts)))
+
+
 def _input_signal(kind: str, rng: np.random.Generator, spec: ExcitationSpec, low: float,
                   high: float) -> tuple[np.ndarray, dict]:
     n, Ts = spec.n_samples, spec.Ts
     if kind == "aprbs":
-        lo_d = max(1, int(round(spec.min_dwell / Ts)))
-        hi_d = max(lo_d, int(round(spec.max_dwell / Ts)))
-        return signals.aprbs(rng, n, low, high, lo_d, hi_d, levels=spec.levels)
+        lo_d, hi_d = _samples((spec.min_dwell, spec.max_dwell), Ts)
+        hold = _samples(spec.steady_dwell, Ts) if spec.steady_fraction > 0 else None
+        return signals.aprbs(rng, n, low, high, lo_d, hi_d, levels=spec.levels, hold=hold,
+                             hold_fraction=spec.steady_fraction)
     if kind == "prbs":
         return signals.prbs(rng, n, low, high, max(1, int(round(spec.prbs_dwell / Ts))))
     return signals.multisine(rng, n, Ts, low, high, band=spec.band, n_sines=spec.n_sines,
@@ -161,6 +214,10 @@ def make_schedule(spec: ExcitationSpec) -> InputSchedule:
                                   spec.rng("T_evap_set"), spec, lo, hi)
     if spec.cycle is not None:
         v, v_spec = signals.drive_cycle(spec.cycle, n=n, Ts=Ts, repeat=True)
+    elif spec.speed_bounds is not None:
+        v, v_spec = signals.aprbs(spec.rng("v_veh"), n, *spec.speed_bounds,
+                                  *_samples(spec.speed_dwell, Ts), levels=SPEED_LEVELS)
+        v_spec = {**v_spec, "unit": "m/s"}
     else:
         v, v_spec = signals.constant_speed(n, Ts, spec.speed)
     T_int = T_shell = None
@@ -171,16 +228,43 @@ def make_schedule(spec: ExcitationSpec) -> InputSchedule:
             spec.rng("T_int"), n, Ts, *(C2K(t) for t in spec.T_int_bounds), **kw)
         T_shell, generators["T_shell"] = signals.slow_exogenous(
             spec.rng("T_shell"), n, Ts, *(C2K(t) for t in spec.T_shell_bounds), **kw)
+    T_amb = None
+    if spec.T_amb_bounds is not None:
+        T_amb, amb_spec = signals.slow_exogenous(
+            spec.rng("T_amb"), n, Ts, *(C2K(t) for t in spec.T_amb_bounds),
+            dwell_s=spec.ambient_dwell, time_constant_s=spec.ambient_time_constant)
+        generators["T_amb"] = {**amb_spec, "unit": "K"}
     record = {**spec.to_dict(), "n_samples": n, "units": _SPEC_UNITS,
               "generators": generators}
     return InputSchedule(W_bl=W_bl, T_evap_set=T_set, v_veh=v, Ts=Ts, T_int=T_int,
-                         T_shell=T_shell, spec=record)
+                         T_shell=T_shell, T_amb=T_amb, spec=record)
 
 
 _SPEC_UNITS = {"W_bl_bounds": "kg/s", "T_evap_set_bounds": "degC", "min_dwell": "s",
                "max_dwell": "s", "prbs_dwell": "s", "band": "Hz", "duration": "s", "Ts": "s",
                "speed": "m/s", "T_int_bounds": "degC", "T_shell_bounds": "degC",
-               "exogenous_dwell": "s", "exogenous_time_constant": "s", "noise": "K"}
+               "exogenous_dwell": "s", "exogenous_time_constant": "s", "noise": "K",
+               "speed_bounds": "m/s", "speed_dwell": "s", "T_amb_bounds": "degC",
+               "ambient_dwell": "s", "ambient_time_constant": "s", "steady_dwell": "s"}
+
+#: What each model family needs from an excitation (``acid excite --model NAME``): the
+#: paper's model is identified at one speed and ambient; the economic model
+#: (:mod:`acid.econ`) needs vehicle speed and ambient variation and near-steady holds.
+#: Ranges: speed 0-36 m/s covers every shipped drive cycle (WLTC class 3 peaks at 36.5 m/s,
+#: within the power map's 2 % tolerance); ambient 25-40 degC is where cabin cooling is the load.
+MODEL_PRESETS: dict[str, dict] = {
+    "paper": {},
+    "econ": {"speed_bounds": (0.0, 36.0), "T_amb_bounds": (25.0, 40.0),
+             "steady_fraction": 0.2, "duration": 6 * 3600.0},
+}
+
+
+def spec_for_model(model: str, **options) -> ExcitationSpec:
+    """The excitation a model family needs (``MODEL_PRESETS``), with ``options`` on top."""
+    if model not in MODEL_PRESETS:
+        raise ConfigError(f"--model: unknown model family {model!r} (choose "
+                          f"{', '.join(MODEL_PRESETS)})")
+    return ExcitationSpec(**{**MODEL_PRESETS[model], **options})
 
 
 def uses_exogenous_schedule(plant: Plant) -> bool:

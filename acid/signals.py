@@ -39,7 +39,9 @@ def _check_common(n: int, low: float, high: float) -> None:
 
 # ------------------------------------------------------------------------------ APRBS
 def aprbs(rng: np.random.Generator, n: int, low: float, high: float, min_dwell: int,
-          max_dwell: int | None = None, levels: int | None = None) -> tuple[np.ndarray, dict]:
+          max_dwell: int | None = None, levels: int | None = None,
+          hold: tuple[int, int] | None = None,
+          hold_fraction: float = 0.0) -> tuple[np.ndarray, dict]:
     """Amplitude-modulated PRBS: random levels held for random dwell times.
 
     Parameters
@@ -52,11 +54,21 @@ def aprbs(rng: np.random.Generator, n: int, low: float, high: float, min_dwell: 
         be shorter than ``min_dwell`` (it is cut by the end of the record).
     levels : ``None`` for levels drawn uniformly in ``[low, high]``; an integer ``L >= 2`` for
         ``L`` equally spaced levels including both bounds (consecutive levels then differ).
+    hold : (min, max) dwell in samples of the *steady-state holds*: with ``hold_fraction``
+        > 0, that fraction of the steps (drawn at random) is held this long instead, so that
+        slow states (cabin interior, shell) settle and the record contains near-steady
+        operating points (what a static power map is identified from).
+    hold_fraction : share of the steps that are steady-state holds, in [0, 1).
 
     Returns
     -------
     u : (n,) signal.
     spec : generator settings and the realised number of steps.
+
+    Notes
+    -----
+    The holds draw from ``rng`` only after the levels, and only when ``hold_fraction > 0``:
+    without holds the signal is bit for bit the same as before holds existed.
     """
     _check_common(n, low, high)
     max_dwell = min_dwell if max_dwell is None else max_dwell
@@ -65,6 +77,10 @@ def aprbs(rng: np.random.Generator, n: int, low: float, high: float, min_dwell: 
                           f"got {min_dwell} .. {max_dwell}")
     if levels is not None and int(levels) < 2:
         raise ConfigError(f"APRBS needs at least 2 levels, got {levels}")
+    if not 0.0 <= float(hold_fraction) < 1.0:
+        raise ConfigError(f"APRBS hold fraction must lie in [0, 1), got {hold_fraction}")
+    if hold_fraction > 0 and (hold is None or not 1 <= int(hold[0]) <= int(hold[1])):
+        raise ConfigError(f"APRBS steady holds need 1 <= min <= max samples, got {hold}")
     min_dwell, max_dwell = int(min_dwell), int(max_dwell)
     m = -(-int(n) // min_dwell)  # enough segments to cover n even with the shortest dwell
     dwell = rng.integers(min_dwell, max_dwell + 1, size=m)
@@ -76,11 +92,19 @@ def aprbs(rng: np.random.Generator, n: int, low: float, high: float, min_dwell: 
         steps = rng.integers(1, int(levels), size=m)
         idx = (rng.integers(int(levels)) + np.cumsum(steps) - steps[0]) % int(levels)
         values = grid[idx]
+    n_holds = 0
+    if hold_fraction > 0:
+        is_hold = rng.random(m) < float(hold_fraction)
+        dwell = np.where(is_hold, rng.integers(int(hold[0]), int(hold[1]) + 1, size=m), dwell)
+        n_holds = int(np.count_nonzero(is_hold & (np.cumsum(dwell) - dwell < n)))
     u = np.repeat(values, dwell)[:n]
     n_steps = int(np.count_nonzero(np.cumsum(dwell) < n)) + 1
     spec = {"type": "aprbs", "n": int(n), "low": float(low), "high": float(high),
             "min_dwell_samples": min_dwell, "max_dwell_samples": max_dwell,
             "levels": None if levels is None else int(levels), "n_steps": n_steps}
+    if hold_fraction > 0:
+        spec.update(hold_samples=[int(hold[0]), int(hold[1])],
+                    hold_fraction=float(hold_fraction), n_holds=n_holds)
     return u, spec
 
 

@@ -13,6 +13,10 @@ T_evap(i) and the measured W_bl(i). At i = 0 the predicted states equal the meas
 
 Everything here is in kelvin; errors are temperature differences (K = degC differences).
 The result is data (``ValidationResult``); ``acid.report.validation`` draws Figs. 5-6.
+
+The econ model family (:mod:`acid.econ`) is validated by the same study: pass its
+``EconParams`` and :mod:`acid.econ.validate` predicts the windows (interior and shell predicted,
+speed and ambient held or measured); the extra channels go to ``extra_metrics``.
 """
 
 from __future__ import annotations
@@ -70,6 +74,9 @@ class ValidationResult:
         NaN (``null`` in JSON) where the truth is constant (std <= ``CONSTANT_TRUTH_STD_K``).
     per_start : {channel: {"rmse", "max_abs", "fit_percent"}: (S,)} metrics of each window.
     settings : how the study was run (mode, counts, ranges, parameters, data source).
+    extra_metrics : {channel: pooled |error| statistics with their unit} of channels beyond
+        the three (the econ model's T_int, T_shell, w_cab, P_comp, window energy); empty for
+        the paper's model.
     """
 
     start_index: np.ndarray
@@ -85,6 +92,7 @@ class ValidationResult:
     per_start: dict[str, dict[str, np.ndarray]]
     settings: dict = field(default_factory=dict)
     channels: tuple[str, ...] = VALIDATED_CHANNELS
+    extra_metrics: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------------ views
     @property
@@ -154,11 +162,12 @@ class ValidationResult:
                            **{name: env for name, env in self.envelope.items()}},
             "starts": {"index": self.start_index, "time_s": self.start_time,
                        "per_start": self.per_start},
+            **({"extra_channels": self.extra_metrics} if self.extra_metrics else {}),
         })
 
 
 # --------------------------------------------------------------------- study
-def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 300,
+def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
              exogenous: str = "hold", held_out_fraction: float | None = None,
              start_range: tuple[int, int] | None = None, placement: str = "even",
              seed: int = 0) -> ValidationResult:
@@ -166,12 +175,15 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
 
     Parameters
     ----------
-    ds : dataset with the channels of ``acid.data.MODEL_CHANNELS``, sampled at ``params.Ts``.
-    params : model parameters (kelvin convention).
+    ds : dataset with the channels of ``acid.data.MODEL_CHANNELS``, sampled at ``params.Ts``
+        (for the econ model: those of ``acid.econ.fit.REQUIRED``).
+    params : model parameters (kelvin convention): ``ModelParams`` (the paper's eqs. 1-3)
+        or ``acid.econ.EconParams``.
     starts : number of prediction windows requested (paper: 60).
     horizon : prediction steps per window (paper: 300, i.e. 1500 s at Ts = 5 s).
     exogenous : ``"hold"`` keeps T_int, T_shell at their values at the start (paper);
-        ``"measured"`` feeds their measurements over the window.
+        ``"measured"`` feeds their measurements over the window. For the econ model (which
+        predicts T_int and T_shell) the same choice applies to v_veh and T_amb.
     held_out_fraction : use only the last fraction (0, 1] of the samples, e.g. the part not
         used for estimation. Exclusive with ``start_range``.
     start_range : (lo, hi) sample indices; every window lies in ``lo .. hi - 1``.
@@ -209,7 +221,10 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
         raise ConfigError(f"--horizon must be at least 1 step, got {horizon}")
     starts, horizon = int(starts), int(horizon)
     src = ds.source
-    ds.validate(require=MODEL_CHANNELS)
+    econ = _is_econ(params)
+    if econ:
+        from acid.econ.fit import REQUIRED
+    ds.validate(require=REQUIRED if econ else MODEL_CHANNELS)
     if not math.isclose(ds.Ts, params.Ts, rel_tol=1e-6):
         raise DataError(f"{src}: sample time {ds.Ts:g} s differs from the model's "
                         f"Ts = {params.Ts:g} s (parameters {params.name!r})")
@@ -233,20 +248,16 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
 
     # ---- gather windows (S, H + 1) by fancy indexing, then predict all starts at once
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
-    T_cab, T_evap, T_ain, T_evap_set, T_int, T_shell = (
-        ds.get(n, "K")[idx] for n in ("T_cab", "T_evap", "T_ain", "T_evap_set", "T_int",
-                                      "T_shell"))
-    W_bl = ds.get("W_bl", "kg/s")[idx]
-    if exogenous == "hold":
-        T_int = np.broadcast_to(T_int[:, :1], T_int.shape)
-        T_shell = np.broadcast_to(T_shell[:, :1], T_shell.shape)
-    x0 = np.stack([T_cab[:, 0], T_evap[:, 0]], axis=-1)
-    cab_hat, evap_hat, _ = model.simulate(x0, W_bl[:, :-1], T_evap_set[:, :-1],
-                                          T_int[:, :-1], T_shell[:, :-1], params)
-    ain_hat = model.inlet_air(evap_hat, W_bl, params)  # eq. 3 at i = 0 .. H
+    extra = {}
+    if econ:
+        from acid.econ.validate import extra_metrics, predict_windows
 
-    predicted = np.stack([cab_hat, evap_hat, ain_hat], axis=-1)
-    measured = np.stack([T_cab, T_evap, T_ain], axis=-1)
+        win = predict_windows(ds, idx, params, exogenous)
+        predicted, measured = win.predicted, win.measured
+        inputs, exo = win.inputs, win.exogenous
+        extra = extra_metrics(win)
+    else:
+        predicted, measured, inputs, exo = _paper_windows(ds, idx, params, exogenous)
     errors = predicted - measured
 
     horizon_s = np.arange(horizon + 1) * ds.Ts
@@ -264,6 +275,7 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
         "held_out_fraction": held_out_fraction,
         "admissible_starts": int(admissible.size),
         "params_name": params.name,
+        "model": "econ" if econ else "paper",
         "params_provenance": params.provenance,
         "data_source": src,
         "data_samples": len(ds),
@@ -271,13 +283,36 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
     }
     return ValidationResult(
         start_index=k0, start_time=ds.time[k0].copy(), horizon_s=horizon_s,
-        predicted=predicted, measured=measured, errors=errors,
-        inputs=np.stack([W_bl, T_evap_set], axis=-1),
-        exogenous=np.stack([T_int, T_shell], axis=-1),
-        envelope=envelope, metrics=metrics, per_start=per_start, settings=settings)
+        predicted=predicted, measured=measured, errors=errors, inputs=inputs, exogenous=exo,
+        envelope=envelope, metrics=metrics, per_start=per_start, settings=settings,
+        extra_metrics=extra)
 
 
 # ------------------------------------------------------------------- helpers
+def _is_econ(params) -> bool:
+    """Whether ``params`` belong to the econ model family (:mod:`acid.econ`)."""
+    return not isinstance(params, ModelParams) and getattr(params, "power_map", None) \
+        is not None
+
+
+def _paper_windows(ds: Dataset, idx: np.ndarray, params: ModelParams, exogenous: str):
+    """Eqs. 1-3 over the windows: (predicted, measured, inputs, exogenous), (S, H + 1, .)."""
+    T_cab, T_evap, T_ain, T_evap_set, T_int, T_shell = (
+        ds.get(n, "K")[idx] for n in ("T_cab", "T_evap", "T_ain", "T_evap_set", "T_int",
+                                      "T_shell"))
+    W_bl = ds.get("W_bl", "kg/s")[idx]
+    if exogenous == "hold":
+        T_int = np.broadcast_to(T_int[:, :1], T_int.shape)
+        T_shell = np.broadcast_to(T_shell[:, :1], T_shell.shape)
+    x0 = np.stack([T_cab[:, 0], T_evap[:, 0]], axis=-1)
+    cab_hat, evap_hat, _ = model.simulate(x0, W_bl[:, :-1], T_evap_set[:, :-1],
+                                          T_int[:, :-1], T_shell[:, :-1], params)
+    ain_hat = model.inlet_air(evap_hat, W_bl, params)  # eq. 3 at i = 0 .. H
+    return (np.stack([cab_hat, evap_hat, ain_hat], axis=-1),
+            np.stack([T_cab, T_evap, T_ain], axis=-1),
+            np.stack([W_bl, T_evap_set], axis=-1), np.stack([T_int, T_shell], axis=-1))
+
+
 def _sample_range(n: int, fraction: float | None, start_range: tuple[int, int] | None,
                   src: str) -> tuple[int, int, str]:
     """The (lo, hi) sample range the windows must lie in, and a note for messages."""

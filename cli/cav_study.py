@@ -1,9 +1,15 @@
-"""``acid cav-study``: speed preview on a real drive cycle, compared fairly (equal comfort,
-same start, end-state corrected, with a speed-blind twin plant)."""
+"""``acid cav-study``: where the A/C energy is, over drive cycles, at equal comfort.
+
+Five controllers on the high-fidelity plant from the same warmed-up state, at the same mean
+cabin temperature, end states charged back by a common continuation: A (paper NMPC, constant
+bound), B (paper NMPC, ICM bound), D and E (economic NMPC without and with speed preview) and
+the perfect-information bound replayed open loop.
+"""
 
 from __future__ import annotations
 
 import math
+from functools import partial
 from pathlib import Path
 
 import typer
@@ -13,7 +19,14 @@ from acid._io import file_sha256, save_figure
 from acid.errors import ConfigError
 from acid.params import load_params
 from acid.units import C2K, K2C
-from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._common import (
+    console,
+    err_console,
+    handle_errors,
+    print_table,
+    progress_bar,
+    write_summary,
+)
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -22,104 +35,168 @@ def _fmt(v, digits: int = 3) -> str:
     return f"{v:.{digits}f}"
 
 
+def _econ_intervals(horizon_s: float, Ts: float) -> tuple[float, ...]:
+    n = int(round(horizon_s / Ts))
+    if n < 2 or abs(n * Ts - horizon_s) > 1e-6:
+        raise ConfigError(f"--econ-horizon must be a multiple of {Ts:g} s and at least "
+                          f"{2 * Ts:g} s, got {horizon_s:g}")
+    return (float(Ts),) * n
+
+
 @handle_errors
 def cav_study(
     cycle: str = typer.Option("udds", "--cycle",
-                              help="Drive cycle from datasets/drive_cycles (udds, nycc, sc03...)."),
+                              help="Drive cycle from datasets/drive_cycles, 'stopgo' (the "
+                                   "paper's stop-and-go, repeated) or 'all'."),
     params: str = typer.Option("paper", "--params",
-                               help="params.json from `acid fit`, or 'paper' for the preset."),
-    horizon: int = typer.Option(6, "--horizon", help="NMPC horizon N (steps of 5 s)."),
+                               help="Paper-model params.json of A and B, or 'paper'."),
+    econ_params: Path | None = typer.Option(
+        None, "--econ-params",
+        help="Econ-model params from `acid fit --model econ`; default: identified here from "
+             "an `acid excite --model econ` record of the plant."),
+    identify_duration: float = typer.Option(21600.0, "--identify-duration",
+                                            help="Length of that record, s."),
+    horizon: int = typer.Option(6, "--horizon", help="Paper NMPC horizon N (steps of 5 s)."),
+    econ_horizon: float = typer.Option(120.0, "--econ-horizon",
+                                       help="Economic NMPC horizon, s (5 s steps)."),
+    econ_solver: str = typer.Option("fatrop", "--econ-solver", help="'fatrop' or 'ipopt'."),
     T_low: float = typer.Option(22.0, "--t-low", help="Comfort band lower edge, degC."),
     T_high: float = typer.Option(26.0, "--t-high", help="Comfort band upper edge, degC."),
+    rh_max: float | None = typer.Option(None, "--rh-max",
+                                        help="Upper bound on cabin relative humidity, % "
+                                             "(economic NMPC and bound)."),
+    t_amb: float | None = typer.Option(None, "--t-amb",
+                                       help="Ambient temperature, degC (default: the "
+                                            "plant's)."),
     warmup: float = typer.Option(1800.0, "--warmup", help="Warm-up before the cycle, s."),
     tail: float = typer.Option(1200.0, "--tail",
                                help="Common continuation measuring the end-state cost, s "
-                                    "(0: C_eff correction only)."),
-    speed_blind: bool = typer.Option(True, "--speed-blind/--no-speed-blind",
-                                     help="Also run the study on the speed-blind twin plant."),
-    identify_duration: float = typer.Option(
-        7200.0, "--identify-duration",
-        help="Length of the APRBS + UDDS record that identifies eta_cop(v), s."),
+                                    "(0: raw energies only)."),
+    bound: bool = typer.Option(True, "--bound/--no-bound",
+                               help="Compute the perfect-information bound and replay it."),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Cycles run in parallel (--cycle all)."),
+    plant_config: Path | None = typer.Option(None, "--plant-config",
+                                             help="TOML configuration of the plant."),
     out: Path = typer.Option(Path("reports/cav-study"), "--out",
-                             help="Folder for the figure (cav_<cycle>.png)."),
+                             help="Folder for the figures."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
-    figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figure."),
+    figures: bool = typer.Option(True, "--figures/--no-figures", help="Write PNG figures."),
 ) -> None:
-    """Compare (A) constant bound, (B) ICM bound, (C) speed-aware NMPC on a drive cycle.
+    """Energy of A, B, D, E and the bound per cycle, at equal mean cabin temperature.
 
-    All three run the NMPC on the high-fidelity plant from the same warmed-up state; (A) and
-    (C) are tuned to (B)'s mean cabin temperature. Reports energy (MJ, compressor + blower),
-    mean/max T_cab, comfort violation (K s outside the band), the end-state correction and
-    the savings vs (A), on the plant and on its speed-blind twin.
+    Reports energy (compressor + blower), the tail-corrected energy, savings against A, each
+    controller's gap to the bound, mean/max T_cab, PMV, humidity, and preview's share (E minus
+    D); writes energy_<cycles>.png and cav_<cycle>.png (trajectories of A, E, the bound).
     """
-    from acid.mpc.cav_study import CASE_LABELS, CASES, StudyConfig, estimated_steps
+    from acid.econ.params import EconParams
+    from acid.mpc.cav_study import (
+        CONTROLLERS,
+        STOPGO,
+        StudyConfig,
+        available_cycles,
+        estimated_steps,
+        identify_econ,
+        make_scenario,
+    )
     from acid.mpc.cav_study import cav_study as run_study
-    from acid.mpc.speed_model import identify_from_plant
-    from acid.signals import available_drive_cycles, drive_cycle
+    from acid.mpc.econ_nmpc import EconNMPCConfig
+    from acid.plant import make_plant
 
-    names = available_drive_cycles()
-    if cycle not in names:
-        raise ConfigError(f"--cycle: unknown drive cycle {cycle!r} (available: "
-                          f"{', '.join(names)})")
-    if not (math.isfinite(identify_duration) and identify_duration > 600.0):
-        raise ConfigError(f"--identify-duration must be more than 600 s, got {identify_duration}")
+    names = available_cycles()
+    if cycle != "all" and cycle not in names:
+        raise ConfigError(f"--cycle: unknown cycle {cycle!r} (available: "
+                          f"{', '.join(names)}, all)")
+    if not (math.isfinite(identify_duration) and identify_duration >= 3600.0):
+        raise ConfigError(f"--identify-duration must be at least 3600 s, got "
+                          f"{identify_duration}")
+    if rh_max is not None and not 0.0 < rh_max <= 100.0:
+        raise ConfigError(f"--rh-max must lie in (0, 100] %, got {rh_max}")
+    if plant_config is not None and not plant_config.is_file():
+        raise ConfigError(f"--plant-config: file not found: {plant_config}")
     p = load_params(params)
-    config = StudyConfig(cycle=cycle, horizon=horizon, T_low=C2K(T_low), T_high=C2K(T_high),
-                         warmup_s=warmup, tail_s=tail, speed_blind=speed_blind)
-    eff = identify_from_plant(duration_s=identify_duration)
-    v, _ = drive_cycle(cycle, Ts=p.Ts)
-    with progress_bar(f"cav-study {cycle}", total=estimated_steps(config, v.size, p.Ts)) as up:
-        result = run_study(p, config, efficiency=eff, progress=up)
+    econ_cfg = EconNMPCConfig(intervals=_econ_intervals(econ_horizon, p.Ts),
+                              solver=econ_solver, T_cab_min=C2K(T_low), T_cab_max=C2K(T_high),
+                              RH_max=None if rh_max is None else rh_max / 100.0)
+    config = StudyConfig(horizon=horizon, econ=econ_cfg, T_low=C2K(T_low), T_high=C2K(T_high),
+                         T_amb=None if t_amb is None else C2K(t_amb), warmup_s=warmup,
+                         tail_s=tail, bound=bound)
+    for name in names if cycle == "all" else [cycle]:   # refuse before any long work
+        sc = make_scenario(name, p.Ts, 303.15, config.stopgo_s)
+        if sc.duration_s < econ_cfg.horizon_s:
+            raise ConfigError(f"--cycle: cycle {name!r} lasts {sc.duration_s:g} s, shorter "
+                              f"than the economic NMPC's horizon ({econ_cfg.horizon_s:g} s, "
+                              "--econ-horizon)")
+    factory = partial(make_plant, "hifi", config_path=plant_config)
+    if econ_params is not None:
+        econ = EconParams.from_json(econ_params)
+        econ_summary = {"source": str(econ_params), "power_map": econ.power_map.quality}
+    else:
+        with console.status("identifying the econ model (acid excite --model econ + acid fit "
+                            "--model econ)"):
+            econ, econ_summary = identify_econ(factory, duration_s=identify_duration)
+    q = econ.power_map.quality
+    console.print(f"econ model: {econ_summary['source']}; power map RMS error "
+                  f"{q.get('rms_pct', math.nan):.2f} % (near-steady "
+                  f"{q.get('steady_rms_pct', math.nan):.2f} %)", highlight=False)
+    cycles = "all" if cycle == "all" else [cycle]
+    if cycle == "all":
+        total, label = len(names), f"cav-study: {len(names)} cycles, {jobs} processes"
+    else:
+        sc = make_scenario(cycle, p.Ts, 303.15, config.stopgo_s)
+        total, label = estimated_steps(config, sc.n, p.Ts), f"cav-study {cycle}"
+    with progress_bar(label, total=total) as up:
+        result = run_study(p, cycles, config, econ=econ, econ_summary=econ_summary,
+                           plant_factory=factory, jobs=jobs, progress=up)
 
-    q = eff.quality
-    console.print(
-        f"eta_cop(v) = {eff.eta0:.3f} (+/- {eff.stderr[0]:.3f}) + {eff.eta1:.4f} "
-        f"(+/- {eff.stderr[1]:.4f}) v [v in m/s]; R^2 {q['r2']:.3f} (constant eta "
-        f"{q['const_eta']:.3f}: R^2 {q['const_r2']:.3f}), RMSE {q['rmse_W']:.0f} W, "
-        f"n = {q['n']}; eta(25)/eta(0) = {eff.ratio(25.0):.3f}", highlight=False)
-    studies = [result.main] + ([result.blind] if result.blind is not None else [])
-    rows, lines = [], []
-    for st in studies:
-        plant = "hifi" if st.plant == "hifi" else "blind"
-        for key in CASES:
-            c = st.cases[key]
-            ms = c.to_json_dict()["solve_ms"]
-            rows.append([plant, key, _fmt(c.energy_J / 1e6, 4),
-                         f"{K2C(c.mean_T_cab):.2f}", f"{K2C(c.max_T_cab):.2f}",
-                         _fmt(c.comfort_violation_Ks, 1), _fmt(c.correction_J / 1e6, 4),
-                         _fmt((c.tail_energy_J - st.cases["A"].tail_energy_J) / 1e6, 4),
-                         f"{ms['median']:.2f}"])
-        for key in ("B", "C"):
-            s = st.savings_pct(key)
-            lines.append(f"{st.plant}: {CASE_LABELS[key]} saves vs A: raw {_fmt(s['raw'], 2)} %,"
-                         f" C_eff-corrected {_fmt(s['corrected'], 2)} %, tail-corrected "
-                         f"{_fmt(s.get('tail_corrected'), 2)} %")
-    print_table(f"{cycle.upper()} ({v.size * p.Ts:g} s, mean {v.mean():.1f} m/s), N = {horizon}",
-                ["_plant", "_case", "E MJ", "mean C", "max C", "viol Ks", "Ceff MJ", "tail MJ",
-                 "ms"], rows)
-    console.print("A: constant bound, B: ICM bound, C: speed-aware NMPC; "
-                  "E: compressor + blower over the cycle; viol: K s outside the band; Ceff, "
-                  "tail: end-state corrections vs A; ms: median whole NMPC step", highlight=False)
-    for line in lines:
+    for name, st in result.cycles.items():
+        sc = st.scenario
+        rows = []
+        for key in CONTROLLERS:
+            if key not in st.results:
+                continue
+            d = st.controller_json(key)
+            ms = d["step_ms"]
+            rows.append([key, _fmt(d["energy_MJ"], 4), _fmt(d["tail_corrected_energy_MJ"], 4),
+                         _fmt(d["saving_raw_pct"], 2), _fmt(d["saving_tail_corrected_pct"], 2),
+                         _fmt(d["gap_to_bound_pct"], 2), f"{K2C(d['mean_T_cab_K']):.2f}",
+                         f"{K2C(d['max_T_cab_K']):.2f}", _fmt(d["pmv_mean"], 2),
+                         _fmt(d["rh_mean_pct"], 0), _fmt(d["w_cab_mean_g_kg"], 2),
+                         "-" if ms is None else f"{ms['median']:.1f}"])
+        title = ("the paper's stop-and-go, repeated" if name == STOPGO else name.upper())
+        print_table(f"{title}: {sc.duration_s:g} s, mean {sc.v.mean():.1f} m/s, target mean "
+                    f"T_cab {K2C(st.target_mean_K):.2f} °C",
+                    ["_ctrl", "E MJ", "E corr MJ", "save raw %", "save corr %",
+                     "gap bound %", "mean °C", "max °C", "PMV", "RH %", "w g/kg", "ms"], rows)
+        line = f"preview's share (E minus D): {_fmt(st.preview_share_points, 3)} points"
+        if "bound" in st.results:
+            bx = st.controller_json("bound")
+            line += (f"; bound: model {bx['model_energy_MJ']:.4f} MJ, replay "
+                     f"{_fmt(bx['replay_vs_model_pct'], 2)} % off it, band vs pinned "
+                     f"T_cab {_fmt(bx['band_vs_pinned_pct'], 3)} %")
         console.print(line, highlight=False)
-    d = result.to_json_dict()
-    if "saving_from_speed_pct" in d:
-        sp = d["saving_from_speed_pct"]
-        console.print("part of the saving owed to speed (plant minus speed-blind twin, "
-                      "points): " + "; ".join(
-                          f"{k}: " + ", ".join(f"{m} {_fmt(v_, 2)}" for m, v_ in sp[k].items())
-                          for k in ("B", "C")), highlight=False)
+        for w in st.warnings:
+            err_console.print(f"[bold yellow]warning:[/] {name}: {w}", highlight=False,
+                              soft_wrap=True)
+    console.print("E: compressor + blower over the cycle; E corr: + tail(end) - tail(start); "
+                  "savings vs A and gaps to the bound on E corr; PMV: ISO 7730, 1.2 met, "
+                  "0.5 clo, 0.2 m/s, radiant = mean of interior and shell; ms: median "
+                  "controller step", highlight=False)
 
-    fig_path = None
+    fig_paths = {}
     if figures:
-        from acid.report.cav import cav_study_figure
+        from acid.report.cav import energy_figure, trajectory_figure
 
-        fig_path = str(save_figure(cav_study_figure(result), out / f"cav_{cycle}.png"))
-        console.print(f"figure written to {fig_path}")
+        stem = "all" if cycle == "all" else cycle
+        fig_paths["energy"] = str(save_figure(energy_figure(result),
+                                              out / f"energy_{stem}.png"))
+        for name, st in result.cycles.items():
+            fig_paths[name] = str(save_figure(trajectory_figure(st), out / f"cav_{name}.png"))
+        console.print(f"figures written to {out}")
     summary = {
         "command": "cav-study", "acid_version": __version__,
         "inputs": {"params": params,
-                   "params_sha256": None if params == "paper" else file_sha256(params)},
-        "figure": fig_path, **d,
+                   "params_sha256": None if params == "paper" else file_sha256(params),
+                   "econ_params": None if econ_params is None else str(econ_params)},
+        "figures": fig_paths, **result.to_json_dict(),
     }
     write_summary(json_path, summary)

@@ -10,7 +10,7 @@ import typer
 
 from acid.data import Dataset
 from acid.errors import ConfigError
-from acid.excite import SIGNAL_TYPES, ExcitationSpec
+from acid.excite import MODEL_PRESETS, SIGNAL_TYPES, ExcitationSpec, spec_for_model
 from acid.excite import excite as run_excitation
 from acid.units import C2K
 from acid_cli._common import handle_errors, print_table, progress_bar, write_summary
@@ -65,7 +65,8 @@ def excite(
     plant: str = typer.Option("hifi", "--plant",
                               help="Plant to excite: 'hifi' (high-fidelity) or 'model' "
                                    "(paper eqs. 1-5)."),
-    duration: float = typer.Option(7200.0, "--duration", help="Record length, s."),
+    duration: float | None = typer.Option(
+        None, "--duration", help="Record length, s (default 7200, 21600 for --model econ)."),
     signal: str = typer.Option("aprbs", "--signal",
                                help=f"Input signal: {', '.join(SIGNAL_TYPES)}."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random stream."),
@@ -88,13 +89,35 @@ def excite(
                                        help="Ambient temperature, degC (default: the "
                                             "plant's, 30 degC in Table II)."),
     json_out: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    model: str = typer.Option(
+        "paper", "--model",
+        help="What the record is for: 'paper' (eqs. 1-5: one speed and ambient) or 'econ' "
+             "(`acid fit --model econ`: random speed 0-36 m/s, ambient 25-40 degC, steady "
+             "holds, 6 h)."),
+    speed_range: tuple[float, float] | None = typer.Option(
+        None, "--speed-range", help="Random vehicle speed between LOW HIGH m/s (APRBS)."),
+    t_amb_range: tuple[float, float] | None = typer.Option(
+        None, "--t-amb-range", help="Slowly varying ambient between LOW HIGH degC."),
+    steady_fraction: float | None = typer.Option(
+        None, "--steady-fraction",
+        help="Share of input steps held 600-1200 s (near-steady operating points)."),
 ) -> None:
     """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
     if cycle is not None and speed != 0.0:
         raise ConfigError("--speed and --cycle are exclusive (give one speed profile)")
-    spec = ExcitationSpec(signal=signal, duration=duration, seed=seed, speed=speed,
-                          cycle=cycle, min_dwell=min_dwell, max_dwell=max_dwell, noise=noise,
-                          vary_exogenous=vary_exogenous)
+    if model not in MODEL_PRESETS:
+        raise ConfigError(f"--model: unknown model family {model!r} (choose "
+                          f"{', '.join(MODEL_PRESETS)})")
+    given = {"speed_bounds": speed_range, "T_amb_bounds": t_amb_range,
+             "steady_fraction": steady_fraction}
+    options = {k: v for k, v in given.items() if v is not None}
+    if cycle is not None or speed != 0.0:
+        options.setdefault("speed_bounds", None)   # an explicit profile replaces the preset's
+    if duration is not None:
+        options["duration"] = duration
+    spec = spec_for_model(model, signal=signal, seed=seed, speed=speed, cycle=cycle,
+                          min_dwell=min_dwell, max_dwell=max_dwell, noise=noise,
+                          vary_exogenous=vary_exogenous, **options)
     if cycle is not None:
         from acid.signals import drive_cycle
 

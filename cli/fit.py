@@ -15,6 +15,8 @@ from acid.fit import COVARIANCES, DEFAULT_COVARIANCE, EQUATION_CHANNEL, ModelFit
 from acid.params import load_params
 from acid_cli._common import console, err_console, handle_errors, print_table, write_summary
 
+MODEL_FAMILIES = ("paper", "econ")
+
 
 def _num(v: float, digits: int = 5) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.{digits}g}"
@@ -61,12 +63,20 @@ def fit(
         help="HAC Bartlett lag: 'auto' (Newey-West 1994), 'nw' (floor(4 (n/100)^(2/9))) "
              "or an integer >= 0."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    model: str = typer.Option(
+        "paper", "--model",
+        help="Model family: 'paper' (eqs. 1-5, the default) or 'econ' (cabin, interior, "
+             "shell, evaporator and humidity with an identified compressor power map; needs "
+             "data from `acid excite --model econ`)."),
 ) -> None:
     """Fit the control-oriented model and write params.json (kelvin convention).
 
     Prints the parameter table with the reference (paper) values beside ours, the
     conditioning of each regression and the one-step and multi-step fit %.
     """
+    if model not in MODEL_FAMILIES:
+        raise ConfigError(f"--model: unknown model family {model!r} (choose "
+                          f"{', '.join(MODEL_FAMILIES)})")
     if not 0.0 < estimation_fraction <= 1.0:
         raise ConfigError(f"--estimation-fraction must be in (0, 1], got {estimation_fraction}")
     bandwidth: str | int = hac_bandwidth
@@ -78,6 +88,16 @@ def fit(
     if covariance not in COVARIANCES:
         raise ConfigError(f"--covariance: unknown covariance {covariance!r} (choose from "
                           f"{', '.join(COVARIANCES)})")
+    if model == "econ":
+        paper_only = {"--method": method != "ls", "--loss": loss != "squared",
+                      "--use-eta-cop": use_eta_cop, "--strict": strict,
+                      "--reference": reference != "paper", "--no-blower": no_blower}
+        given = [opt for opt, set_ in paper_only.items() if set_]
+        if given:
+            raise ConfigError(f"{', '.join(given)}: only for --model paper")
+        from acid_cli._fit_econ import fit_econ
+
+        return fit_econ(data, out, estimation_fraction, covariance, bandwidth, json_path)
     ref = load_params(reference)
     ds = Dataset.from_hdf5(data, require=MODEL_CHANNELS, min_samples=20)
     est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]

@@ -11,7 +11,7 @@ import typer
 from acid import __version__
 from acid._io import file_sha256, save_figure
 from acid.data import MODEL_CHANNELS, Dataset
-from acid.params import load_params
+from acid.econ.params import load_any_params, model_family
 from acid.validate import validate as run_validation
 from acid_cli._common import console, handle_errors, print_table, write_summary
 
@@ -62,16 +62,27 @@ def validate(
     out: Path = typer.Option(Path("reports/validate"), "--out",
                              help="Folder for the figures (fig5/fig6 PNG)."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    beside: str | None = typer.Option(
+        None, "--beside",
+        help="Another params.json (or 'paper') validated on the same data and starts, shown "
+             "beside (e.g. the paper's model beside the econ model)."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
     Errors are in K; figures like the paper's Fig. 5 (one prediction) and Fig. 6 (errors of
-    all starts vs prediction time) go to --out.
+    all starts vs prediction time) go to --out. The model family (the paper's or econ) is
+    read from the parameter file.
     """
     from acid.report.validation import error_figure, prediction_figure
 
-    p = load_params(params)
-    ds = Dataset.from_hdf5(data, require=MODEL_CHANNELS)
+    p = load_any_params(params)
+    families = {model_family(params)} | ({model_family(beside)} if beside else set())
+    if "econ" in families:
+        from acid.econ.fit import REQUIRED
+        require = tuple(dict.fromkeys(MODEL_CHANNELS + REQUIRED))
+    else:
+        require = MODEL_CHANNELS
+    ds = Dataset.from_hdf5(data, require=require)
     data_sha256 = file_sha256(data)
     fraction_source = "--held-out-fraction"
     if held_out_fraction is None:
@@ -102,6 +113,24 @@ def validate(
     if hrows:
         print_table("Error vs prediction time: mean / p95 of |e| over starts (K)",
                     ["time (s)", *result.channels], hrows)
+    if result.extra_metrics:
+        print_table("Predicted beyond the paper's channels: |e| over all starts and steps",
+                    ["channel", "unit", "median", "p90", "max"],
+                    [[name, m["unit"], _fmt(m["median_abs"]), _fmt(m["p90_abs"]),
+                      _fmt(m["max_abs"])]
+                     for name, m in result.extra_metrics.items()])
+    other = None
+    if beside:
+        q = load_any_params(beside)
+        other = run_validation(ds, q, starts=starts, horizon=horizon, exogenous=exogenous,
+                               held_out_fraction=held_out_fraction, placement=placement,
+                               seed=seed)
+        print_table(f"Beside: |e| median / p90 (K), {p.name!r} vs {q.name!r}, same starts",
+                    ["channel", p.name, q.name],
+                    [[c, f"{_fmt(result.metrics[c]['median_abs'])} / "
+                         f"{_fmt(result.metrics[c]['p90_abs'])}",
+                      f"{_fmt(other.metrics[c]['median_abs'])} / "
+                      f"{_fmt(other.metrics[c]['p90_abs'])}"] for c in result.channels])
 
     fig5 = save_figure(prediction_figure(result), out / "fig5_prediction.png")
     fig6 = save_figure(error_figure(result), out / "fig6_errors.png")
@@ -118,4 +147,6 @@ def validate(
         "figures": {"fig5_prediction": str(fig5), "fig6_errors": str(fig6)},
         **result.to_json_dict(),
     }
+    if other is not None:
+        summary["beside"] = {"params": beside, "channels": other.to_json_dict()["channels"]}
     write_summary(json_path, summary)

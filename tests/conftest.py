@@ -42,3 +42,54 @@ def noisy_model_dataset(model_spec):
     spec = model_spec.replace(noise=0.05)
     plant = make_plant("model", meas_noise_std=spec.noise, rng=spec.rng("noise"))
     return excite(plant, spec)
+
+
+# ------------------------------------------------------------------ econ model family
+ECON_TRUTH = {"r_max": 0.8, "k_rec": 0.1, "ntu_ref": 2.75, "ntu_exp": 0.4, "kappa_bl": 0.1,
+              "C_cab": 4500.0, "hA_int": 190.0, "hA_sh": 67.0, "Q_cab": 80.0,
+              "C_int": 65000.0, "Q_int": 350.0, "C_sh": 65000.0, "hA_ext0": 60.0,
+              "hA_ext_v": 9.0, "Q_sh": 900.0, "tau_ew": 11.0, "dT_ew": 0.1, "M_cab": 3.7,
+              "m_w": 1.4e-5, "RH_amb": 0.5}
+#: an inverse-COP map of the size identified on the high-fidelity plant
+ECON_MAP = (0.155, 0.051, -0.029, -0.006, 0.05, -0.004, -0.01, -0.0015, 0.0027, 0.0022,
+            0.0005, -0.005, 0.0014, -0.0015, -0.0052)
+
+
+@pytest.fixture(scope="session")
+def econ_truth():
+    """A known econ parameter set (sizes as identified on the high-fidelity plant)."""
+    from acid.econ.params import EconParams, PowerMap
+
+    domain = {"Q_e": (-500.0, 6000.0), "T_evap": (270.0, 290.0), "v_veh": (0.0, 35.0),
+              "T_amb": (290.0, 320.0)}
+    return EconParams(values=dict(ECON_TRUTH), C_ew=2000.0,
+                      power_map=PowerMap(coef=ECON_MAP, domain=domain), name="truth")
+
+
+@pytest.fixture(scope="session")
+def econ_model_dataset(econ_truth):
+    """2 h of the econ model as a plant, excited as ``acid excite --model econ`` (seed 1)."""
+    from acid.econ.plant import EconPlant
+    from acid.excite import spec_for_model
+
+    return excite(EconPlant(econ_truth), spec_for_model("econ", duration=2 * 3600.0, seed=1))
+
+
+@pytest.fixture(scope="session")
+def econ_hifi_dataset():
+    """3 h of the high-fidelity plant excited as ``acid excite --model econ`` (seed 0)."""
+    from acid.excite import spec_for_model
+
+    return excite(make_plant("hifi"), spec_for_model("econ", duration=3 * 3600.0, seed=0))
+
+
+@pytest.fixture(scope="session")
+def econ_hifi_fit(econ_hifi_dataset):
+    """The econ model identified on the first 3/4 of ``econ_hifi_dataset``."""
+    import warnings
+
+    from acid.econ.fit import EconFitter
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return EconFitter().fit(econ_hifi_dataset.split(0.75)[0])

@@ -250,3 +250,43 @@ def test_cli_import_errors_one_line(tmp_path):
                                      str(tmp_path / cmap), "--out", str(out)])
         assert_one_line_error(result, *words)
         assert not out.exists()
+
+
+# ------------------------------------------------------------ econ model family needs
+def test_econ_preset_varies_speed_and_ambient_with_steady_holds():
+    from acid.excite import MODEL_PRESETS, spec_for_model
+
+    spec = spec_for_model("econ", duration=6 * 3600.0, seed=2)
+    s = make_schedule(spec)
+    assert spec.duration == MODEL_PRESETS["econ"]["duration"]
+    levels = np.unique(s.v_veh)
+    assert levels.min() == 0.0 and levels.max() == 36.0 and levels.size == 7   # standstill too
+    assert C2K(25.0) <= s.T_amb.min() and s.T_amb.max() <= C2K(40.0)
+    assert np.ptp(s.T_amb) > 5.0
+    # steady holds: some W_bl levels last at least the 600 s hold
+    runs = np.diff(np.flatnonzero(np.diff(np.r_[np.nan, s.W_bl, np.nan]) != 0))
+    assert runs.max() * spec.Ts >= 600.0
+    assert s.spec["generators"]["W_bl"]["n_holds"] >= 1
+    # the paper's preset draws the same inputs as before holds existed
+    base = make_schedule(ExcitationSpec(seed=2))
+    np.testing.assert_array_equal(base.W_bl, make_schedule(spec_for_model("paper", seed=2)).W_bl)
+    assert base.T_amb is None
+
+
+@pytest.mark.parametrize("kw", [{"speed_bounds": (5.0, 1.0)}, {"T_amb_bounds": (20.0, 80.0)},
+                                {"steady_fraction": 1.0},
+                                {"speed_bounds": (0.0, 30.0), "cycle": "udds"}])
+def test_econ_options_are_validated(kw):
+    with pytest.raises(ConfigError):
+        ExcitationSpec(**kw)
+
+
+def test_cli_excite_model_econ(tmp_path):
+    out, js = tmp_path / "econ.h5", tmp_path / "econ.json"
+    res = runner.invoke(app, ["excite", "--model", "econ", "--duration", "1800", "--out",
+                              str(out), "--json", str(js), "--t-amb-range", "28", "35"])
+    assert res.exit_code == 0, res.output
+    ds = Dataset.from_hdf5(out)
+    assert np.ptp(ds["v_veh"]) > 5.0 and 28.0 <= ds["T_amb"].min() <= ds["T_amb"].max() <= 35.0
+    res = runner.invoke(app, ["excite", "--model", "thermal", "--out", str(tmp_path / "x.h5")])
+    assert_one_line_error(res, "--model", "thermal")

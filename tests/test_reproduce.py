@@ -16,7 +16,8 @@ pytestmark = pytest.mark.slow
 FIGURES = ("stages/sweep/fig3_speed_sweep.png", "stages/validate/fig5_prediction.png",
            "stages/validate/fig6_errors.png", "stages/mpc/fig7_model.png",
            "stages/mpc/fig8_plant.png", "stages/mpc/fig9_cav_bound.png",
-           "stages/mpc/fig10_cav_comparison.png", "stages/cav/cav_study_nycc.png")
+           "stages/mpc/fig10_cav_comparison.png", "stages/cav/cav_nycc.png",
+           "stages/cav/energy.png", "stages/econ/fig_econ_errors.png")
 
 
 @pytest.fixture(scope="module")
@@ -66,6 +67,11 @@ def test_summary_numbers_are_finite_and_physical(quick_run):
     cav = mpc["scenarios"]["cav"]
     assert 0 < cav["case1_energy_MJ"] < 1 and 0 < cav["case2_energy_MJ"] < 1
     assert s["agreement"]["agree"] > 0
+    energy = st["cav"]["summary"]["cycles"]["nycc"]["controllers"]
+    assert set(energy) == {"A", "B", "D", "E", "bound"}
+    assert all(0 < c["energy_MJ"] < 1 for c in energy.values())
+    assert any(r["section"] == "Where the energy is" and r["quantity"].startswith("conclusion")
+               for r in s["comparison"])
 
 
 def test_second_run_reuses_every_stage(quick_run):

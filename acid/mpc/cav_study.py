@@ -1,356 +1,378 @@
-"""A fair drive-cycle study of speed preview for the A/C of a connected and automated vehicle.
+"""Where the A/C energy is: five controllers on the high-fidelity plant over drive cycles.
 
-The paper's CAV comparison (scenario (c) of :mod:`acid.mpc.scenarios`) compares energy over
-a short window that ends with the ICM case's cabin warmer: part of the "saving" is heat not
-yet removed. This study compares three controllers on the high-fidelity plant over a whole
-standard drive cycle, under conditions that make the energies comparable:
+For each cycle (a standard drive cycle of ``datasets/drive_cycles`` or the paper's
+stop-and-go scenario, repeated) every controller drives the plant through the plant's own
+inputs ``W_bl`` and ``T_evap_set``:
 
-* **(A) constant bound** -- the paper's NMPC with a constant upper bound on T_cab (the
-  conventional A/C), the bound tuned (secant iteration) so that the mean cabin temperature
-  over the cycle equals that of (B);
-* **(B) ICM bound** -- the paper's NMPC following the speed-coordinated bound of
-  :mod:`acid.mpc.icm` (comfort band ``[T_low, T_high]``, built from the previewed cycle); no
-  open-loop compressor shut-off (the NMPC decides);
-* **(C) speed-aware NMPC** -- :class:`acid.mpc.speed_model.SpeedAwareNMPC`, eq. 4 with the
-  identified ``eta_cop(v(i|k))`` over the previewed speed; lower bound ``T_low``, a constant
-  upper bound tuned like (A) to the same mean T_cab as (B): the optimiser itself decides
-  when to cool below it.
+* **A** -- the paper's NMPC (eqs. 7-13, N = 6) with a constant upper bound on T_cab;
+* **B** -- the paper's NMPC following the ICM bound (paper section IV-C, :mod:`acid.mpc.icm`)
+  built from the previewed cycle inside the comfort band; its mean cabin temperature is the
+  study's target;
+* **D** -- the economic NMPC (:mod:`acid.mpc.econ_nmpc`) on the identified econ model
+  (:mod:`acid.econ`), comfort band ``[T_low, b]``, speed and ambient held at their current
+  values over the horizon (no preview);
+* **E** -- the same controller with the cycle's speed and ambient previewed;
+* **bound** -- the perfect-information bound (:mod:`acid.mpc.bound`): the whole cycle as one
+  optimisation on the same econ model (cyclic state, band, same mean), its plan replayed open
+  loop on the plant.
 
 Fairness
 --------
-* **Same start.** Each plant is first warmed up to a steady condition (``warmup_s`` at the
-  cycle's mean speed with the paper's NMPC on a constant bound ``warmup_bound``); every case
-  starts from that full plant state (T_cab, T_evap, T_int, T_shell, T_cw, w_cab).
-* **Same comfort.** (A) and (C) have the mean T_cab of (B) over samples 1 .. n (within
-  ``tol_K``); the comfort violation (K s outside ``[T_low, T_high]``) is reported.
-* **Same end state.** The cases end in different states; the heat left in the cabin is
-  charged back. Heat content ``H = C_cab T_cab + C_int T_int + w_sh C_sh T_shell + C_ew T_ew
-  + L_cab w_cab`` (J, capacities from :class:`acid.plant.config.PlantConfig`; ``w_sh = hA_sh /
-  (hA_sh + hA_ext(v_mean))`` is the share of the shell's surplus that flows into the cabin
-  rather than to ambient; ``L_cab = M_cab h_fg`` the latent heat of the cabin moisture, which
-  matters: a case that ends with a warm evaporator ends with humid air), and the correction
-  of case X is ``(H_X - H_A) / COP_A`` with ``COP_A`` the evaporator heat per compressor
-  energy of (A) over the cycle (so (A)'s correction is 0). This lumped correction uses the
-  *average* COP and no blower energy, so it underestimates the cost of a pull-down. A second,
-  model-free correction (``tail_s`` > 0): every case continues from its end state for
-  ``tail_s`` under the same controller (paper NMPC, constant bound = the target mean, cycle
-  mean speed); the tail energies' differences to (A)'s are the measured cost of the
-  different end states (the most trustworthy number; 1200 s lets the interior settle).
-  Savings are reported raw, C_eff-corrected and tail-corrected.
-* **Speed-blind twin.** The whole study is repeated on the plant with speed removed from its
-  physics (:func:`acid.mpc.scenarios._speed_blind_hifi`); what (B) or (C) save there owes
-  nothing to speed (the controllers still believe in it).
+* **Same start.** The plant is warmed up (``warmup_s`` at the cycle's mean speed, paper NMPC
+  on ``warmup_bound``); A, B, D and E start from that full plant state (``plant.measure()``
+  filtered by the plant's accepted initial keys). The bound starts from its own optimal
+  periodic state (the other plant states from the warm-up).
+* **Same comfort.** A's bound and D's and E's upper band edge ``b`` are tuned (secant steps)
+  until the run's mean T_cab over samples 1..n equals B's within ``tol_K``; the bound's mean
+  constraint is re-set until its plant replay does.
+* **Same end state, model-free.** Runs end in different states (cabin, interior, humidity).
+  From every start and end state the plant continues for ``tail_s`` under one common
+  controller (paper NMPC, constant bound at the target, cycle mean speed); the
+  **tail-corrected energy** ``E + tail(end) - tail(start)`` charges each run the measured
+  cost of the state it leaves (and credits the state it was given). No plant physics is
+  re-derived here.
 
-Energy is compressor + blower (the NMPC's objective), ``sum(P) Ts`` over the cycle; the
-constant condenser fan is left out. Temperatures in K, energies in J inside.
+Reported per controller: energy (compressor + blower, ``sum(P) Ts``), tail-corrected energy,
+mean and max T_cab, comfort violation, PMV (:mod:`acid.comfort`), humidity, saving against
+A (raw and tail-corrected), gap to the bound; per cycle, preview's share (E minus D, points)
+and the bound's band-versus-pinned value. Temperatures in K, energies in J inside.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
 from acid._io import json_safe
-from acid.errors import ConfigError
+from acid.comfort import ComfortConfig, ComfortStats, comfort_stats
+from acid.econ.params import MAP_INPUTS, EconParams
+from acid.errors import ConfigError, ExtrapolationWarning
+from acid.mpc.bound import BoundConfig, BoundPlan, perfect_information_bound
+from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
 from acid.mpc.icm import ICMConfig, icm_upper_bound
 from acid.mpc.nmpc import NMPC, NMPCConfig
-from acid.mpc.scenarios import ClosedLoopRun, closed_loop, solve_stats_ms
-from acid.mpc.speed_model import SpeedAwareNMPC, SpeedEfficiency
 from acid.params import ModelParams
 from acid.units import C2K
 
-CASES = ("A", "B", "C")
-CASE_LABELS = {"A": "A: constant bound", "B": "B: ICM bound",
-               "C": "C: speed-aware NMPC"}
-#: full plant state carried from the warm-up / the cycle into the next run
-STATE_KEYS = ("T_cab", "T_evap", "T_int", "T_shell", "T_cw", "w_cab")
+CONTROLLERS = ("A", "B", "D", "E", "bound")
+LABELS = {"A": "A: paper NMPC, constant bound", "B": "B: paper NMPC, ICM bound",
+          "D": "D: economic NMPC, no preview", "E": "E: economic NMPC, speed preview",
+          "bound": "bound: perfect information, replayed"}
+#: The paper's stop-and-go scenario as a study cycle (its 80 s period repeated).
+STOPGO = "stopgo"
+#: model states the bound's plan sets in the plant before its replay
+_MODEL_STATES = ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")
+
+PlantFactory = Callable[[], object]
+Progress = Callable[[int], None]
 
 
+def available_cycles() -> list[str]:
+    """Every cycle the study knows: the shipped drive cycles and the stop-and-go scenario."""
+    from acid.signals import available_drive_cycles
+
+    return available_drive_cycles() + [STOPGO]
+
+
+# ---------------------------------------------------------------------- configuration
 @dataclass(frozen=True)
 class StudyConfig:
     """Options of the study (temperatures in K, times in s).
 
     Attributes
     ----------
-    cycle : drive cycle name from ``datasets/drive_cycles``.
-    horizon : NMPC horizon N for all three controllers (paper: 6 = 30 s).
-    T_low, T_high : comfort band, K (ICM band; (C)'s lower bound is ``T_low``).
-    warmup_s : warm-up length before the cycle, s.
-    warmup_bound : constant upper bound during the warm-up, K.
-    tol_K : tolerance on the mean-T_cab match of (A) and (C) to (B), K.
-    max_iter : iterations of the bound tuning.
-    tail_s : length of the common continuation that measures the end-state cost, s (0: none).
-    icm : rule of case (B).
-    speed_blind : also run the study on the speed-blind twin plant.
+    horizon : paper NMPC horizon N of A, B, the warm-up and the tails (Table II: 6).
+    econ : options of the economic NMPC of D and E (its band edges are set by the study).
+    T_low, T_high : comfort band, K (ICM band; D's and E's lower edge is ``T_low``).
+    T_amb : ambient temperature, K (None: the plant's own).
+    warmup_s, warmup_bound : warm-up before the cycle, s, and its constant bound, K.
+    tol_K : mean-T_cab match of A, D, E and the bound's replay to B, K.
+    max_iter : iterations of each mean-T_cab tuning.
+    tail_s : common continuation measuring the cost of a state, s (0: no correction).
+    icm : rule of B.
+    bound : compute the bound (and its replay).
+    stopgo_s : length of the stop-and-go scenario (80 s periods), s.
+    comfort : PMV assumptions.
     """
 
-    cycle: str = "udds"
     horizon: int = 6
+    econ: EconNMPCConfig = field(default_factory=EconNMPCConfig)
     T_low: float = C2K(22.0)
     T_high: float = C2K(26.0)
+    T_amb: float | None = None
     warmup_s: float = 1800.0
     warmup_bound: float = C2K(24.0)
     tol_K: float = 0.02
     max_iter: int = 8
     tail_s: float = 1200.0
     icm: ICMConfig = field(default_factory=ICMConfig)
-    speed_blind: bool = True
+    bound: bool = True
+    stopgo_s: float = 800.0
+    comfort: ComfortConfig = field(default_factory=ComfortConfig)
 
     def __post_init__(self):
         if int(self.horizon) < 2:
             raise ConfigError(f"--horizon must be at least 2, got {self.horizon}")
         if not self.T_low < self.T_high:
-            raise ConfigError("comfort band: T_low must be below T_high")
-        if self.warmup_s < 0 or self.tail_s < 0:
-            raise ConfigError("warm-up and tail lengths must be >= 0 s")
+            raise ConfigError(f"comfort band is empty: --t-low {self.T_low - 273.15:.2f} degC "
+                              f"is not below --t-high {self.T_high - 273.15:.2f} degC")
+        if self.T_high - self.T_low < 0.5:
+            raise ConfigError("comfort band narrower than 0.5 K: the controllers cannot be "
+                              "tuned to a common mean inside it")
+        if self.warmup_s < 0 or self.tail_s < 0 or self.stopgo_s < 80.0:
+            raise ConfigError("warm-up and tail must be >= 0 s, the stop-and-go >= 80 s")
+        if not 0 < self.tol_K <= 0.05:
+            raise ConfigError(f"tol_K must lie in (0, 0.05] K, got {self.tol_K}")
 
-    def nmpc_config(self) -> NMPCConfig:
-        """The NMPC options shared by all cases (Table II, horizon and lower bound here)."""
-        return NMPCConfig(N=int(self.horizon), T_cab_min=self.T_low)
+    def nmpc_config(self, T_amb: float) -> NMPCConfig:
+        """The paper NMPC's options (Table II, horizon, lower bound, ambient of eq. 4)."""
+        return NMPCConfig(N=int(self.horizon), T_cab_min=self.T_low, T_amb=float(T_amb))
 
     def to_json_dict(self) -> dict:
-        return {"cycle": self.cycle, "horizon": int(self.horizon), "T_low_K": self.T_low,
-                "T_high_K": self.T_high, "warmup_s": self.warmup_s,
-                "warmup_bound_K": self.warmup_bound, "tol_K": self.tol_K,
-                "max_iter": self.max_iter, "tail_s": self.tail_s,
-                "icm": self.icm.to_json_dict(), "speed_blind": self.speed_blind}
+        return {"horizon": int(self.horizon), "econ": self.econ.to_json_dict(),
+                "T_low_K": self.T_low, "T_high_K": self.T_high, "T_amb_K": self.T_amb,
+                "warmup_s": self.warmup_s, "warmup_bound_K": self.warmup_bound,
+                "tol_K": self.tol_K, "max_iter": self.max_iter, "tail_s": self.tail_s,
+                "icm": self.icm.to_json_dict(), "bound": self.bound,
+                "stopgo_s": self.stopgo_s, "comfort": self.comfort.to_json_dict()}
 
 
-class _RecordingPlant:
-    """Delegates to a plant and keeps every step row (for Q_evap and the end state)."""
-
-    def __init__(self, plant):
-        self.plant = plant
-        self.Ts = plant.Ts
-        self.name = getattr(plant, "name", "plant")
-        self.rows: list[dict] = []
-
-    def reset(self, initial=None):
-        self.rows = []
-        return self.plant.reset(initial)
-
-    def step(self, W_bl, T_evap_set, v_veh=0.0, **kw):
-        row = self.plant.step(W_bl, T_evap_set, v_veh, **kw)
-        self.rows.append(row)
-        return row
-
-    def measure(self) -> dict:
-        return dict(self.plant.measure())
-
-    def end_state(self) -> dict:
-        s = self.measure()
-        return {k: float(s[k]) for k in STATE_KEYS}
-
-    def q_evap_J(self) -> float:
-        return float(sum(r.get("Q_evap", 0.0) for r in self.rows) * self.Ts)
-
-
-# ----------------------------------------------------------------------------- results
 @dataclass(frozen=True)
-class CaseResult:
-    """One case on one plant (K, J, s).
+class Scenario:
+    """What the vehicle does over a cycle, per sample of ``Ts``.
 
     Attributes
     ----------
-    key, label : ``"A"``, ``"B"``, ``"C"`` and a description.
-    run : the closed-loop run over the cycle.
-    upper_bound_K : the constant upper bound of (A)/(C) after tuning (None for (B)).
-    tuning : [(bound K, mean T_cab K)] of the tuning iterations (empty for (B)).
-    end_state : plant state at the end of the cycle, K (w_cab kg/kg).
-    heat_content_J : H of the end state (module docstring), J.
-    q_evap_J : evaporator heat removed over the cycle, J.
-    correction_J : C_eff end-state correction relative to (A), J (0 for (A)).
-    tail_energy_J : energy of the common continuation, J (NaN without a tail).
-    T_low, T_high : comfort band, K.
+    name : cycle name.
+    v : (n,) mean vehicle speed over each sample, m/s.
+    T_amb : (n,) ambient temperature, K.
+    Ts : sample time, s.
     """
 
-    key: str
+    name: str
+    v: np.ndarray
+    T_amb: np.ndarray
+    Ts: float
+
+    @property
+    def n(self) -> int:
+        return int(self.v.size)
+
+    @property
+    def duration_s(self) -> float:
+        return self.n * self.Ts
+
+
+def make_scenario(cycle: str, Ts: float, T_amb: float, stopgo_s: float = 800.0) -> Scenario:
+    """The speed profile of a cycle name and a constant ambient (K)."""
+    if cycle == STOPGO:
+        from acid.mpc.scenarios import stop_and_go_cycle
+
+        n = int(round(stopgo_s / Ts))
+        v = stop_and_go_cycle(np.arange(n) * Ts + 0.5 * Ts)
+    else:
+        from acid.signals import available_drive_cycles, drive_cycle
+
+        if cycle not in available_drive_cycles():
+            raise ConfigError(f"--cycle: unknown cycle {cycle!r} (available: "
+                              f"{', '.join(available_cycles())}, all)")
+        v, _ = drive_cycle(cycle, Ts=Ts)
+    return Scenario(name=cycle, v=np.asarray(v, dtype=float), T_amb=np.full(v.size, T_amb),
+                    Ts=float(Ts))
+
+
+# -------------------------------------------------------------------------- plant runs
+def initial_keys(plant) -> tuple[str, ...]:
+    """The state keys the plant's ``reset`` accepts (its ``INITIAL_KEYS``).
+
+    Looked up on the plant, then on its module; plants without the declaration accept the
+    measured temperatures and humidity (every ``measure()`` key but the ambient).
+    """
+    import sys
+
+    keys = getattr(plant, "INITIAL_KEYS", None)
+    if keys is None:
+        keys = getattr(sys.modules.get(type(plant).__module__), "INITIAL_KEYS", None)
+    if keys is None:
+        keys = tuple(k for k in plant.measure() if k != "T_amb")
+    return tuple(keys)
+
+
+def plant_state(plant) -> dict:
+    """The plant's full state from ``measure()``, filtered by its accepted initial keys."""
+    meas = plant.measure()
+    return {k: float(meas[k]) for k in initial_keys(plant) if k in meas}
+
+
+@dataclass(frozen=True)
+class PlantRun:
+    """One run of a controller on the plant, n steps of Ts (K, kg/kg, kg/s, W, s).
+
+    States (n+1,) at the sample instants: T_cab, T_evap, T_int, T_shell, w_cab. Inputs and
+    interval means (n,): W_bl, T_evap_set, v_veh, T_amb, T_ain, P_comp, P_bl. ``step_ms``
+    and ``fallback`` (n,) the controller's wall time and fallbacks; ``start`` and ``end``
+    the plant's full states.
+    """
+
     label: str
-    run: ClosedLoopRun
-    upper_bound_K: float | None
-    tuning: tuple
-    end_state: dict
-    heat_content_J: float
-    q_evap_J: float
-    correction_J: float
-    tail_energy_J: float
-    T_low: float
-    T_high: float
+    Ts: float
+    T_cab: np.ndarray
+    T_evap: np.ndarray
+    T_int: np.ndarray
+    T_shell: np.ndarray
+    w_cab: np.ndarray
+    W_bl: np.ndarray
+    T_evap_set: np.ndarray
+    v_veh: np.ndarray
+    T_amb: np.ndarray
+    T_ain: np.ndarray
+    P_comp: np.ndarray
+    P_bl: np.ndarray
+    step_ms: np.ndarray
+    fallback: np.ndarray
+    start: dict
+    end: dict
+
+    @property
+    def n(self) -> int:
+        return int(self.W_bl.size)
+
+    @property
+    def time(self) -> np.ndarray:
+        """(n+1,) sample instants, s."""
+        return np.arange(self.n + 1) * self.Ts
 
     @property
     def energy_J(self) -> float:
-        """Compressor + blower energy over the cycle, sum((P_comp + P_bl) Ts), J."""
-        return self.run.energy_J()
-
-    @property
-    def corrected_energy_J(self) -> float:
-        """Energy plus the C_eff end-state correction, J."""
-        return self.energy_J + self.correction_J
+        """Compressor + blower energy, sum((P_comp + P_bl) Ts), J."""
+        return float(np.sum(self.P_comp + self.P_bl) * self.Ts)
 
     @property
     def mean_T_cab(self) -> float:
-        """Mean cabin temperature over samples 1 .. n, K."""
-        return float(np.mean(self.run.T_cab[1:]))
+        """Mean cabin temperature over samples 1..n, K."""
+        return float(np.mean(self.T_cab[1:]))
 
     @property
     def max_T_cab(self) -> float:
-        return float(np.max(self.run.T_cab[1:]))
+        return float(np.max(self.T_cab[1:]))
 
-    @property
-    def comfort_violation_Ks(self) -> float:
-        """Integral of the distance outside ``[T_low, T_high]`` over samples 1 .. n, K s."""
-        T = self.run.T_cab[1:]
-        d = np.maximum.reduce([np.zeros_like(T), T - self.T_high, self.T_low - T])
-        return float(np.sum(d) * self.run.Ts)
+    def violation_Ks(self, T_low: float, T_high: float) -> float:
+        """Integral of the distance outside ``[T_low, T_high]`` over samples 1..n, K s."""
+        T = self.T_cab[1:]
+        return float(np.sum(np.maximum(0.0, np.maximum(T - T_high, T_low - T))) * self.Ts)
 
-    def to_json_dict(self) -> dict:
-        return {
-            "label": self.label, "energy_MJ": self.energy_J / 1e6,
-            "corrected_energy_MJ": self.corrected_energy_J / 1e6,
-            "correction_MJ": self.correction_J / 1e6,
-            "tail_energy_MJ": self.tail_energy_J / 1e6,
-            "mean_T_cab_K": self.mean_T_cab, "max_T_cab_K": self.max_T_cab,
-            "min_T_cab_K": float(np.min(self.run.T_cab[1:])),
-            "comfort_violation_Ks": self.comfort_violation_Ks,
-            "upper_bound_K": self.upper_bound_K,
-            "tuning": [[float(b), float(m)] for b, m in self.tuning],
-            "end_state_K": self.end_state, "heat_content_J": self.heat_content_J,
-            "q_evap_MJ": self.q_evap_J / 1e6, "solve_ms": solve_stats_ms([self.run]),
-            "fallbacks": int(np.sum(self.run.fallback)),
-        }
+    def comfort(self, config: ComfortConfig) -> ComfortStats:
+        """PMV and humidity over samples 1..n."""
+        s = slice(1, None)
+        return comfort_stats(self.T_cab[s], self.T_int[s], self.T_shell[s], self.w_cab[s],
+                             config)
 
 
-def _pct(ref: float, x: float) -> float | None:
-    return 100.0 * (ref - x) / ref if ref > 0 and np.isfinite(ref) and np.isfinite(x) else None
+class _PaperBound:
+    """The paper's NMPC following a precomputed upper bound (A, B, warm-up, tails)."""
+
+    def __init__(self, mpc: NMPC, upper: np.ndarray):
+        self.mpc, self.upper = mpc, np.asarray(upper, dtype=float)
+        self.log = mpc.log
+
+    def reset(self) -> None:
+        self.mpc.reset()
+        self.log = self.mpc.log
+
+    def make_step(self, meas: dict, k: int) -> np.ndarray:
+        N = self.mpc.N
+        return self.mpc.make_step([meas["T_cab"], meas["T_evap"]], self.upper[k: k + N + 1],
+                                  meas["T_int"], meas["T_shell"], T_amb=meas["T_amb"])
 
 
-@dataclass(frozen=True)
-class PlantStudy:
-    """The three cases on one plant.
+class _Econ:
+    """The economic NMPC with the cycle's speed and ambient per interval (D, E)."""
 
-    Attributes
-    ----------
-    plant : ``"hifi"`` or ``"speed-blind twin"``.
-    cases : {"A", "B", "C"} -> CaseResult.
-    start_state : the common warmed-up start, K.
-    target_mean_K : (B)'s mean T_cab, which (A) and (C) are tuned to, K.
-    cop_ref : (A)'s evaporator heat per compressor energy, used by the correction.
-    capacities : {"C_cab", "C_int", "C_sh", "C_ew" (J/K), "w_sh" (1), "L_cab" (J per kg/kg)}
-        of the heat content.
+    def __init__(self, mpc: EconNMPC, scenario: Scenario, T_cab_max: float):
+        self.mpc, self.sc, self.T_cab_max = mpc, scenario, float(T_cab_max)
+        self.log = mpc.log
+
+    def reset(self) -> None:
+        self.mpc.reset()
+        self.log = self.mpc.log
+
+    def make_step(self, meas: dict, k: int) -> np.ndarray:
+        iv, Ts = self.mpc.config.intervals, self.sc.Ts
+        x = [meas[n] for n in _MODEL_STATES]
+        return self.mpc.make_step(x, stage_means(self.sc.v, k, iv, Ts),
+                                  stage_means(self.sc.T_amb, k, iv, Ts),
+                                  T_cab_max=self.T_cab_max)
+
+
+@dataclass
+class _ReplayLog:
+    step_time_s: list = field(default_factory=list)
+    fallback: list = field(default_factory=list)
+
+
+class _Replay:
+    """A fixed input plan applied open loop (the bound's replay)."""
+
+    def __init__(self, inputs: np.ndarray):
+        self.inputs = np.asarray(inputs, dtype=float)
+        self.log = _ReplayLog()
+
+    def reset(self) -> None:
+        self.log = _ReplayLog()
+
+    def make_step(self, meas: dict, k: int) -> np.ndarray:
+        self.log.step_time_s.append(0.0)
+        self.log.fallback.append(False)
+        return self.inputs[k]
+
+
+def run_on_plant(plant_factory: PlantFactory, controller, start: dict, scenario: Scenario,
+                 label: str, v: np.ndarray | None = None) -> PlantRun:
+    """``u = controller.make_step(measure(), k); plant.step(u)`` over the scenario.
+
+    ``v`` overrides the scenario's speed (warm-up and tails run at its mean speed).
     """
+    v = scenario.v if v is None else np.asarray(v, dtype=float)
+    n = v.size
+    T_amb = np.resize(scenario.T_amb, n)
+    plant = plant_factory()
+    plant.reset(start)
+    controller.reset()
+    states, rows = [plant.measure()], []
+    for k in range(n):
+        u = controller.make_step(states[-1], k)
+        rows.append(plant.step(float(u[0]), float(u[1]), float(v[k]), T_amb=float(T_amb[k])))
+        states.append(plant.measure())
 
-    plant: str
-    cases: dict
-    start_state: dict
-    target_mean_K: float
-    cop_ref: float
-    capacities: dict
+    def st(name):
+        return np.array([float(s[name]) for s in states])
 
-    def savings_pct(self, key: str) -> dict:
-        """Saving of case ``key`` vs (A): raw, C_eff-corrected and tail-corrected, %.
+    def col(name):
+        return np.array([float(r.get(name, np.nan)) for r in rows])
 
-        Tail-corrected: ``E_X + (tail_X - tail_A)`` against ``E_A``.
-        """
-        a, x = self.cases["A"], self.cases[key]
-        out = {"raw": _pct(a.energy_J, x.energy_J),
-               "corrected": _pct(a.corrected_energy_J, x.corrected_energy_J)}
-        if np.isfinite(a.tail_energy_J):
-            # the tail's extra energy is charged to the cycle (A's tail is the reference)
-            out["tail_corrected"] = _pct(a.energy_J,
-                                         x.energy_J + x.tail_energy_J - a.tail_energy_J)
-            out["tail_correction_MJ"] = (x.tail_energy_J - a.tail_energy_J) / 1e6
-        return out
-
-    def to_json_dict(self) -> dict:
-        return {"plant": self.plant, "start_state_K": self.start_state,
-                "target_mean_T_cab_K": self.target_mean_K, "cop_ref": self.cop_ref,
-                "capacities": self.capacities,
-                "cases": {k: c.to_json_dict() for k, c in self.cases.items()},
-                "savings_pct": {k: self.savings_pct(k) for k in ("B", "C")}}
+    log = controller.log
+    return PlantRun(
+        label=label, Ts=scenario.Ts, T_cab=st("T_cab"), T_evap=st("T_evap"),
+        T_int=st("T_int"), T_shell=st("T_shell"), w_cab=st("w_cab"), W_bl=col("W_bl"),
+        T_evap_set=col("T_evap_set"), v_veh=v.copy(), T_amb=T_amb.copy(), T_ain=col("T_ain"),
+        P_comp=col("P_comp"), P_bl=col("P_bl"),
+        step_ms=np.array(log.step_time_s[-n:]) * 1e3 if n else np.zeros(0),
+        fallback=np.array(log.fallback[-n:], dtype=bool), start=dict(start),
+        end=plant_state(plant))
 
 
-@dataclass(frozen=True)
-class CavStudyResult:
-    """Everything ``acid cav-study`` reports.
-
-    Attributes
-    ----------
-    config : the study options.
-    efficiency : the ``eta_cop(v)`` used by (C).
-    v_step : (n,) cycle speed per sample, m/s.
-    main : study on the high-fidelity plant.
-    blind : study on the speed-blind twin (None when not run).
-    params_name : model parameters of the NMPCs.
-    elapsed_s : wall time, s.
-    """
-
-    config: StudyConfig
-    efficiency: SpeedEfficiency
-    v_step: np.ndarray
-    main: PlantStudy
-    blind: PlantStudy | None
-    params_name: str
-    elapsed_s: float
-
-    def to_json_dict(self) -> dict:
-        """Strict-JSON summary (non-finite numbers become null; temperatures in K)."""
-        return json_safe(self._json())
-
-    def _json(self) -> dict:
-        d = {"config": self.config.to_json_dict(), "efficiency": self.efficiency.to_json_dict(),
-             "params": self.params_name, "elapsed_s": self.elapsed_s,
-             "cycle_mean_speed_m_s": float(np.mean(self.v_step)),
-             "cycle_duration_s": float(self.v_step.size * self.main.cases["A"].run.Ts),
-             "hifi": self.main.to_json_dict()}
-        if self.blind is not None:
-            d["speed_blind_twin"] = self.blind.to_json_dict()
-            d["saving_from_speed_pct"] = {
-                k: {m: (self.main.savings_pct(k)[m] - self.blind.savings_pct(k)[m]
-                        if self.main.savings_pct(k).get(m) is not None
-                        and self.blind.savings_pct(k).get(m) is not None else None)
-                    for m in ("raw", "corrected", "tail_corrected")
-                    if m in self.main.savings_pct(k)}
-                for k in ("B", "C")}
-        return d
-
-
-# ------------------------------------------------------------------------------ study
-def _capacities(plant, v_mean: float) -> dict:
-    c = getattr(plant, "cfg", None)
-    if c is None:
-        from acid.plant.config import PlantConfig
-
-        c = PlantConfig()
-    hA_ext = c.hA_ext0 + c.hA_ext_v * v_mean ** 0.8
-    return {"C_cab": c.C_cab, "C_int": c.C_int, "C_sh": c.C_sh, "C_ew": c.C_ew,
-            "w_sh": c.hA_sh / (c.hA_sh + hA_ext), "L_cab": c.C_cab / c.c_p_air * c.h_fg}
-
-
-def heat_content(state: dict, cap: dict) -> float:
-    """``H = C_cab T_cab + C_int T_int + w_sh C_sh T_shell + C_ew T_evap + L_cab w_cab``, J.
-
-    Temperatures in K, ``w_cab`` in kg/kg; ``L_cab = (C_cab / c_p) h_fg`` (J per kg/kg) is
-    the latent heat of the cabin air's moisture (0 when the state has no ``w_cab``).
-    """
-    return float(cap["C_cab"] * state["T_cab"] + cap["C_int"] * state["T_int"]
-                 + cap["w_sh"] * cap["C_sh"] * state["T_shell"]
-                 + cap["C_ew"] * state["T_evap"] + cap["L_cab"] * state.get("w_cab", 0.0))
-
-
-def end_state_correction(H_case: float, H_ref: float, cop_ref: float) -> float:
-    """Electric energy to remove the extra heat ``H_case - H_ref`` at ``cop_ref``, J."""
-    return (H_case - H_ref) / cop_ref
-
-
-def _tune(run_fn: Callable[[float], tuple], target: float, lo: float, hi: float,
-          tol: float, max_iter: int):
+def tune_mean(run_fn: Callable[[float], tuple], target: float, lo: float, hi: float,
+              tol: float, max_iter: int):
     """Constant bound b in [lo, hi] whose run has mean T_cab = ``target`` (secant steps).
 
-    ``run_fn(b)`` returns ``(mean_T_cab, payload)``. Returns ``(b, payload, history)`` of
-    the iterate closest to the target.
+    ``run_fn(b)`` returns ``(mean_T_cab, payload)``. Returns ``(b, payload, history)`` of the
+    iterate closest to the target.
     """
     hist, best = [], None
     b_prev = f_prev = None
@@ -375,154 +397,476 @@ def _tune(run_fn: Callable[[float], tuple], target: float, lo: float, hi: float,
     return best[0], best[1], tuple(hist)
 
 
-def _run(plant_factory, mpc, init, ub, v, label):
-    plant = _RecordingPlant(plant_factory())
-    run = closed_loop(plant, mpc, init, ub, v, label)
-    return run, plant
+# ----------------------------------------------------------------------------- results
+@dataclass(frozen=True)
+class ControllerResult:
+    """One controller on one cycle.
 
-
-def run_plant_study(params: ModelParams, config: StudyConfig, efficiency: SpeedEfficiency,
-                    v_step: np.ndarray, plant_factory: Callable, plant_label: str = "hifi",
-                    progress: Callable[[int], None] | None = None) -> PlantStudy:
-    """Warm-up, then (B), (A) tuned and (C) tuned on one plant; see the module docstring.
-
-    ``progress(steps)`` is called after each closed-loop run with its number of steps.
+    Attributes
+    ----------
+    key, label : ``"A"`` .. ``"bound"`` and a description.
+    run : the plant run over the cycle.
+    tail_end_J, tail_start_J : energy of the common continuation from the end and the start
+        state, J (NaN without tails).
+    comfort : PMV and humidity statistics.
+    upper_bound_K : A's constant bound or D's/E's upper band edge after tuning (None: B,
+        bound).
+    tuning : [(bound K, mean T_cab K)] of the tuning iterations.
+    extra : controller-specific numbers (the bound's model energies, ...).
     """
-    tick = progress or (lambda steps: None)
-    ncfg = config.nmpc_config()
-    paper_mpc = NMPC(params, ncfg)
-    aware = SpeedAwareNMPC(params, efficiency, ncfg)
-    Ts, N = params.Ts, ncfg.N
-    n = int(v_step.size)
-    v_mean = float(np.mean(v_step))
-    v_pad = np.concatenate((v_step, np.full(N + 1, v_step[-1])))
-    t_all = np.arange(n + N + 1) * Ts
 
-    # warm-up to a steady condition (same for every case)
-    n_w = int(round(config.warmup_s / Ts))
-    probe = plant_factory()
-    start = {k: float(v) for k, v in probe.reset().items() if k in STATE_KEYS}
-    if n_w > 0:
-        rec = _RecordingPlant(probe)
-        closed_loop(rec, paper_mpc, None, np.full(n_w + N + 1, config.warmup_bound),
-                    np.full(n_w, v_mean), "warm-up")
-        start = rec.end_state()
-        tick(n_w)
-    cap = _capacities(probe, v_mean)
+    key: str
+    label: str
+    run: PlantRun
+    tail_end_J: float
+    tail_start_J: float
+    comfort: ComfortStats
+    upper_bound_K: float | None = None
+    tuning: tuple = ()
+    extra: dict = field(default_factory=dict)
 
-    def finish(key, run, plant, bound, hist):
-        return key, run, plant, bound, hist
+    @property
+    def energy_J(self) -> float:
+        return self.run.energy_J
 
-    # (B) ICM bound from the previewed cycle
-    ub_B = icm_upper_bound(t_all, v_pad, config.icm, initial=start["T_cab"])
-    run_B, pl_B = _run(plant_factory, paper_mpc, start, ub_B, v_step, CASE_LABELS["B"])
-    tick(n)
-    target = float(np.mean(run_B.T_cab[1:]))
-    lo, hi = config.T_low - 2.0, config.T_high
+    @property
+    def tail_corrected_J(self) -> float:
+        """``E + tail(end) - tail(start)``: the energy with the state change charged, J."""
+        if not (math.isfinite(self.tail_end_J) and math.isfinite(self.tail_start_J)):
+            return self.energy_J
+        return self.energy_J + self.tail_end_J - self.tail_start_J
 
-    def tuned(mpc, key):
+
+def _pct(ref: float, x: float) -> float | None:
+    ok = ref > 0 and math.isfinite(ref) and math.isfinite(x)
+    return 100.0 * (ref - x) / ref if ok else None
+
+
+@dataclass(frozen=True)
+class CycleStudy:
+    """The five controllers on one cycle.
+
+    Attributes
+    ----------
+    scenario : the cycle.
+    results : {key: ControllerResult} for the controllers that ran.
+    start_state : the common warmed-up plant state, K (w_cab kg/kg).
+    target_mean_K : B's mean T_cab, the target of A, D, E and the bound, K.
+    T_low, T_high : comfort band, K.
+    elapsed_s : wall time, s.
+    warnings : distinct warnings raised while the cycle ran (e.g. the power map
+        extrapolated), one line each.
+    """
+
+    scenario: Scenario
+    results: dict
+    start_state: dict
+    target_mean_K: float
+    T_low: float
+    T_high: float
+    elapsed_s: float = float("nan")
+    warnings: tuple[str, ...] = ()
+
+    def saving_pct(self, key: str, corrected: bool = True) -> float | None:
+        """Saving of ``key`` against A, %, tail-corrected (``E + tail(end) - tail(start)``)."""
+        a, x = self.results["A"], self.results[key]
+        if corrected:
+            return _pct(a.tail_corrected_J, x.tail_corrected_J)
+        return _pct(a.energy_J, x.energy_J)
+
+    def gap_to_bound_pct(self, key: str) -> float | None:
+        """(tail-corrected energy of ``key`` - the bound's replay) / the bound's replay, %."""
+        if "bound" not in self.results:
+            return None
+        b = self.results["bound"].tail_corrected_J
+        x = self.results[key].tail_corrected_J
+        return 100.0 * (x - b) / b if b > 0 and math.isfinite(x) else None
+
+    @property
+    def preview_share_points(self) -> float | None:
+        """Saving of E minus saving of D (tail-corrected), percentage points."""
+        if "D" not in self.results or "E" not in self.results:
+            return None
+        d, e = self.saving_pct("D"), self.saving_pct("E")
+        return None if d is None or e is None else e - d
+
+    def controller_json(self, key: str) -> dict:
+        r = self.results[key]
+        run = r.run
+        ms = run.step_ms
+        return {
+            "label": r.label, "energy_MJ": r.energy_J / 1e6,
+            "tail_corrected_energy_MJ": r.tail_corrected_J / 1e6,
+            "tail_end_MJ": r.tail_end_J / 1e6, "tail_start_MJ": r.tail_start_J / 1e6,
+            "saving_raw_pct": self.saving_pct(key, corrected=False),
+            "saving_tail_corrected_pct": self.saving_pct(key),
+            "gap_to_bound_pct": self.gap_to_bound_pct(key),
+            "mean_T_cab_K": run.mean_T_cab, "max_T_cab_K": run.max_T_cab,
+            "min_T_cab_K": float(np.min(run.T_cab[1:])),
+            "comfort_violation_Ks": run.violation_Ks(self.T_low, self.T_high),
+            **r.comfort.to_json_dict(),
+            "mean_W_bl_kg_s": float(np.mean(run.W_bl)),
+            "mean_T_evap_set_K": float(np.mean(run.T_evap_set)),
+            "mean_T_evap_K": float(np.mean(run.T_evap[1:])),
+            "upper_bound_K": r.upper_bound_K,
+            "tuning": [[float(b), float(m)] for b, m in r.tuning],
+            "step_ms": ({"median": float(np.median(ms)), "p95": float(np.percentile(ms, 95)),
+                         "max": float(np.max(ms))} if ms.size and ms.any() else None),
+            "fallbacks": int(np.sum(run.fallback)), "start_state": run.start,
+            "end_state": run.end, **r.extra,
+        }
+
+    def to_json_dict(self) -> dict:
+        sc = self.scenario
+        return json_safe({
+            "cycle": sc.name, "duration_s": sc.duration_s,
+            "mean_speed_m_s": float(np.mean(sc.v)), "T_amb_K": float(np.mean(sc.T_amb)),
+            "target_mean_T_cab_K": self.target_mean_K, "start_state": self.start_state,
+            "controllers": {k: self.controller_json(k) for k in CONTROLLERS
+                            if k in self.results},
+            "preview_share_points": self.preview_share_points, "elapsed_s": self.elapsed_s,
+            "warnings": list(self.warnings),
+        })
+
+
+@dataclass(frozen=True)
+class CavStudyResult:
+    """Everything ``acid cav-study`` reports.
+
+    Attributes
+    ----------
+    config : the study options.
+    cycles : {name: CycleStudy}.
+    params_name : the paper model's parameters (A, B).
+    econ : the econ model's identification summary (source, power-map quality).
+    elapsed_s : wall time, s.
+    """
+
+    config: StudyConfig
+    cycles: dict
+    params_name: str
+    econ: dict
+    elapsed_s: float
+
+    def to_json_dict(self) -> dict:
+        return json_safe({"config": self.config.to_json_dict(), "params": self.params_name,
+                          "econ_model": self.econ, "elapsed_s": self.elapsed_s,
+                          "units": {"energy": "MJ", "temperature": "K", "saving": "%",
+                                    "preview_share": "percentage points"},
+                          "definitions": DEFINITIONS,
+                          "cycles": {k: c.to_json_dict() for k, c in self.cycles.items()}})
+
+
+DEFINITIONS = {
+    "energy_MJ": "compressor + blower energy over the cycle, sum((P_comp + P_bl) Ts)",
+    "tail_corrected_energy_MJ": "energy + tail(end state) - tail(start state); tail: the "
+                                "energy of a common continuation (paper NMPC, constant bound "
+                                "at the target, cycle mean speed)",
+    "saving_tail_corrected_pct": "100 (A - X) / A of the tail-corrected energies",
+    "gap_to_bound_pct": "100 (X - bound) / bound of the tail-corrected energies, the bound "
+                        "replayed open loop on the plant",
+    "preview_share_points": "saving of E minus saving of D (tail-corrected), points",
+}
+
+
+# --------------------------------------------------------------------------- the study
+class _CycleRunner:
+    """Runs the controllers of one cycle from one start and charges their end states.
+
+    Holds what every run shares (plant factory, scenario, start, target, the tail
+    controller) so that each step of the study is a method, not a closure.
+    """
+
+    def __init__(self, plant_factory: PlantFactory, sc: Scenario, config: StudyConfig,
+                 paper: NMPC, tick: Progress):
+        self.plant_factory, self.sc, self.config = plant_factory, sc, config
+        self.paper, self.tick = paper, tick
+        self.n_t = int(round(config.tail_s / sc.Ts))
+        self.start: dict = {}
+        self.target = math.nan
+        self.tail_start = math.nan
+
+    def run(self, controller, label: str, start: dict | None = None,
+            v: np.ndarray | None = None) -> PlantRun:
+        run = run_on_plant(self.plant_factory, controller,
+                           self.start if start is None else start, self.sc, label, v=v)
+        self.tick(run.n)
+        return run
+
+    def warm_up(self, start: dict) -> None:
+        """Run the warm-up (module docstring) and keep its end as the common start."""
+        n_w = int(round(self.config.warmup_s / self.sc.Ts))
+        self.start = start
+        if n_w > 0:
+            N = self.paper.N
+            ctrl = _PaperBound(self.paper, np.full(n_w + N + 1, self.config.warmup_bound))
+            self.start = self.run(ctrl, "warm-up", start,
+                                  v=np.full(n_w, float(np.mean(self.sc.v)))).end
+
+    def set_target(self, target: float) -> None:
+        """The common mean T_cab; the tail from the common start is measured once."""
+        self.target = float(target)
+        self.tail_start = self.tail(self.start)
+
+    def tail(self, state: dict) -> float:
+        """Energy of the common continuation from ``state`` (module docstring), J."""
+        if self.n_t <= 0:
+            return math.nan
+        ctrl = _PaperBound(self.paper, np.full(self.n_t + self.paper.N + 1, self.target))
+        return self.run(ctrl, "tail", state,
+                        v=np.full(self.n_t, float(np.mean(self.sc.v)))).energy_J
+
+    def result(self, key: str, run: PlantRun, bound: float | None = None, tuning=(),
+               extra: dict | None = None, tail_start: float | None = None
+               ) -> ControllerResult:
+        return ControllerResult(
+            key=key, label=LABELS[key], run=run, tail_end_J=self.tail(run.end),
+            tail_start_J=self.tail_start if tail_start is None else tail_start,
+            comfort=run.comfort(self.config.comfort), upper_bound_K=bound,
+            tuning=tuple(tuning), extra=extra or {})
+
+    def tuned(self, key: str, make_controller: Callable[[float], object], lo: float,
+              hi: float) -> ControllerResult:
+        """The controller whose constant bound ``b`` gives the target mean T_cab."""
         def run_fn(b):
-            if isinstance(mpc, SpeedAwareNMPC):
-                mpc.set_speed_profile(v_step)
-            r, p = _run(plant_factory, mpc, start, np.full(n + N + 1, b), v_step,
-                        CASE_LABELS[key])
-            tick(n)
-            return float(np.mean(r.T_cab[1:])), (r, p)
+            run = self.run(make_controller(b), LABELS[key])
+            return run.mean_T_cab, run
 
-        b, (r, p), hist = _tune(run_fn, target, lo, hi, config.tol_K, config.max_iter)
-        return r, p, b, hist
+        b, run, hist = tune_mean(run_fn, self.target, lo, hi, self.config.tol_K,
+                                 self.config.max_iter)
+        return self.result(key, run, b, hist)
 
-    run_A, pl_A, b_A, h_A = tuned(paper_mpc, "A")
-    run_C, pl_C, b_C, h_C = tuned(aware, "C")
+    def bound(self, econ: EconParams, guess_run: PlantRun | None) -> ControllerResult:
+        """Solve the bound, replay it open loop, re-set its mean until the replay matches."""
+        cfg, sc = self.config, self.sc
+        guess = None
+        if guess_run is not None:
+            x = np.column_stack([getattr(guess_run, n) for n in _MODEL_STATES])
+            guess = (x, np.column_stack([guess_run.W_bl, guess_run.T_evap_set]))
+        T_req, hist, best = self.target, [], None
+        for _ in range(max(1, cfg.max_iter // 2)):
+            bc = BoundConfig(T_mean=float(np.clip(T_req, cfg.T_low, cfg.T_high)),
+                             T_low=cfg.T_low, T_high=cfg.T_high, RH_max=cfg.econ.RH_max)
+            plan = perfect_information_bound(econ, sc.v, sc.T_amb, bc, guess=guess)
+            run = self.run(_Replay(plan.inputs), LABELS["bound"], self._replay_start(plan))
+            err = run.mean_T_cab - self.target
+            hist.append((bc.T_mean, run.mean_T_cab))
+            if best is None or abs(err) < abs(best[2]):
+                best = (plan, run, err)
+            if abs(err) <= cfg.tol_K:
+                break
+            T_req = bc.T_mean - err
+            guess = (plan.x, plan.inputs)
+        plan, run, _ = best
+        pinned = perfect_information_bound(
+            econ, sc.v, sc.T_amb,
+            BoundConfig(T_mean=plan.config.T_mean, T_low=cfg.T_low, T_high=cfg.T_high,
+                        pinned=True, RH_max=cfg.econ.RH_max), guess=(plan.x, plan.inputs))
+        return self.result("bound", run, tuning=hist, tail_start=self.tail(run.start),
+                           extra=_bound_extra(plan, pinned, run, len(hist)))
 
-    raw = {"A": (run_A, pl_A, b_A, h_A), "B": (run_B, pl_B, None, ()),
-           "C": (run_C, pl_C, b_C, h_C)}
-    P_A = float(np.sum(run_A.P_comp) * Ts)
-    cop_ref = pl_A.q_evap_J() / P_A if P_A > 0 else float("nan")
-    H = {k: heat_content(v[1].end_state(), cap) for k, v in raw.items()}
-
-    # common continuation from each end state: measures the end-state cost directly
-    n_t = int(round(config.tail_s / Ts))
-    tails = {}
-    for key, (_run_k, pl, _b, _h) in raw.items():
-        if n_t > 0:
-            rec = _RecordingPlant(plant_factory())
-            tr = closed_loop(rec, paper_mpc, pl.end_state(), np.full(n_t + N + 1, target),
-                             np.full(n_t, v_mean), f"{key} tail")
-            tails[key] = tr.energy_J()
-            tick(n_t)
-        else:
-            tails[key] = float("nan")
-
-    cases = {}
-    for key in CASES:
-        run, pl, b, hist = raw[key]
-        cases[key] = CaseResult(
-            key=key, label=CASE_LABELS[key], run=run, upper_bound_K=b, tuning=hist,
-            end_state=pl.end_state(), heat_content_J=H[key], q_evap_J=pl.q_evap_J(),
-            correction_J=0.0 if key == "A" else end_state_correction(H[key], H["A"], cop_ref),
-            tail_energy_J=tails[key], T_low=config.T_low, T_high=config.T_high)
-    return PlantStudy(plant=plant_label, cases=cases, start_state=start,
-                      target_mean_K=target, cop_ref=cop_ref, capacities=cap)
-
-
-def _default_factories():
-    from acid.mpc.scenarios import _make_hifi, _speed_blind_hifi
-
-    return _make_hifi, _speed_blind_hifi
+    def _replay_start(self, plan: BoundPlan) -> dict:
+        """The common start with the model's states replaced by the plan's periodic state."""
+        init = dict(self.start)
+        init.update({k: float(v) for k, v in zip(_MODEL_STATES, plan.x[0], strict=True)
+                     if k in init})
+        return init
 
 
-def estimated_steps(config: StudyConfig, n: int, Ts: float = 5.0) -> int:
-    """Closed-loop steps the study will take (for a progress bar; tuning may stop early)."""
-    per = (int(round(config.warmup_s / Ts)) + n * (1 + 2 * 3)
-           + 3 * int(round(config.tail_s / Ts)))
-    return per * (2 if config.speed_blind else 1)
+def _bound_extra(plan: BoundPlan, pinned: BoundPlan, run: PlantRun, iterations: int) -> dict:
+    """The bound's own numbers: model energies, replay error, band-versus-pinned value."""
+    return {"model_energy_MJ": plan.energy_J / 1e6, "model_mean_T_cab_K": plan.mean_T_cab,
+            "replay_vs_model_pct": 100.0 * (run.energy_J - plan.energy_J) / plan.energy_J,
+            "pinned_model_energy_MJ": pinned.energy_J / 1e6,
+            "band_vs_pinned_pct": 100.0 * (pinned.energy_J - plan.energy_J) / pinned.energy_J,
+            "solve_status": plan.status, "solve_time_s": plan.solve_time_s,
+            "replay_iterations": iterations}
 
 
-def cav_study(params: ModelParams, config: StudyConfig | None = None,
-              efficiency: SpeedEfficiency | None = None,
-              plant_factory: Callable | None = None,
-              blind_factory: Callable | None = None,
-              progress: Callable[[int, int], None] | None = None) -> CavStudyResult:
-    """Run the study on one drive cycle (see the module docstring).
+def study_cycle(params: ModelParams, econ: EconParams, cycle: str, config: StudyConfig,
+                plant_factory: PlantFactory, controllers=CONTROLLERS,
+                progress: Progress | None = None) -> CycleStudy:
+    """Run the study on one cycle (module docstring).
 
     Parameters
     ----------
-    params : model parameters of all three NMPCs.
-    config : study options (default ``StudyConfig()``: UDDS, N = 6, band 22-26 degC).
-    efficiency : ``eta_cop(v)`` of (C); default: identified from the high-fidelity plant
-        (:func:`acid.mpc.speed_model.identify_from_plant`, UDDS, 7200 s, seed 0).
-    plant_factory, blind_factory : plant constructors (default: ``HifiPlant()`` and its
-        speed-blind twin).
-    progress : ``progress(done, total)`` in closed-loop steps.
+    params : paper model parameters of A, B, the warm-up and the tails.
+    econ : identified econ model of D, E and the bound.
+    cycle : cycle name (``available_cycles()``).
+    config : study options.
+    plant_factory : builds a fresh plant (picklable for ``--cycle all`` in parallel).
+    controllers : subset of ``CONTROLLERS`` to run (A and B always run).
+    progress : called with the number of plant steps after each run.
+
+    Raises
+    ------
+    ConfigError
+        The cycle is shorter than the economic NMPC's horizon, or an option is invalid.
+
+    Notes
+    -----
+    Warnings of the controllers are collected, de-duplicated and returned in
+    ``CycleStudy.warnings`` instead of being repeated at every tuning run; where the cycle
+    leaves the power map's data (:class:`acid.errors.ExtrapolationWarning`) one line per
+    cycle says so.
     """
-    from acid.signals import drive_cycle
+    import warnings
 
-    config = config or StudyConfig()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        study = _study_cycle(params, econ, cycle, config, plant_factory, controllers, progress)
+    sc = study.scenario
+    lines = {m.split(" ")[0]: f"ExtrapolationWarning: the cycle leaves the power map's data: "
+             f"{m}" for m in econ.power_map.outside(v_veh=sc.v, T_amb=sc.T_amb)}
+    for w in caught:  # one line per power-map input, one per other message
+        text = str(w.message)
+        key = text
+        if issubclass(w.category, ExtrapolationWarning):
+            key = next((n for n, _ in MAP_INPUTS if f": {n} " in text), text)
+        lines.setdefault(key, f"{w.category.__name__}: {text}")
+    return dataclasses.replace(study, warnings=tuple(lines.values()))
+
+
+def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progress
+                 ) -> CycleStudy:
     t0 = time.perf_counter()
-    v_step, _ = drive_cycle(config.cycle, Ts=params.Ts)
-    if plant_factory is None:
-        plant_factory, blind_default = _default_factories()
-        blind_factory = blind_factory or blind_default
-    if efficiency is None:
-        from acid.mpc.speed_model import identify_from_plant
+    probe = plant_factory()
+    T_amb = float(probe.measure()["T_amb"]) if config.T_amb is None else float(config.T_amb)
+    sc = make_scenario(cycle, params.Ts, T_amb, config.stopgo_s)
+    if sc.duration_s < config.econ.horizon_s:
+        raise ConfigError(f"cycle {cycle!r} lasts {sc.duration_s:g} s, shorter than the "
+                          f"economic NMPC's horizon ({config.econ.horizon_s:g} s)")
+    paper = NMPC(params, config.nmpc_config(T_amb))
+    runner = _CycleRunner(plant_factory, sc, config, paper, progress or (lambda steps: None))
+    runner.warm_up(plant_state(probe))
+    N, n = paper.N, sc.n
 
-        efficiency = identify_from_plant()
-    total = estimated_steps(config, int(v_step.size), params.Ts)
-    done = [0]
+    # B: the ICM bound from the previewed cycle defines the target mean
+    t_all = np.arange(n + N + 1) * sc.Ts
+    v_pad = np.concatenate((sc.v, np.full(N + 1, sc.v[-1])))
+    ub_B = icm_upper_bound(t_all, v_pad, config.icm, initial=runner.start["T_cab"])
+    run_B = runner.run(_PaperBound(paper, ub_B), LABELS["B"])
+    runner.set_target(run_B.mean_T_cab)
+    results = {"B": runner.result("B", run_B)}
+    results["A"] = runner.tuned("A", partial(_constant_bound, paper, n + N + 1),
+                                config.T_low - 2.0, config.T_high)
+    for key, preview in (("D", False), ("E", True)):
+        if key in controllers:
+            mpc = EconNMPC(econ, config.econ.replace(T_cab_min=config.T_low,
+                                                     T_cab_max=config.T_high,
+                                                     preview=preview))
+            results[key] = runner.tuned(key, partial(_Econ, mpc, sc), config.T_low + 0.1,
+                                        config.T_high)
+    if config.bound and "bound" in controllers:
+        guess = results.get("E", results.get("D"))
+        results["bound"] = runner.bound(econ, guess.run if guess is not None else None)
+    return CycleStudy(scenario=sc, results=results, start_state=runner.start,
+                      target_mean_K=runner.target, T_low=config.T_low, T_high=config.T_high,
+                      elapsed_s=time.perf_counter() - t0)
 
-    def tick(steps):
-        done[0] += steps
-        if progress is not None:
-            progress(min(done[0], total), total)
 
-    main = run_plant_study(params, config, efficiency, v_step, plant_factory, "hifi", tick)
-    blind = None
-    if config.speed_blind and blind_factory is not None:
-        blind = run_plant_study(params, config, efficiency, v_step, blind_factory,
-                                "speed-blind twin", tick)
-    if progress is not None:
+def _constant_bound(mpc: NMPC, n: int, b: float) -> _PaperBound:
+    """Controller A: the paper's NMPC with the constant upper bound ``b`` (K)."""
+    return _PaperBound(mpc, np.full(n, b))
+
+
+def estimated_steps(config: StudyConfig, n: int, Ts: float = 5.0) -> int:
+    """Plant steps one cycle's study takes (for a progress bar; tuning may stop early)."""
+    n_t = int(round(config.tail_s / Ts))
+    return int(round(config.warmup_s / Ts)) + n * (1 + 3 * 3 + 2) + 6 * n_t
+
+
+def identify_econ(plant_factory: PlantFactory, duration_s: float = 6 * 3600.0,
+                  seed: int = 0) -> tuple[EconParams, dict]:
+    """Identify the econ model from an ``acid excite --model econ`` record of the plant.
+
+    Returns the parameters and a summary (record, fit quality, power-map RMS error).
+    """
+    import warnings
+
+    from acid.econ.fit import EconFitter
+    from acid.excite import excite, spec_for_model
+
+    spec = spec_for_model("econ", duration=duration_s, seed=seed)
+    ds = excite(plant_factory(), spec)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # carried by the result
+        res = EconFitter().fit(ds)
+    summary = {"source": f"acid excite --model econ ({duration_s:g} s, seed {seed}) + acid "
+                         "fit --model econ", "power_map": res.power_map_quality,
+               "fit_percent_simulation": res.fit_percent_simulation,
+               "warnings": list(res.warnings)}
+    return res.params, summary
+
+
+def default_plant_factory() -> PlantFactory:
+    """A picklable factory of the default high-fidelity plant."""
+    from acid.plant import make_plant
+
+    return partial(make_plant, "hifi")
+
+
+def cav_study(params: ModelParams, cycles, config: StudyConfig | None = None,
+              econ: EconParams | None = None, econ_summary: dict | None = None,
+              plant_factory: PlantFactory | None = None, jobs: int = 1,
+              progress: Callable[[int, int], None] | None = None) -> CavStudyResult:
+    """Run the study on one or more cycles (module docstring).
+
+    Parameters
+    ----------
+    params : paper model parameters (A, B).
+    cycles : a cycle name, ``"all"`` or a list of names.
+    config : options (default ``StudyConfig()``).
+    econ : identified econ model (default: identified from the plant, :func:`identify_econ`).
+    econ_summary : its identification summary, for the report.
+    plant_factory : builds the plant (default the high-fidelity plant).
+    jobs : cycles studied in parallel processes (``--cycle all``).
+    progress : ``progress(done, total)`` in plant steps (one cycle) or cycles (several).
+    """
+    config = config or StudyConfig()
+    names = available_cycles() if cycles == "all" else (
+        [cycles] if isinstance(cycles, str) else list(cycles))
+    for c in names:
+        if c not in available_cycles():
+            raise ConfigError(f"--cycle: unknown cycle {c!r} (available: "
+                              f"{', '.join(available_cycles())}, all)")
+    t0 = time.perf_counter()
+    plant_factory = plant_factory or default_plant_factory()
+    if econ is None:
+        econ, econ_summary = identify_econ(plant_factory)
+    out: dict[str, CycleStudy] = {}
+    if len(names) == 1 or jobs <= 1:
+        done = [0]
+        if len(names) == 1:
+            sc = make_scenario(names[0], params.Ts, 303.15, config.stopgo_s)
+            total = estimated_steps(config, sc.n, params.Ts)
+
+            def tick(steps):
+                done[0] += steps
+                if progress is not None:
+                    progress(min(done[0], total), total)
+        else:
+            def tick(steps):
+                pass
+        for i, name in enumerate(names):
+            out[name] = study_cycle(params, econ, name, config, plant_factory, progress=tick)
+            if len(names) > 1 and progress is not None:
+                progress(i + 1, len(names))
+    else:
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        with ProcessPoolExecutor(max_workers=int(jobs)) as ex:
+            futs = {ex.submit(study_cycle, params, econ, name, config, plant_factory): name
+                    for name in names}
+            for i, f in enumerate(as_completed(futs)):
+                out[futs[f]] = f.result()
+                if progress is not None:
+                    progress(i + 1, len(names))
+        out = {name: out[name] for name in names}
+    if progress is not None and len(names) == 1:
+        total = estimated_steps(config, out[names[0]].scenario.n, params.Ts)
         progress(total, total)
-    return CavStudyResult(config=config, efficiency=efficiency, v_step=np.asarray(v_step),
-                          main=main, blind=blind, params_name=params.name,
+    summary = dict(econ_summary or {}, name=econ.name, provenance=econ.provenance,
+                   power_map_domain={k: list(v) for k, v in econ.power_map.domain.items()})
+    return CavStudyResult(config=config, cycles=out, params_name=params.name, econ=summary,
                           elapsed_s=time.perf_counter() - t0)

@@ -1,8 +1,8 @@
-"""Figure of the drive-cycle CAV study (:mod:`acid.mpc.cav_study`) from its result object.
+"""Figures of the drive-cycle energy study (:mod:`acid.mpc.cav_study`) from its result objects.
 
-Builds a ``matplotlib.figure.Figure`` directly (no pyplot state); save with
-``acid._io.save_figure``. Speeds in m/s, temperatures in °C, powers in W, energies in kJ,
-time in s.
+Builds ``matplotlib.figure.Figure`` objects directly (no pyplot state); save with
+``acid._io.save_figure``. Speeds in m/s, temperatures in °C, humidity in g/kg, powers in W,
+energies in MJ, time in s.
 """
 
 from __future__ import annotations
@@ -10,65 +10,74 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from acid.mpc.cav_study import CASES, CavStudyResult
+from acid.mpc.cav_study import CONTROLLERS, CavStudyResult, CycleStudy
 from acid.units import K2C
 
-_COLORS = {"A": "tab:blue", "B": "tab:orange", "C": "tab:green"}
-_STYLE = {"A": "-", "B": "-", "C": "--"}  # C dashed: it coincides with A where it never
-#                                           pre-cools
-_BAND = {"color": "tab:red", "linestyle": ":", "linewidth": 1.4}
+_COLORS = {"A": "tab:blue", "B": "tab:orange", "D": "tab:purple", "E": "tab:green",
+           "bound": "black"}
+_STYLE = {"A": "-", "B": "-", "D": ":", "E": "-", "bound": "--"}
+_BAND = {"color": "tab:red", "linestyle": ":", "linewidth": 1.2}
 
 
-def cav_study_figure(result: CavStudyResult) -> Figure:
-    """Speed, T_cab with the comfort band, A/C power and cumulative energy of A/B/C.
+def energy_figure(result: CavStudyResult) -> Figure:
+    """Tail-corrected energy per controller and cycle (grouped bars), savings vs A on top."""
+    cycles = list(result.cycles)
+    keys = [k for k in CONTROLLERS if any(k in c.results for c in result.cycles.values())]
+    fig = Figure(figsize=(max(6.0, 1.6 * len(cycles) + 2.0), 4.8), layout="constrained")
+    ax = fig.subplots()
+    width = 0.8 / len(keys)
+    x = np.arange(len(cycles))
+    for j, key in enumerate(keys):
+        vals = [c.results[key].tail_corrected_J / 1e6 if key in c.results else np.nan
+                for c in result.cycles.values()]
+        bars = ax.bar(x + (j - (len(keys) - 1) / 2) * width, vals, width,
+                      color=_COLORS[key], label=key, alpha=0.85)
+        for b, c in zip(bars, result.cycles.values(), strict=True):
+            s = c.saving_pct(key) if key in c.results and key != "A" else None
+            if s is not None:
+                ax.annotate(f"{s:.1f}%", (b.get_x() + b.get_width() / 2, b.get_height()),
+                            ha="center", va="bottom", fontsize=6, rotation=90)
+    ax.set_xticks(x, [c.upper() for c in cycles])
+    ax.set_ylabel("energy, end state charged back (MJ)")
+    ax.set_title("A/C energy (compressor + blower) at equal mean cabin temperature; "
+                 "labels: saving vs A", fontsize=10)
+    ax.legend(fontsize=8, ncols=len(keys))
+    ax.grid(True, axis="y", alpha=0.3)
+    return fig
 
-    Parameters
-    ----------
-    result : the study; the high-fidelity plant runs (``result.main``) are drawn.
 
-    Returns
-    -------
-    Figure with four stacked panels sharing the time axis.
-    """
-    study = result.main
-    cfg = result.config
-    fig = Figure(figsize=(10, 10))
-    axs = fig.subplots(4, 1, sharex=True)
-    run0 = study.cases["A"].run
-    t_step = run0.time[:-1]
-    Ts = run0.Ts
-    axs[0].step(np.append(t_step, run0.time[-1]), np.append(result.v_step, result.v_step[-1]),
-                where="post", color="k", linewidth=1.0)
-    axs[0].set_ylabel("vehicle speed (m/s)")
-    axs[0].set_title(f"{cfg.cycle.upper()}: A/C energy at equal mean cabin temperature "
-                     f"(N = {cfg.horizon}, high-fidelity plant)")
-    for key in CASES:
-        c = study.cases[key]
-        run = c.run
-        col = _COLORS[key]
-        ls = _STYLE[key]
-        axs[1].plot(run.time, K2C(run.T_cab), color=col, linestyle=ls, label=c.label)
-        P = run.P_comp + run.P_bl
-        axs[2].step(np.append(run.time[:-1], run.time[-1]), np.append(P, P[-1]), where="post",
-                    color=col, linestyle=ls, linewidth=1.0, label=c.label)
-        E = np.concatenate(([0.0], np.cumsum(P) * Ts)) / 1e3
-        axs[3].plot(run.time, E, color=col, linestyle=ls,
-                    label=f"{c.label}: {c.energy_J / 1e6:.4f} MJ "
-                          f"(end-corrected {c.corrected_energy_J / 1e6:.4f} MJ)")
-    b = study.cases["B"].run
-    axs[1].plot(b.time, K2C(b.T_cab_max), color=_COLORS["B"], linestyle="--", linewidth=0.9,
-                label="ICM bound (B)")
-    for T in (cfg.T_low, cfg.T_high):
+def trajectory_figure(study: CycleStudy, keys=("A", "E", "bound")) -> Figure:
+    """Speed, T_cab with the band, T_evap_set and W_bl, humidity, power: A, E and the bound."""
+    keys = [k for k in keys if k in study.results]
+    fig = Figure(figsize=(10, 11), layout="constrained")
+    axs = fig.subplots(5, 1, sharex=True)
+    sc = study.scenario
+    t = np.arange(sc.n + 1) * sc.Ts
+    axs[0].step(t, np.append(sc.v, sc.v[-1]), where="post", color="k", lw=1.0)
+    axs[0].set_ylabel("speed (m/s)")
+    axs[0].set_title(f"{sc.name.upper()}: paper NMPC (A), economic NMPC with preview (E) and "
+                     "the perfect-information bound replayed on the plant", fontsize=10)
+    ax_w = axs[2].twinx()
+    for key in keys:
+        r = study.results[key]
+        run, col, ls = r.run, _COLORS[key], _STYLE[key]
+        lab = f"{key}: {r.tail_corrected_J / 1e6:.4f} MJ"
+        axs[1].plot(t, K2C(run.T_cab), color=col, ls=ls, lw=1.1, label=lab)
+        axs[2].step(t[:-1], K2C(run.T_evap_set), where="post", color=col, ls=ls, lw=1.0)
+        ax_w.step(t[:-1], run.W_bl, where="post", color=col, ls=ls, lw=0.6, alpha=0.5)
+        axs[3].plot(t, 1e3 * run.w_cab, color=col, ls=ls, lw=1.1)
+        axs[4].step(t[:-1], run.P_comp + run.P_bl, where="post", color=col, ls=ls, lw=0.8)
+    for T in (study.T_low, study.T_high):
         axs[1].axhline(K2C(T), **_BAND)
-    axs[1].axhline(K2C(study.target_mean_K), color="grey", linewidth=0.8,
-                   label=f"mean T_cab target {K2C(study.target_mean_K):.2f} °C")
-    axs[1].set_ylabel("cabin temperature $T_{cab}$ (°C)")
-    axs[2].set_ylabel("P_comp + P_bl (W)")
-    axs[3].set_ylabel("cumulative energy (kJ)")
-    axs[3].set_xlabel("time (s)")
-    for ax in axs[1:]:
-        ax.legend(fontsize=7, loc="best")
+    axs[1].axhline(K2C(study.target_mean_K), color="grey", lw=0.8,
+                   label=f"target mean {K2C(study.target_mean_K):.2f} °C")
+    axs[1].set_ylabel("$T_{cab}$ (°C)")
+    axs[1].legend(fontsize=7, loc="best")
+    axs[2].set_ylabel("$T_{evap,set}$ (°C)")
+    ax_w.set_ylabel("$W_{bl}$ (kg/s, thin)")
+    axs[3].set_ylabel("cabin humidity\n$w_{cab}$ (g/kg)")
+    axs[4].set_ylabel("$P_{comp} + P_{bl}$ (W)")
+    axs[4].set_xlabel("time (s)")
     for ax in axs:
         ax.grid(True, alpha=0.3)
-    fig.tight_layout()
     return fig

@@ -1,0 +1,521 @@
+"""Economic NMPC on the identified econ model (beyond the paper).
+
+At every update k it solves, on the model of :mod:`acid.econ.model` (the same functions the
+fit used), over a horizon of intervals ``dt_0 .. dt_{N-1}`` (default 24 x 5 s = 120 s; a
+non-uniform grid such as 6 x 5 s + 3 x 10 s + 4 x 15 s is allowed, the model being
+continuous-time)::
+
+    min  sum_i dt_i (P_comp(i) + P_bl(i) + a_sl |s_i|_1)  +  pi (H(x_N) - H(x_0))
+    s.t. x_{i+1} = F_dt_i(x_i, u_i, d_i, dist)           RK4 interval map of the model
+         T_cab_min(i) - s_lo <= T_cab(i+1) <= T_cab_max(i) + s_hi       comfort band
+         Q_e(i) >= -s_q                                  no negative refrigerant heat
+         w_cab(i+1) <= w(T_cab(i+1), RH_max) + s_rh      optional humidity bound
+         u_min <= u_i <= u_max,  s_i >= 0,  x_0 = x(k)
+
+``P_comp = Q_e f(Q_e, T_evap, v, T_amb)`` is the identified power map, ``P_bl`` paper eq. 5,
+used where its data were: a previewed speed or ambient outside them, or a plan whose cooling
+load or evaporator temperature leaves them (a hot pull-down beyond the loads the excitation
+reached), raises an :class:`acid.errors.ExtrapolationWarning` (once per input and reset;
+``extrapolation`` lists them) -- the map's data range is not a capacity limit, so the plan
+is not cut to it.
+``d_i = (v_i, T_amb_i)`` the previewed vehicle speed and ambient (interval means; with
+``preview=False`` both are held at their current values: controller D of the study), ``dist``
+additive disturbances on the state equations (zero unless an estimator feeds them).
+
+**Terminal price.** A 120 s horizon is short against the interior and shell (time constants
+of several minutes), so heat left in them at the end is priced: ``H`` is the model's heat
+content (:func:`acid.econ.model.heat_content`) and ``pi`` the marginal electric energy per
+joule of cooling, ``dP_comp/dQ_e`` of the power map at the current operating point (CasADi
+derivative), recomputed every update. ``terminal="none"`` drops it.
+
+**Solver.** CasADi ``nlpsol`` built once through :func:`_make_solver` (the one place an NLP
+becomes a solver, so a compiled solver can be dropped in), variables ordered stage by stage
+``[x_0, u_0, s_0, x_1, ...., x_N]`` and constraints per stage so that **fatrop** detects the
+optimal-control structure; IPOPT solves the identical NLP. Warm start from the previous
+solution shifted by one sample (interpolated on a non-uniform grid). The same fallback as
+:class:`acid.mpc.nmpc.NMPC`: on a failed solve, the rest of the last plan, else maximum
+cooling, counted in ``fallbacks`` with a :class:`acid.errors.SolverWarning`.
+
+In closed loop it applies ``W_bl`` and ``T_evap_set`` of the first interval: the plant's own
+inputs. Temperatures in K, powers in W, energies in J.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from acid.econ import model
+from acid.econ.params import EconParams
+from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
+from acid.psychro import humidity_ratio
+from acid.units import C2K
+
+_NX, _NU = model.NX, model.NU
+#: state offsets and scales of the NLP variables (z = (x - offset) / scale): K and kg/kg
+_X_OFF = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
+_X_SCL = np.array([1.0, 1.0, 1.0, 1.0, 1e-3])
+_U_OFF = np.array([0.1, 278.15])
+_U_SCL = np.array([0.01, 1.0])
+
+
+def _make_solver(nlp: dict, opts: dict, solver: str = "fatrop") -> ca.Function:
+    """The one place an NLP becomes a solver (CasADi ``nlpsol``).
+
+    ``nlp`` has ``x``, ``f``, ``g``, ``p`` (SX); ``opts`` the solver's options. A compiled
+    (code-generated) solver with the same call signature can replace this function.
+    """
+    return ca.nlpsol("acid_econ_nmpc", solver, nlp, opts)
+
+
+@dataclass(frozen=True)
+class EconNMPCConfig:
+    """Options of the economic NMPC (temperatures in K).
+
+    Attributes
+    ----------
+    intervals : interval lengths of the horizon, s (the first one must be the sample time).
+    T_cab_min, T_cab_max : comfort band on the cabin air, K (default 22-26 degC).
+    RH_max : optional upper bound on the cabin relative humidity (0-1).
+    W_bl_min, W_bl_max : blower flow bounds, kg/s (paper Table II).
+    T_evap_set_min, T_evap_set_max : set-point bounds, K (paper Table II: 3-10 degC).
+    slack_penalty : a_sl, W per unit of violation (K, kW of Q_e, g/kg) and per second.
+    preview : use the previewed speed and ambient (False: hold their current values).
+    terminal : ``"heat"`` (price the heat content at the horizon's end) or ``"none"``.
+    solver : ``"fatrop"`` (default, structure-exploiting) or ``"ipopt"``.
+    tol, max_iter : solver tolerance and iteration limit.
+    cost_scale : objective factor inside the NLP (kJ instead of J).
+    fallback_input : input when no plan is left (default maximum cooling).
+    """
+
+    intervals: tuple[float, ...] = (5.0,) * 24
+    T_cab_min: float = C2K(22.0)
+    T_cab_max: float = C2K(26.0)
+    RH_max: float | None = None
+    W_bl_min: float = 0.05
+    W_bl_max: float = 0.15
+    T_evap_set_min: float = C2K(3.0)
+    T_evap_set_max: float = C2K(10.0)
+    slack_penalty: float = 1e5
+    preview: bool = True
+    terminal: str = "heat"
+    solver: str = "fatrop"
+    tol: float = 1e-6
+    max_iter: int = 200
+    cost_scale: float = 1e-3
+    fallback_input: tuple[float, float] | None = None
+
+    def __post_init__(self):
+        iv = tuple(float(t) for t in self.intervals)
+        object.__setattr__(self, "intervals", iv)
+        if len(iv) < 2 or min(iv) <= 0:
+            raise ConfigError("econ NMPC: the horizon needs at least 2 positive intervals")
+        if not self.T_cab_min < self.T_cab_max:
+            raise ConfigError(f"comfort band is empty: T_cab_min {self.T_cab_min - 273.15:.2f} "
+                              f"degC is not below T_cab_max {self.T_cab_max - 273.15:.2f} degC")
+        if self.RH_max is not None and not 0.0 < self.RH_max <= 1.0:
+            raise ConfigError(f"RH_max must lie in (0, 1], got {self.RH_max}")
+        if not (self.W_bl_min < self.W_bl_max and self.T_evap_set_min < self.T_evap_set_max):
+            raise ConfigError("econ NMPC: input bounds must satisfy min < max")
+        if self.terminal not in ("heat", "none"):
+            raise ConfigError(f"terminal must be 'heat' or 'none', got {self.terminal!r}")
+        if self.solver not in ("fatrop", "ipopt"):
+            raise ConfigError(f"solver must be 'fatrop' or 'ipopt', got {self.solver!r}")
+
+    @property
+    def N(self) -> int:
+        """Number of intervals."""
+        return len(self.intervals)
+
+    @property
+    def horizon_s(self) -> float:
+        """Horizon length, s."""
+        return float(sum(self.intervals))
+
+    @property
+    def u_min(self) -> np.ndarray:
+        return np.array([self.W_bl_min, self.T_evap_set_min])
+
+    @property
+    def u_max(self) -> np.ndarray:
+        return np.array([self.W_bl_max, self.T_evap_set_max])
+
+    @property
+    def u_safe(self) -> np.ndarray:
+        """The fallback input (maximum cooling unless configured)."""
+        if self.fallback_input is not None:
+            return np.array(self.fallback_input, dtype=float)
+        return np.array([self.W_bl_max, self.T_evap_set_min])
+
+    def replace(self, **changes) -> EconNMPCConfig:
+        import dataclasses
+
+        return dataclasses.replace(self, **changes)
+
+    def to_json_dict(self) -> dict:
+        return {"intervals_s": list(self.intervals), "horizon_s": self.horizon_s,
+                "T_cab_min_K": self.T_cab_min, "T_cab_max_K": self.T_cab_max,
+                "RH_max": self.RH_max, "W_bl_bounds_kg_s": [self.W_bl_min, self.W_bl_max],
+                "T_evap_set_bounds_K": [self.T_evap_set_min, self.T_evap_set_max],
+                "slack_penalty": self.slack_penalty, "preview": self.preview,
+                "terminal": self.terminal, "solver": self.solver, "tol": self.tol,
+                "max_iter": self.max_iter}
+
+
+@dataclass(frozen=True)
+class EconSolution:
+    """One solve: the first move and the predicted trajectory.
+
+    Attributes
+    ----------
+    u : (2,) input for the first interval [W_bl kg/s, T_evap_set K].
+    x : (N+1, 5) predicted states; t : (N+1,) their times from now, s.
+    W_bl, T_evap_set : (N,) planned inputs.
+    Q_e, P_comp, P_bl : (N,) interval means, W.
+    slack : (N, ns) slacks (>= 0).
+    price : terminal price pi, W/W.
+    energy_J : sum dt (P_comp + P_bl) over the horizon, J.
+    objective : the NLP objective (unscaled, J).
+    status, success, iterations, solve_time_s : solver report.
+    """
+
+    u: np.ndarray
+    x: np.ndarray
+    t: np.ndarray
+    W_bl: np.ndarray
+    T_evap_set: np.ndarray
+    Q_e: np.ndarray
+    P_comp: np.ndarray
+    P_bl: np.ndarray
+    slack: np.ndarray
+    price: float
+    energy_J: float
+    objective: float
+    status: str
+    success: bool
+    iterations: int
+    solve_time_s: float
+
+    @property
+    def plan(self) -> np.ndarray:
+        """(N, 2) planned inputs."""
+        return np.column_stack([self.W_bl, self.T_evap_set])
+
+
+@dataclass
+class EconStepLog:
+    """What ``make_step`` did at each update: applied inputs, solutions, fallbacks, times."""
+
+    u: list = field(default_factory=list)
+    solutions: list = field(default_factory=list)
+    fallback: list = field(default_factory=list)
+    step_time_s: list = field(default_factory=list)
+
+
+def stage_means(profile, k: int, intervals, Ts: float) -> np.ndarray:
+    """Means of a per-sample profile over the horizon's intervals starting at sample ``k``.
+
+    ``profile[j]`` holds over ``[j Ts, (j+1) Ts)``; past its end the last value holds.
+    Interval edges are rounded to whole samples (at least one sample per interval).
+    """
+    a = np.asarray(profile, dtype=float).ravel()
+    edges = k + np.concatenate(([0], np.maximum.accumulate(
+        np.maximum(np.round(np.cumsum(intervals) / Ts).astype(int), 1))))
+    idx = np.minimum(np.arange(edges[0], edges[-1]), a.size - 1)
+    vals = a[idx]
+    out = np.empty(len(intervals))
+    for i in range(len(intervals)):
+        lo, hi = edges[i] - k, max(edges[i + 1] - k, edges[i] - k + 1)
+        out[i] = vals[lo:hi].mean()
+    return out
+
+
+class EconNMPC:
+    """Economic NMPC on the econ model (module docstring).
+
+    Parameters
+    ----------
+    params : identified :class:`acid.econ.params.EconParams`.
+    config : options.
+
+    Notes
+    -----
+    Build once, call :meth:`make_step` every sample (do-mpc style); :meth:`solve` is the
+    stateless part (apart from the warm start).
+    """
+
+    def __init__(self, params: EconParams, config: EconNMPCConfig | None = None):
+        self.params = params
+        self.config = config or EconNMPCConfig()
+        if abs(self.config.intervals[0] - params.Ts) > 1e-9:
+            raise ConfigError(f"econ NMPC: the first interval ({self.config.intervals[0]:g} s) "
+                              f"must equal the sample time {params.Ts:g} s")
+        self.N = self.config.N
+        self._t = np.concatenate(([0.0], np.cumsum(self.config.intervals)))
+        self._build()
+        self.reset()
+
+    # ------------------------------------------------------------------ build
+    def _build(self) -> None:
+        cfg, p, N = self.config, self.params, self.N
+        ns = 3 + (1 if cfg.RH_max is not None else 0)
+        self._ns = ns
+        nw = _NX + _NU + ns
+        self._nw = nw
+        steps = {dt: model.casadi_step(p, dt) for dt in sorted(set(cfg.intervals))}
+        x0 = ca.SX.sym("x0", _NX)
+        v = ca.SX.sym("v", N)
+        Ta = ca.SX.sym("T_amb", N)
+        dist = ca.SX.sym("dist", _NX)
+        price = ca.SX.sym("price")
+        xoff, xscl = ca.DM(_X_OFF), ca.DM(_X_SCL)
+        uoff, uscl = ca.DM(_U_OFF), ca.DM(_U_SCL)
+        Z = [ca.SX.sym(f"z_{i}", _NX) for i in range(N + 1)]
+        V = [ca.SX.sym(f"v_{i}", _NU) for i in range(N)]
+        S = [ca.SX.sym(f"s_{i}", ns) for i in range(N)]
+        X = [xoff + xscl * z for z in Z]
+        U = [uoff + uscl * w for w in V]
+        w_list, g, eq, cost, energy = [], [], [], 0, 0
+        lbg, ubg = [], []
+        for i in range(N):
+            dt = cfg.intervals[i]
+            w_list += [Z[i], V[i], S[i]]
+            if i == 0:
+                g.append(Z[0] - (x0 - xoff) / xscl)
+                eq += [True] * _NX
+                lbg += [0.0] * _NX
+                ubg += [0.0] * _NX
+            xn, _T_ain, Q_e, P_c, P_b = steps[dt](X[i], U[i], ca.vertcat(v[i], Ta[i]), dist)
+            g.append(Z[i + 1] - (xn - xoff) / xscl)
+            eq += [True] * _NX
+            lbg += [0.0] * _NX
+            ubg += [0.0] * _NX
+            s = S[i]
+            path = [xn[0] - s[0], xn[0] + s[1], Q_e / 1e3 + s[2]]
+            lo = [-np.inf, 0.0, 0.0]     # band edges filled in per solve
+            hi = [0.0, np.inf, np.inf]
+            if cfg.RH_max is not None:
+                path.append(1e3 * (xn[4] - humidity_ratio(xn[0], cfg.RH_max, p.p_atm)) - s[3])
+                lo.append(-np.inf)
+                hi.append(0.0)
+            g.append(ca.vertcat(*path))
+            eq += [False] * len(path)
+            lbg += lo
+            ubg += hi
+            stage_E = dt * (P_c + P_b)
+            energy += stage_E
+            cost += stage_E + cfg.slack_penalty * dt * ca.sum1(s)
+        w_list.append(Z[N])
+        if cfg.terminal == "heat":
+            H = model.heat_content
+            cost += price * (H(ca.vertsplit(X[N]), v[N - 1], p)
+                             - H(ca.vertsplit(x0), v[N - 1], p))
+        w = ca.vertcat(*w_list)
+        g = ca.vertcat(*g)
+        par = ca.vertcat(x0, v, Ta, dist, price)
+        nlp = {"x": w, "f": cost * cfg.cost_scale, "g": g, "p": par}
+        if cfg.solver == "fatrop":
+            opts = {"structure_detection": "auto", "equality": eq, "print_time": False,
+                    "calc_lam_p": False,
+                    "fatrop": {"print_level": 0, "tol": cfg.tol, "max_iter": int(cfg.max_iter),
+                               "mu_init": 1e-1}}
+        else:
+            opts = {"print_time": False, "calc_lam_p": False,
+                    "ipopt": {"print_level": 0, "sb": "yes", "tol": cfg.tol,
+                              "max_iter": int(cfg.max_iter)}}
+        self._solver = _make_solver(nlp, opts, cfg.solver)
+        self._eval = ca.Function("econ_eval", [w, par],
+                                 [energy, ca.vertcat(*[steps[cfg.intervals[i]](
+                                     X[i], U[i], ca.vertcat(v[i], Ta[i]), dist)[2]
+                                     for i in range(N)])])
+        self._n_w, self._n_g = int(w.shape[0]), int(g.shape[0])
+        self._lbg0, self._ubg0 = np.array(lbg), np.array(ubg)
+        ng_stage = int((self._n_g - _NX) / N)
+        base_g = _NX + np.arange(N) * ng_stage + _NX
+        self._ig_hi, self._ig_lo = base_g, base_g + 1
+        base = np.arange(N) * nw
+        self._ix = base[:, None] + np.arange(_NX)
+        self._ix = np.vstack([self._ix, N * nw + np.arange(_NX)])
+        self._iu = base[:, None] + _NX + np.arange(_NU)
+        self._is = base[:, None] + _NX + _NU + np.arange(ns)
+        lbx = np.full(self._n_w, -np.inf)
+        ubx = np.full(self._n_w, np.inf)
+        lbx[self._iu] = (cfg.u_min - _U_OFF) / _U_SCL
+        ubx[self._iu] = (cfg.u_max - _U_OFF) / _U_SCL
+        lbx[self._is] = 0.0
+        self._lbx, self._ubx = lbx, ubx
+        # terminal price dP_comp/dQ_e at an operating point (CasADi derivative of the map)
+        q, te, vv, ta = (ca.SX.sym(n) for n in ("Q_e", "T_evap", "v", "T_amb"))
+        P = model.compressor_power(q, te, vv, ta, p.power_map)
+        self._dPdQ = ca.Function("dPdQ", [q, te, vv, ta], [ca.jacobian(P, q)])
+        self._step0 = steps[cfg.intervals[0]]
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        """Forget the warm start, the plan, the log, the fallback count and the warnings."""
+        self._w_prev = None
+        self._lam_prev = None
+        self._plan = None
+        self._plan_age = 0
+        self.fallbacks = 0
+        self.log = EconStepLog()
+        self.extrapolation: list[str] = []
+
+    def _scaled_guess(self, x0: np.ndarray, v, Ta, dist, u_guess) -> np.ndarray:
+        """Shifted previous solution (interpolated in time), else a forward simulation."""
+        cfg, N = self.config, self.N
+        w = np.zeros(self._n_w)
+        if self._w_prev is not None:
+            wp = self._w_prev
+            Xp = wp[self._ix] * _X_SCL + _X_OFF
+            Up = wp[self._iu] * _U_SCL + _U_OFF
+            Sp = wp[self._is]
+            tn = self._t + cfg.intervals[0]
+            for j in range(_NX):
+                w[self._ix[:, j]] = (np.interp(tn, self._t, Xp[:, j]) - _X_OFF[j]) / _X_SCL[j]
+            for j in range(_NU):
+                w[self._iu[:, j]] = (np.interp(tn[:-1], self._t[:-1], Up[:, j])
+                                     - _U_OFF[j]) / _U_SCL[j]
+            for j in range(self._ns):
+                w[self._is[:, j]] = np.interp(tn[:-1], self._t[:-1], Sp[:, j])
+            w[self._ix[0]] = (x0 - _X_OFF) / _X_SCL
+            return w
+        u = np.clip(np.asarray(u_guess, dtype=float), cfg.u_min, cfg.u_max)
+        x = x0.copy()
+        w[self._ix[0]] = (x - _X_OFF) / _X_SCL
+        for i in range(N):
+            w[self._iu[i]] = (u - _U_OFF) / _U_SCL
+            step = model.casadi_step(self.params, cfg.intervals[i]) if i and \
+                cfg.intervals[i] != cfg.intervals[0] else self._step0
+            x = np.asarray(step(x, u, [v[i], Ta[i]], dist)[0]).ravel()
+            w[self._ix[i + 1]] = (x - _X_OFF) / _X_SCL
+        return w
+
+    def price(self, x0, u, v0: float, Ta0: float, dist) -> float:
+        """Terminal price pi = dP_comp/dQ_e at the current operating point, W/W (>= 0.05)."""
+        out = self._step0(x0, u, [v0, Ta0], dist)
+        Q_e = float(out[2])
+        q_lo, q_hi = self.params.power_map.domain.get("Q_e", (Q_e, Q_e))
+        Q_e = float(np.clip(Q_e, max(q_lo, 1.0), q_hi))
+        T_ev = 0.5 * (float(x0[3]) + float(np.asarray(out[0]).ravel()[3]))
+        return float(max(float(self._dPdQ(Q_e, T_ev, v0, Ta0)), 0.05))
+
+    # ------------------------------------------------------------------ solve
+    def solve(self, x, v_preview, T_amb_preview, T_cab_max=None, T_cab_min=None,
+              dist=None, u_guess=None) -> EconSolution:
+        """Solve once from the measured state.
+
+        Parameters
+        ----------
+        x : (5,) state [T_cab, T_int, T_shell, T_evap, w_cab] (K, kg/kg).
+        v_preview, T_amb_preview : speed (m/s) and ambient (K) per interval, scalars or (N,).
+        T_cab_max, T_cab_min : comfort band per interval end, scalars or (N,) (default:
+            the configured band).
+        dist : (5,) additive disturbances on the state derivatives (default zero).
+        u_guess : input used for a cold initial guess (default: maximum cooling when the
+            cabin is above its band, else mid-range).
+        """
+        cfg, N = self.config, self.N
+        x = np.asarray(x, dtype=float).reshape(_NX)
+        v = np.broadcast_to(np.asarray(v_preview, dtype=float), (N,)).copy()
+        Ta = np.broadcast_to(np.asarray(T_amb_preview, dtype=float), (N,)).copy()
+        ub = np.broadcast_to(np.asarray(cfg.T_cab_max if T_cab_max is None else T_cab_max,
+                                        dtype=float), (N,))
+        lb = np.broadcast_to(np.asarray(cfg.T_cab_min if T_cab_min is None else T_cab_min,
+                                        dtype=float), (N,))
+        if np.any(lb >= ub):
+            raise ConfigError("comfort band is empty: T_cab_min must be below T_cab_max")
+        dist = np.zeros(_NX) if dist is None else np.asarray(dist, dtype=float).reshape(_NX)
+        self._warn_outside(v_veh=v, T_amb=Ta)
+        if u_guess is None:  # a cold start: full cooling when the cabin is above its band
+            u_guess = cfg.u_safe if x[0] > ub[0] else 0.5 * (cfg.u_min + cfg.u_max)
+        u0 = self._plan[0] if self._plan is not None else u_guess
+        pi = self.price(x, u0, v[0], Ta[0], dist) if cfg.terminal == "heat" else 0.0
+        lbg, ubg = self._lbg0.copy(), self._ubg0.copy()
+        ubg[self._ig_hi] = ub
+        lbg[self._ig_lo] = lb
+        par = np.concatenate((x, v, Ta, dist, [pi]))
+        args = {"x0": self._scaled_guess(x, v, Ta, dist, u_guess), "lbx": self._lbx,
+                "ubx": self._ubx, "lbg": lbg, "ubg": ubg, "p": par}
+        if self._lam_prev is not None and len(set(cfg.intervals)) == 1:
+            args["lam_g0"], args["lam_x0"] = self._lam_prev
+        t0 = time.perf_counter()
+        res = self._solver(**args)
+        dt = time.perf_counter() - t0
+        st = self._solver.stats()
+        w = np.asarray(res["x"]).ravel()
+        ok = bool(st.get("success", False)) and bool(np.all(np.isfinite(w)))
+        if ok:
+            self._w_prev = w
+            self._lam_prev = (np.asarray(res["lam_g"]).ravel(), np.asarray(res["lam_x"]).ravel())
+        energy, Q_e = self._eval(w, par)
+        X = w[self._ix] * _X_SCL + _X_OFF
+        Uc = np.clip(w[self._iu] * _U_SCL + _U_OFF, cfg.u_min, cfg.u_max)
+        Q_e = np.asarray(Q_e).ravel()
+        P_bl = model.blower_power(Uc[:, 0], self.params)
+        T_ev = 0.5 * (X[:-1, 3] + X[1:, 3])
+        P_c = np.asarray(model.compressor_power(Q_e, T_ev, v, Ta, self.params.power_map))
+        if ok:
+            self._warn_outside(Q_e=Q_e, T_evap=T_ev)
+        return EconSolution(
+            u=Uc[0].copy(), x=X, t=self._t.copy(), W_bl=Uc[:, 0], T_evap_set=Uc[:, 1], Q_e=Q_e,
+            P_comp=P_c, P_bl=P_bl, slack=np.maximum(w[self._is], 0.0), price=pi,
+            energy_J=float(energy), objective=float(res["f"]) / cfg.cost_scale,
+            status=str(st.get("return_status", "")), success=ok,
+            iterations=int(st.get("iter_count", -1)), solve_time_s=dt)
+
+    def _warn_outside(self, **inputs) -> None:
+        """One ExtrapolationWarning per power-map input (per reset) that leaves its data."""
+        for msg in self.params.power_map.outside(**inputs):
+            name = msg.split(" ")[0]
+            if name not in self.extrapolation:
+                self.extrapolation.append(name)
+                warnings.warn(f"econ NMPC: power map extrapolated: {msg}",
+                              ExtrapolationWarning, stacklevel=4)
+
+    # ------------------------------------------------------------ closed loop
+    def make_step(self, x, v_preview, T_amb_preview, T_cab_max=None, T_cab_min=None,
+                  dist=None) -> np.ndarray:
+        """One closed-loop update: the input [W_bl, T_evap_set] for the next sample.
+
+        Never raises for a solver failure: the fallback (rest of the last plan, else
+        ``config.u_safe``) is applied and counted. With ``config.preview`` False, the
+        speed and ambient previews are replaced by their first values (held).
+        """
+        t0 = time.perf_counter()
+        cfg = self.config
+        v = np.atleast_1d(np.asarray(v_preview, dtype=float))
+        Ta = np.atleast_1d(np.asarray(T_amb_preview, dtype=float))
+        if not cfg.preview:
+            v, Ta = v[:1], Ta[:1]
+        sol = None
+        try:
+            sol = self.solve(x, v, Ta, T_cab_max, T_cab_min, dist)
+            ok = sol.success
+            status = sol.status
+        except (RuntimeError, ValueError, FloatingPointError) as exc:
+            status, ok = f"error: {str(exc).splitlines()[0][:120]}", False
+        if ok:
+            self._plan, self._plan_age = sol.plan, 0
+            u = sol.u.copy()
+        else:
+            self.fallbacks += 1
+            warnings.warn(f"econ NMPC solve failed ({status}); fallback applied",
+                          SolverWarning, stacklevel=2)
+            self._w_prev = self._lam_prev = None
+            nxt = self._plan_age + 1
+            if self._plan is not None and nxt < self.N:
+                u = self._plan[nxt].copy()
+                self._plan_age += 1
+            else:
+                u = cfg.u_safe.copy()
+        u = np.clip(u, cfg.u_min, cfg.u_max)
+        self.log.u.append(u)
+        self.log.solutions.append(sol)
+        self.log.fallback.append(not ok)
+        self.log.step_time_s.append(time.perf_counter() - t0)
+        return u

@@ -1,0 +1,137 @@
+"""acid.econ.fit: identification of the econ model, on its own plant and on the hifi plant."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+from _cli import assert_one_line_error
+from typer.testing import CliRunner
+
+from acid.econ.fit import EconFitter
+from acid.econ.params import NAMES, EconParams
+from acid.errors import DataError, IdentifiabilityWarning
+from acid.fit import ModelFitter
+from acid.validate import validate
+from acid_cli.main import app
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def model_fit(econ_model_dataset):
+    return EconFitter(covariance="white").fit(econ_model_dataset)
+
+
+def test_recovers_the_true_parameters_of_its_own_model(model_fit, econ_truth):
+    p = model_fit.params
+    for n in NAMES:
+        assert p.values[n] == pytest.approx(econ_truth.values[n], rel=1e-6, abs=1e-12), n
+    assert p.C_ew == pytest.approx(econ_truth.C_ew, rel=1e-3)
+    np.testing.assert_allclose(p.power_map.coef, econ_truth.power_map.coef, atol=1e-5)
+    assert model_fit.power_map_quality["rms_pct"] < 0.01
+    assert model_fit.fit_percent_simulation["T_cab"] > 99.9
+    # the domain the map was identified on is the excitation's
+    assert p.power_map.domain["v_veh"] == (0.0, 36.0)
+
+
+def test_result_reports_uncertainty_and_round_trips(model_fit, tmp_path):
+    d = model_fit.to_json_dict()
+    assert d["model"] == "econ" and len(d["parameters"]) == len(NAMES) + 4
+    assert set(d["covariance"]) >= {"dynamics", "power_map"}
+    row = dict((r[0], r) for r in model_fit.table())["C_cab"]
+    assert row[4] <= row[2] <= row[5]           # the estimate lies in its interval
+    json.dumps(d)
+    path = model_fit.params.to_json(tmp_path / "econ.json", extra={"fit": d})
+    assert EconParams.from_json(path).values == model_fit.params.values
+
+
+def test_hifi_plant_power_map_and_dynamics(econ_hifi_fit):
+    q = econ_hifi_fit.power_map_quality
+    assert q["rms_pct"] < 5.0 and q["steady_rms_pct"] < 3.0 and q["r2"] > 0.98
+    assert econ_hifi_fit.fit_percent_one_step["T_cab"] > 95.0
+    v = econ_hifi_fit.params.values
+    assert 0.5 < v["r_max"] < 1.0 and v["C_int"] > 10 * v["C_cab"]   # a heavy interior
+    assert 0.0 < v["RH_amb"] < 1.0 and not econ_hifi_fit.warnings
+
+
+@pytest.mark.slow
+def test_validates_beside_the_paper_model_on_held_out_data(econ_hifi_dataset, econ_hifi_fit):
+    est, held = econ_hifi_dataset.split(0.75)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        paper = ModelFitter(method="oe").fit(est).params
+    kw = {"starts": 30, "horizon": 120}
+    e = validate(held, econ_hifi_fit.params, **kw)
+    p = validate(held, paper, **kw)
+    assert e.settings["model"] == "econ" and p.settings["model"] == "paper"
+    assert e.metrics["T_cab"]["median_abs"] < p.metrics["T_cab"]["median_abs"]
+    for ch in ("T_cab", "T_evap", "T_ain"):        # the paper's "couple of degrees"
+        assert e.metrics[ch]["median_abs"] < 1.5 and e.metrics[ch]["p90_abs"] < 5.0
+    extra = e.extra_metrics
+    assert extra["w_cab"]["unit"] == "g/kg" and extra["w_cab"]["median_abs"] < 0.5
+    assert extra["compressor_energy"]["median_abs"] < 25.0
+
+
+def test_refuses_data_that_cannot_identify_it(econ_model_dataset):
+    ds = econ_model_dataset.window(0, 1000)
+    flat = ds.window(0, len(ds))
+    flat.channels["W_bl"] = np.full(len(flat), 0.1)
+    with pytest.raises(DataError, match="W_bl is"):
+        EconFitter().fit(flat)
+    del flat.channels["w_cab"], flat.units["w_cab"]
+    with pytest.raises(DataError, match="w_cab"):
+        EconFitter().fit(flat)
+
+
+def test_warns_when_speed_is_not_excited(econ_truth):
+    from acid.econ.plant import EconPlant
+    from acid.excite import excite, spec_for_model
+
+    ds = excite(EconPlant(econ_truth), spec_for_model("econ", duration=2400.0,
+                                                      speed_bounds=None, speed=10.0,
+                                                      T_amb_bounds=None))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = EconFitter(skip_s=0.0).fit(ds)
+    lines = [str(w.message) for w in caught if w.category is IdentifiabilityWarning]
+    assert any("v_veh varies" in m for m in lines) and any("T_amb varies" in m for m in lines)
+    assert set(lines) <= set(res.warnings)
+
+
+# ------------------------------------------------------------------------------- CLI
+@pytest.fixture(scope="module")
+def econ_file(econ_model_dataset, tmp_path_factory):
+    return econ_model_dataset.to_hdf5(tmp_path_factory.mktemp("econ") / "econ.h5")
+
+
+def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
+    out, js = tmp_path / "econ.json", tmp_path / "fit.json"
+    res = runner.invoke(app, ["fit", str(econ_file), "--model", "econ", "--out", str(out),
+                              "--estimation-fraction", "0.6", "--json", str(js)])
+    assert res.exit_code == 0, res.output
+    assert "power map" in res.output and "RMS error" in res.output
+    d = json.loads(out.read_text())
+    assert d["model"] == "econ" and d["provenance"]["estimation_fraction"] == 0.6
+    assert json.loads(js.read_text())["model"] == "econ"
+    vj = tmp_path / "val.json"
+    res = runner.invoke(app, ["validate", str(econ_file), "--params", str(out), "--beside",
+                              "paper", "--starts", "8", "--horizon", "60", "--out",
+                              str(tmp_path / "figs"), "--json", str(vj)])
+    assert res.exit_code == 0, res.output
+    v = json.loads(vj.read_text())
+    assert v["settings"]["model"] == "econ" and "w_cab" in v["extra_channels"]
+    assert v["settings"]["held_out_fraction"] == pytest.approx(0.4)
+    assert set(v["beside"]["channels"]) == {"T_cab", "T_evap", "T_ain"}
+
+
+@pytest.mark.parametrize("args, fragments", [
+    (["--model", "thermal"], ("--model", "thermal", "econ")),
+    (["--model", "econ", "--method", "oe"], ("--method", "only for --model paper")),
+])
+def test_cli_fit_bad_model_options(econ_file, tmp_path, args, fragments):
+    res = runner.invoke(app, ["fit", str(econ_file), "--out", str(tmp_path / "p.json"), *args])
+    assert res.exit_code == 2
+    assert_one_line_error(res, *fragments)

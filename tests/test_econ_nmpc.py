@@ -1,0 +1,113 @@
+"""acid.mpc.econ_nmpc: the economic NMPC on the econ model."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from acid.econ.plant import EconPlant
+from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
+from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
+from acid.units import C2K
+
+X = np.array([C2K(24.5), C2K(27.0), C2K(35.0), C2K(8.0), 0.008])
+SHORT = (5.0,) * 8
+
+
+def _cfg(**kw):
+    return EconNMPCConfig(**{"intervals": SHORT, "T_cab_min": C2K(22.0),
+                             "T_cab_max": C2K(24.0), **kw})
+
+
+def test_closed_loop_on_its_own_model_keeps_the_band(econ_truth):
+    mpc = EconNMPC(econ_truth, _cfg())
+    plant = EconPlant(econ_truth)
+    plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
+    E, T = 0.0, []
+    for _ in range(30):
+        m = plant.measure()
+        u = mpc.make_step([m[k] for k in ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")],
+                          12.0, C2K(30.0))
+        assert np.all(u >= mpc.config.u_min) and np.all(u <= mpc.config.u_max)
+        row = plant.step(u[0], u[1], 12.0, T_amb=C2K(30.0))
+        E += (row["P_comp"] + row["P_bl"]) * 5.0
+        T.append(plant.measure()["T_cab"])
+    assert mpc.fallbacks == 0 and E > 0
+    assert max(T[3:]) <= C2K(24.0) + 0.05       # after the pull-down, inside the band
+    assert min(T[3:]) >= C2K(22.0) - 0.05
+    assert T[-1] == pytest.approx(C2K(24.0), abs=0.1)   # rides the upper edge: least energy
+    sol = mpc.log.solutions[-1]
+    assert sol.success and sol.price > 0 and sol.x.shape == (9, 5)
+
+
+def test_more_cooling_costs_more(econ_truth):
+    e = []
+    for top in (23.0, 24.0, 25.0):
+        sol = EconNMPC(econ_truth, _cfg(T_cab_max=C2K(top))).solve(X, 12.0, C2K(30.0))
+        assert sol.success
+        e.append(sol.energy_J)
+    assert e[0] > e[1] > e[2]
+
+
+def test_fatrop_and_ipopt_solve_the_same_nlp(econ_truth):
+    a = EconNMPC(econ_truth, _cfg()).solve(X, 12.0, C2K(30.0))
+    b = EconNMPC(econ_truth, _cfg(solver="ipopt")).solve(X, 12.0, C2K(30.0))
+    assert a.success and b.success
+    np.testing.assert_allclose(a.u, b.u, rtol=1e-3)
+    assert a.objective == pytest.approx(b.objective, rel=1e-5)
+
+
+def test_without_preview_the_speed_is_held(econ_truth):
+    ramp = np.linspace(0.0, 30.0, len(SHORT))
+    held = EconNMPC(econ_truth, _cfg(preview=False))
+    same = EconNMPC(econ_truth, _cfg())
+    u_held = held.make_step(X, ramp, C2K(30.0))
+    u_const = same.make_step(X, np.full(len(SHORT), ramp[0]), C2K(30.0))
+    np.testing.assert_allclose(u_held, u_const, rtol=1e-9)
+
+
+def test_non_uniform_grid_and_stage_means(econ_truth):
+    cfg = _cfg(intervals=(5.0, 5.0, 10.0, 20.0))
+    sol = EconNMPC(econ_truth, cfg).solve(X, 10.0, C2K(30.0))
+    assert sol.success and sol.t[-1] == 40.0 and cfg.horizon_s == 40.0
+    prof = np.arange(10.0)
+    np.testing.assert_allclose(stage_means(prof, 2, (5.0, 5.0, 10.0), 5.0), [2, 3, 4.5])
+    np.testing.assert_allclose(stage_means(prof, 8, (5.0, 10.0), 5.0), [8, 9])  # last holds
+
+
+def test_extrapolation_is_an_explicit_warning(econ_truth):
+    mpc = EconNMPC(econ_truth, _cfg())
+    with pytest.warns(ExtrapolationWarning, match="v_veh up to 50"):
+        mpc.make_step(X, 50.0, C2K(30.0))
+    assert mpc.extrapolation
+
+
+def test_solver_failure_falls_back_to_the_plan(econ_truth):
+    mpc = EconNMPC(econ_truth, _cfg())
+    mpc.make_step(X, 10.0, C2K(30.0))
+    plan = mpc.log.solutions[-1].plan
+    starved = EconNMPC(econ_truth, _cfg(max_iter=1))
+    starved._plan, starved._plan_age = plan, 0
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        u = starved.make_step(X + 1.0, 10.0, C2K(30.0))
+    assert any(issubclass(w.category, SolverWarning) for w in caught)
+    assert starved.fallbacks == 1 and starved.log.fallback == [True]
+    np.testing.assert_allclose(u, plan[1])
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"T_cab_min": C2K(24.0), "T_cab_max": C2K(22.0)}, "comfort band is empty"),
+    ({"intervals": (5.0,)}, "at least 2"),
+    ({"RH_max": 1.5}, "RH_max"),
+])
+def test_bad_configuration(kw, match):
+    with pytest.raises(ConfigError, match=match):
+        _cfg(**kw)
+
+
+def test_first_interval_must_be_the_sample_time(econ_truth):
+    with pytest.raises(ConfigError, match="sample time"):
+        EconNMPC(econ_truth, _cfg(intervals=(10.0, 10.0)))
