@@ -16,7 +16,9 @@ A/C on/off logic (hysteresis): the compressor stops when T_ew < T_ew,set - hyst_
 In the plant's "direct" mode (excitation, MPC) only ``CompressorLoop`` runs, tracking the
 commanded T_evap_set; the blower flow is an input. In "nominal" mode ``BlowerLoop`` sets W_bl
 and the evaporator set-point is reset within paper Table II's 3-10 degC when the blower sits at
-its minimum and the cabin is still below its set-point (no overcooling at low load).
+its minimum and the cabin is still below its set-point (no overcooling at low load); when
+even the fully reset evaporator overcools the cabin by 0.5 K the A/C demand switches off (the
+compressor stops, the blower ventilates) until the cabin is 0.5 K above its set-point.
 
 Protections (both modes, in ``acid.plant.hifi``): the compressor speed is capped by a
 head-pressure derate (linear from N_max at ``p_derate`` to N_min at ``p_cut``) and by frost

@@ -42,6 +42,7 @@ from acid.plant.config import PlantConfig
 
 _MAX_ITER = 40
 _TOL = 1e-5  # K, Newton step on T_e and T_c
+_TOL_SUC = 1e-4  # K, change of the suction-line drop between iterations
 _FD = 1e-3  # K, finite-difference step of the Jacobian
 
 
@@ -113,6 +114,7 @@ def make_solver(config: PlantConfig) -> tuple[Callable, Callable]:
     UA_er0, UA_cr0, n_r = config.UA_er0, config.UA_cr0, config.n_r
     inv_m0, dT_suc0 = 1.0 / config.m_r0, config.dT_suc0
     L0, LN, Lcu, inv_Pr = config.P_loss0, config.P_loss_N, config.P_loss_cu, 1.0 / config.P_rated
+    last_dTs = [0.0]  # warm start of the suction drop (the previous solution's)
 
     def state(Te, Tc, N, dTs):
         x = (Te - T1_LO) * inv1
@@ -157,7 +159,9 @@ def make_solver(config: PlantConfig) -> tuple[Callable, Callable]:
         ei = eta_is_max - k_is * d * d - c_is_lo / N - c_is_hi * r * r
         if ei < 0.2:
             ei = 0.2
-        dh = h2s - h1s
+        # isentropic lift from the suction state: tabulated at (p_s, T_s + SH), scaled to the
+        # actual suction temperature T_e + SH (ideal-gas: isentropic work ~ inlet temperature)
+        dh = (h2s - h1s) * (Te + SH) / (Ts + SH)
         if dh < 0.0:
             dh = 0.0
         m = ev * rho * Vd60 * N
@@ -175,11 +179,9 @@ def make_solver(config: PlantConfig) -> tuple[Callable, Callable]:
             Te = Tew - 0.5
         if Tc < Tcw:
             Tc = Tcw + 0.5
-        m = state(Te, Tc, N, 0.0)[0]
+        dTs = last_dTs[0]
         it = 0
         for it in range(1, _MAX_ITER + 1):  # noqa: B007  (iteration count is returned)
-            q = m * inv_m0
-            dTs = dT_suc0 * q * q
             F1, F2 = residual(Te, Tc, N, Tew, Tcw, dTs)
             a1, a2 = residual(Te + _FD, Tc, N, Tew, Tcw, dTs)
             b1, b2 = residual(Te, Tc + _FD, N, Tew, Tcw, dTs)
@@ -201,15 +203,16 @@ def make_solver(config: PlantConfig) -> tuple[Callable, Callable]:
                 Te = Tew
             if Tc < Tcw:
                 Tc = Tcw
-            m_new = state(Te, Tc, N, dTs)[0]
-            dm = abs(m_new - m) * inv_m0
-            m = m_new
-            if big < _TOL and dm < 1e-6:
+            q = state(Te, Tc, N, dTs)[0] * inv_m0
+            d_new = dT_suc0 * q * q
+            change = abs(d_new - dTs)
+            dTs = d_new
+            if big < _TOL and change < _TOL_SUC:
                 break
         else:
             _warn_not_converged(N, Tew, Tcw)
-        q = m * inv_m0
-        m, _, pc, h1, h2, h3, _, _, ps = state(Te, Tc, N, dT_suc0 * q * q)
+        last_dTs[0] = dTs
+        m, _, pc, h1, h2, h3, _, _, ps = state(Te, Tc, N, dTs)
         W = m * (h2 - h1)
         x = W * inv_Pr
         P_el = W + L0 + LN * N * inv_Nmax + Lcu * x * x

@@ -47,11 +47,11 @@ MODES = ("direct", "nominal")
 
 #: Every dynamic state: the keys of ``HifiPlant.measure()`` accepted by ``reset(initial=...)``
 #: (temperatures K, w_cab kg/kg, N_comp and comp_integrator rpm, blower_integrator kg/s,
-#: evap_set_reset K, ac_on and cut_out 0/1; T_e_last, T_c_last K and p_dis_last Pa: the last
+#: evap_set_reset K, ac_on, cut_out and ac_demand 0/1; T_e_last, T_c_last K and p_dis_last Pa: the last
 #: cycle solution, which warm-starts the solver and drives the fan and the protections).
 INITIAL_KEYS = ("T_cab", "T_int", "T_shell", "T_evap", "T_cw", "w_cab", "T_int_slow", "N_comp",
                 "comp_integrator", "blower_integrator", "evap_set_reset", "ac_on", "cut_out",
-                "T_e_last", "T_c_last", "p_dis_last")
+                "ac_demand", "T_e_last", "T_c_last", "p_dis_last")
 
 _STEP_KEYWORDS = ("T_cab_set", "compressor_enabled", "T_int", "T_shell", "T_amb")
 
@@ -73,6 +73,10 @@ def humidity_ratio(T: float, RH: float, p_atm: float = 101325.0) -> float:
     p_w = RH * 611.2 * math.exp(17.62 * t / (243.12 + t))
     return 0.621945 * p_w / (p_atm - p_w)
 
+
+#: Condenser air-side conductance with no forced flow (natural convection of a parked front
+#: end), W/K: assumption, keeps the condenser wall coupled to ambient with the fan off.
+G_CA_NATURAL = 20.0
 
 #: Fan speed fractions are quantised to 1/FAN_LEVELS (PWM steps) so that the front end can be
 #: tabulated per vehicle speed.
@@ -159,6 +163,7 @@ def front_end(config: PlantConfig, v_veh: float, T_amb: float | None = None) -> 
             G = m * cp * (1.0 - math.exp(-UA / (m * cp)))
         else:
             G = 0.0
+        G = max(G, G_CA_NATURAL)
         S.append(s)
         Qs.append(Q)
         ms.append(m)
@@ -272,7 +277,7 @@ class HifiPlant(Plant):
         """Reset to the hot soak of the configuration, overridden by ``initial``.
 
         Keys: ``INITIAL_KEYS`` (temperatures in K; w_cab kg/kg; N_comp rpm; comp_integrator
-        rpm; blower_integrator kg/s; evap_set_reset K; ac_on, cut_out 0/1; the last cycle
+        rpm; blower_integrator kg/s; evap_set_reset K; ac_on, cut_out, ac_demand 0/1; the last cycle
         solution T_e_last, T_c_last K, p_dis_last Pa, NaN = compressor stopped). Without
         ``w_cab`` the cabin starts with the ambient humidity ratio (a closed, soaked car holds
         outside air's moisture). Without controller states the compressor starts on from rest
@@ -311,6 +316,7 @@ class HifiPlant(Plant):
             self._blower.integ = init["blower_integrator"]
         self.T_reset = init.get("evap_set_reset", 0.0)
         self.cut_out = bool(init.get("cut_out", 0.0) >= 0.5)
+        self.ac_demand = bool(init.get("ac_demand", 1.0) >= 0.5)
         self.t = 0.0
         self._bal = [0.0] * 12
         self._U0 = self._stored()
@@ -327,7 +333,8 @@ class HifiPlant(Plant):
                 "T_cw": self.T_cw, "T_int_slow": self.T_int_slow, "N_comp": self.N,
                 "comp_integrator": self._comp.integ, "blower_integrator": self._blower.integ,
                 "evap_set_reset": self.T_reset, "ac_on": 1.0 if self._comp.on else 0.0,
-                "cut_out": 1.0 if self.cut_out else 0.0, "T_e_last": self.T_e,
+                "cut_out": 1.0 if self.cut_out else 0.0,
+                "ac_demand": 1.0 if self.ac_demand else 0.0, "T_e_last": self.T_e,
                 "T_c_last": self.T_c, "p_dis_last": self.p_c}
 
     def _front_end(self, v: float) -> FrontEnd:
@@ -472,7 +479,7 @@ class HifiPlant(Plant):
         T_cab, T_int, T_is, T_sh = self.T_cab, self.T_int, self.T_int_slow, self.T_shell
         T_ew, T_cw, w_cab, N = self.T_ew, self.T_cw, self.w_cab, self.N
         T_e, T_c, p_c, p_s = self.T_e, self.T_c, self.p_c, self.p_s
-        T_reset, cut = self.T_reset, self.cut_out
+        T_reset, cut, demand = self.T_reset, self.cut_out, self.ac_demand
         W_prev, eps = -1.0, 0.0
         s_W = s_Pbl = s_Pc = s_Qe = s_Qc = s_Qlat = s_Tain = s_N = s_r = s_Te = s_Tc = 0.0
         s_on = s_Pf = s_W_sh = s_ps = s_pc = s_m = s_mca = s_st = s_Tset = 0.0
@@ -485,10 +492,15 @@ class HifiPlant(Plant):
             if nominal:
                 W = blower.update(T_cab, T_cab_set, dt)
                 e_cab = T_cab - T_cab_set
-                if e_cab > 0.0 or W <= W_min:  # reset: raise only at minimum blower
+                if demand and (e_cab > 0.0 or W <= W_min):  # raise only at minimum blower
                     T_reset -= k_reset * e_cab * dt
                     T_reset = 0.0 if T_reset < 0.0 else (reset_max if T_reset > reset_max
                                                          else T_reset)
+                # A/C demand: off when even the fully reset evaporator overcools the cabin
+                if demand and T_reset >= reset_max and e_cab < -0.5:
+                    demand = False
+                elif not demand and e_cab > 0.5:
+                    demand = True
                 T_set = T_set_in + T_reset
             else:
                 W = W_cmd
@@ -506,7 +518,7 @@ class HifiPlant(Plant):
                     N_cap -= K_frost * (T_e_min - T_e)
                 if N_cap < N_min:
                     N_cap = N_min
-            N_cmd = comp.update(T_ew, T_set, dt, enabled and not cut, N_cap)
+            N_cmd = comp.update(T_ew, T_set, dt, enabled and demand and not cut, N_cap)
             N = N_cmd + (N - N_cmd) * a_N
             if N < 1.0 and N_cmd == 0.0:
                 N = 0.0
@@ -602,7 +614,7 @@ class HifiPlant(Plant):
         self.T_cab, self.T_int, self.T_int_slow, self.T_shell = T_cab, T_int, T_is, T_sh
         self.T_ew, self.T_cw, self.w_cab, self.N = T_ew, T_cw, w_cab, N
         self.T_e, self.T_c, self.p_c, self.p_s = T_e, T_c, p_c, p_s
-        self.T_reset, self.cut_out = T_reset, cut
+        self.T_reset, self.cut_out, self.ac_demand = T_reset, cut, demand
         self.t += n * dt
         for i, x in enumerate((B0, B1, B2, B3, B4, B5, B6, B7, B8, B9)):
             bal[i] += x * dt
