@@ -134,24 +134,23 @@ class PlantConfig:
     W_ea0: float = _p(0.1, "kg/s", "evaporator", "reference flow of UA_ea0")
     n_ea: float = _p(0.51, "1", "evaporator",
                      "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ W^0.51")
-    UA_er0: float = _p(4000.0, "W/K", "evaporator",
-                       "assumption inside PLANT.md's 3-5 kW/K: two-phase refrigerant side at "
-                       "m_r0 (flow boiling 2-5 kW/(m^2 K) on about 1 m^2)")
+    UA_er0: float = _p(5000.0, "W/K", "evaporator",
+                       "assumption, top of PLANT.md's 3-5 kW/K: two-phase refrigerant side at "
+                       "m_r0 (flow boiling 2-5 kW/(m^2 K) on about 1-1.5 m^2)")
     m_r0: float = _p(0.05, "kg/s", "evaporator",
                      "reference refrigerant flow of UA_er0, UA_cr0, dT_suc0 (33 cc at 8000 rpm)")
     n_r: float = _p(0.8, "1", "evaporator",
                     "[Incropera] Dittus-Boelter exponent: UA_r = UA_r0 (m_r/m_r0)^0.8")
-    dT_suc0: float = _p(2.0, "K", "evaporator",
-                        "suction line + accumulator pressure drop as saturation-temperature drop "
-                        "at m_r0, scaling with m_r^2; [ASHRAE-R] sizes stationary suction lines "
-                        "for about 1 K; automotive hoses and accumulator assumed twice that")
+    dT_suc0: float = _p(1.0, "K", "evaporator",
+                        "suction line pressure drop as a saturation-temperature drop at m_r0, "
+                        "scaling with m_r^2: [ASHRAE-R] sizes suction lines for about 1 K")
 
     # ---------------------------------------------------------------- condenser / front end
     C_cw: float = _p(3000.0, "J/K", "condenser", "assumption: ~3 kg aluminium + refrigerant")
     UA_cr0: float = _p(2500.0, "W/K", "condenser",
                        "assumption: refrigerant side at m_r0 (mean over desuperheating and "
                        "two-phase), scaling with (m_r/m_r0)^n_r")
-    UA_ca0: float = _p(1000.0, "W/K", "condenser",
+    UA_ca0: float = _p(1100.0, "W/K", "condenser",
                        "calibrated (E(0) of Table I) inside 700-1200 W/K, an assumption: a "
                        "compact condenser rejecting ~10 kW at ~17 K inlet difference and 1 kg/s "
                        "has eps ~0.6, NTU ~0.9, UA ~900 W/K")
@@ -167,9 +166,9 @@ class PlantConfig:
                       "assumption: ram pressure recovery 1/2 rho C_ram v^2 (PLANT.md 0.4-0.6)")
     dp_fan0: float = _p(200.0, "Pa", "condenser",
                         "assumption: fan shut-off pressure at full speed (PLANT.md 150-250)")
-    Q_fan_free: float = _p(0.68, "m^3/s", "condenser",
-                           "assumption: fan free delivery at full speed; gives 2.45 m/s idle face "
-                           "velocity (PLANT.md 1.5-2.5) and about 120 W of fan power")
+    Q_fan_free: float = _p(0.69, "m^3/s", "condenser",
+                           "assumption: fan free delivery at full speed; gives 2.48 m/s idle face "
+                           "velocity (PLANT.md 1.5-2.5) and about 100 W of fan power")
     K_fan_off: float = _p(20.0, "Pa s^2/m^6", "condenser",
                           "assumption: resistance of the stopped, windmilling fan and shroud")
     s_fan_low: float = _p(0.6, "1", "condenser", "assumption: low fan stage, speed fraction")
