@@ -313,8 +313,9 @@ def check_pulldown(plant: Plant) -> tuple[list[CheckRow], dict]:
     return rows, data
 
 
-def _cop_at_load(cfg, v, Q=1800.0, T_ew=C2K(5.0), T_amb=None):
-    """Steady cycle delivering ``Q`` W of cooling: bisection on compressor speed."""
+def _cop_at_load(cfg, v, Q=1800.0, T_ew=278.15, T_amb=None):
+    """Steady cycle delivering ``Q`` W of cooling at evaporator wall ``T_ew`` (K, default
+    5 degC): bisection on compressor speed."""
     from acid.plant.hifi import front_end, steady_cycle
 
     lo, hi, res = cfg.N_min, cfg.N_max, None

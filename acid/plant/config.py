@@ -95,7 +95,9 @@ class PlantConfig:
     hA_int_slow: float = _p(60.0, "W/K", "cabin",
                             "assumption: conduction fast -> slow interior node (time constant "
                             "C_int_slow / hA_int_slow = 25 min)")
-    C_sh: float = _p(80.0e3, "J/K", "cabin", "assumption from masses: ~100 kg steel x 460 + ~25 kg glass x 840 + ~15 kg trim x "
+    C_sh: float = _p(80.0e3, "J/K", "cabin",
+                     "assumption from masses: ~100 kg steel x 460 + ~25 kg glass x 840 + "
+                     "~15 kg trim x "
                       "1500 J/(kg K), about 80 kJ/K")
     A_shell: float = _p(9.0, "m^2", "cabin",
                         "assumption: outer cabin surface swept by the air stream (roof 1.6, sides "
@@ -150,10 +152,10 @@ class PlantConfig:
     UA_cr0: float = _p(2500.0, "W/K", "condenser",
                        "assumption: refrigerant side at m_r0 (mean over desuperheating and "
                        "two-phase), scaling with (m_r/m_r0)^n_r")
-    UA_ca0: float = _p(1100.0, "W/K", "condenser",
-                       "calibrated (E(0) of Table I) inside 700-1200 W/K, an assumption: a "
-                       "compact condenser rejecting ~10 kW at ~17 K inlet difference and 1 kg/s "
-                       "has eps ~0.6, NTU ~0.9, UA ~900 W/K")
+    UA_ca0: float = _p(1200.0, "W/K", "condenser",
+                       "calibrated (E(0) of Table I, idle head pressures) at the top of "
+                       "700-1200 W/K, an assumption: a compact condenser rejecting ~10 kW at "
+                       "~17 K inlet difference and 1 kg/s has eps ~0.6, NTU ~0.9, UA ~900 W/K")
     m_ca0: float = _p(1.0, "kg/s", "condenser", "reference air flow of UA_ca0")
     n_ca: float = _p(0.51, "1", "condenser",
                      "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ m^0.51")
@@ -181,9 +183,9 @@ class PlantConfig:
                            "[HondaPS] fan to high above 1520 kPa gauge (1621 kPa absolute)")
     p_fan_low: float = _p(1.031e6, "Pa", "condenser",
                           "[HondaPS] fan back to low below 930 kPa gauge")
-    dT_recirc: float = _p(3.0, "K", "condenser",
+    dT_recirc: float = _p(4.0, "K", "condenser",
                           "assumption: idle hot-air recirculation raises the condenser inlet air "
-                          "(PLANT.md 3-8 K, lowest value), fading linearly to 0 at v_recirc")
+                          "(PLANT.md 3-8 K), fading linearly to 0 at v_recirc")
     v_recirc: float = _p(5.0, "m/s", "condenser", "assumption: PLANT.md, fading by about 5 m/s")
 
     # ---------------------------------------------------------------- compressor / cycle
@@ -255,7 +257,8 @@ class PlantConfig:
     # ---------------------------------------------------------------- initial hot soak
     T_cab0: float = _p(313.15, "K", "initial", "assumption: hot soak 40 degC (PLANT.md 38-42)")
     T_int0: float = _p(315.15, "K", "initial", "assumption: sun-heated seats and dash")
-    T_shell0: float = _p(313.15, "K", "initial", "assumption: shell at its parked equilibrium with the 40 degC soak: "
+    T_shell0: float = _p(313.15, "K", "initial",
+                         "assumption: shell at its parked equilibrium with the 40 degC soak: "
                          "(Q_solar_shell + hA_ext0 T_amb + hA_sh T_cab0) / (hA_ext0 + hA_sh)")
     T_ew0: float = _p(303.15, "K", "initial", "assumption: HVAC box at ambient after the soak")
     T_cw0: float = _p(303.15, "K", "initial", "assumption: front end at ambient")
@@ -412,6 +415,9 @@ class PlantConfig:
                                                              "hyst_on"):
                 if not 150.0 < v < 450.0:
                     bad(f"{f.name} = {v} K is implausible (temperatures are in kelvin)")
+        if not 233.15 <= self.T_amb <= 330.15:
+            bad(f"T_amb = {self.T_amb} K is outside the refrigerant property tables "
+                "(233.15-330.15 K, -40 to 57 degC)")
         if self.refrigerant not in REFRIGERANTS:
             bad(f"refrigerant {self.refrigerant!r} not supported (choose "
                 f"{' or '.join(REFRIGERANTS)})")

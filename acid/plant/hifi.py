@@ -47,8 +47,8 @@ MODES = ("direct", "nominal")
 
 #: Every dynamic state: the keys of ``HifiPlant.measure()`` accepted by ``reset(initial=...)``
 #: (temperatures K, w_cab kg/kg, N_comp and comp_integrator rpm, blower_integrator kg/s,
-#: evap_set_reset K, ac_on, cut_out and ac_demand 0/1; T_e_last, T_c_last K and p_dis_last Pa: the last
-#: cycle solution, which warm-starts the solver and drives the fan and the protections).
+#: evap_set_reset K, ac_on, cut_out and ac_demand 0/1; T_e_last, T_c_last K and p_dis_last Pa:
+#: the last cycle solution, which warm-starts the solver and drives the fan and protections).
 INITIAL_KEYS = ("T_cab", "T_int", "T_shell", "T_evap", "T_cw", "w_cab", "T_int_slow", "N_comp",
                 "comp_integrator", "blower_integrator", "evap_set_reset", "ac_on", "cut_out",
                 "ac_demand", "T_e_last", "T_c_last", "p_dis_last")
@@ -403,10 +403,10 @@ class HifiPlant(Plant):
         Returns
         -------
         Row k: the physical states at t_k (T_cab, T_evap, T_int, T_int_slow, T_shell, T_cw,
-        K; w_cab, kg/kg; controller states are in ``measure()``), T_amb, the applied inputs (W_bl mean, kg/s;
-        T_evap_set, K; v_veh, m/s) and means over the step: T_ain, T_e, T_c (K), N_comp (rpm),
-        P_comp (compressor electric power), P_bl (paper eq. 5), P_fan (condenser fan),
-        W_comp (compressor shaft power), Q_evap, Q_cond, Q_lat (W), COP = Q_evap / P_comp
+        K; w_cab, kg/kg; controller states are in ``measure()``), T_amb, the applied inputs
+        (W_bl mean, kg/s; T_evap_set, K; v_veh, m/s) and means over the step: T_ain, T_e, T_c
+        (K), N_comp (rpm), P_comp (compressor electric power), P_bl (paper eq. 5), P_fan
+        (condenser fan), W_comp (compressor shaft power), Q_evap, Q_cond, Q_lat (W), COP = Q_evap / P_comp
         (0 while the compressor stands still), p_suc (compressor suction = low-side service
         port) and p_dis (head) pressures (Pa, NaN while stopped), m_r, m_ca (refrigerant and
         condenser air flows, kg/s), fan_speed (condenser fan speed fraction), recirc (fraction),
@@ -590,7 +590,8 @@ class HifiPlant(Plant):
             wc_m = 0.5 * (w_cab + w_cab_n)
             B8 += W * (w_ain - wc_m) + m_inf * (w_amb - wc_m) + m_moist
             B9 += abs(W * (w_ain - wc_m)) + abs(m_inf * (w_amb - wc_m)) + m_moist
-            T_ew, T_cw, T_cab, T_int, T_sh, w_cab = T_ew_n, T_cw_n, T_cab_n, T_int_n, T_sh_n, w_cab_n
+            T_ew, T_cw, T_cab, T_int, T_sh = T_ew_n, T_cw_n, T_cab_n, T_int_n, T_sh_n
+            w_cab = w_cab_n
             # ---- means over the sample
             s_W += W
             s_Pbl += P_bl
