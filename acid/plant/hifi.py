@@ -407,8 +407,8 @@ class HifiPlant(Plant):
         (W_bl mean, kg/s; T_evap_set, K; v_veh, m/s) and means over the step: T_ain, T_e, T_c
         (K), N_comp (rpm), P_comp (compressor electric power), P_bl (paper eq. 5), P_fan
         (condenser fan), W_comp (compressor shaft power), Q_evap, Q_cond, Q_lat (W),
-        COP = Q_evap / P_comp (0 while the compressor stands still), p_suc (compressor suction = low-side service
-        port) and p_dis (head) pressures (Pa, NaN while stopped), m_r, m_ca (refrigerant and
+        COP = Q_evap / P_comp (0 while the compressor stands still), p_suc (compressor
+        suction = low-side service port) and p_dis (head) pressures (Pa, NaN while stopped), m_r, m_ca (refrigerant and
         condenser air flows, kg/s), fan_speed (condenser fan speed fraction), recirc (fraction),
         ac_on (fraction of the step the A/C logic was on).
         """
