@@ -1,10 +1,11 @@
 """Configuration of the high-fidelity plant: every parameter with its unit and its source.
 
-``PlantConfig()`` is the frozen default calibration documented in ``/work/shared/PLANT.md``.
-Parameters anchored in the paper (Wang et al., ACC 2018) say so in their ``source``; all
-others are engineering assumptions for a compact electric vehicle, labelled as such, and were
-chosen (once, then frozen) so that the nominal-controller speed sweep lands in the bands of the
-paper's Table I (``acid.plant.sweep``).
+``PlantConfig()`` is the frozen default (second generation, issue 9). Every field's
+``source`` names a reference key of ``datasets/plant/SOURCES.md`` (full bibliographic detail
+there), the paper ([Wang2018]), or says *assumption* with its reason; the few *calibrated*
+ones (UA_ca0) stay inside a stated range. The calibration targets E(0) of the paper's Table I
+and the idle service chart of ``acid plant-check``; with the cited physics Table I falls
+further with speed than the paper's (SOURCES.md says by how much and why).
 
 Units are SI with **temperatures in kelvin** (the library's inside), also in TOML files::
 

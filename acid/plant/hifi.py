@@ -1,33 +1,43 @@
 """The high-fidelity A/C + cabin plant: acid's open stand-in for NREL's CoolSim (PLANT.md).
 
-Quasi-static refrigerant cycle (``acid.plant.cycle``) + dynamic thermal masses, integrated at
-a fixed internal step ``dt_int`` (default 0.5 s) inside each 5 s sample:
+Second generation (issue 9). Quasi-static refrigerant cycle (``acid.plant.cycle``: compressor
+map in speed and pressure ratio, inverter + motor losses, refrigerant-side UA ~ m_r^0.8,
+suction-line drop) + dynamic thermal masses, integrated at a fixed internal step ``dt_int``
+(default 0.5 s) inside each 5 s sample:
 
-* air mixing: r = sat(k_rec (T_amb - T_cab), 0, r_max), T_mix = r T_cab + (1 - r) T_amb, and
-  likewise the humidity ratio w_mix;
+* air mixing: r = sat(k_rec (T_amb - T_cab), 0, r_max), T_mix = r T_cab + (1 - r) T_amb
+  + f_bl_heat P_bl / (W c_p) (the blower's heat enters ahead of the evaporator); likewise
+  the humidity ratio w_mix;
 * evaporator air side (epsilon-NTU against the wall, Lewis analogy for moisture):
   UA_ea = UA_ea0 (W/W_ea0)^n_ea, eps = 1 - exp(-UA_ea/(W c_p)),
-  Q_sens = eps W c_p (T_mix - T_ew), T_ain = T_mix - eps (T_mix - T_ew); when
-  w_mix > w_sat(T_ew): w_ain = w_mix - eps (w_mix - w_sat(T_ew)), Q_lat = W (w_mix - w_ain) h_fg;
-* condenser air side: m_ca = m_ca_fan + k_ram V (linear fan + ram superposition),
-  UA_ca = UA_ca0 (m_ca/m_ca_fan)^n_ca, Q_ca = eps_c m_ca c_p (T_cw - T_amb): **this is where
-  vehicle speed enters** (and, weakly, through the shell's external convection);
-* walls and cabin:
-  C_ew dT_ew/dt = Q_sens + Q_lat - Q_e,     C_cw dT_cw/dt = Q_c - Q_ca,
-  C_cab dT_cab/dt = hA_int (T_int - T_cab) + hA_sh (T_shell - T_cab) + W c_p (T_ain - T_cab)
-                    + Q_pass,
-  C_int dT_int/dt = Q_solar_int + hA_int (T_cab - T_int),
-  C_sh dT_shell/dt = Q_solar_shell + hA_ext(V) (T_amb - T_shell) + hA_sh (T_cab - T_shell),
-  M_cab dw_cab/dt = W (w_ain - w_cab) + m_moist_pass,   M_cab = C_cab / c_p;
-* compressor speed: first-order lag tau_N behind the PI command (``acid.plant.controller``).
+  Q_sens = eps W c_p (T_mix - T_ew); when w_mix > w_sat(T_ew):
+  w_ain = w_mix - eps (w_mix - w_sat(T_ew)), Q_lat = W (w_mix - w_ain) h_fg;
+* front end (``front_end``): condenser face air flow from the balance of fan curve, ram
+  pressure and grille + core resistance, a PWM fan proportional to head pressure (floor at
+  low speed, off at speed when the pressure allows), hot-air recirculation at idle,
+  Q_ca = G_ca(v, fan) (T_cw - T_amb - dT_rec(v)): **this is where vehicle speed enters the
+  cycle**;
+* cabin: C_cab dT_cab/dt = hA_int (T_int - T_cab) + hA_sh (T_shell - T_cab)
+  + W c_p (T_ain - T_cab) + m_inf(v) c_p (T_amb - T_cab) + Q_pass,
+  C_int dT_int/dt = G A_glass tau + hA_int (T_cab - T_int) + hA_is (T_int_slow - T_int),
+  C_int_slow dT_int_slow/dt = hA_is (T_int - T_int_slow),
+  C_sh dT_shell/dt = G A_sun alpha + hA_ext(v) (T_amb - T_shell) + hA_sh (T_cab - T_shell)
+  with hA_ext(v) from a turbulent flat plate, M_cab dw_cab/dt = W (w_ain - w_cab)
+  + m_inf (w_amb - w_cab) + m_moist_pass, M_cab = C_cab / c_p;
+* walls: C_ew dT_ew/dt = Q_sens + Q_lat - Q_e, C_cw dT_cw/dt = Q_c - Q_ca;
+* controls (``acid.plant.controller``): compressor PI with on/off hysteresis, speed capped by
+  the head-pressure derate and frost protection, cut-out above ``p_cut``; in nominal mode the
+  blower PI, the evaporator set-point reset and the A/C demand; compressor speed lags its
+  command with ``tau_N``.
 
-Integration: each node's own linear term is integrated exactly (exponential Euler; the cabin
-air, whose time constant is about 10 s, and the two heat-exchanger walls), couplings and the
-refrigerant heat flows are explicit; the slow interior and shell use forward Euler. Quartering
-``dt_int`` changes the 600 s energy by < 0.5 % (PLANT.md behaviour 13, tested).
+Integration: each node's own linear term is integrated exactly (exponential Euler: cabin air,
+both heat-exchanger walls, cabin water), couplings and the refrigerant heat flows are
+explicit; interior and shell use forward Euler. ``HifiPlant.balance()`` integrates every
+flow with the trapezoidal rule and compares it with the stored energy (``acid plant-check``,
+check b); the 0.5 s step stays within 0.12 % of 0.01 s in 600 s energy (check c).
 
 Measurements follow ``acid.plant.base``: states at t_k (before the step), inputs held,
-outputs and powers as means over [t_k, t_k + Ts). Temperatures in K.
+outputs and powers as means over [t_k, t_k + Ts). Temperatures in K, pressures in Pa.
 """
 
 from __future__ import annotations
@@ -404,13 +414,14 @@ class HifiPlant(Plant):
         -------
         Row k: the physical states at t_k (T_cab, T_evap, T_int, T_int_slow, T_shell, T_cw,
         K; w_cab, kg/kg; controller states are in ``measure()``), T_amb, the applied inputs
-        (W_bl mean, kg/s; T_evap_set, K; v_veh, m/s) and means over the step: T_ain, T_e, T_c
-        (K), N_comp (rpm), P_comp (compressor electric power), P_bl (paper eq. 5), P_fan
-        (condenser fan), W_comp (compressor shaft power), Q_evap, Q_cond, Q_lat (W),
-        COP = Q_evap / P_comp (0 while the compressor stands still), p_suc (compressor
-        suction = low-side service port) and p_dis (head) pressures (Pa, NaN while stopped), m_r, m_ca (refrigerant and
-        condenser air flows, kg/s), fan_speed (condenser fan speed fraction), recirc (fraction),
-        ac_on (fraction of the step the A/C logic was on).
+        (W_bl mean, kg/s; T_evap_set, K; v_veh, m/s) and means over the step: T_ain, T_e,
+        T_c (K); N_comp (rpm); P_comp (compressor electric power), P_bl (paper eq. 5), P_fan
+        (condenser fan), W_comp (compressor shaft power), Q_evap, Q_cond, Q_lat (W);
+        COP = Q_evap / P_comp (0 while the compressor stands still); p_suc (compressor
+        suction = low-side service port) and p_dis (head) pressures (Pa, NaN while
+        stopped); m_r, m_ca (refrigerant and condenser air flows, kg/s); fan_speed
+        (condenser fan speed fraction); recirc (fraction); ac_on (fraction of the step the
+        A/C logic was on).
         """
         for key in kw:
             if key not in _STEP_KEYWORDS:
