@@ -138,14 +138,16 @@ class PlantConfig:
     n_ea: float = _p(0.51, "1", "evaporator",
                      "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ W^0.51")
     UA_er0: float = _p(5000.0, "W/K", "evaporator",
-                       "assumption, top of PLANT.md's 3-5 kW/K: two-phase refrigerant side at "
+                       "calibrated (idle low side, plant-check d) at the top of PLANT.md's "
+                       "3-5 kW/K (an assumption): two-phase refrigerant side at "
                        "m_r0 (flow boiling 2-5 kW/(m^2 K) on about 1-1.5 m^2)")
     m_r0: float = _p(0.05, "kg/s", "evaporator",
                      "reference refrigerant flow of UA_er0, UA_cr0, dT_suc0 (33 cc at 8000 rpm)")
     n_r: float = _p(0.8, "1", "evaporator",
                     "[Incropera] Dittus-Boelter exponent: UA_r = UA_r0 (m_r/m_r0)^0.8")
     dT_suc0: float = _p(1.0, "K", "evaporator",
-                        "suction line pressure drop as a saturation-temperature drop at m_r0, "
+                        "calibrated (idle low side) to [ASHRAE-R]'s design value: suction line "
+                        "pressure drop as a saturation-temperature drop at m_r0, "
                         "scaling with m_r^2: [ASHRAE-R] sizes suction lines for about 1 K")
 
     # ---------------------------------------------------------------- condenser / front end
@@ -170,7 +172,8 @@ class PlantConfig:
     dp_fan0: float = _p(200.0, "Pa", "condenser",
                         "assumption: fan shut-off pressure at full speed (PLANT.md 150-250)")
     Q_fan_free: float = _p(0.69, "m^3/s", "condenser",
-                           "assumption: fan free delivery at full speed; gives 2.48 m/s idle face "
+                           "calibrated (idle head pressure) inside PLANT.md's idle face velocity "
+                           "1.5-2.5 m/s (an assumption): fan free delivery; gives 2.48 m/s face "
                            "velocity (PLANT.md 1.5-2.5) and about 100 W of fan power")
     K_fan_off: float = _p(20.0, "Pa s^2/m^6", "condenser",
                           "assumption: resistance of the stopped, windmilling fan and shroud")
@@ -185,8 +188,9 @@ class PlantConfig:
     p_fan_low: float = _p(1.031e6, "Pa", "condenser",
                           "[HondaPS] fan back to low below 930 kPa gauge")
     dT_recirc: float = _p(4.0, "K", "condenser",
-                          "assumption: idle hot-air recirculation raises the condenser inlet air "
-                          "(PLANT.md 3-8 K), fading linearly to 0 at v_recirc")
+                          "calibrated (Table I shape, idle head pressure) inside PLANT.md's 3-8 K "
+                          "(an assumption): idle hot-air recirculation raises the condenser "
+                          "inlet air, fading linearly to 0 at v_recirc")
     v_recirc: float = _p(5.0, "m/s", "condenser", "assumption: PLANT.md, fading by about 5 m/s")
 
     # ---------------------------------------------------------------- compressor / cycle
