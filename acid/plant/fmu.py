@@ -676,6 +676,14 @@ class FmuPlant(Plant):
                                                                self.map.parameters)}
         for mode, table in self.map.modes.items():
             self._settings[mode] = self._resolve_settings(f"modes.{mode}", table)
+        # keywords of ``step`` that hold for one step only (as in ``HifiPlant.step``): when
+        # not given, their FMU input returns to its start value
+        self._per_step_defaults = {}
+        if "compressor_enabled" in self._bool_in:
+            self._per_step_defaults["compressor_enabled"] = True
+        r = self._in.get("T_cab_set")
+        if r is not None and r.var.start is not None:
+            self._per_step_defaults["T_cab_set"] = r.to_acid(float(r.var.start))
         self._read = list(self._st.values()) + list(self._out.values())
         self._read_vrs = [r.vr for r in self._read]
         self._instant = [i for i, r in enumerate(self._read)
@@ -811,6 +819,7 @@ class FmuPlant(Plant):
         them; ``T_int`` and ``T_shell`` are accepted and ignored unless mapped.
         """
         values = {"W_bl": W_bl, "T_evap_set": T_evap_set, "v_veh": v_veh}
+        values.update(self._per_step_defaults)  # keywords hold for one step only
         for key, value in kw.items():
             if key not in INPUT_CHANNELS:
                 raise ConfigError(f"FmuPlant.step: unknown keyword {key!r}")
