@@ -29,13 +29,17 @@ from pathlib import Path
 FMI_VERSION = 2  # replaced at export
 
 if FMI_VERSION == 3:
-    from pythonfmu3 import Boolean, Fmi3Causality as Causality, Fmi3Slave
-    from pythonfmu3 import Fmi3Variability as Variability, Float64 as RealVariable
+    from pythonfmu3 import Boolean, Fmi3Slave
+    from pythonfmu3 import Float64 as RealVariable
+    from pythonfmu3 import Fmi3Causality as Causality
+    from pythonfmu3 import Fmi3Variability as Variability
 
     Slave = Fmi3Slave
 else:
-    from pythonfmu import Boolean, Fmi2Causality as Causality, Fmi2Slave
-    from pythonfmu import Fmi2Variability as Variability, Real as RealVariable
+    from pythonfmu import Boolean, Fmi2Slave
+    from pythonfmu import Fmi2Causality as Causality
+    from pythonfmu import Fmi2Variability as Variability
+    from pythonfmu import Real as RealVariable
 
     Slave = Fmi2Slave
 

@@ -355,6 +355,7 @@ class _Instance:
             raise FmuError(f"{fmu_name}: cannot load the FMU's binary for this platform "
                            f"({' '.join(str(exc).split())})") from None
         self.alive = False
+        self.broken = False
         self._instantiate()
 
     # -- logging callbacks (kept referenced so that ctypes does not free them)
@@ -412,6 +413,8 @@ class _Instance:
         except FmuError:
             raise
         except Exception as exc:
+            if getattr(exc, "status", 3) >= 3:  # error or fatal: no further FMI calls
+                self.broken = True
             raise self.error(what, exc) from None
 
     # -- FMI calls, version-independent
@@ -431,9 +434,10 @@ class _Instance:
             self.fmu.reset()
         except Exception:  # an FMU without a working reset: instantiate anew
             self.log.clear()
+            free = self.fmu.fmi3FreeInstance if self.version == 3 else \
+                self.fmu.fmi2FreeInstance
             try:
-                self.fmu.fmi2FreeInstance(self.fmu.component) if self.version == 2 else \
-                    self.fmu.fmi3FreeInstance(self.fmu.component)
+                free(self.fmu.component)
             except Exception:
                 pass
             self._instantiate()
@@ -470,6 +474,8 @@ class _Instance:
             result = self.fmu.doStep(t, h)
         except Exception as exc:
             status = getattr(exc, "status", None)
+            if status is None or status >= 3:  # error or fatal: no further FMI calls
+                self.broken = True
             if self.version == 2 and status == 2 and self._terminated():
                 raise self.error(f"the FMU terminated the simulation at t = {t:g} s") from None
             label = {1: "warning", 2: "discard", 3: "error", 4: "fatal"}.get(status, "failed")
@@ -492,10 +498,16 @@ class _Instance:
             return False
 
     def close(self) -> None:
+        """Terminate and free the instance; the shared library stays loaded (unloading a
+        library that embeds Python, as pythonfmu's do, can crash the process). After an
+        error or fatal status FMI forbids further calls: the instance is then left alone."""
         if not self.alive:
             return
         self.alive = False
-        for fn in (self.fmu.terminate, self.fmu.freeInstance):
+        if self.broken:
+            return
+        free = self.fmu.fmi3FreeInstance if self.version == 3 else self.fmu.fmi2FreeInstance
+        for fn in (self.fmu.terminate, lambda: free(self.fmu.component)):
             try:
                 fn()
             except Exception:
@@ -582,6 +594,7 @@ class FmuPlant(Plant):
         self._embedded = self._read_embedded(folder)
         self._inst = _Instance(self.md, folder, self.fmu_name, instance_name)
         self._finalizer = weakref.finalize(self, self._inst.close)
+        self._finalizer.atexit = False  # no FMI calls while the interpreter shuts down
         self._state: dict[str, float] = {}
         self._inputs_now: dict[str, float] = {}
         self.t = 0.0
@@ -771,8 +784,9 @@ class FmuPlant(Plant):
             raise ConfigError(f"{self.map.source}: the ambient temperature is set but the "
                               "map has no [inputs] T_amb")
         inst = self._inst
-        if not inst.alive:
-            raise FmuError(f"{self.fmu_name}: the FMU instance was closed")
+        if not inst.alive or inst.broken:
+            raise FmuError(f"{self.fmu_name}: the FMU instance was closed or failed; "
+                           "create a new plant")
         if self.t > 0.0 or self._state:
             inst.reset()
         settings = list(self._settings["parameters"]) + list(self._settings.get(self.mode, []))
@@ -818,6 +832,9 @@ class FmuPlant(Plant):
         Keywords: ``T_amb`` (K), ``compressor_enabled``, ``T_cab_set`` (K) where the map has
         them; ``T_int`` and ``T_shell`` are accepted and ignored unless mapped.
         """
+        if not self._inst.alive or self._inst.broken:
+            raise FmuError(f"{self.fmu_name}: the FMU instance was closed or failed; "
+                           "create a new plant")
         values = {"W_bl": W_bl, "T_evap_set": T_evap_set, "v_veh": v_veh}
         values.update(self._per_step_defaults)  # keywords hold for one step only
         for key, value in kw.items():

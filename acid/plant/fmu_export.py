@@ -95,6 +95,7 @@ def plant_interface(config: PlantConfig | None = None) -> dict:
 def fmu_map_text(spec: dict, fmu_name: str, fmi_version: int) -> str:
     """The TOML FMU map of an exported FMU (every channel it exposes, with units)."""
     u = spec["units"]
+    Ts = float(spec["config"]["Ts"])
 
     def line(channel: str, name: str, sampling: str | None = None) -> str:
         extra = f', sampling = "{sampling}"' if sampling else ""
@@ -105,9 +106,8 @@ def fmu_map_text(spec: dict, fmu_name: str, fmi_version: int) -> str:
            f"# (acid {__version__}). Drive it with: --plant fmu:{fmu_name} --fmu-map <this file>",
            "# Format: datasets/FORMAT.md, section 'FMU maps'.", "",
            "[fmu]", 'label = "acid-hifi-fmu"',
-           "Ts = %r        # acid's sample period, s" % float(spec["config"]["Ts"]),
-           "step = %r      # FMU communication step, s (Ts or a divisor of it)"
-           % float(spec["config"]["Ts"]), "",
+           f"Ts = {Ts!r}        # acid's sample period, s",
+           f"step = {Ts!r}      # FMU communication step, s (Ts or a divisor of it)", "",
            "[inputs]       # set at t_k, held over the sample"]
     out += [line(ch, f"input.{ch}") for ch in spec["inputs"]]
     out.append('compressor_enabled = { name = "input.compressor_enabled" }')
