@@ -113,3 +113,47 @@ def temperature_unit_consistent(values: np.ndarray, unit: str) -> bool:
     lo, hi = _PLAUSIBLE[unit]
     v = np.asarray(values, dtype=float)
     return bool(np.all((v >= lo) & (v <= hi)))
+
+
+# ------------------------------------------------------------------ unit-aware values
+class Temperature(float):
+    """A temperature that knows its scale: a float whose value is in **kelvin**.
+
+    Make one with :func:`degC` or :func:`kelvin`; pass it anywhere acid takes a temperature.
+    Arguments documented in K use it as is; those documented in degC (the excitation spec's
+    bounds) convert it (:func:`in_degC`). Plain numbers keep the documented unit of each
+    argument, so a value is never guessed::
+
+        acid.make_plant("hifi", T_amb=acid.degC(35))          # 308.15 K
+        acid.ExcitationSpec(T_evap_set_bounds=(acid.degC(3), acid.degC(10)))
+    """
+
+    __slots__ = ()
+
+    @property
+    def K(self) -> float:
+        """Value in kelvin."""
+        return float(self)
+
+    @property
+    def degC(self) -> float:
+        """Value in degrees Celsius."""
+        return float(self) - ZERO_CELSIUS
+
+    def __repr__(self) -> str:
+        return f"{self.degC:g} degC ({float(self):g} K)"
+
+
+def degC(value: float) -> Temperature:
+    """A temperature given in degrees Celsius (its float value is kelvin)."""
+    return Temperature(float(value) + ZERO_CELSIUS)
+
+
+def kelvin(value: float) -> Temperature:
+    """A temperature given in kelvin."""
+    return Temperature(float(value))
+
+
+def in_degC(value):
+    """``value`` in degC: a :class:`Temperature` is converted, a plain number is degC."""
+    return value.degC if isinstance(value, Temperature) else value

@@ -28,6 +28,9 @@ def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: floa
     """
     from acid.errors import ConfigError
 
+    if T_amb is not None and not 200.0 < float(T_amb) < 400.0:
+        raise ConfigError(f"ambient temperature T_amb = {T_amb} is not plausible in kelvin "
+                          "(give kelvin, or acid.degC(...))")
     if name.startswith(FMU_PREFIX):
         from acid.plant.fmu import FmuPlant
 
