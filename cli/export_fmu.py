@@ -49,7 +49,7 @@ def export_fmu(
     result = run_export(out, cfg, fmi_version=fmi_version, map_out=map_out)
     elapsed = time.perf_counter() - t0
     print_table(f"{out}: FMI {fmi_version}.0 co-simulation FMU, model "
-                f"{result.model_identifier} ({elapsed:.1f} s)",
+                f"{result.model_identifier} ({elapsed:.2f} s)",
                 ["_variables", "count", "_names"],
                 [["state.*", len(result.states), ", ".join(result.states)],
                  ["mean.*", len(result.means), ", ".join(result.means)]])

@@ -266,3 +266,17 @@ def test_step_keywords_the_map_lacks_are_refused(cabin_lag):
     with pytest.raises(ConfigError, match="no \\[modes.nominal\\]"):
         FmuPlant(fmu, fmu_map, mode="nominal")
     plant.step(0.1, C2K(5.0), 0.0, T_int=C2K(30.0))  # accepted and ignored, as HifiPlant
+
+
+def test_the_configuration_is_baked_into_the_fmu(tmp_path):
+    from acid.plant.config import PlantConfig
+    from acid.plant.fmu_export import export_fmu
+
+    cfg = PlantConfig().replace(T_amb=C2K(38.0), RH_amb=0.3)
+    res = export_fmu(tmp_path / "hot.fmu", cfg, map_out=tmp_path / "hot.toml")
+    plant = FmuPlant(res.fmu, res.fmu_map)
+    assert plant.config()["embedded"]["config"]["T_amb"] == pytest.approx(C2K(38.0))
+    native = HifiPlant(cfg)
+    for _ in range(10):
+        a, b = native.step(0.12, C2K(6.0), 5.0), plant.step(0.12, C2K(6.0), 5.0)
+        assert max(abs(a[k] - b[k]) for k in a) <= 1e-9
