@@ -271,11 +271,13 @@ def _variable(section: str, channel: str, spec, source: str) -> VariableMap:
 
 
 # ------------------------------------------------------------------- FMU archives
-_EXTRACTED: dict[tuple, str] = {}
+#: (path, size, mtime) -> (model description, extracted folder): an FMU is read, validated
+#: and unpacked once per process however many plants are built from it
+_EXTRACTED: dict[tuple, tuple] = {}
 
 
 def _cleanup_extracted() -> None:
-    for folder in _EXTRACTED.values():
+    for _md, folder in _EXTRACTED.values():
         shutil.rmtree(folder, ignore_errors=True)
     _EXTRACTED.clear()
 
@@ -300,6 +302,10 @@ def _open_fmu(path: Path):
     """(model description, extracted folder) of an FMU; one-line errors for bad archives."""
     if not path.is_file():
         raise FmuError(f"{path}: FMU not found")
+    key = _file_key(path)
+    cached = _EXTRACTED.get(key)
+    if cached is not None and os.path.isdir(cached[1]):
+        return cached
     import zipfile
 
     try:
@@ -320,14 +326,11 @@ def _open_fmu(path: Path):
         kinds = "model exchange" if md.modelExchange is not None else "no co-simulation"
         raise FmuError(f"{path}: the FMU supports {kinds} only; acid needs an FMI "
                        f"{md.fmiVersion} co-simulation FMU (export it with co-simulation)")
-    key = _file_key(path)
-    folder = _EXTRACTED.get(key)
-    if folder is None or not os.path.isdir(folder):
-        try:
-            folder = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="acid-fmu-"))
-        except Exception as exc:
-            raise FmuError(f"{path}: cannot extract the FMU ({exc})") from None
-        _EXTRACTED[key] = folder
+    try:
+        folder = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="acid-fmu-"))
+    except Exception as exc:
+        raise FmuError(f"{path}: cannot extract the FMU ({exc})") from None
+    _EXTRACTED[key] = (md, folder)
     return md, folder
 
 
