@@ -10,6 +10,7 @@ import typer
 from acid import __version__
 from acid._io import file_sha256, save_figure
 from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 
 def _fmt(v) -> str:
@@ -24,8 +25,8 @@ def _verdict(passed) -> str:
 
 @handle_errors
 def plant_check(
-    plant: str = typer.Option("hifi", "--plant",
-                              help="Plant to check, as `acid excite --plant` builds it."),
+    plant: str = plant_option(),
+    fmu_map: Path | None = fmu_map_option(),
     config: Path | None = typer.Option(None, "--config",
                                        help="Plant configuration (TOML, SI units, K)."),
     ambient: float | None = typer.Option(None, "--ambient",
@@ -48,9 +49,15 @@ def plant_check(
 
     if ambient is not None and not math.isfinite(ambient):
         raise ConfigError(f"--ambient must be a finite temperature in degC, got {ambient}")
-    the_plant = build_plant(plant, config, None if ambient is None else C2K(ambient))
+    choice = plant_choice(plant, fmu_map)
+    if config is not None and choice.kind != "hifi":
+        raise ConfigError("--config applies to --plant hifi only")
+    T_amb = None if ambient is None else C2K(ambient)
+    extra = {"fmu_map": choice.fmu_map} if choice.kind == "fmu" else {}
+    the_plant = build_plant(choice.spec, config, T_amb, **extra)
+    nominal = (choice.factory(mode="nominal", T_amb=T_amb) if choice.kind == "fmu" else None)
     with progress_bar("plant check", total=13) as update:
-        result = run_check(the_plant, progress=update)
+        result = run_check(the_plant, progress=update, nominal_factory=nominal)
 
     rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r.passed)]
             for r in result.rows]
@@ -60,7 +67,7 @@ def plant_check(
                   f"cop_gain_25_vs_0_equal_load_pct = "
                   f"{_fmt(result.cop_gain_25_vs_0_equal_load_pct)} %")
     summary = result.to_json_dict()
-    summary.update(acid_version=__version__,
+    summary.update(acid_version=__version__, **choice.to_json_dict(),
                    config_path=str(config) if config is not None else None,
                    config_sha256=file_sha256(config) if config is not None else None)
     figures = {}

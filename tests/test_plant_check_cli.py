@@ -53,3 +53,18 @@ def test_ambient_in_a_config_outside_the_tables_is_one_line_error(tmp_path):
     result = runner.invoke(app, ["plant-check", "--config", str(cfg), "--out", str(tmp_path)])
     assert result.exit_code == 2
     assert_one_line_error(result, "T_amb", "property tables", str(cfg))
+
+
+def test_plant_check_through_an_exported_fmu(tmp_path, exported_fmu):
+    """The same checks through an FMU of acid's plant: Table I equals the native plant's;
+    what needs the plant's internals or configuration is reported without a verdict."""
+    fmu, fmu_map = exported_fmu
+    js = tmp_path / "s.json"
+    result = runner.invoke(app, ["plant-check", "--plant", f"fmu:{fmu}", "--fmu-map",
+                                 str(fmu_map), "--out", str(tmp_path / "o"), "--json", str(js)])
+    assert result.exit_code in (0, 1), result.output
+    d = json.loads(js.read_text())
+    by = {c["name"]: c for c in d["checks"]}
+    assert by["Table I: E(0 m/s), 600 s"]["value"] > 1.0
+    assert all(c["passed"] is None for c in d["checks"] if c["group"] in "bcdfg")
+    assert d["plant"].startswith("fmu:")

@@ -56,12 +56,21 @@ from acid.plant.cycle import make_solver
 MODES = ("direct", "nominal")
 
 #: Every dynamic state: the keys of ``HifiPlant.measure()`` accepted by ``reset(initial=...)``
-#: (temperatures K, w_cab kg/kg, N_comp and comp_integrator rpm, blower_integrator kg/s,
-#: evap_set_reset K, ac_on, cut_out and ac_demand 0/1; T_e_last, T_c_last K and p_dis_last Pa:
-#: the last cycle solution, which warm-starts the solver and drives the fan and protections).
-INITIAL_KEYS = ("T_cab", "T_int", "T_shell", "T_evap", "T_cw", "w_cab", "T_int_slow", "N_comp",
-                "comp_integrator", "blower_integrator", "evap_set_reset", "ac_on", "cut_out",
+#: (temperatures K, w_cab kg/kg, N_comp_state (the lagged compressor speed, at t_k) and
+#: comp_integrator rpm, blower_integrator kg/s,
+#: T_evap_set_eff K (evaporator set-point after the low-load reset), ac_state, cut_out and
+#: ac_demand 0/1; T_e_last, T_c_last K and p_dis_last Pa (0 = stood still): the last cycle
+#: solution, which warm-starts the solver and drives the fan and protections).
+INITIAL_KEYS = ("T_cab", "T_int", "T_shell", "T_evap", "T_cw", "w_cab", "T_int_slow",
+                "N_comp_state", "comp_integrator", "blower_integrator", "T_evap_set_eff",
+                "ac_state", "cut_out",
                 "ac_demand", "T_e_last", "T_c_last", "p_dis_last")
+
+#: Units (inside: K for temperatures) of the states ``acid.data.CHANNELS`` does not know.
+STATE_UNITS = {"N_comp_state": "rpm", "comp_integrator": "rpm",
+               "blower_integrator": "kg/s", "T_evap_set_eff": "K", "ac_state": "1",
+               "cut_out": "1", "ac_demand": "1", "T_e_last": "K",
+               "T_c_last": "K", "p_dis_last": "Pa"}
 
 _STEP_KEYWORDS = ("T_cab_set", "compressor_enabled", "T_int", "T_shell", "T_amb")
 
@@ -230,6 +239,22 @@ def steady_cycle(N: float, T_evap_wall: float, v_veh: float = 0.0,
     return res, T_cw
 
 
+def _p_sat_function(config: PlantConfig):
+    """p_sat(T) (Pa) of the configured refrigerant from the cycle's tables (linear)."""
+    from acid.plant import refrigerant as rf
+
+    P = rf.table(config.refrigerant, config.superheat, config.subcool).lists[0]
+    lo, inv, imax = rf.T1_LO, 1.0 / rf.DT1, len(P) - 2
+
+    def p_sat(T: float) -> float:
+        x = (T - lo) * inv
+        i = int(x)
+        i = 0 if i < 0 else (imax if i > imax else i)
+        return P[i] + (x - i) * (P[i + 1] - P[i])
+
+    return p_sat
+
+
 class HifiPlant(Plant):
     """High-fidelity A/C + cabin plant (quasi-static cycle, dynamic thermal masses).
 
@@ -265,6 +290,7 @@ class HifiPlant(Plant):
         self.meas_noise_std = float(meas_noise_std)
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self._solve, _ = make_solver(self.cfg)
+        self._p_sat = _p_sat_function(self.cfg)
         self._comp = CompressorLoop(self.cfg)
         self._blower = BlowerLoop(self.cfg)
         self.n_sub = int(round(self.Ts / self.cfg.dt_int))
@@ -278,6 +304,10 @@ class HifiPlant(Plant):
         d.update(mode=self.mode, meas_noise_std_K=self.meas_noise_std)
         return d
 
+    def units(self) -> dict[str, str]:
+        """Units of the controller states ``acid.data.CHANNELS`` does not know (K inside)."""
+        return dict(STATE_UNITS)
+
     def nominal(self) -> HifiPlant:
         """A fresh copy of this plant run by its own nominal controller (paper section II-A)."""
         return HifiPlant(self.cfg, mode="nominal", meas_noise_std=self.meas_noise_std,
@@ -286,9 +316,10 @@ class HifiPlant(Plant):
     def reset(self, initial: dict[str, float] | None = None) -> Measurement:
         """Reset to the hot soak of the configuration, overridden by ``initial``.
 
-        Keys: ``INITIAL_KEYS`` (temperatures in K; w_cab kg/kg; N_comp rpm; comp_integrator
-        rpm; blower_integrator kg/s; evap_set_reset K; ac_on, cut_out, ac_demand 0/1; the last cycle
-        solution T_e_last, T_c_last K, p_dis_last Pa, NaN = compressor stopped). Without
+        Keys: ``INITIAL_KEYS`` (temperatures in K; w_cab kg/kg; N_comp_state rpm;
+        comp_integrator rpm; blower_integrator kg/s; T_evap_set_eff K; ac_state, cut_out,
+        ac_demand 0/1; the
+        last cycle solution T_e_last, T_c_last K, p_dis_last Pa, 0 = stood still). Without
         ``w_cab`` the cabin starts with the ambient humidity ratio (a closed, soaked car holds
         outside air's moisture). Without controller states the compressor starts on from rest
         and both PI integrators sit at their minimum outputs.
@@ -301,7 +332,7 @@ class HifiPlant(Plant):
                 raise ConfigError(f"initial condition {key!r} unknown "
                                   f"(known: {', '.join(INITIAL_KEYS)})")
             value = float(value)
-            if not math.isfinite(value) and key != "p_dis_last":
+            if not math.isfinite(value):
                 raise ConfigError(f"initial {key} = {value} is not finite")
             if key.startswith("T_") and not 200.0 < value < 400.0:
                 raise ConfigError(f"initial {key} = {value} K is implausible "
@@ -313,18 +344,18 @@ class HifiPlant(Plant):
         self.T_int_slow = init.get("T_int_slow", self.T_int)
         self.T_ew, self.T_cw = init["T_evap"], init["T_cw"]
         self.w_cab = init.get("w_cab", self.w_amb)
-        self.N = init.get("N_comp", 0.0)
+        self.N = init.get("N_comp_state", 0.0)
         self.T_e = init.get("T_e_last", self.T_ew - 5.0)
         self.T_c = init.get("T_c_last", self.T_cw + 5.0)
-        self.p_c = init.get("p_dis_last", math.nan)
+        self.p_c = init.get("p_dis_last", 0.0) or math.nan  # 0: the compressor stood still
         self.p_s = math.nan
-        self._comp.reset(on=bool(init.get("ac_on", 1.0) >= 0.5))
+        self._comp.reset(on=bool(init.get("ac_state", 1.0) >= 0.5))
         self._blower.reset()
         if "comp_integrator" in init:
             self._comp.integ = init["comp_integrator"]
         if "blower_integrator" in init:
             self._blower.integ = init["blower_integrator"]
-        self.T_reset = init.get("evap_set_reset", 0.0)
+        self.T_reset = init.get("T_evap_set_eff", c.T_ew_set) - c.T_ew_set
         self.cut_out = bool(init.get("cut_out", 0.0) >= 0.5)
         self.ac_demand = bool(init.get("ac_demand", 1.0) >= 0.5)
         self.t = 0.0
@@ -340,12 +371,14 @@ class HifiPlant(Plant):
         """
         return {"T_cab": self.T_cab, "T_evap": self.T_ew, "T_int": self.T_int,
                 "T_shell": self.T_shell, "T_amb": self.T_amb, "w_cab": self.w_cab,
-                "T_cw": self.T_cw, "T_int_slow": self.T_int_slow, "N_comp": self.N,
+                "T_cw": self.T_cw, "T_int_slow": self.T_int_slow, "N_comp_state": self.N,
                 "comp_integrator": self._comp.integ, "blower_integrator": self._blower.integ,
-                "evap_set_reset": self.T_reset, "ac_on": 1.0 if self._comp.on else 0.0,
+                "T_evap_set_eff": self.cfg.T_ew_set + self.T_reset,
+                "ac_state": 1.0 if self._comp.on else 0.0,
                 "cut_out": 1.0 if self.cut_out else 0.0,
                 "ac_demand": 1.0 if self.ac_demand else 0.0, "T_e_last": self.T_e,
-                "T_c_last": self.T_c, "p_dis_last": self.p_c}
+                "T_c_last": self.T_c,
+                "p_dis_last": self.p_c if self.p_c == self.p_c else 0.0}
 
     def _front_end(self, v: float) -> FrontEnd:
         key = (v, self.T_amb)
@@ -412,14 +445,15 @@ class HifiPlant(Plant):
 
         Returns
         -------
-        Row k: the physical states at t_k (T_cab, T_evap, T_int, T_int_slow, T_shell, T_cw,
-        K; w_cab, kg/kg; controller states are in ``measure()``), T_amb, the applied inputs
+        Row k: every state at t_k (``measure()``: T_cab, T_evap, T_int, T_int_slow, T_shell,
+        T_cw, K; w_cab, kg/kg; the controller states), T_amb, the applied inputs
         (W_bl mean, kg/s; T_evap_set, K; v_veh, m/s) and means over the step: T_ain, T_e,
         T_c (K); N_comp (rpm); P_comp (compressor electric power), P_bl (paper eq. 5), P_fan
         (condenser fan), W_comp (compressor shaft power), Q_evap, Q_cond, Q_lat (W);
         COP = Q_evap / P_comp (0 while the compressor stands still); p_suc (compressor
-        suction = low-side service port) and p_dis (head) pressures (Pa, NaN while
-        stopped); m_r, m_ca (refrigerant and condenser air flows, kg/s); fan_speed
+        suction = low-side service port) and p_dis (head) pressures (Pa; while the
+        compressor stands still, the saturation pressures of the two walls); m_r, m_ca
+        (refrigerant and condenser air flows, kg/s); fan_speed
         (condenser fan speed fraction); recirc (fraction); ac_on (fraction of the step the
         A/C logic was on).
         """
@@ -449,9 +483,7 @@ class HifiPlant(Plant):
             W_cmd = min(max(W_cmd, c.W_bl_min), c.W_bl_max)
         else:
             W_cmd = 0.0
-        row = {"T_cab": self.T_cab, "T_evap": self.T_ew, "T_int": self.T_int,
-               "T_shell": self.T_shell, "T_amb": self.T_amb, "w_cab": self.w_cab,
-               "T_cw": self.T_cw, "T_int_slow": self.T_int_slow}
+        row = self.measure()
 
         # ---- constants over the step (plain floats for a lean substep loop)
         dt = c.dt_int
@@ -483,7 +515,7 @@ class HifiPlant(Plant):
         T_e_min, K_frost = c.T_e_min, c.K_frost
         reset_max = c.T_ew_set_max - c.T_ew_set
         k_reset = c.k_reset
-        solve = self._solve
+        solve, p_sat = self._solve, self._p_sat
         comp, blower = self._comp, self._blower
         exp = math.exp
 
@@ -494,7 +526,6 @@ class HifiPlant(Plant):
         W_prev, eps = -1.0, 0.0
         s_W = s_Pbl = s_Pc = s_Qe = s_Qc = s_Qlat = s_Tain = s_N = s_r = s_Te = s_Tc = 0.0
         s_on = s_Pf = s_W_sh = s_ps = s_pc = s_m = s_mca = s_st = s_Tset = 0.0
-        n_run = 0
         bal = self._bal
         B0 = B1 = B2 = B3 = B4 = B5 = B6 = B7 = B8 = B9 = 0.0
 
@@ -563,12 +594,13 @@ class HifiPlant(Plant):
             if N > 0.0:
                 T_e, T_c, m_r, Q_e, Q_c, P_c, W_sh, p_s, p_c, _it = solve(N, T_ew, T_cw, T_e,
                                                                             T_c)
-                n_run += 1
                 s_ps += p_s
                 s_pc += p_c
-            else:
+            else:  # no flow: each side sits at the saturation pressure of its wall
                 T_e, T_c, m_r, Q_e, Q_c, P_c, W_sh = T_ew, T_cw, 0.0, 0.0, 0.0, 0.0, 0.0
                 p_c = p_s = math.nan
+                s_ps += p_sat(T_ew)
+                s_pc += p_sat(T_cw)
             # ---- thermal masses (exponential Euler on each node's own term)
             Tinf = T_mix + (Q_lat - Q_e) / G_a
             T_ew_n = Tinf + (T_ew - Tinf) * exp(-G_a * dt / C_ew)
@@ -640,8 +672,7 @@ class HifiPlant(Plant):
             COP=Q_evap / P_comp if P_comp > 0.0 else 0.0, recirc=s_r * inv,
             Q_evap=Q_evap, Q_cond=s_Qc * inv, Q_lat=s_Qlat * inv, W_comp=s_W_sh * inv,
             T_e=s_Te * inv, T_c=s_Tc * inv, ac_on=s_on * inv,
-            p_suc=s_ps / n_run if n_run else math.nan,
-            p_dis=s_pc / n_run if n_run else math.nan,
+            p_suc=s_ps * inv, p_dis=s_pc * inv,
             m_r=s_m * inv, m_ca=s_mca * inv, fan_speed=s_st * inv,
         )
         if self.meas_noise_std:
