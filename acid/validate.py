@@ -177,8 +177,8 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
     ----------
     ds : dataset with the channels of ``acid.data.MODEL_CHANNELS``, sampled at ``params.Ts``
         (for the econ model: those of ``acid.econ.fit.REQUIRED``).
-    params : model parameters (kelvin convention): ``ModelParams`` (the paper's eqs. 1-3)
-        or ``acid.econ.EconParams``.
+    params : model parameters (kelvin convention): ``ModelParams`` or the result of
+        ``acid.fit`` (the paper's eqs. 1-3), or ``acid.econ.EconParams``.
     starts : number of prediction windows requested (paper: 60).
     horizon : prediction steps per window (paper: 300, i.e. 1500 s at Ts = 5 s).
     exogenous : ``"hold"`` keeps T_int, T_shell at their values at the start (paper);
@@ -211,6 +211,9 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
     shorter than ``starts * horizon``). When fewer distinct admissible starts exist than
     requested, each is used once and a ``UserWarning`` says so.
     """
+    from acid.econ.params import as_any_params
+
+    params = as_any_params(params)  # a fit result is accepted wherever parameters are
     if exogenous not in EXOGENOUS_MODES:
         raise ConfigError(f"--exogenous: unknown mode {exogenous!r} (choose 'hold' or 'measured')")
     if placement not in PLACEMENTS:

@@ -27,6 +27,7 @@ from acid_cli._common import (
     progress_bar,
     write_summary,
 )
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -68,8 +69,8 @@ def cav_study(
     t_amb: float | None = typer.Option(None, "--t-amb",
                                        help="Ambient temperature, degC (default: the "
                                             "plant's)."),
-    warmup: float = typer.Option(1800.0, "--warmup", help="Warm-up before the cycle, s."),
-    tail: float = typer.Option(1200.0, "--tail",
+    warmup: float = typer.Option(7200.0, "--warmup", help="Warm-up before the cycle, s."),
+    tail: float = typer.Option(2400.0, "--tail",
                                help="Common continuation measuring the end-state cost, s "
                                     "(0: raw energies only)."),
     bound: bool = typer.Option(True, "--bound/--no-bound",
@@ -81,6 +82,8 @@ def cav_study(
                              help="Folder for the figures."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write PNG figures."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
     """Energy of A, B, D, E and the bound per cycle, at equal mean cabin temperature.
 
@@ -111,8 +114,11 @@ def cav_study(
                           f"{identify_duration}")
     if rh_max is not None and not 0.0 < rh_max <= 100.0:
         raise ConfigError(f"--rh-max must lie in (0, 100] %, got {rh_max}")
-    if plant_config is not None and not plant_config.is_file():
-        raise ConfigError(f"--plant-config: file not found: {plant_config}")
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
+    if plant_config is not None and (choice.kind != "hifi" or not plant_config.is_file()):
+        raise ConfigError(f"--plant-config: file not found: {plant_config}"
+                          if choice.kind == "hifi" else
+                          "--plant-config applies to --plant hifi only")
     p = load_params(params)
     econ_cfg = EconNMPCConfig(intervals=_econ_intervals(econ_horizon, p.Ts),
                               solver=econ_solver, T_cab_min=C2K(T_low), T_cab_max=C2K(T_high),
@@ -126,7 +132,11 @@ def cav_study(
             raise ConfigError(f"--cycle: cycle {name!r} lasts {sc.duration_s:g} s, shorter "
                               f"than the economic NMPC's horizon ({econ_cfg.horizon_s:g} s, "
                               "--econ-horizon)")
-    factory = partial(make_plant, "hifi", config_path=plant_config)
+    if choice.kind == "fmu":
+        choice.check()
+        factory = choice.factory()
+    else:
+        factory = partial(make_plant, "hifi", config_path=plant_config)
     if econ_params is not None:
         econ = EconParams.from_json(econ_params)
         econ_summary = {"source": str(econ_params), "power_map": econ.power_map.quality}
@@ -196,7 +206,8 @@ def cav_study(
         "command": "cav-study", "acid_version": __version__,
         "inputs": {"params": params,
                    "params_sha256": None if params == "paper" else file_sha256(params),
-                   "econ_params": None if econ_params is None else str(econ_params)},
+                   "econ_params": None if econ_params is None else str(econ_params),
+                   **choice.to_json_dict()},
         "figures": fig_paths, **result.to_json_dict(),
     }
     write_summary(json_path, summary)

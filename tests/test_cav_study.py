@@ -83,12 +83,14 @@ def test_json_has_the_issue_keys(study):
     assert math.isfinite(b["model_energy_MJ"]) and b["band_vs_pinned_pct"] >= -1e-6
 
 
-def test_economic_nmpc_keeps_the_evaporator_warmer_than_the_paper_nmpc(study):
-    # the paper's eq. 4 drives T_evap_set to its floor; the identified map prices the
-    # latent load and the COP, so the economic NMPC runs a warmer coil and a humid cabin
-    A, E = study.results["A"].run, study.results["E"].run
-    assert E.T_evap_set.mean() > A.T_evap_set.mean() + 2.0
-    assert E.w_cab.mean() > A.w_cab.mean()
+def test_economic_nmpc_is_not_worse_than_the_paper_nmpc(study):
+    # at equal comfort, optimising an identified power map should not cost more than the
+    # paper's eq. 4 (1 % allowed for model error); the bound, periodic, spins up first
+    for key in ("D", "E"):
+        assert study.saving_pct(key) > -1.0, key
+    bound = study.results["bound"]
+    assert bound.run.start != study.start_state       # its own periodic state, spun up
+    assert abs(bound.extra["replay_vs_model_pct"]) < 25.0
 
 
 def test_initial_keys_come_from_the_plant():

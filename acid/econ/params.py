@@ -277,3 +277,17 @@ def load_any_params(spec):
     if model_family(spec) == MODEL_NAME:
         return EconParams.from_json(spec)
     return load_params(spec)
+
+
+def as_any_params(obj):
+    """``acid.params.as_params`` for both families: ``EconParams`` (or an econ fit result)
+    as is, a path by its family, anything else as the paper's parameters."""
+    from acid.params import as_params
+
+    if isinstance(obj, EconParams):
+        return obj
+    if isinstance(getattr(obj, "params", None), EconParams):
+        return obj.params
+    if isinstance(obj, (str, Path)):
+        return load_any_params(obj)
+    return as_params(obj)
