@@ -47,26 +47,25 @@ def energy_figure(result: CavStudyResult) -> Figure:
 
 
 def trajectory_figure(study: CycleStudy, keys=("A", "E", "bound")) -> Figure:
-    """Speed, T_cab with the band, T_evap_set and W_bl, humidity, power: A, E and the bound."""
+    """Speed, T_cab with the band, T_evap_set, W_bl, humidity and power: A, E and the bound."""
     keys = [k for k in keys if k in study.results]
-    fig = Figure(figsize=(10, 11), layout="constrained")
-    axs = fig.subplots(5, 1, sharex=True)
+    fig = Figure(figsize=(10, 12), layout="constrained")
+    axs = fig.subplots(6, 1, sharex=True)
     sc = study.scenario
     t = np.arange(sc.n + 1) * sc.Ts
     axs[0].step(t, np.append(sc.v, sc.v[-1]), where="post", color="k", lw=1.0)
     axs[0].set_ylabel("speed (m/s)")
     axs[0].set_title(f"{sc.name.upper()}: paper NMPC (A), economic NMPC with preview (E) and "
                      "the perfect-information bound replayed on the plant", fontsize=10)
-    ax_w = axs[2].twinx()
     for key in keys:
         r = study.results[key]
         run, col, ls = r.run, _COLORS[key], _STYLE[key]
-        lab = f"{key}: {r.tail_corrected_J / 1e6:.4f} MJ"
+        lab = f"{key}: {r.tail_corrected_J / 1e6:.4f} MJ (end state charged back)"
         axs[1].plot(t, K2C(run.T_cab), color=col, ls=ls, lw=1.1, label=lab)
-        axs[2].step(t[:-1], K2C(run.T_evap_set), where="post", color=col, ls=ls, lw=1.0)
-        ax_w.step(t[:-1], run.W_bl, where="post", color=col, ls=ls, lw=0.6, alpha=0.5)
-        axs[3].plot(t, 1e3 * run.w_cab, color=col, ls=ls, lw=1.1)
-        axs[4].step(t[:-1], run.P_comp + run.P_bl, where="post", color=col, ls=ls, lw=0.8)
+        axs[2].step(t[:-1], K2C(run.T_evap_set), where="post", color=col, ls=ls, lw=0.9)
+        axs[3].step(t[:-1], run.W_bl, where="post", color=col, ls=ls, lw=0.9)
+        axs[4].plot(t, 1e3 * run.w_cab, color=col, ls=ls, lw=1.1)
+        axs[5].step(t[:-1], run.P_comp + run.P_bl, where="post", color=col, ls=ls, lw=0.8)
     for T in (study.T_low, study.T_high):
         axs[1].axhline(K2C(T), **_BAND)
     axs[1].axhline(K2C(study.target_mean_K), color="grey", lw=0.8,
@@ -74,10 +73,10 @@ def trajectory_figure(study: CycleStudy, keys=("A", "E", "bound")) -> Figure:
     axs[1].set_ylabel("$T_{cab}$ (°C)")
     axs[1].legend(fontsize=7, loc="best")
     axs[2].set_ylabel("$T_{evap,set}$ (°C)")
-    ax_w.set_ylabel("$W_{bl}$ (kg/s, thin)")
-    axs[3].set_ylabel("cabin humidity\n$w_{cab}$ (g/kg)")
-    axs[4].set_ylabel("$P_{comp} + P_{bl}$ (W)")
-    axs[4].set_xlabel("time (s)")
+    axs[3].set_ylabel("$W_{bl}$ (kg/s)")
+    axs[4].set_ylabel("cabin humidity\n$w_{cab}$ (g/kg)")
+    axs[5].set_ylabel("$P_{comp} + P_{bl}$ (W)")
+    axs[5].set_xlabel("time (s)")
     for ax in axs:
         ax.grid(True, alpha=0.3)
     return fig
