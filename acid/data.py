@@ -416,15 +416,16 @@ def _member(g, name: str, source: str, group: bool = False):
     """``g[name]`` as a dataset (or a group with ``group``), else a one-line ``DataError``."""
     import h5py
 
+    where = f"{g.name.rstrip('/')}/{name}"
     try:
         obj = g.get(name)
     except Exception as exc:  # noqa: BLE001 - broken links, foreign objects
-        raise DataError(f"{source}: /{name} cannot be opened ({exc.__class__.__name__})") from None
+        raise DataError(f"{source}: {where} cannot be opened ({exc.__class__.__name__})") from None
     kind = h5py.Group if group else h5py.Dataset
     if obj is None:
         return None
     if not isinstance(obj, kind):
-        raise DataError(f"{source}: /{name} must be {'a group' if group else 'an array'}")
+        raise DataError(f"{source}: {where} must be {'a group' if group else 'an array'}")
     return obj
 
 
@@ -555,6 +556,7 @@ class ChannelMap:
     channels: Mapping[str, tuple[str, str]]
     Ts: float | None = None
     resample: str | None = None
+    source: str = field(default="channel map", compare=False)
 
     @classmethod
     def from_file(cls, path: str | os.PathLike) -> ChannelMap:
@@ -626,7 +628,7 @@ class ChannelMap:
             if Ts is None:
                 raise DataError(f"{source}: resample = {resample!r} needs Ts (the grid to "
                                 "resample onto)")
-        return cls(time=d["time"], channels=chans, Ts=Ts, resample=resample)
+        return cls(time=d["time"], channels=chans, Ts=Ts, resample=resample, source=source)
 
 
 def _numeric_column(values, name: str, source: str) -> np.ndarray:
@@ -701,17 +703,18 @@ def _resample_mode(time: np.ndarray, cmap: ChannelMap, source: str) -> tuple[str
         return "none", None
     if at_Ts:
         if cmap.resample == "mean":
-            raise DataError(f"{source}: the map's resample = 'mean' on data already sampled "
-                            f"every Ts = {Ts:g} s would average outputs and powers a second "
-                            "time; set resample = 'none'")
+            raise DataError(f"{source}: resample = 'mean' in {cmap.source} on data already "
+                            f"sampled every Ts = {Ts:g} s would average outputs and powers a "
+                            "second time; set resample = 'none'")
         if cmap.resample is None:
             return "none", (f"data already sampled every Ts = {Ts:g} s: taken as they are, not "
                             "resampled (set resample = 'mean' or 'sample' in the map to change)")
         return cmap.resample, None
     if step > Ts * (1 + 1e-6):
-        raise DataError(f"{source}: the map's Ts = {Ts:g} s is finer than the data's own step "
-                        f"({step:g} s); acid resamples onto a coarser grid only")
-    check_size((time[-1] - time[0]) / Ts, f"{source}: resampling onto Ts = {Ts:g} s")
+        raise DataError(f"{source}: Ts = {Ts:g} s in {cmap.source} is finer than the data's "
+                        f"own step ({step:g} s); acid resamples onto a coarser grid only")
+    check_size((time[-1] - time[0]) / Ts, f"{source}: resampling onto Ts = {Ts:g} s "
+               f"({cmap.source})")
     return cmap.resample or "mean", None
 
 
