@@ -214,6 +214,12 @@ def _check_folder_writable(label: str, d: Path) -> None:
         raise OutputError(f"{label} {d}: folder {probe} is not writable")
 
 
+def plant_inputs(plant: str | None, fmu_map: PathLike | None) -> dict[str, PathLike | None]:
+    """The files behind ``--plant fmu:PATH.fmu`` and ``--fmu-map`` (for ``check_paths``)."""
+    fmu = plant[len("fmu:"):] if plant and plant.startswith("fmu:") else None
+    return {"--plant": fmu or None, "--fmu-map": fmu_map}
+
+
 def params_input(spec: str | None) -> str | None:
     """The file behind a ``--params``/``--reference`` value (``None`` for the 'paper' preset)."""
     return None if spec is None or str(spec) == "paper" else spec

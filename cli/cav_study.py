@@ -16,13 +16,16 @@ from acid.units import C2K, K2C
 from acid_cli._common import (
     check_paths,
     handle_errors,
+    note,
     params_input,
+    plant_inputs,
     print_table,
     progress_bar,
     require_range,
     say,
     write_summary,
 )
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 #: Longest NMPC horizon (steps) and warm-up / tail / identification record accepted.
 MAX_HORIZON = 200
@@ -60,6 +63,8 @@ def cav_study(
     allow_unstable: bool = typer.Option(
         False, "--allow-unstable",
         help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
     """Compare (A) constant bound, (B) ICM bound, (C) speed-aware NMPC on a drive cycle.
 
@@ -73,7 +78,8 @@ def cav_study(
     from acid.mpc.speed_model import identify_from_plant
     from acid.signals import available_drive_cycles, drive_cycle
 
-    check_paths(inputs={"--params": params_input(params)}, outputs={"--json": json_path},
+    check_paths(inputs={"--params": params_input(params), **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
                 folders={"--out": (out if figures else None, (f"cav_{cycle}.png",))})
     require_range(horizon, "--horizon", 2, MAX_HORIZON, "steps")
     require_range(T_low, "--t-low", 0.0, 50.0, "degC")
@@ -88,13 +94,22 @@ def cav_study(
     if cycle not in names:
         raise ConfigError(f"--cycle: unknown drive cycle {cycle!r} (available: "
                           f"{', '.join(names)})")
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     p = load_params(params, allow_unstable=allow_unstable)
+    factory = None
+    if choice.kind == "fmu":
+        choice.check()
+        factory = choice.factory()
+        if speed_blind:
+            note("an FMU plant has no speed-blind twin; running without it")
+            speed_blind = False
     config = StudyConfig(cycle=cycle, horizon=horizon, T_low=C2K(T_low), T_high=C2K(T_high),
                          warmup_s=warmup, tail_s=tail, speed_blind=speed_blind)
-    eff = identify_from_plant(duration_s=identify_duration)
+    eff = identify_from_plant(plant=None if factory is None else factory(),
+                              duration_s=identify_duration)
     v, _ = drive_cycle(cycle, Ts=p.Ts)
     with progress_bar(f"cav-study {cycle}", total=estimated_steps(config, v.size, p.Ts)) as up:
-        result = run_study(p, config, efficiency=eff, progress=up)
+        result = run_study(p, config, efficiency=eff, plant_factory=factory, progress=up)
 
     q = eff.quality
     say(
@@ -143,7 +158,8 @@ def cav_study(
     summary = {
         "command": "cav-study", "acid_version": __version__,
         "inputs": {"params": params,
-                   "params_sha256": None if params == "paper" else file_sha256(params)},
+                   "params_sha256": None if params == "paper" else file_sha256(params),
+                   **choice.to_json_dict()},
         "figure": fig_path, **d,
     }
     write_summary(json_path, summary)

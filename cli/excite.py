@@ -16,46 +16,47 @@ from acid.units import C2K
 from acid_cli._common import (
     check_paths,
     handle_errors,
+    plant_inputs,
     print_table,
     progress_bar,
     require_range,
     write_summary,
 )
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 PLANTS = ("hifi", "model")
 
-#: Accepted ambient temperatures, degC (a kelvin value typed by mistake is refused).
-T_AMB_RANGE_C = (-40.0, 60.0)
+#: Ambient temperatures accepted here, degC: a kelvin value typed by mistake is refused; the
+#: plant refuses what its own tables do not cover.
+T_AMB_RANGE_C = (-60.0, 150.0)
 
 
 def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
-                plant_config: Path | None, T_amb: float | None, allow_unstable: bool = False):
+                plant_config: Path | None, T_amb: float | None,
+                fmu_map: Path | None = None, allow_unstable: bool = False):
     """The plant chosen by ``--plant``, with the spec's noise and the noise stream's seed.
 
     A plant that is not available in this installation (``--plant hifi`` before the
     high-fidelity modules exist, or without their dependencies) is a one-line ``ConfigError``.
     """
-    from acid.plant import make_plant
-
-    if name not in PLANTS:
-        raise ConfigError(f"--plant: unknown plant {name!r} (choose {' or '.join(PLANTS)})")
-    if name == "hifi" and params is not None:
+    choice = plant_choice(name, fmu_map, allowed=PLANTS)
+    if choice.kind != "model" and params is not None:
         raise ConfigError("--params applies to --plant model only (the high-fidelity plant "
                           "is configured with --plant-config)")
-    if name == "model" and plant_config is not None:
+    if choice.kind != "hifi" and plant_config is not None:
         raise ConfigError("--plant-config applies to --plant hifi only (the model plant "
-                          "takes --params)")
+                          "takes --params, an FMU plant --fmu-map)")
     if plant_config is not None and not Path(plant_config).is_file():
         raise ConfigError(f"--plant-config: file not found: {plant_config}")
     model_params = None
-    if name == "model":
+    if choice.kind == "model":
         from acid.params import load_params
 
         model_params = load_params(params, allow_unstable=allow_unstable)
     try:
-        return make_plant(name, config_path=plant_config, params=model_params,
-                          meas_noise_std=spec.noise, rng=spec.rng("noise"),
-                          T_amb=None if T_amb is None else C2K(T_amb))
+        return choice.make(config_path=plant_config, params=model_params,
+                           meas_noise_std=spec.noise, rng=spec.rng("noise"),
+                           T_amb=None if T_amb is None else C2K(T_amb))
     except ImportError as exc:
         raise ConfigError(f"--plant {name}: not available in this installation ({exc}); "
                           f"use --plant model") from None
@@ -72,9 +73,8 @@ def _summary_rows(ds: Dataset) -> list[list[str]]:
 @handle_errors
 def excite(
     out: Path = typer.Option(..., "--out", "-o", help="HDF5 dataset to write (atomically)."),
-    plant: str = typer.Option("hifi", "--plant",
-                              help="Plant to excite: 'hifi' (high-fidelity) or 'model' "
-                                   "(paper eqs. 1-5)."),
+    plant: str = plant_option("hifi", PLANTS),
+    fmu_map: Path | None = fmu_map_option(),
     duration: float = typer.Option(7200.0, "--duration", help="Record length, s."),
     signal: str = typer.Option("aprbs", "--signal",
                                help=f"Input signal: {', '.join(SIGNAL_TYPES)}."),
@@ -103,7 +103,8 @@ def excite(
     json_out: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
     """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
-    check_paths(inputs={"--params": params, "--plant-config": plant_config},
+    check_paths(inputs={"--params": params, "--plant-config": plant_config,
+                        **plant_inputs(plant, fmu_map)},
                 outputs={"--out": out, "--json": json_out})
     if t_amb is not None:
         require_range(t_amb, "--t-amb", *T_AMB_RANGE_C, "degC")
@@ -116,7 +117,7 @@ def excite(
         from acid.signals import drive_cycle
 
         drive_cycle(cycle, n=1, Ts=spec.Ts)  # unknown names fail before the plant is built
-    the_plant = build_plant(plant, spec, params, plant_config, t_amb, allow_unstable)
+    the_plant = build_plant(plant, spec, params, plant_config, t_amb, fmu_map, allow_unstable)
     t0 = time.perf_counter()
     with progress_bar(f"exciting {plant} plant", spec.n_samples) as update:
         ds = run_excitation(the_plant, spec, progress=update)

@@ -19,11 +19,13 @@ from acid_cli._common import (
     console,
     handle_errors,
     params_input,
+    plant_inputs,
     print_table,
     progress_bar,
     say,
     write_summary,
 )
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 FIGURES = ("fig7_model.png", "fig8_plant.png", "fig9_cav_bound.png",
            "fig10_cav_comparison.png")
@@ -58,24 +60,33 @@ def mpc_check(
     allow_unstable: bool = typer.Option(
         False, "--allow-unstable",
         help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
-    """Run the NMPC scenarios: (a) on the model, (b) on the high-fidelity plant, (c) CAV case.
+    """Run the NMPC scenarios: (a) on the model, (b) on the plant, (c) CAV case.
 
     Reports A/C energy (MJ), constraint violations (K), whole-step solve time (ms) and
     fallbacks per scenario, with PASS/FAIL against the stated criteria; exits 1 on any FAIL.
     """
-    check_paths(inputs={"--params": params_input(params)}, outputs={"--json": json_path},
+    check_paths(inputs={"--params": params_input(params), **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
                 folders={"--out": (out if figures else None, FIGURES)})
     if first_move not in ("free", "pinned"):
         raise ConfigError(f"--first-move must be 'free' or 'pinned', got {first_move!r}")
     if solver not in ("fatrop", "ipopt"):
         raise ConfigError(f"--solver must be 'fatrop' or 'ipopt', got {solver!r}")
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     p = load_params(params, allow_unstable=allow_unstable)
     config = NMPCConfig(first_move=first_move, solver=solver)
+    factory = None
+    if choice.kind == "fmu" and not skip_plant:
+        choice.check()
+        factory = choice.factory()
 
     t0 = time.perf_counter()
     with progress_bar("mpc-check", total=1) as update:
-        result = run_check(p, config, plant=not skip_plant, progress=update)
+        result = run_check(p, config, plant=not skip_plant, progress=update,
+                           plant_factory=factory)
     elapsed = time.perf_counter() - t0
 
     say(f"NMPC: N = {config.N}, solver {solver}, first move {first_move}, "
@@ -139,7 +150,8 @@ def mpc_check(
         "command": "mpc-check",
         "acid_version": __version__,
         "inputs": {"params": params,
-                   "params_sha256": None if params == "paper" else file_sha256(params)},
+                   "params_sha256": None if params == "paper" else file_sha256(params),
+                   **choice.to_json_dict()},
         "elapsed_s": elapsed,
         "figures": fig_paths,
         **result.to_json_dict(),

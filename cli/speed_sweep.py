@@ -9,15 +9,18 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure, write_json
+from acid.errors import ConfigError
 from acid_cli._common import (
     check_paths,
     handle_errors,
+    plant_inputs,
     print_table,
     progress_bar,
     require_range,
     say,
     write_summary,
 )
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 #: Longest simulated time per speed accepted, s (one day).
 MAX_DURATION_S = 86400.0
@@ -35,6 +38,8 @@ def speed_sweep(
     out: Path = typer.Option(Path("reports/speed-sweep"), "--out",
                              help="Folder for the figure and the result JSON."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
     """Run the nominal controller at 0-25 m/s for --duration s and compare with Table I.
 
@@ -45,13 +50,23 @@ def speed_sweep(
     from acid.plant.sweep import speed_sweep as run_sweep
     from acid.report.plant import sweep_figure
 
-    check_paths(inputs={"--config": config}, outputs={"--json": json_path},
+    check_paths(inputs={"--config": config, **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
                 folders={"--out": (out, ("speed_sweep.png", "speed_sweep.json"))})
     require_range(duration, "--duration", 0.0, MAX_DURATION_S, "s", lo_open=True)
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
+    if config is not None and choice.kind != "hifi":
+        raise ConfigError("--config applies to --plant hifi only (an FMU plant is configured "
+                          "through --fmu-map)")
+    factory = None
+    if choice.kind == "fmu":
+        choice.check(mode="nominal")
+        factory = choice.factory(mode="nominal")
     cfg = PlantConfig.from_toml(config) if config is not None else PlantConfig()
     speeds = PAPER_TABLE_I["speeds_mps"]
     with progress_bar("speed sweep", total=len(speeds)) as update:
-        result = run_sweep(cfg, speeds=speeds, duration=duration, progress=update)
+        result = run_sweep(cfg, speeds=speeds, duration=duration, progress=update,
+                           plant_factory=factory)
 
     paper_E = PAPER_TABLE_I["energy_MJ"]
     paper_km = PAPER_TABLE_I["energy_MJ_per_km"]
@@ -66,7 +81,7 @@ def speed_sweep(
                   + ("" if duration == 600.0 else "  [paper values are for 600 s]"))
 
     summary = result.to_json_dict()
-    summary.update(acid_version=__version__,
+    summary.update(acid_version=__version__, **choice.to_json_dict(),
                    config_path=str(config) if config is not None else None,
                    config_sha256=file_sha256(config) if config is not None else None)
     figure_path = save_figure(sweep_figure(result), out / "speed_sweep.png")
