@@ -9,7 +9,7 @@ from pathlib import Path
 from acid import __version__
 from acid.data import Dataset
 from acid.econ.fit import REQUIRED, EconFitter
-from acid_cli._common import console, err_console, print_table, write_summary
+from acid_cli._common import note, print_table, say, warn, write_summary
 
 
 def _num(v: float, digits: int = 5) -> str:
@@ -30,9 +30,8 @@ def fit_econ(data: Path, out: Path, estimation_fraction: float, covariance: str,
     report = result.to_json_dict()
     params.to_json(out, extra={"fit": report})
 
-    console.print(f"{data}: {len(est)} of {len(ds)} samples ({est.duration:g} s), model econ, "
-                  f"{result.n_rows} one-step rows, covariance {covariance} "
-                  f"({result.elapsed_s:.1f} s)", highlight=False)
+    say(f"{data}: {len(est)} of {len(ds)} samples ({est.duration:g} s), model econ, "
+        f"{result.n_rows} one-step rows, covariance {covariance} ({result.elapsed_s:.1f} s)")
     rows = [[n, u, _num(v), _num(s, 2), "-" if not math.isfinite(lo) else
              f"[{_num(lo)}, {_num(hi)}]"] for n, u, v, s, lo, hi in result.table()]
     print_table("Econ model parameters (SI, kelvin)", ["name", "unit", "estimate", "stderr",
@@ -45,14 +44,13 @@ def fit_econ(data: Path, out: Path, estimation_fraction: float, covariance: str,
     q = result.power_map_quality
     steady = (f"; near-steady samples ({q['n_steady']}): RMS {q['steady_rms_pct']:.2f} %, "
               f"max {q['steady_max_pct']:.1f} %" if "steady_rms_pct" in q else "")
-    console.print(f"power map P_comp = Q_e f(Q_e, T_evap, v, T_amb): RMS error {q['rms_W']:.1f} W "
-                  f"({q['rms_pct']:.2f} % of the mean power), R^2 {q['r2']:.4f}, n = {q['n']}"
-                  f"{steady}", highlight=False)
+    say(f"power map P_comp = Q_e f(Q_e, T_evap, v, T_amb): RMS error {q['rms_W']:.1f} W "
+        f"({q['rms_pct']:.2f} % of the mean power), R^2 {q['r2']:.4f}, n = {q['n']}{steady}")
     for line in result.notes:
-        console.print(f"note: {line}", highlight=False)
+        note(line)
     for line in result.warnings:
-        err_console.print(f"[bold yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
-    console.print(f"parameters written to {out}")
+        warn(line)
+    say(f"parameters written to {out}")
     write_summary(json_path, {"command": "fit", "acid_version": __version__, "model": "econ",
                               "inputs": {"data": str(data)},
                               "estimation_fraction": estimation_fraction, "out": str(out),

@@ -20,14 +20,23 @@ from acid.errors import ConfigError
 from acid.params import load_params
 from acid.units import C2K, K2C
 from acid_cli._common import (
-    console,
-    err_console,
+    check_paths,
     handle_errors,
+    params_input,
+    plant_inputs,
     print_table,
     progress_bar,
+    require,
+    require_range,
+    say,
+    warn,
     write_summary,
 )
 from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+
+#: Longest paper-NMPC horizon (steps) and warm-up / tail / identification record accepted.
+MAX_HORIZON = 200
+MAX_SECONDS = 7 * 86400.0
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -82,6 +91,9 @@ def cav_study(
                              help="Folder for the figures."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write PNG figures."),
+    allow_unstable: bool = typer.Option(
+        False, "--allow-unstable",
+        help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
     plant: str = plant_option("hifi", ("hifi",)),
     fmu_map: Path | None = fmu_map_option(),
 ) -> None:
@@ -109,17 +121,33 @@ def cav_study(
     if cycle != "all" and cycle not in names:
         raise ConfigError(f"--cycle: unknown cycle {cycle!r} (available: "
                           f"{', '.join(names)}, all)")
-    if not (math.isfinite(identify_duration) and identify_duration >= 3600.0):
-        raise ConfigError(f"--identify-duration must be at least 3600 s, got "
-                          f"{identify_duration}")
-    if rh_max is not None and not 0.0 < rh_max <= 100.0:
-        raise ConfigError(f"--rh-max must lie in (0, 100] %, got {rh_max}")
+    stem = "all" if cycle == "all" else cycle
+    figure_names = [f"energy_{stem}.png"] + [f"cav_{n}.png"
+                                             for n in (names if cycle == "all" else [cycle])]
+    check_paths(inputs={"--params": params_input(params), "--econ-params": econ_params,
+                        "--plant-config": plant_config, **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
+                folders={"--out": (out if figures else None, figure_names)})
+    require_range(horizon, "--horizon", 2, MAX_HORIZON, "steps")
+    require_range(T_low, "--t-low", 0.0, 50.0, "degC")
+    require_range(T_high, "--t-high", 0.0, 50.0, "degC")
+    if not T_low < T_high:
+        raise ConfigError(f"--t-low {T_low:g} degC must be below --t-high {T_high:g} degC "
+                          "(the comfort band is empty)")
+    require_range(warmup, "--warmup", 0.0, MAX_SECONDS, "s")
+    require_range(tail, "--tail", 0.0, MAX_SECONDS, "s")
+    require_range(identify_duration, "--identify-duration", 3600.0, MAX_SECONDS, "s")
+    require_range(econ_horizon, "--econ-horizon", 10.0, 3600.0, "s")
+    require(econ_solver in ("fatrop", "ipopt"), "--econ-solver",
+            f"must be 'fatrop' or 'ipopt', got {econ_solver!r}")
+    if rh_max is not None:
+        require_range(rh_max, "--rh-max", 0.0, 100.0, "%", lo_open=True)
+    if t_amb is not None:
+        require_range(t_amb, "--t-amb", -40.0, 55.0, "degC")
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
-    if plant_config is not None and (choice.kind != "hifi" or not plant_config.is_file()):
-        raise ConfigError(f"--plant-config: file not found: {plant_config}"
-                          if choice.kind == "hifi" else
-                          "--plant-config applies to --plant hifi only")
-    p = load_params(params)
+    require(plant_config is None or choice.kind == "hifi", "--plant-config",
+            "applies to --plant hifi only")
+    p = load_params(params, allow_unstable=allow_unstable)
     econ_cfg = EconNMPCConfig(intervals=_econ_intervals(econ_horizon, p.Ts),
                               solver=econ_solver, T_cab_min=C2K(T_low), T_cab_max=C2K(T_high),
                               RH_max=None if rh_max is None else rh_max / 100.0)
@@ -141,13 +169,12 @@ def cav_study(
         econ = EconParams.from_json(econ_params)
         econ_summary = {"source": str(econ_params), "power_map": econ.power_map.quality}
     else:
-        with console.status("identifying the econ model (acid excite --model econ + acid fit "
-                            "--model econ)"):
-            econ, econ_summary = identify_econ(factory, duration_s=identify_duration)
+        say("identifying the econ model (acid excite --model econ + acid fit --model econ)")
+        econ, econ_summary = identify_econ(factory, duration_s=identify_duration)
     q = econ.power_map.quality
-    console.print(f"econ model: {econ_summary['source']}; power map RMS error "
-                  f"{q.get('rms_pct', math.nan):.2f} % (near-steady "
-                  f"{q.get('steady_rms_pct', math.nan):.2f} %)", highlight=False)
+    say(f"econ model: {econ_summary['source']}; power map RMS error "
+        f"{q.get('rms_pct', math.nan):.2f} % (near-steady "
+        f"{q.get('steady_rms_pct', math.nan):.2f} %)")
     cycles = "all" if cycle == "all" else [cycle]
     if cycle == "all":
         total, label = len(names), f"cav-study: {len(names)} cycles, {jobs} processes"
@@ -183,25 +210,22 @@ def cav_study(
             line += (f"; bound: model {bx['model_energy_MJ']:.4f} MJ, replay "
                      f"{_fmt(bx['replay_vs_model_pct'], 2)} % off it, band vs pinned "
                      f"T_cab {_fmt(bx['band_vs_pinned_pct'], 3)} %")
-        console.print(line, highlight=False)
+        say(line)
         for w in st.warnings:
-            err_console.print(f"[bold yellow]warning:[/] {name}: {w}", highlight=False,
-                              soft_wrap=True)
-    console.print("E: compressor + blower over the cycle; E corr: + tail(end) - tail(start); "
-                  "savings vs A and gaps to the bound on E corr; PMV: ISO 7730, 1.2 met, "
-                  "0.5 clo, 0.2 m/s, radiant = mean of interior and shell; ms: median "
-                  "controller step", highlight=False)
+            warn(f"{name}: {w}")
+    say("E: compressor + blower over the cycle; E corr: + tail(end) - tail(start); savings "
+        "vs A and gaps to the bound on E corr; PMV: ISO 7730, 1.2 met, 0.5 clo, 0.2 m/s, "
+        "radiant = mean of interior and shell; ms: median controller step")
 
     fig_paths = {}
     if figures:
         from acid.report.cav import energy_figure, trajectory_figure
 
-        stem = "all" if cycle == "all" else cycle
         fig_paths["energy"] = str(save_figure(energy_figure(result),
                                               out / f"energy_{stem}.png"))
         for name, st in result.cycles.items():
             fig_paths[name] = str(save_figure(trajectory_figure(st), out / f"cav_{name}.png"))
-        console.print(f"figures written to {out}")
+        say(f"figures written to {out}")
     summary = {
         "command": "cav-study", "acid_version": __version__,
         "inputs": {"params": params,

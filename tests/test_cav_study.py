@@ -149,7 +149,7 @@ def test_cli_writes_json_and_figures(econ_file, tmp_path):
 @pytest.mark.parametrize("args, fragments", [
     (["--cycle", "marsrover"], ("--cycle", "marsrover", "udds", "stopgo")),
     (["--cycle", "nycc", "--econ-horizon", "900"], ("nycc", "shorter", "horizon (900 s")),
-    (["--t-low", "26", "--t-high", "22"], ("comfort band is empty",)),
+    (["--t-low", "26", "--t-high", "22"], ("--t-low", "comfort band is empty")),
     (["--rh-max", "150"], ("--rh-max",)),
 ])
 def test_cli_bad_input_is_one_line(econ_file, args, fragments):

@@ -270,13 +270,14 @@ def model_family(spec) -> str:
     return MODEL_NAME if isinstance(d, dict) and d.get("model") == MODEL_NAME else "paper"
 
 
-def load_any_params(spec):
-    """The parameters of either family: ``ModelParams`` (paper) or ``EconParams``."""
+def load_any_params(spec, allow_unstable: bool = False):
+    """The parameters of either family: ``ModelParams`` (paper; unstable ones refused unless
+    ``allow_unstable``, as ``acid.params.load_params``) or ``EconParams``."""
     from acid.params import load_params
 
     if model_family(spec) == MODEL_NAME:
         return EconParams.from_json(spec)
-    return load_params(spec)
+    return load_params(spec, allow_unstable=allow_unstable)
 
 
 def as_any_params(obj):
