@@ -29,7 +29,8 @@ import warnings
 
 import numpy as np
 
-from acid.mpc.cav_study import _MODEL_STATES, default_plant_factory, identify_econ
+from acid.econ.model import STATES
+from acid.mpc.cav_study import default_plant_factory, identify_econ
 from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.params import paper
@@ -50,7 +51,7 @@ def record(econ, cycle: str):
     steps = []
     for k in range(v.size):
         m = plant.measure()
-        x = np.array([m[n] for n in _MODEL_STATES])
+        x = np.array([m[n] for n in STATES])
         vp = stage_means(v, k, mpc.config.intervals, 5.0)
         Ta = np.full(mpc.N, m["T_amb"])
         u = mpc.make_step(x, vp, Ta)

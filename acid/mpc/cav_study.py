@@ -52,6 +52,7 @@ import numpy as np
 
 from acid._io import json_safe
 from acid.comfort import ComfortConfig, ComfortStats, comfort_stats
+from acid.econ import model as econ_model
 from acid.econ.params import MAP_INPUTS, EconParams
 from acid.errors import ConfigError, ExtrapolationWarning
 from acid.mpc.bound import BoundConfig, BoundPlan, perfect_information_bound
@@ -67,8 +68,8 @@ LABELS = {"A": "A: paper NMPC, constant bound", "B": "B: paper NMPC, ICM bound",
           "bound": "bound: perfect information, replayed"}
 #: The paper's stop-and-go scenario as a study cycle (its 80 s period repeated).
 STOPGO = "stopgo"
-#: model states the bound's plan sets in the plant before its replay
-_MODEL_STATES = ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")
+#: the econ model's states, read from the plant by D and E and set by the bound's replay
+_MODEL_STATES = econ_model.STATES
 
 PlantFactory = Callable[[], object]
 Progress = Callable[[int], None]

@@ -42,6 +42,7 @@ inputs. Temperatures in K, powers in W, energies in J.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -152,8 +153,7 @@ class EconNMPCConfig:
         return np.array([self.W_bl_max, self.T_evap_set_min])
 
     def replace(self, **changes) -> EconNMPCConfig:
-        import dataclasses
-
+        """A copy with some options changed (validated again)."""
         return dataclasses.replace(self, **changes)
 
     def to_json_dict(self) -> dict:
