@@ -101,7 +101,8 @@ def cav_study(
 
     Reports energy (compressor + blower), the tail-corrected energy, savings against A, each
     controller's gap to the bound, mean/max T_cab, PMV, humidity, and preview's share (E minus
-    D); writes energy_<cycles>.png and cav_<cycle>.png (trajectories of A, E, the bound).
+    D); writes energy_CYCLE.png (energy_all.png for --cycle all) and cav_CYCLE.png
+    (trajectories of A, E and the bound) to --out.
     """
     from acid.econ.params import EconParams
     from acid.mpc.cav_study import (
