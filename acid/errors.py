@@ -26,3 +26,7 @@ class IdentifiabilityWarning(UserWarning):
 
 class SolverWarning(UserWarning):
     """A numerical solver failed or returned an inaccurate solution; a fallback was used."""
+
+
+class CodegenWarning(UserWarning):
+    """Generated C could not be compiled or loaded; the CasADi solver is used instead."""
