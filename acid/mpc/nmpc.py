@@ -107,6 +107,8 @@ from acid.mpc.estimator import (
     EstimatorConfig,
     OffsetFreeEstimator,
 )
+
+__all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog"]
 from acid.mpc.layout import BlockVector
 from acid.mpc.solver import NLPSolver
 from acid.params import ModelParams
@@ -165,8 +167,10 @@ class NMPCConfig:
         ``"inlet"`` (added to eq. 3's inlet air and to eq. 2); see :func:`predict`.
     estimator : tuning of that Kalman filter.
     backoff : tighten the cabin bounds in ``make_step`` by the recent one-step prediction
-        errors of T_cab (:class:`acid.mpc.estimator.ErrorBackoff`; None: off). With the
-        default ``sigma0 = 0`` nothing changes while the model predicts exactly.
+        errors of T_cab (:class:`acid.mpc.estimator.ErrorBackoff`); None (default): off, the
+        paper's NMPC. Scenario (b) of ``acid mpc-check`` turns it on. It assumes the errors
+        are the model's: with the compressor shut off open loop (the CAV case) they are
+        not, and the margin would grow for nothing.
     """
 
     N: int = 6
@@ -190,7 +194,7 @@ class NMPCConfig:
     offset_free: bool = False
     disturbance: str = "state"
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
-    backoff: BackoffConfig | None = field(default_factory=BackoffConfig)
+    backoff: BackoffConfig | None = None
 
     def __post_init__(self):
         if self.first_move not in ("free", "pinned"):

@@ -74,7 +74,11 @@ class NLPResult:
 
 
 class _Worker:
-    """A daemon thread that runs one job at a time; the caller waits with a timeout."""
+    """A daemon thread that runs one job at a time; the caller waits with a timeout.
+
+    The thread holds no reference to a job between jobs, so the solver that owns it can be
+    garbage-collected (and stop it) as usual.
+    """
 
     def __init__(self, name: str):
         self._go = threading.Lock()
@@ -83,19 +87,21 @@ class _Worker:
         self._done.acquire()
         self._job = None
         self._out = None
+        self._stopped = False
         self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
         self.thread.start()
 
     def _loop(self):
         while True:
             self._go.acquire()
-            job = self._job
-            if job is None:
+            if self._stopped:
                 return
+            job, self._job = self._job, None
             try:
                 self._out = (job(), None)
             except BaseException as exc:  # handed to the caller
                 self._out = (None, exc)
+            del job
             self._done.release()
 
     def run(self, job, timeout_s: float):
@@ -109,7 +115,8 @@ class _Worker:
         return True, out, exc
 
     def stop(self):
-        self._job = None
+        """Let the thread end (after the job it may still be running)."""
+        self._stopped = True
         self._go.release()
 
 
@@ -237,7 +244,8 @@ class NLPSolver:
     def _timed_out(self, dt: float) -> NLPResult:
         """Abandon the running solve (its thread and memory stay busy) and rebuild."""
         self.timeouts += 1
-        self._worker = None  # the stuck thread is a daemon: it dies with the process
+        self._worker.stop()  # the thread ends if the solve ever returns; it is a daemon
+        self._worker = None
         if self._compiled is not None:
             self._compiled.abandon()
         self._build()
