@@ -108,7 +108,7 @@ from acid.mpc.estimator import (
     OffsetFreeEstimator,
 )
 
-__all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog"]
+__all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog", "predict"]
 from acid.mpc.layout import BlockVector
 from acid.mpc.solver import NLPSolver
 from acid.params import ModelParams
