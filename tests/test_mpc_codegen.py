@@ -119,3 +119,21 @@ def test_concurrent_first_uses_build_one_entry_and_both_load(tmp_path):
     assert results[0] == results[1]
     assert len(list(tmp_path.glob("*.so"))) == 1
     assert not list(tmp_path.glob("*.part"))
+
+
+def test_a_reused_memory_slot_starts_afresh():
+    """A released slot of the compiled solver is re-initialised for its next owner, so an
+    instance's answers do not depend on what ran before it in the process."""
+    x, ub = [C2K(26.3), C2K(7.0)], np.r_[C2K(25.5), np.full(6, C2K(25.2))]
+
+    def first_move():
+        return NMPC(paper()).solve(x, ub, C2K(30.0), C2K(33.0)).u
+
+    before = first_move()
+    other = NMPC(paper(), NMPCConfig(first_move="pinned"))  # another active-set structure
+    other.solve([C2K(27.0), C2K(6.0)], C2K(25.0), C2K(30.0), C2K(33.0), u_prev=[0.1, C2K(5.0)])
+    del other
+    import gc
+
+    gc.collect()
+    np.testing.assert_array_equal(first_move(), before)

@@ -129,14 +129,37 @@ def link_flags(source: str) -> list[str]:
 
 
 def generate_source(fn: ca.Function, name: str | None = None) -> str:
-    """The C source of ``fn`` (and everything it calls), as one translation unit."""
+    """The C source of ``fn`` (and everything it calls), as one translation unit, with
+    :func:`reset_function` appended when the function keeps memory."""
     cg = ca.CodeGenerator(name or fn.name(), {"with_header": False})
     try:
         cg.add(fn)
-        return cg.dump()
+        source = cg.dump()
     except RuntimeError as exc:
         first = str(exc).strip().splitlines()[-1][:160] if str(exc).strip() else ""
         raise CodegenError(f"CasADi cannot generate C for {fn.name()!r} ({first})") from None
+    return source + reset_function(source, fn.name())
+
+
+def reset_function(source: str, name: str) -> str:
+    """C of ``<name>_acid_reset(int mem)``: free and re-initialise one memory slot.
+
+    A stateful generated function (an NLP solver keeps its solver object per slot) would
+    otherwise hand a released slot, with what the last owner left in it, to the next
+    instance: results would depend on what ran before in the process. With the reset
+    every instance starts as a new CasADi function does. Empty when ``name`` keeps no
+    memory (or the generated code does not have the expected shape).
+    """
+    m = re.search(r"CASADI_SYMBOL_EXPORT int " + re.escape(name)
+                  + r"\(const casadi_real\*\* arg[^{]*\{\s*return (\w+)\(", source)
+    if not m:
+        return ""
+    inner = m.group(1)
+    if f"void {inner}_free_mem(int mem)" not in source or f"int {inner}_init_mem(int mem)" \
+            not in source:
+        return ""
+    return (f"\nCASADI_SYMBOL_EXPORT int {name}_acid_reset(int mem) {{\n"
+            f"  {inner}_free_mem(mem);\n  return {inner}_init_mem(mem);\n}}\n")
 
 
 def build_key(source: str, cc: list[str], flags: list[str]) -> str:
@@ -305,6 +328,10 @@ class CompiledFunction:
             self._decref()
             raise CodegenError(f"{self.library.name}: no free memory slot (too many "
                                "instances of one compiled function in this process)")
+        reset = getattr(self._lib, f"{self.name}_acid_reset", None)
+        if reset is not None:  # a reused slot starts afresh (see reset_function)
+            reset.restype = ctypes.c_int
+            reset(ctypes.c_int(self._mem))
         self._open = True
 
     def call(self) -> int:
