@@ -17,6 +17,7 @@ from acid.mpc.scenarios import PLANT_BACKOFF
 from acid.mpc.scenarios import mpc_check as run_check
 from acid.params import load_params
 from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -53,7 +54,7 @@ def mpc_check(
         help="Estimate disturbances on eqs. 1-2 with a Kalman filter and predict with them."),
     backoff: bool = typer.Option(
         True, "--backoff/--no-backoff",
-        help="On the high-fidelity plant (scenario b), tighten the cabin bounds by 2 standard "
+        help="On the high-fidelity plant (scenario b), tighten the cabin bounds by 3 standard "
              "deviations of the NMPC's recent one-step T_cab prediction errors; "
              "--no-backoff: the paper's NMPC."),
     backoff_prior: float = typer.Option(
@@ -63,8 +64,10 @@ def mpc_check(
     skip_plant: bool = typer.Option(False, "--skip-plant",
                                     help="Only scenario (a), on the control-oriented model."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figures."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
-    """Run the NMPC scenarios: (a) on the model, (b) on the high-fidelity plant, (c) CAV case.
+    """Run the NMPC scenarios: (a) on the model, (b) on the plant, (c) CAV case.
 
     Reports A/C energy (MJ), constraint violations (K), whole-step solve time (ms) and
     fallbacks per scenario, with PASS/FAIL against the stated criteria; exits 1 on any FAIL.
@@ -75,15 +78,20 @@ def mpc_check(
         raise ConfigError(f"--solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
     if not (math.isfinite(backoff_prior) and backoff_prior >= 0):
         raise ConfigError(f"--backoff-prior must be a number >= 0 (K), got {backoff_prior}")
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     p = load_params(params)
     config = NMPCConfig(first_move=first_move, solver=solver, compiled="auto" if compiled
                         else False, offset_free=offset_free)
     plant_backoff = dataclasses.replace(PLANT_BACKOFF, sigma0=backoff_prior) if backoff else None
+    factory = None
+    if choice.kind == "fmu" and not skip_plant:
+        choice.check()
+        factory = choice.factory()
 
     t0 = time.perf_counter()
     with progress_bar("mpc-check", total=1) as update:
-        result = run_check(p, config, plant=not skip_plant, plant_backoff=plant_backoff,
-                           progress=update)
+        result = run_check(p, config, plant=not skip_plant, progress=update,
+                           plant_factory=factory, plant_backoff=plant_backoff)
     elapsed = time.perf_counter() - t0
 
     tm = result.timing
@@ -151,7 +159,8 @@ def mpc_check(
         "command": "mpc-check",
         "acid_version": __version__,
         "inputs": {"params": params,
-                   "params_sha256": None if params == "paper" else file_sha256(params)},
+                   "params_sha256": None if params == "paper" else file_sha256(params),
+                   **choice.to_json_dict()},
         "elapsed_s": elapsed,
         "figures": fig_paths,
         **result.to_json_dict(),

@@ -111,7 +111,7 @@ from acid.mpc.estimator import (
 __all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog", "predict"]
 from acid.mpc.layout import BlockVector
 from acid.mpc.solver import NLPSolver
-from acid.params import ModelParams
+from acid.params import ModelParams, as_params
 from acid.units import C2K
 
 #: x = [T_cab, T_evap], u = [W_bl, T_evap_set], slacks s of the upper and lower bounds of
@@ -406,12 +406,13 @@ class NMPC:
     """
 
     def __init__(self, params: ModelParams, config: NMPCConfig | None = None):
-        self.params = params
+        self.params = as_params(params)  # ModelParams or a FitResult
         self.config = config or NMPCConfig()
         self.N = int(self.config.N)
-        self._theta = theta_vector(params)
+        self._theta = theta_vector(self.params)
         self._build()
-        self.estimator = (OffsetFreeEstimator(model_function(params, self.config.disturbance),
+        self.estimator = (OffsetFreeEstimator(model_function(self.params,
+                                                             self.config.disturbance),
                                               config=self.config.estimator,
                                               compiled=self.config.compiled)
                           if self.config.offset_free else None)
