@@ -198,12 +198,8 @@ class NLPSolver:
             pass
 
     # ------------------------------------------------------------------ solve
-    def _solve_compiled(self, args: list) -> tuple:
-        cf = self._compiled
-        for buf, a in zip(cf.inputs, args, strict=True):
-            buf[:] = a
-        flag = cf.call()
-        out = cf.outputs
+    def _unpack_compiled(self, flag: int) -> tuple:
+        out = self._compiled.outputs
         return (out[0].copy(), float(out[1][0]), out[3].copy(), out[4].copy(),
                 flag == 0, "Solve_Succeeded" if flag == 0 else f"failed (code {flag})", -1)
 
@@ -222,9 +218,15 @@ class NLPSolver:
         """
         args = [x0, p, lbx, ubx, lbg, ubg,
                 0.0 if lam_x0 is None else lam_x0, 0.0 if lam_g0 is None else lam_g0]
-        job = ((lambda: self._solve_compiled(args)) if self._compiled is not None
-               else (lambda: self._solve_casadi(args)))
         t0 = time.perf_counter()
+        cf = self._compiled
+        if cf is not None:  # the worker only makes the C call; buffers are filled here
+            for buf, a in zip(cf.inputs, args, strict=True):
+                buf[:] = a
+            job = cf.call
+        else:
+            def job():
+                return self._solve_casadi(args)
         if self.timeout_s is None:
             out = job()
         else:
@@ -235,6 +237,8 @@ class NLPSolver:
                 return self._timed_out(time.perf_counter() - t0)
             if exc is not None:
                 raise exc
+        if cf is not None:
+            out = self._unpack_compiled(out)
         dt = time.perf_counter() - t0
         x, f, lam_x, lam_g, success, status, iters = out
         success = success and bool(np.all(np.isfinite(x)))
