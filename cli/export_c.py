@@ -13,7 +13,19 @@ from acid.mpc.codegen import CodegenError, find_compiler
 from acid.mpc.export import check_export, export_c
 from acid.mpc.nmpc import NMPCConfig
 from acid.params import load_params
-from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._common import (
+    check_paths,
+    handle_errors,
+    params_input,
+    print_table,
+    progress_bar,
+    say,
+    write_summary,
+)
+
+#: the files of the package (written into --out)
+FILES = ("acid_nmpc_solver.c", "acid_nmpc.h", "acid_nmpc.c", "main.c", "Makefile",
+         "problem.json")
 
 
 @handle_errors
@@ -29,6 +41,9 @@ def export_c_cmd(
              "NMPC on --check-states seeded states (skipped without a compiler)."),
     check_states: int = typer.Option(20, "--check-states", help="States for --check."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    allow_unstable: bool = typer.Option(
+        False, "--allow-unstable",
+        help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
 ) -> None:
     """Export the paper's NMPC (eqs. 7-13) as plain C for an ECU.
 
@@ -37,11 +52,13 @@ def export_c_cmd(
     acid_nmpc_step(x, disturbances, bounds, u), with input checks and a fallback), an example
     main.c, a Makefile (`make` needs only cc) and problem.json.
     """
-    if horizon < 2:
-        raise ConfigError(f"--horizon must be at least 2, got {horizon}")
-    if check_states < 1:
-        raise ConfigError(f"--check-states must be at least 1, got {check_states}")
-    p = load_params(params)
+    check_paths(inputs={"--params": params_input(params)}, outputs={"--json": json_path},
+                folders={"--out": (out, FILES)})
+    if not 2 <= horizon <= 100:
+        raise ConfigError(f"--horizon must be between 2 and 100, got {horizon}")
+    if not 1 <= check_states <= 10_000:
+        raise ConfigError(f"--check-states must be between 1 and 10000, got {check_states}")
+    p = load_params(params, allow_unstable=allow_unstable)
     config = NMPCConfig(N=horizon)
     with progress_bar("export-c", total=2) as update:
         res = export_c(p, out, config)
@@ -49,23 +66,22 @@ def export_c_cmd(
         checked = None
         if check:
             if find_compiler() is None:
-                console.print("no C compiler found: the package is written but not built")
+                say("no C compiler found: the package is written but not built")
             else:
                 try:
                     checked = check_export(out, p, config, n_states=check_states)
                 except CodegenError as exc:
                     raise ConfigError(f"--out {out}: {exc}") from None
         update(2)
-    console.print(f"C package for parameters {p.name!r} (N = {horizon}) written to {out}/: "
-                  + ", ".join(res.files), highlight=False)
+    say(f"C package for parameters {p.name!r} (N = {horizon}) written to {out}/: "
+        + ", ".join(res.files))
     if checked is not None:
         print_table("exported first move vs acid's NMPC (relative difference, max)",
                     ["states", "C solves OK", "vs NMPC(solver='sqp')", "vs NMPC (fatrop)"],
                     [[checked["states"], checked["c_status_ok"],
                       f"{checked['max_rel_diff_vs_sqp']:.1e}",
                       f"{checked['max_rel_diff_vs_fatrop']:.1e}"]])
-    console.print(f"build it with: make -C {out}   (then: {out}/example < states.txt)",
-                  highlight=False)
+    say(f"build it with: make -C {out}   (then: {out}/example < states.txt)")
     write_summary(json_path, {
         "command": "export-c", "acid_version": __version__,
         "inputs": {"params": params,
