@@ -37,5 +37,9 @@ class ExtrapolationWarning(UserWarning):
     """An identified map is evaluated outside the range of the data it was identified on."""
 
 
+class CodegenWarning(UserWarning):
+    """Generated C could not be compiled or loaded; the CasADi solver is used instead."""
+
+
 class InSampleWarning(UserWarning):
     """A model is validated on (part of) the data it was fitted on."""

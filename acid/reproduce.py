@@ -56,12 +56,14 @@ class ReproduceOptions:
     cav_tail_s: float = 2400.0
     econ_duration_s: float = 6 * 3600.0
     econ_horizon_s: float = 120.0
+    econ_compiled: bool = True
 
     @classmethod
     def quick(cls) -> ReproduceOptions:
         return cls(sweep_duration_s=300.0, excite_duration_s=2 * 3600.0, starts=12,
                    horizon=120, timing_repeats=1, cav_cycles=("nycc",), cav_warmup_s=300.0,
-                   cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0)
+                   cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0,
+                   econ_compiled=False)
 
 
 # --------------------------------------------------------------------- stage bodies
@@ -204,7 +206,8 @@ def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     econ = EconParams.from_json(inputs["econ"] / "econ_params.json")
     n = int(round(config["econ_horizon_s"] / params.Ts))
     cfg = StudyConfig(warmup_s=config["warmup_s"], tail_s=config["tail_s"],
-                      econ=EconNMPCConfig(intervals=(params.Ts,) * n))
+                      econ=EconNMPCConfig(intervals=(params.Ts,) * n,
+                                          compiled="auto" if config["compiled"] else False))
     res = cav_study(params, list(config["cycles"]), cfg, econ=econ,
                     econ_summary={"source": "stage econ", "power_map": econ.power_map.quality},
                     progress=progress)
@@ -291,7 +294,8 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
                "horizon": opts.horizon}),
         Stage("cav", "where the energy is: " + ", ".join(c.upper() for c in opts.cav_cycles),
               stage_cav, {"cycles": list(opts.cav_cycles), "warmup_s": opts.cav_warmup_s,
-                          "tail_s": opts.cav_tail_s, "econ_horizon_s": opts.econ_horizon_s},
+                          "tail_s": opts.cav_tail_s, "econ_horizon_s": opts.econ_horizon_s,
+                          "compiled": opts.econ_compiled},
               depends=("fit", "econ")),
         Stage("plant_check", "plant credentials (acid plant-check)", stage_plant_check, {}),
     ]

@@ -70,6 +70,13 @@ def cav_study(
     econ_horizon: float = typer.Option(120.0, "--econ-horizon",
                                        help="Economic NMPC horizon, s (5 s steps)."),
     econ_solver: str = typer.Option("fatrop", "--econ-solver", help="'fatrop' or 'ipopt'."),
+    offset_free: bool = typer.Option(
+        False, "--offset-free/--no-offset-free",
+        help="D and E estimate model disturbances with an offset-free Kalman filter."),
+    compiled: bool = typer.Option(
+        True, "--compiled/--no-compiled",
+        help="Run the economic NMPC's solver as generated C (compiled once per horizon and "
+             "cached per user; needs a C compiler, else CasADi is used)."),
     T_low: float = typer.Option(22.0, "--t-low", help="Comfort band lower edge, degC."),
     T_high: float = typer.Option(26.0, "--t-high", help="Comfort band upper edge, degC."),
     rh_max: float | None = typer.Option(None, "--rh-max",
@@ -150,7 +157,9 @@ def cav_study(
             "applies to --plant hifi only")
     p = load_params(params, allow_unstable=allow_unstable)
     econ_cfg = EconNMPCConfig(intervals=_econ_intervals(econ_horizon, p.Ts),
-                              solver=econ_solver, T_cab_min=C2K(T_low), T_cab_max=C2K(T_high),
+                              solver=econ_solver, compiled="auto" if compiled else False,
+                              offset_free=offset_free,
+                              T_cab_min=C2K(T_low), T_cab_max=C2K(T_high),
                               RH_max=None if rh_max is None else rh_max / 100.0)
     config = StudyConfig(horizon=horizon, econ=econ_cfg, T_low=C2K(T_low), T_high=C2K(T_high),
                          T_amb=None if t_amb is None else C2K(t_amb), warmup_s=warmup,

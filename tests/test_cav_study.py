@@ -25,8 +25,8 @@ from acid.plant import make_plant
 from acid_cli.main import app
 
 runner = CliRunner()
-SHORT = StudyConfig(econ=EconNMPCConfig(intervals=(5.0,) * 6), warmup_s=1800.0, tail_s=120.0,
-                    stopgo_s=240.0)
+SHORT = StudyConfig(econ=EconNMPCConfig(intervals=(5.0,) * 6, compiled=False), warmup_s=1800.0,
+                    tail_s=120.0, stopgo_s=240.0)
 
 
 @pytest.fixture(scope="module")
@@ -137,6 +137,7 @@ def test_cli_writes_json_and_figures(econ_file, tmp_path):
     out, js = tmp_path / "figs", tmp_path / "cav.json"
     res = runner.invoke(app, ["cav-study", "--cycle", "nycc", "--econ-params", str(econ_file),
                               "--econ-horizon", "30", "--warmup", "60", "--tail", "60",
+                              "--no-compiled",
                               "--out", str(out), "--json", str(js)])
     assert res.exit_code == 0, res.output
     d = json.loads(js.read_text())
@@ -154,6 +155,6 @@ def test_cli_writes_json_and_figures(econ_file, tmp_path):
 ])
 def test_cli_bad_input_is_one_line(econ_file, args, fragments):
     res = runner.invoke(app, ["cav-study", "--econ-params", str(econ_file), "--no-figures",
-                              *args])
+                              "--no-compiled", *args])
     assert res.exit_code == 2
     assert_one_line_error(res, *fragments)

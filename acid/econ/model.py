@@ -42,13 +42,15 @@ Powers (means over an interval of length ``dt``)::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import casadi as ca
 import numpy as np
 
 from acid import model as paper_model
-from acid.econ.params import DT_SCALE, Q_SCALE, T_REF, TA_REF, V_SCALE, W_REF, PowerMap
-from acid.psychro import humidity_ratio
+from acid.econ.params import DT_SCALE, MAP_TERMS, Q_SCALE, T_REF, TA_REF, V_SCALE, W_REF, PowerMap
+from acid.econ.params import NAMES as PARAMETER_NAMES
+from acid.psychro import H_FG, P_ATM, humidity_ratio
 
 STATES = ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")
 STATE_UNITS = ("K", "K", "K", "K", "kg/kg")
@@ -343,3 +345,26 @@ def heat_content(x, v_veh, p):
     return (p.C_cab * T_cab + p.C_int * T_int + w_sh * p.C_sh * T_sh + p.C_ew * T_ev
             + p.M_cab * p.h_fg * w)
 
+
+
+#: Layout of :func:`parameter_vector`: the dynamic parameters, C_ew, the 15 power-map
+#: coefficients and eq. 5's beta (an NLP takes them as parameters, so that one built, and
+#: compiled, solver serves every identified parameter set of the same structure).
+N_THETA = len(PARAMETER_NAMES) + 1 + len(MAP_TERMS) + 3
+
+
+def parameter_vector(p) -> np.ndarray:
+    """All numbers of ``p`` (``EconParams``) as one vector (layout ``N_THETA``)."""
+    return np.concatenate([[p.values[n] for n in PARAMETER_NAMES], [p.C_ew],
+                           p.power_map.coef, p.beta]).astype(float)
+
+
+def symbolic_parameters(theta) -> SimpleNamespace:
+    """An object with ``EconParams``' attributes read from the vector ``theta`` (numbers or
+    CasADi symbols; inverse of :func:`parameter_vector`), for the model functions."""
+    t = ca.vertsplit(theta) if _is_sym(theta) else list(np.asarray(theta, dtype=float))
+    n = len(PARAMETER_NAMES)
+    return SimpleNamespace(**dict(zip(PARAMETER_NAMES, t[:n], strict=True)), C_ew=t[n],
+                           power_map=SimpleNamespace(coef=t[n + 1: n + 1 + len(MAP_TERMS)]),
+                           beta=tuple(t[n + 1 + len(MAP_TERMS):]), c_p=1008.0, h_fg=H_FG,
+                           p_atm=P_ATM)

@@ -28,13 +28,17 @@ content (:func:`acid.econ.model.heat_content`) and ``pi`` the marginal electric 
 joule of cooling, ``dP_comp/dQ_e`` of the power map at the current operating point (CasADi
 derivative), recomputed every update. ``terminal="none"`` drops it.
 
-**Solver.** CasADi ``nlpsol`` built once through :func:`_make_solver` (the one place an NLP
-becomes a solver, so a compiled solver can be dropped in), variables ordered stage by stage
-``[x_0, u_0, s_0, x_1, ...., x_N]`` and constraints per stage so that **fatrop** detects the
-optimal-control structure; IPOPT solves the identical NLP. Warm start from the previous
-solution shifted by one sample (interpolated on a non-uniform grid). The same fallback as
-:class:`acid.mpc.nmpc.NMPC`: on a failed solve, the rest of the last plan, else maximum
-cooling, counted in ``fallbacks`` with a :class:`acid.errors.SolverWarning`.
+**Solver.** The NLP is built once through :func:`_make_solver`, which hands it to
+:class:`acid.mpc.solver.NLPSolver` (issue 13): generated C compiled at first use and cached
+per user when a C compiler works (``compiled="auto"``; CasADi otherwise, the same algorithm),
+with a wall-clock cap per solve. The identified parameters are NLP *parameters*
+(:func:`acid.econ.model.parameter_vector`), so one compiled solver serves every parameter set
+of the same horizon and options. Variables are ordered stage by stage ``[x_0, u_0, s_0, x_1,
+...., x_N]`` and constraints per stage so that **fatrop** detects the optimal-control
+structure; IPOPT solves the identical NLP. Warm start from the previous solution shifted by
+one sample (interpolated on a non-uniform grid). The same fallback as
+:class:`acid.mpc.nmpc.NMPC`: on a failed or timed-out solve, the rest of the last plan, else
+maximum cooling, counted in ``fallbacks`` with a :class:`acid.errors.SolverWarning`.
 
 In closed loop it applies ``W_bl`` and ``T_evap_set`` of the first interval: the plant's own
 inputs. Temperatures in K, powers in W, energies in J.
@@ -53,6 +57,8 @@ import numpy as np
 from acid.econ import model
 from acid.econ.params import EconParams
 from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
+from acid.mpc.estimator import EstimatorConfig, OffsetFreeEstimator
+from acid.mpc.solver import NLPSolver
 from acid.psychro import humidity_ratio
 from acid.units import C2K
 
@@ -64,13 +70,22 @@ _U_OFF = np.array([0.1, 278.15])
 _U_SCL = np.array([0.01, 1.0])
 
 
-def _make_solver(nlp: dict, opts: dict, solver: str = "fatrop") -> ca.Function:
-    """The one place an NLP becomes a solver (CasADi ``nlpsol``).
+#: Kalman-filter tuning for the econ model's five states (K, K, K, K, kg/kg) and the
+#: disturbances on their derivatives (K/s, kg/kg/s): per sample of 5 s, a few mK of model
+#: noise, 0.05 K on the evaporator wall (on/off cycling), disturbances that may move by
+#: about 1 K per minute on the cabin air.
+ECON_ESTIMATOR = EstimatorConfig(sigma_x=(0.01, 0.01, 0.01, 0.05, 1e-5),
+                                 sigma_d=(2e-3, 2e-4, 2e-4, 1e-2, 2e-6),
+                                 sigma_y=(0.01, 0.01, 0.01, 0.05, 1e-5),
+                                 sigma_d0=(1e-2, 1e-3, 1e-3, 5e-2, 1e-5))
 
-    ``nlp`` has ``x``, ``f``, ``g``, ``p`` (SX); ``opts`` the solver's options. A compiled
-    (code-generated) solver with the same call signature can replace this function.
-    """
-    return ca.nlpsol("acid_econ_nmpc", solver, nlp, opts)
+
+def _make_solver(nlp: dict, opts: dict, config: EconNMPCConfig) -> NLPSolver:
+    """The one place the NLP becomes a solver: :class:`acid.mpc.solver.NLPSolver` (generated,
+    compiled C when ``config.compiled`` allows and a compiler works, else CasADi; a
+    wall-clock cap of ``config.max_solve_s`` per solve)."""
+    return NLPSolver("acid_econ_nmpc", nlp, config.solver, opts, compiled=config.compiled,
+                     timeout_s=config.max_solve_s)
 
 
 @dataclass(frozen=True)
@@ -91,6 +106,17 @@ class EconNMPCConfig:
     tol, max_iter : solver tolerance and iteration limit.
     cost_scale : objective factor inside the NLP (kJ instead of J).
     fallback_input : input when no plan is left (default maximum cooling).
+    compiled : run the solver as generated C (``acid.mpc.codegen``): ``"auto"`` when a C
+        compiler works (else CasADi, one notice), ``True``, or ``False`` (CasADi). The econ
+        parameters are NLP parameters, so one compiled solver (cached per user) serves every
+        identified parameter set of the same horizon and options; the first build compiles
+        for a minute or two.
+    max_solve_s : wall-clock cap per solve, s (None: none); a solve still running then is
+        abandoned and the fallback applies.
+    offset_free : estimate the additive disturbances ``dist`` in ``make_step`` with the
+        offset-free Kalman filter of :mod:`acid.mpc.estimator` (the model's RK4 interval map,
+        disturbances on the five state derivatives) and predict with them held.
+    estimator : its tuning (``ECON_ESTIMATOR``).
     """
 
     intervals: tuple[float, ...] = (5.0,) * 24
@@ -109,6 +135,10 @@ class EconNMPCConfig:
     max_iter: int = 200
     cost_scale: float = 1e-3
     fallback_input: tuple[float, float] | None = None
+    compiled: bool | str = "auto"
+    max_solve_s: float | None = 2.5
+    offset_free: bool = False
+    estimator: EstimatorConfig = ECON_ESTIMATOR
 
     def __post_init__(self):
         iv = tuple(float(t) for t in self.intervals)
@@ -126,6 +156,10 @@ class EconNMPCConfig:
             raise ConfigError(f"terminal must be 'heat' or 'none', got {self.terminal!r}")
         if self.solver not in ("fatrop", "ipopt"):
             raise ConfigError(f"solver must be 'fatrop' or 'ipopt', got {self.solver!r}")
+        if self.compiled not in ("auto", True, False):
+            raise ConfigError(f"compiled must be 'auto', True or False, got {self.compiled!r}")
+        if self.max_solve_s is not None and not self.max_solve_s > 0:
+            raise ConfigError(f"max_solve_s must be positive or None, got {self.max_solve_s}")
 
     @property
     def N(self) -> int:
@@ -163,7 +197,9 @@ class EconNMPCConfig:
                 "T_evap_set_bounds_K": [self.T_evap_set_min, self.T_evap_set_max],
                 "slack_penalty": self.slack_penalty, "preview": self.preview,
                 "terminal": self.terminal, "solver": self.solver, "tol": self.tol,
-                "max_iter": self.max_iter}
+                "max_iter": self.max_iter, "compiled": self.compiled,
+                "max_solve_s": self.max_solve_s, "offset_free": self.offset_free,
+                "estimator": self.estimator.to_json_dict() if self.offset_free else None}
 
 
 @dataclass(frozen=True)
@@ -208,9 +244,11 @@ class EconSolution:
 
 @dataclass
 class EconStepLog:
-    """What ``make_step`` did at each update: applied inputs, solutions, fallbacks, times."""
+    """What ``make_step`` did at each update: applied inputs, solutions, fallbacks, times,
+    and the disturbances the prediction used (the estimate with ``offset_free``)."""
 
     u: list = field(default_factory=list)
+    disturbance: list = field(default_factory=list)
     solutions: list = field(default_factory=list)
     fallback: list = field(default_factory=list)
     step_time_s: list = field(default_factory=list)
@@ -266,11 +304,21 @@ class EconNMPC:
         self._ns = ns
         nw = _NX + _NU + ns
         self._nw = nw
-        steps = {dt: model.casadi_step(p, dt) for dt in sorted(set(cfg.intervals))}
+        theta = ca.SX.sym("theta", model.N_THETA)   # the econ parameters: NLP parameters
+        ps = model.symbolic_parameters(theta)
+
+        def interval(x, u, vi, Tai, dt):
+            """x_next, Q_e, P_comp, P_bl of one interval (the model's own functions)."""
+            r = model.step(ca.vertsplit(x), ca.vertsplit(u), (vi, Tai), ps, dt,
+                           dist=ca.vertsplit(dist))
+            Q_e = model.refrigerant_heat(r.Q_coil, x[3], r.x[3], dt, ps)
+            P_c = model.compressor_power(Q_e, r.T_evap, vi, Tai, ps.power_map)
+            return ca.vertcat(*r.x), Q_e, P_c, model.blower_power(u[0], ps)
+
+        dist = ca.SX.sym("dist", _NX)
         x0 = ca.SX.sym("x0", _NX)
         v = ca.SX.sym("v", N)
         Ta = ca.SX.sym("T_amb", N)
-        dist = ca.SX.sym("dist", _NX)
         price = ca.SX.sym("price")
         xoff, xscl = ca.DM(_X_OFF), ca.DM(_X_SCL)
         uoff, uscl = ca.DM(_U_OFF), ca.DM(_U_SCL)
@@ -279,7 +327,7 @@ class EconNMPC:
         S = [ca.SX.sym(f"s_{i}", ns) for i in range(N)]
         X = [xoff + xscl * z for z in Z]
         U = [uoff + uscl * w for w in V]
-        w_list, g, eq, cost, energy = [], [], [], 0, 0
+        w_list, g, eq, cost, energy, q_list = [], [], [], 0, 0, []
         lbg, ubg = [], []
         for i in range(N):
             dt = cfg.intervals[i]
@@ -289,7 +337,8 @@ class EconNMPC:
                 eq += [True] * _NX
                 lbg += [0.0] * _NX
                 ubg += [0.0] * _NX
-            xn, _T_ain, Q_e, P_c, P_b = steps[dt](X[i], U[i], ca.vertcat(v[i], Ta[i]), dist)
+            xn, Q_e, P_c, P_b = interval(X[i], U[i], v[i], Ta[i], dt)
+            q_list.append(Q_e)
             g.append(Z[i + 1] - (xn - xoff) / xscl)
             eq += [True] * _NX
             lbg += [0.0] * _NX
@@ -299,7 +348,7 @@ class EconNMPC:
             lo = [-np.inf, 0.0, 0.0]     # band edges filled in per solve
             hi = [0.0, np.inf, np.inf]
             if cfg.RH_max is not None:
-                path.append(1e3 * (xn[4] - humidity_ratio(xn[0], cfg.RH_max, p.p_atm)) - s[3])
+                path.append(1e3 * (xn[4] - humidity_ratio(xn[0], cfg.RH_max, ps.p_atm)) - s[3])
                 lo.append(-np.inf)
                 hi.append(0.0)
             g.append(ca.vertcat(*path))
@@ -312,11 +361,12 @@ class EconNMPC:
         w_list.append(Z[N])
         if cfg.terminal == "heat":
             H = model.heat_content
-            cost += price * (H(ca.vertsplit(X[N]), v[N - 1], p)
-                             - H(ca.vertsplit(x0), v[N - 1], p))
+            cost += price * (H(ca.vertsplit(X[N]), v[N - 1], ps)
+                             - H(ca.vertsplit(x0), v[N - 1], ps))
         w = ca.vertcat(*w_list)
         g = ca.vertcat(*g)
-        par = ca.vertcat(x0, v, Ta, dist, price)
+        par = ca.vertcat(x0, v, Ta, dist, price, theta)
+        self._theta = model.parameter_vector(p)
         nlp = {"x": w, "f": cost * cfg.cost_scale, "g": g, "p": par}
         if cfg.solver == "fatrop":
             opts = {"structure_detection": "auto", "equality": eq, "print_time": False,
@@ -327,11 +377,8 @@ class EconNMPC:
             opts = {"print_time": False, "calc_lam_p": False,
                     "ipopt": {"print_level": 0, "sb": "yes", "tol": cfg.tol,
                               "max_iter": int(cfg.max_iter)}}
-        self._solver = _make_solver(nlp, opts, cfg.solver)
-        self._eval = ca.Function("econ_eval", [w, par],
-                                 [energy, ca.vertcat(*[steps[cfg.intervals[i]](
-                                     X[i], U[i], ca.vertcat(v[i], Ta[i]), dist)[2]
-                                     for i in range(N)])])
+        self._solver = _make_solver(nlp, opts, cfg)
+        self._eval = ca.Function("econ_eval", [w, par], [energy, ca.vertcat(*q_list)])
         self._n_w, self._n_g = int(w.shape[0]), int(g.shape[0])
         self._lbg0, self._ubg0 = np.array(lbg), np.array(ubg)
         ng_stage = int((self._n_g - _NX) / N)
@@ -352,7 +399,20 @@ class EconNMPC:
         q, te, vv, ta = (ca.SX.sym(n) for n in ("Q_e", "T_evap", "v", "T_amb"))
         P = model.compressor_power(q, te, vv, ta, p.power_map)
         self._dPdQ = ca.Function("dPdQ", [q, te, vv, ta], [ca.jacobian(P, q)])
-        self._step0 = steps[cfg.intervals[0]]
+        self._steps = {dt: model.casadi_step(p, dt) for dt in sorted(set(cfg.intervals))}
+        self._step0 = self._steps[cfg.intervals[0]]
+        self.estimator = None
+        if cfg.offset_free:  # f(x, u, v, d) -> x_next: one sample of the model, d = dist
+            xs, us, vs, ds = (ca.SX.sym(n, k) for n, k in (("x", _NX), ("u", _NU),
+                                                          ("v", model.ND), ("d", _NX)))
+            f = ca.Function("econ_f", [xs, us, vs, ds], [self._step0(xs, us, vs, ds)[0]])
+            self.estimator = OffsetFreeEstimator(f, config=cfg.estimator,
+                                                 compiled=cfg.compiled)
+
+    @property
+    def backend(self) -> str:
+        """``"compiled"`` (generated C) or ``"casadi"``."""
+        return self._solver.backend
 
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
@@ -364,6 +424,9 @@ class EconNMPC:
         self.fallbacks = 0
         self.log = EconStepLog()
         self.extrapolation: list[str] = []
+        self._applied = None  # (u, d) applied over the last period, for the estimator
+        if getattr(self, "estimator", None) is not None:
+            self.estimator.reset()
 
     def _scaled_guess(self, x0: np.ndarray, v, Ta, dist, u_guess) -> np.ndarray:
         """Shifted previous solution (interpolated in time), else a forward simulation."""
@@ -389,8 +452,7 @@ class EconNMPC:
         w[self._ix[0]] = (x - _X_OFF) / _X_SCL
         for i in range(N):
             w[self._iu[i]] = (u - _U_OFF) / _U_SCL
-            step = model.casadi_step(self.params, cfg.intervals[i]) if i and \
-                cfg.intervals[i] != cfg.intervals[0] else self._step0
+            step = self._steps[cfg.intervals[i]]
             x = np.asarray(step(x, u, [v[i], Ta[i]], dist)[0]).ravel()
             w[self._ix[i + 1]] = (x - _X_OFF) / _X_SCL
         return w
@@ -438,20 +500,19 @@ class EconNMPC:
         lbg, ubg = self._lbg0.copy(), self._ubg0.copy()
         ubg[self._ig_hi] = ub
         lbg[self._ig_lo] = lb
-        par = np.concatenate((x, v, Ta, dist, [pi]))
-        args = {"x0": self._scaled_guess(x, v, Ta, dist, u_guess), "lbx": self._lbx,
-                "ubx": self._ubx, "lbg": lbg, "ubg": ubg, "p": par}
+        par = np.concatenate((x, v, Ta, dist, [pi], self._theta))
+        lam_g0 = lam_x0 = None
         if self._lam_prev is not None and len(set(cfg.intervals)) == 1:
-            args["lam_g0"], args["lam_x0"] = self._lam_prev
-        t0 = time.perf_counter()
-        res = self._solver(**args)
-        dt = time.perf_counter() - t0
-        st = self._solver.stats()
-        w = np.asarray(res["x"]).ravel()
-        ok = bool(st.get("success", False)) and bool(np.all(np.isfinite(w)))
+            lam_g0, lam_x0 = self._lam_prev
+        res = self._solver.solve(self._scaled_guess(x, v, Ta, dist, u_guess), par,
+                                 self._lbx, self._ubx, lbg, ubg, lam_x0=lam_x0, lam_g0=lam_g0)
+        w = res.x
+        ok = res.success
         if ok:
             self._w_prev = w
-            self._lam_prev = (np.asarray(res["lam_g"]).ravel(), np.asarray(res["lam_x"]).ravel())
+            self._lam_prev = (res.lam_g, res.lam_x)
+        if not np.all(np.isfinite(w)):  # a timeout: report the initial guess's trajectory
+            w = self._scaled_guess(x, v, Ta, dist, u_guess)
         energy, Q_e = self._eval(w, par)
         X = w[self._ix] * _X_SCL + _X_OFF
         Uc = np.clip(w[self._iu] * _U_SCL + _U_OFF, cfg.u_min, cfg.u_max)
@@ -464,9 +525,9 @@ class EconNMPC:
         return EconSolution(
             u=Uc[0].copy(), x=X, t=self._t.copy(), W_bl=Uc[:, 0], T_evap_set=Uc[:, 1], Q_e=Q_e,
             P_comp=P_c, P_bl=P_bl, slack=np.maximum(w[self._is], 0.0), price=pi,
-            energy_J=float(energy), objective=float(res["f"]) / cfg.cost_scale,
-            status=str(st.get("return_status", "")), success=ok,
-            iterations=int(st.get("iter_count", -1)), solve_time_s=dt)
+            energy_J=float(energy), objective=float(res.f) / cfg.cost_scale,
+            status=res.status, success=ok, iterations=res.iterations,
+            solve_time_s=res.solve_time_s)
 
     def _warn_outside(self, **inputs) -> None:
         """One ExtrapolationWarning per power-map input (per reset) that leaves its data."""
@@ -484,7 +545,9 @@ class EconNMPC:
 
         Never raises for a solver failure: the fallback (rest of the last plan, else
         ``config.u_safe``) is applied and counted. With ``config.preview`` False, the
-        speed and ambient previews are replaced by their first values (held).
+        speed and ambient previews are replaced by their first values (held). With
+        ``config.offset_free`` the state and disturbances are estimated from ``x`` (and
+        ``dist``, if given, is ignored); the estimate is in ``log.disturbance``.
         """
         t0 = time.perf_counter()
         cfg = self.config
@@ -493,6 +556,9 @@ class EconNMPC:
         if not cfg.preview:
             v, Ta = v[:1], Ta[:1]
         sol = None
+        x = np.asarray(x, dtype=float).reshape(_NX)
+        if self.estimator is not None:
+            x, dist = self.estimator.update(x, *(self._applied or (None, None)))
         try:
             sol = self.solve(x, v, Ta, T_cab_max, T_cab_min, dist)
             ok = sol.success
@@ -514,6 +580,8 @@ class EconNMPC:
             else:
                 u = cfg.u_safe.copy()
         u = np.clip(u, cfg.u_min, cfg.u_max)
+        self._applied = (u, np.array([v[0], Ta[0]]))
+        self.log.disturbance.append(None if dist is None else np.asarray(dist, float).copy())
         self.log.u.append(u)
         self.log.solutions.append(sol)
         self.log.fallback.append(not ok)
