@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from acid._io import write_json
+from acid.claims import MODEL as _PAPER_MODEL
+from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import DataError
 
 UNITS_CONVENTION = (
@@ -41,9 +43,28 @@ PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
     ("beta3", "W", "blower power, constant (eq. 5)"),
 )
 
-PAPER_GAMMA = (0.2451, 0.0867, 1.2999, 1.0047, -0.5176, 0.4553, 34.9579)
-PAPER_TAU = (-0.1842, -1.3226, 154.4995)
-PAPER_BETA = (24156.0, -1974.2, 49.318)
+
+
+def _block(prefix: str) -> slice:
+    """The contiguous slice of ``PARAMETER_TABLE`` whose names start with ``prefix``."""
+    idx = [i for i, row in enumerate(PARAMETER_TABLE) if row[0].rstrip("0123456789") == prefix]
+    if idx != list(range(idx[0], idx[-1] + 1)):
+        raise AssertionError(f"parameters {prefix}* are not contiguous in PARAMETER_TABLE")
+    return slice(idx[0], idx[-1] + 1)
+
+
+#: Named slices of the 13-vector ``ModelParams.theta`` (``PARAMETER_TABLE`` order).
+GAMMA = _block("gamma")
+TAU = _block("tau")
+BETA = _block("beta")
+#: gamma and tau: the parameters of the dynamics, eqs. 1-3 (refined by output error).
+DYNAMICS = slice(GAMMA.start, TAU.stop)
+
+# The paper's values live in the claims registry (the one place the paper's numbers are
+# written); the names below are kept for the code and tests that import them.
+PAPER_GAMMA = _PAPER_MODEL.gamma
+PAPER_TAU = _PAPER_MODEL.tau
+PAPER_BETA = _PAPER_MODEL.beta
 
 
 @dataclass(frozen=True)
@@ -65,9 +86,9 @@ class ModelParams:
     gamma: tuple[float, ...]
     tau: tuple[float, ...]
     beta: tuple[float, ...] = PAPER_BETA
-    c_p: float = 1008.0
-    eta_cop: float = 3.5
-    Ts: float = 5.0
+    c_p: float = _TABLE_II.c_p
+    eta_cop: float = _TABLE_II.eta_cop
+    Ts: float = _TABLE_II.Ts
     name: str = "custom"
     provenance: dict = field(default_factory=dict, compare=False)
 
@@ -90,6 +111,14 @@ class ModelParams:
     def theta(self) -> np.ndarray:
         """All 13 parameters as one vector, in ``PARAMETER_TABLE`` order."""
         return np.array(self.gamma + self.tau + self.beta)
+
+    def with_theta(self, theta, **changes) -> ModelParams:
+        """A copy with gamma, tau, beta from a 13-vector (``PARAMETER_TABLE`` order)."""
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape != (len(PARAMETER_TABLE),):
+            raise DataError(f"theta needs {len(PARAMETER_TABLE)} numbers, got {theta.shape}")
+        return self.replace(gamma=tuple(theta[GAMMA]), tau=tuple(theta[TAU]),
+                            beta=tuple(theta[BETA]), **changes)
 
     def as_dict(self) -> dict[str, float]:
         """{name: value} for the 13 parameters."""
@@ -142,9 +171,9 @@ class ModelParams:
                 gamma=tuple(d["gamma"]),
                 tau=tuple(d["tau"]),
                 beta=tuple(d.get("beta", PAPER_BETA)),
-                c_p=d.get("c_p", 1008.0),
-                eta_cop=d.get("eta_cop", 3.5),
-                Ts=d.get("Ts", 5.0),
+                c_p=d.get("c_p", _TABLE_II.c_p),
+                eta_cop=d.get("eta_cop", _TABLE_II.eta_cop),
+                Ts=d.get("Ts", _TABLE_II.Ts),
                 name=str(d.get("name", Path(source).stem)),
                 provenance=d.get("provenance", {}) or {},
             )
@@ -172,11 +201,12 @@ def paper() -> ModelParams:
         gamma=PAPER_GAMMA,
         tau=PAPER_TAU,
         beta=PAPER_BETA,
-        c_p=1008.0,
-        eta_cop=3.5,
-        Ts=5.0,
+        c_p=_TABLE_II.c_p,
+        eta_cop=_TABLE_II.eta_cop,
+        Ts=_TABLE_II.Ts,
         name="paper",
-        provenance={"source": "Wang et al., ACC 2018, section II-B-2, eq. 5, Table II"},
+        provenance={"source": "Wang et al., ACC 2018, section II-B-2, eq. 5, Table II "
+                              "(acid.claims)"},
     )
 
 

@@ -25,6 +25,8 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from acid.claims import MODEL as _PAPER_MODEL
+from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import ConfigError
 
 REFRIGERANTS = ("R134a", "R1234yf")
@@ -66,7 +68,7 @@ class PlantConfig:
 
     # ---------------------------------------------------------------- cabin
     C_cab: float = _p(3877.0, "J/K", "cabin",
-                      "paper gamma3: c_p Ts / gamma3 = 1008*5/1.2999 (about 3.3 m^3 of air)")
+                      "paper gamma3: c_p Ts / gamma3 (about 3.3 m^3 of air)")
     hA_int: float = _p(190.0, "W/K", "cabin", "paper gamma1: gamma1 C_cab / Ts")
     hA_sh: float = _p(67.2, "W/K", "cabin", "paper gamma2: gamma2 C_cab / Ts")
     C_int: float = _p(65.0e3, "J/K", "cabin", "assumption: seats, dash, panels (PLANT.md 60-70)")
@@ -78,13 +80,13 @@ class PlantConfig:
                          "hA_ext_v V^0.8 (flat-plate turbulent exponent)")
 
     # ---------------------------------------------------------------- HVAC air side
-    c_p_air: float = _p(1008.0, "J/(kg K)", "hvac", "paper Table II")
+    c_p_air: float = _p(_TABLE_II.c_p, "J/(kg K)", "hvac", "paper Table II")
     h_fg: float = _p(2.45e6, "J/kg", "hvac", "latent heat of water near 20 degC")
     W_bl_min: float = _p(0.05, "kg/s", "hvac", "paper Table II")
     W_bl_max: float = _p(0.15, "kg/s", "hvac", "paper Table II")
-    beta1: float = _p(24156.0, "W s^2/kg^2", "hvac", "paper eq. 5")
-    beta2: float = _p(-1974.2, "W s/kg", "hvac", "paper eq. 5")
-    beta3: float = _p(49.318, "W", "hvac", "paper eq. 5")
+    beta1: float = _p(_PAPER_MODEL.beta[0], "W s^2/kg^2", "hvac", "paper eq. 5")
+    beta2: float = _p(_PAPER_MODEL.beta[1], "W s/kg", "hvac", "paper eq. 5")
+    beta3: float = _p(_PAPER_MODEL.beta[2], "W", "hvac", "paper eq. 5")
     k_rec: float = _p(0.1, "1/K", "hvac",
                       "assumption: recirculation r = sat(k_rec (T_amb - T_cab), 0, r_max); the "
                       "paper only says proportional and saturated")
