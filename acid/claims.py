@@ -211,7 +211,8 @@ class Measured:
 class Rule:
     """Base of the verdict rules: ``judge(paper, acid) -> (Verdict, reason)``."""
 
-    def judge(self, paper: float | None, acid: float) -> tuple[Verdict, str]:
+    def judge(self, paper: float | None, acid: float, unit: str = "") -> tuple[Verdict, str]:
+        """(verdict, reason) for acid's value against the paper's (both in ``unit``)."""
         raise NotImplementedError
 
     def describe(self, unit: str) -> str:
@@ -236,11 +237,11 @@ class Within(Rule):
             parts.append(f"{format_number(self.abs, '.3g')} {_unit(unit)}".rstrip())
         return "within " + " + ".join(parts or ["0"])
 
-    def judge(self, paper, acid):
+    def judge(self, paper, acid, unit=""):
         tol = self.abs + self.rel * abs(paper)
         diff = acid - paper
         rel = f" ({format_number(100 * diff / paper, '+.1f')} %)" if paper else ""
-        off = f"off by {format_number(diff, '+.3g')}{rel}"
+        off = f"off by {format_number(diff, '+.3g')}{_unit_suffix(unit)}{rel}"
         return (Verdict.AGREES if abs(diff) <= tol else Verdict.DISAGREES), off
 
 
@@ -257,11 +258,12 @@ class AtMost(Rule):
             f"{format_number(self.limit, '.3g')} {_unit(unit)}".rstrip()
         return f"at most {lim}" + (f" (acid's reading of {self.reading})" if self.reading else "")
 
-    def judge(self, paper, acid):
+    def judge(self, paper, acid, unit=""):
         limit = paper if self.limit is None else self.limit
         ok = acid <= limit
         return (Verdict.AGREES if ok else Verdict.DISAGREES), \
-            f"{'within' if ok else 'above'} the limit {format_number(limit, '.3g')}"
+            f"{'within' if ok else 'above'} the limit {format_number(limit, '.3g')}" \
+            f"{_unit_suffix(unit)}"
 
 
 @dataclass(frozen=True)
@@ -278,7 +280,7 @@ class SameSign(Rule):
     def describe(self, unit: str) -> str:
         return f"same sign as the paper ({self.meaning}); magnitude not judged"
 
-    def judge(self, paper, acid):
+    def judge(self, paper, acid, unit=""):
         same = abs(acid) > self.deadband and math.copysign(1.0, acid) == math.copysign(1.0, paper)
         return (Verdict.DIRECTION if same else Verdict.DISAGREES), \
             (self.meaning if same else f"not so: {self.meaning} fails")
@@ -293,7 +295,7 @@ class NotComparable(Rule):
     def describe(self, unit: str) -> str:
         return "not compared"
 
-    def judge(self, paper, acid):
+    def judge(self, paper, acid, unit=""):
         return Verdict.NOT_COMPARABLE, self.reason
 
 
@@ -304,7 +306,7 @@ class BeyondThePaper(Rule):
     def describe(self, unit: str) -> str:
         return "no paper value"
 
-    def judge(self, paper, acid):
+    def judge(self, paper, acid, unit=""):
         return Verdict.BEYOND, "not studied in the paper"
 
 
@@ -633,8 +635,9 @@ def _cycle_claims() -> list[Claim]:
                 BeyondThePaper()))
     out.append(Claim(
         "cycle.B.from_speed", "Beyond the paper",
-        "drive cycle: part of the ICM saving owed to speed, end state charged back (points)",
-        None, Measured(CavStudyStage, "saving_from_speed_pct.B.tail_corrected", spec=".2f"),
+        "drive cycle: part of the ICM saving owed to speed, end state charged back",
+        None, Measured(CavStudyStage, "saving_from_speed_pct.B.tail_corrected", spec=".2f",
+                       unit="points"),
         BeyondThePaper()))
     return out
 
@@ -749,7 +752,7 @@ def judge(claim: Claim, results: StudyResults) -> ClaimVerdict:
                                 f"this run has {r.path} = {format_number(have, 'g')}; the "
                                 f"paper's result is for {r.what}")
     paper = claim.paper.value if claim.paper is not None else None
-    verdict, reason = claim.rule.judge(paper, value)
+    verdict, reason = claim.rule.judge(paper, value, claim.unit)
     return ClaimVerdict(claim, verdict, value, est, reason)
 
 

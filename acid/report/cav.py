@@ -62,7 +62,7 @@ def cav_study_figure(result: CavStudyResult) -> Figure:
                 label="ICM bound (B)")
     for T in (cfg.T_low, cfg.T_high):
         axs[1].axhline(K2C(T), **_BAND)
-    axs[1].axhline(K2C(study.target_mean_K), color="grey", linewidth=0.8,
+    axs[1].axhline(K2C(study.target_mean_K), color="black", linewidth=0.7, linestyle=(0, (1, 3)),
                    label=f"mean T_cab target {K2C(study.target_mean_K):.2f} °C")
     axs[1].set_ylabel("cabin temperature $T_{cab}$ (°C)")
     axs[2].set_ylabel("P_comp + P_bl (W)")

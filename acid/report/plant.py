@@ -40,6 +40,7 @@ def sweep_figure(result: SweepResult) -> Figure:
         for s in range(S):
             y = result.traces[name][s]
             ax.plot(t, K2C(y) if is_temp else y, color=colors[s], lw=1.0,
+                    ls=_LINESTYLES[s % len(_LINESTYLES)],
                     label=f"{result.speeds_mps[s]:g} m/s")
         ax.set_ylabel(label)
         ax.set_xlabel("time (s)")
@@ -66,6 +67,12 @@ def sweep_figure(result: SweepResult) -> Figure:
                  f"E({result.speeds_mps[0]:g} m/s) = {result.ratio_last_first:.3f} "
                  f"(paper {TABLE_I.energy_MJ[-1] / TABLE_I.energy_MJ[0]:.2f})")
     return fig
+
+
+#: one dash pattern per speed as well as a colour: close curves (T_cab tracks the same
+#: set-point at every speed) stay distinguishable (checked by ``acid.report.audit``)
+_LINESTYLES = ("-", (0, (5, 1.5)), (0, (3, 1.5, 1, 1.5)), (0, (1, 1.2)), (0, (7, 2, 1, 2)),
+               (0, (2, 2)))
 
 
 def _colormap():
