@@ -866,19 +866,32 @@ def registry_rows(claims: Sequence[Claim] = CLAIMS) -> list[tuple[str, str, str,
     return rows
 
 
+def load_summary(path: str | Path) -> dict:
+    """A ``summary.json`` of ``acid reproduce`` (``DataError`` naming the file if it is not)."""
+    from acid.errors import DataError
+
+    path = Path(path)
+    try:
+        summary = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise DataError(f"{path}: file not found") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DataError(f"{path}: not a JSON file ({exc.__class__.__name__})") from None
+    if not isinstance(summary, dict) or not isinstance(summary.get("claims"), dict):
+        raise DataError(f"{path}: no 'claims' block (not a summary.json of acid reproduce)")
+    return summary
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m acid.claims [summary.json]``: the registry, or the headline table."""
+    from acid.errors import AcidError
+
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv:
-        path = Path(argv[0])
         try:
-            summary = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            print(f"error: {path}: {exc}", file=sys.stderr)
-            return 2
-        if "claims" not in summary:
-            print(f"error: {path}: no 'claims' block (not a summary.json of acid reproduce)",
-                  file=sys.stderr)
+            summary = load_summary(argv[0])
+        except AcidError as exc:
+            print(f"error: {exc}", file=sys.stderr)
             return 2
         sys.stdout.write(headline_markdown(summary))
         return 0
@@ -894,5 +907,5 @@ if __name__ == "__main__":
 __all__ = ["CLAIMS", "HEADLINE", "MODEL", "STUDIES", "TABLE_I", "TABLE_II", "AtMost",
            "BeyondThePaper", "Claim", "ClaimVerdict", "claim", "HeadlineRow", "Measured",
            "NotComparable", "PaperValue", "Requires", "Rule", "SameSign", "Verdict", "Within",
-           "contradictions", "counts", "evaluate", "headline_markdown", "judge",
+           "contradictions", "counts", "evaluate", "headline_markdown", "judge", "load_summary",
            "summary_claims", "validate_registry"]

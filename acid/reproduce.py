@@ -237,7 +237,10 @@ def summary_dict(outcomes: dict[str, StageOutcome], verdicts: list[ClaimVerdict]
 def write_outputs(out: Path, outcomes: dict[str, StageOutcome], opts: ReproduceOptions,
                   elapsed_s: float) -> tuple[Path, Path, list[ClaimVerdict]]:
     """Write ``report.html`` and ``summary.json`` into ``out``; the verdicts behind them."""
-    verdicts = evaluate(study_results(outcomes))
+    from acid.report.sections import sections_for
+
+    results = study_results(outcomes)
+    verdicts = evaluate(results)
     figs = report_figures(outcomes, [s.name for s in build_stages(opts)])
     meta = {"acid": __version__, "python": platform.python_version(),
             "machine": f"{platform.machine()}, {_cpu_count()} cores",
@@ -245,7 +248,7 @@ def write_outputs(out: Path, outcomes: dict[str, StageOutcome], opts: ReproduceO
             "mode": "quick" if opts == ReproduceOptions.quick() else "full"}
     html = write_report(out / "report.html", Report(
         title="acid: Model Predictive Climate Control of CAVs, reproduced",
-        verdicts=verdicts, figures=figs,
+        verdicts=verdicts, figures=figs, sections=sections_for(results),
         stages=[StageTime(o.title, o.seconds, o.cached) for o in outcomes.values()],
         meta=meta))
     summary = write_json(out / "summary.json",

@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 import pytest
+from _claims import fit, mpc, results, summary_of, sweep, validation
 
 import acid
 import acid.claims as claims_mod
@@ -30,82 +31,8 @@ from acid.claims import (
     validate_registry,
 )
 from acid.params import paper
-from acid.pipeline import StageOutcome
 from acid.report.numbers import format_number
-from acid.reproduce import ReproduceOptions, write_outputs
-from acid.stage_results import (
-    CavComparisonSummary,
-    CavStudyStage,
-    ChannelErrors,
-    ClosedLoopSummary,
-    Estimate,
-    FitStage,
-    MpcStage,
-    Savings,
-    StudyResults,
-    SweepStage,
-    TimingSummary,
-    ValidationStage,
-)
-
-
-# ------------------------------------------------------------- synthetic stage results
-def _sweep(duration_s=TABLE_I.duration_s, scale=1.01) -> SweepStage:
-    E = tuple(scale * e for e in TABLE_I.energy_MJ)
-    km = tuple(math.nan if v == 0 else e / (v * duration_s / 1000.0)
-               for v, e in zip(TABLE_I.speeds_mps, E, strict=True))
-    return SweepStage(speeds_mps=TABLE_I.speeds_mps, duration_s=duration_s, energy_MJ=E,
-                      energy_MJ_per_km=km, ratio_last_first=E[-1] / E[0],
-                      max_energy_step_MJ=max(b - a for a, b in zip(E, E[1:], strict=False)),
-                      efficiency_gain_pct=100 * (E[0] / E[-1] - 1))
-
-
-def _fit() -> FitStage:
-    names = [f"gamma{i}" for i in range(1, 8)] + [f"tau{i}" for i in range(1, 4)] + \
-        [f"beta{i}" for i in range(1, 4)]
-    theta = paper().theta * 0.9
-    return FitStage(method="oe", covariance="hac", gamma=tuple(theta[:7]),
-                    tau=tuple(theta[7:10]), beta=tuple(theta[10:]),
-                    parameters={n: Estimate(v, 0.01, v - 0.02, v + 0.02)
-                                for n, v in zip(names, theta, strict=True)},
-                    ls_gamma=tuple(theta[:7]), ls_tau=tuple(theta[7:10]),
-                    fit_percent_one_step={"T_cab": 98.0}, fit_percent_simulation={"T_cab": 90.0})
-
-
-def _validation(p90=1.0) -> ValidationStage:
-    ch = ChannelErrors(rmse=0.5, mean_abs=0.4, median_abs=0.3, p90_abs=p90, p95_abs=p90 + 0.1,
-                       max_abs=2.5, fit_percent=60.0)
-    return ValidationStage(starts=STUDIES.validation_starts, horizon=STUDIES.validation_horizon,
-                           horizon_s=1500.0, channels={c: ch for c in ("T_cab", "T_evap",
-                                                                       "T_ain")})
-
-
-def _mpc(saving=20.0, difference=0.008) -> MpcStage:
-    loop = ClosedLoopSummary(passed=True, criterion="", energy_MJ=0.1, max_violation_K=0.0,
-                             ride_error_K=0.0)
-    cav = CavComparisonSummary(window_s=STUDIES.cav_window_s, case1_energy_MJ=0.026,
-                               case2_energy_MJ=0.034, energy_difference_MJ=difference,
-                               saving_pct=saving, speed_blind_saving_pct=saving - 1.0,
-                               saving_from_speed_pct=1.0, T_cab_end_difference_K=2.0)
-    return MpcStage(passed=True, model=loop, plant=dataclasses.replace(loop,
-                                                                       max_violation_K=0.3),
-                    cav=loop, cav_paper=cav, cav_periodic=dataclasses.replace(cav, saving_pct=-0.3),
-                    cycles=4, timing=TimingSummary(median_ms=1.0, p95_ms=1.5, max_ms=3.0,
-                                                   steps=50, passed=True, criterion=""))
-
-
-def _cav() -> CavStudyStage:
-    s = Savings(raw=-1e-10, corrected=0.0, tail_corrected=-1e-12)   # signed zeros
-    return CavStudyStage(cycle="udds", savings_pct={"B": Savings(5.0, 2.0, 1.0), "C": s},
-                         saving_from_speed_pct={"B": Savings(1.0, 1.0, 1.0), "C": s},
-                         eta_cop0=4.9, eta_cop1_per_mps=0.03, eta_cop_r2=0.5)
-
-
-def _results(**over) -> StudyResults:
-    stages = {"sweep": _sweep(), "fit": _fit(), "validate": _validation(), "mpc": _mpc(),
-              "cav": _cav()}
-    stages.update(over)
-    return StudyResults({k: v for k, v in stages.items() if v is not None})
+from acid.stage_results import FitStage, MpcStage, StudyResults, SweepStage
 
 
 def _by_id(verdicts):
@@ -151,7 +78,7 @@ def test_parameter_preset_reads_the_registry():
 
 # ------------------------------------------------------------------------ the verdicts
 def test_verdicts_follow_the_rules_of_the_registry():
-    v = _by_id(evaluate(_results()))
+    v = _by_id(evaluate(results()))
     assert v["table1.energy.0mps"].verdict is Verdict.AGREES          # 1 % off, rule 5 %
     assert v["table1.falls_with_speed"].verdict is Verdict.DIRECTION
     assert v["identification.gamma1"].verdict is Verdict.NOT_COMPARABLE
@@ -165,7 +92,7 @@ def test_verdicts_follow_the_rules_of_the_registry():
 
 
 def test_comparability_conditions_and_missing_stages():
-    v = _by_id(evaluate(_results(sweep=_sweep(duration_s=300.0), validate=_validation(5.0),
+    v = _by_id(evaluate(results(sweep=sweep(duration_s=300.0), validate=validation(5.0),
                                  mpc=None)))
     e0 = v["table1.energy.0mps"]
     assert e0.verdict is Verdict.NOT_COMPARABLE and "duration_s = 300" in e0.reason
@@ -177,7 +104,7 @@ def test_comparability_conditions_and_missing_stages():
 
 def test_energy_row_and_saving_row_cannot_contradict_each_other():
     """A saving that agrees while Case 1 uses *more* energy is flagged, not printed."""
-    v = evaluate(_results(mpc=_mpc(saving=9.0, difference=-0.001)))
+    v = evaluate(results(mpc=mpc(saving=9.0, difference=-0.001)))
     assert _by_id(v)["cav.saving"].verdict is Verdict.AGREES
     assert contradictions(v) == ["cav.saving agrees but cav.case1_below_case2, which it "
                                  "implies, disagrees"]
@@ -194,7 +121,7 @@ def test_rules(rule, acid, verdict):
 
 
 def test_estimates_carry_their_intervals_and_signed_zeros_print_as_zero():
-    v = _by_id(evaluate(_results()))
+    v = _by_id(evaluate(results()))
     g1 = v["identification.gamma1"]
     assert "±" in g1.acid_text and "[" in g1.acid_text
     assert v["cycle.C.raw"].acid_text == "0.00 %"
@@ -203,23 +130,9 @@ def test_estimates_carry_their_intervals_and_signed_zeros_print_as_zero():
 
 
 # ------------------------------------------------ summary.json and the headline table
-def _outcomes(tmp_path, results: StudyResults) -> dict[str, StageOutcome]:
-    out = {}
-    for name, r in results.by_stage.items():
-        d = tmp_path / "stages" / name
-        d.mkdir(parents=True)
-        out[name] = StageOutcome(name, name, d, r.to_json_dict(), 0.1, False, "k")
-    return out
-
-
-def _summary(tmp_path, results: StudyResults) -> dict:
-    _, path, _ = write_outputs(tmp_path, _outcomes(tmp_path, results), ReproduceOptions(), 1.0)
-    return json.loads(path.read_text())
-
-
 def test_summary_verdicts_are_derived_from_the_registry(tmp_path, monkeypatch):
     """Changing one tolerance in the registry changes that verdict in summary.json."""
-    before = _summary(tmp_path / "a", _results())
+    before = summary_of(tmp_path / "a", results())
     items = {i["id"]: i for i in before["claims"]["items"]}
     assert items["table1.energy.0mps"]["verdict"] == "agrees"
     assert items["table1.energy.0mps"]["rule_text"] == "within 5 %"
@@ -228,24 +141,33 @@ def test_summary_verdicts_are_derived_from_the_registry(tmp_path, monkeypatch):
     tight = dataclasses.replace(tight, rule=Within(rel=0.001))
     monkeypatch.setattr(claims_mod, "CLAIMS", tuple(tight if c.id == tight.id else c
                                                     for c in CLAIMS))
-    after = _summary(tmp_path / "b", _results())
+    after = summary_of(tmp_path / "b", results())
     items = {i["id"]: i for i in after["claims"]["items"]}
     assert items["table1.energy.0mps"]["verdict"] == "disagrees"
     assert items["table1.energy.0mps"]["rule_text"] == "within 0.1 %"
     assert after["claims"]["counts"]["disagrees"] == before["claims"]["counts"]["disagrees"] + 1
 
 
-def test_summary_round_trips_the_typed_stage_results(tmp_path):
-    s = _summary(tmp_path, _results())
+def test_summary_round_trips_the_typed_stageresults(tmp_path):
+    s = summary_of(tmp_path, results())
     back = StudyResults.from_summaries({k: v["summary"] for k, v in s["stages"].items()})
-    assert back.get(SweepStage) == _sweep() and back.get(FitStage) == _fit()
-    assert back.get(MpcStage) == _mpc()
+    assert back.get(SweepStage) == sweep() and back.get(FitStage) == fit()
+    assert back.get(MpcStage) == mpc()
     re_judged = [v.to_json_dict()["verdict"] for v in evaluate(back)]
     assert re_judged == [i["verdict"] for i in s["claims"]["items"]]
 
 
+def test_report_shows_sections_of_the_stages_that_ran(tmp_path):
+    summary_of(tmp_path, results())
+    html = (tmp_path / "report.html").read_text()
+    assert "Beyond the paper: speed preview on UDDS" in html and "4.900 + 0.0300 v" in html
+    assert 'data-claim="cav.saving"' in html and "-0.00" not in html
+    summary_of(tmp_path / "b", results(cav=None))
+    assert "speed preview on" not in (tmp_path / "b" / "report.html").read_text()
+
+
 def test_headline_markdown_is_rendered_from_summary_json(tmp_path):
-    md = headline_markdown(_summary(tmp_path, _results()))
+    md = headline_markdown(summary_of(tmp_path, results()))
     lines = md.splitlines()
     assert lines[0] == "| result | paper | acid | verdict |"
     row = next(line for line in lines if line.startswith("| Table I: A/C energy"))
@@ -255,7 +177,7 @@ def test_headline_markdown_is_rendered_from_summary_json(tmp_path):
 
 
 def test_claims_command_prints_the_headline_table(tmp_path, capsys):
-    s = _summary(tmp_path, _results())
+    s = summary_of(tmp_path, results())
     (tmp_path / "s.json").write_text(json.dumps(s))
     assert claims_mod.main([str(tmp_path / "s.json")]) == 0
     assert capsys.readouterr().out == headline_markdown(s)
