@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from acid.claims import contradictions, counts
+from acid.claims import contradictions, counts, headline_rows, load_summary
 from acid.errors import ConfigError
 from acid.pipeline import run_pipeline
 from acid.reproduce import ReproduceOptions, build_stages, write_outputs
@@ -64,10 +64,10 @@ def reproduce(
     print_table("Stages", ["stage", "time (s)", "cache"],
                 [[o.title, f"{o.seconds:.1f}", "reused" if o.cached else "computed"]
                  for o in outcomes.values()])
-    print_table("Paper vs acid (verdicts from the claims registry, acid.claims)",
-                ["section", "quantity", "paper", "acid", "verdict"],
-                [[v.claim.section, v.claim.quantity, v.paper_text, v.acid_text,
-                  v.verdict.value] for v in verdicts])
+    summary = load_summary(summary_path)
+    print_table("Paper vs acid (headline; every claim in the report)",
+                ["_result", "_paper", "_acid", "_verdict"],
+                [[r[0].replace("*", ""), *r[1:]] for r in headline_rows(summary)])
     n = counts(verdicts)
     console.print(", ".join(f"{c} {k}" for k, c in n.items()), highlight=False)
     bad = contradictions(verdicts)
@@ -75,4 +75,4 @@ def reproduce(
         err_console.print("contradictory verdicts: " + "; ".join(bad), highlight=False)
     console.print(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
     if json_path is not None:
-        write_summary(json_path, __import__("json").loads(summary_path.read_text()))
+        write_summary(json_path, summary)
