@@ -19,6 +19,7 @@ and return ``YourResult(...).to_json_dict()`` from the stage function.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import types
 import typing
@@ -36,6 +37,7 @@ STAGE_RESULTS: dict[str, type[StageResult]] = {}
 
 
 # ---------------------------------------------------------------------------- codec
+@functools.cache
 def _hints(cls) -> dict[str, Any]:
     return typing.get_type_hints(cls)
 
