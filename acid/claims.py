@@ -215,7 +215,8 @@ class Rule:
         """(verdict, reason) for acid's value against the paper's (both in ``unit``)."""
         raise NotImplementedError
 
-    def describe(self, unit: str) -> str:
+    def describe(self, unit: str, paper: float | None = None) -> str:
+        """The rule in words (``paper``: the paper's value, when the rule refers to it)."""
         raise NotImplementedError
 
     def to_json_dict(self) -> dict:
@@ -229,7 +230,7 @@ class Within(Rule):
     rel: float = 0.0
     abs: float = 0.0
 
-    def describe(self, unit: str) -> str:
+    def describe(self, unit: str, paper: float | None = None) -> str:
         parts = []
         if self.rel:
             parts.append(f"{format_number(100 * self.rel, '.3g')} %")
@@ -253,10 +254,11 @@ class AtMost(Rule):
     limit: float | None = None
     reading: str = ""
 
-    def describe(self, unit: str) -> str:
-        lim = "the paper's value" if self.limit is None else \
-            f"{format_number(self.limit, '.3g')} {_unit(unit)}".rstrip()
-        return f"at most {lim}" + (f" (acid's reading of {self.reading})" if self.reading else "")
+    def describe(self, unit: str, paper: float | None = None) -> str:
+        limit = paper if self.limit is None else self.limit
+        lim = "the paper's value" if limit is None else \
+            f"{format_number(limit, '.3g')}{_unit_suffix(unit)}"
+        return f"at most {lim}" + (f", acid's reading of {self.reading}" if self.reading else "")
 
     def judge(self, paper, acid, unit=""):
         limit = paper if self.limit is None else self.limit
@@ -277,7 +279,7 @@ class SameSign(Rule):
     meaning: str
     deadband: float = 0.0
 
-    def describe(self, unit: str) -> str:
+    def describe(self, unit: str, paper: float | None = None) -> str:
         return f"same sign as the paper ({self.meaning}); magnitude not judged"
 
     def judge(self, paper, acid, unit=""):
@@ -292,7 +294,7 @@ class NotComparable(Rule):
 
     reason: str
 
-    def describe(self, unit: str) -> str:
+    def describe(self, unit: str, paper: float | None = None) -> str:
         return "not compared"
 
     def judge(self, paper, acid, unit=""):
@@ -303,7 +305,7 @@ class NotComparable(Rule):
 class BeyondThePaper(Rule):
     """acid's own measurement of something the paper did not study (no verdict)."""
 
-    def describe(self, unit: str) -> str:
+    def describe(self, unit: str, paper: float | None = None) -> str:
         return "no paper value"
 
     def judge(self, paper, acid, unit=""):
@@ -324,6 +326,11 @@ class Claim:
     implies: tuple[str, ...] = ()
 
     @property
+    def rule_text(self) -> str:
+        """The verdict rule in words, with the paper's value where the rule refers to it."""
+        return self.rule.describe(self.unit, self.paper.value if self.paper else None)
+
+    @property
     def unit(self) -> str:
         if self.paper is not None:
             return self.paper.unit
@@ -337,7 +344,7 @@ class Claim:
                 "measured_at": None if self.measured is None else self.measured.where(),
                 "requires": [dataclasses.asdict(r) for r in (self.measured.requires
                                                              if self.measured else ())],
-                "rule": self.rule.to_json_dict(), "rule_text": self.rule.describe(self.unit),
+                "rule": self.rule.to_json_dict(), "rule_text": self.rule_text,
                 "note": self.note, "implies": list(self.implies)}
 
 
@@ -862,7 +869,7 @@ def registry_rows(claims: Sequence[Claim] = CLAIMS) -> list[tuple[str, str, str,
             c.paper.display() + _unit_suffix(c.paper.unit) if c.paper.value is not None
             else c.paper.display())
         rows.append((c.id, paper, c.measured.where() if c.measured else "—",
-                     c.rule.describe(c.unit), c.note or getattr(c.rule, "reason", "")))
+                     c.rule_text, c.note or getattr(c.rule, "reason", "")))
     return rows
 
 

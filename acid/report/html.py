@@ -108,7 +108,7 @@ def _claims_table(verdicts: Sequence[ClaimVerdict]) -> list[str]:
             f"<td class=num>{e(v.paper_text)}{quote}{src}</td>"
             f"<td class=num>{e(v.acid_text)}</td>"
             f"<td class={_css_class(v.verdict)}>{e(v.verdict.value)}</td>"
-            f"<td>{e(c.rule.describe(c.unit))}</td><td>{note}</td></tr>")
+            f"<td>{e(c.rule_text)}</td><td>{note}</td></tr>")
     out.append("</table>")
     return out
 
