@@ -34,3 +34,7 @@ app.command(name="cav-study")(cav_study.cav_study)
 from acid_cli import claims  # noqa: E402
 
 app.command(name="claims")(claims.claims)
+
+from acid_cli import export_fmu  # noqa: E402
+
+app.command(name="export-fmu")(export_fmu.export_fmu)
