@@ -161,6 +161,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--update", action="store_true", help="rewrite the reference file")
     ap.add_argument("--file", type=Path, default=REFERENCE_FILE, help="reference JSON")
     args = ap.parse_args(argv)
+    if not args.file.is_file() and not args.update:
+        print(f"error: {args.file}: no reference file (a source checkout has "
+              "tests/references/closed_loop.json; --file PATH, or --update to create one)",
+              file=sys.stderr)
+        return 2
     stored = load(args.file) if args.file.is_file() else {}
     measured = measure()
     drifts = compare(stored, measured)
