@@ -242,7 +242,8 @@ class Within(Rule):
         tol = self.abs + self.rel * abs(paper)
         diff = acid - paper
         rel = f" ({format_number(100 * diff / paper, '+.1f')} %)" if paper else ""
-        off = f"off by {format_number(diff, '+.3g')}{_unit_suffix(unit)}{rel}"
+        u = " points" if unit == "%" else _unit_suffix(unit)
+        off = f"off by {format_number(diff, '+.3g')}{u}{rel}"
         return (Verdict.AGREES if abs(diff) <= tol else Verdict.DISAGREES), off
 
 

@@ -135,8 +135,15 @@ def render_report(report: Report) -> str:
                    + "; ".join(e(b) for b in bad) + "</p>")
     out += _claims_table(paper)
     if beyond:
-        out.append("<h2>Beyond the paper</h2>")
-        out += _claims_table(beyond)
+        out.append("<h2>Beyond the paper</h2><table class=claims><tr><th>quantity</th>"
+                   "<th>acid (measured)</th><th>note</th></tr>")
+        for v in beyond:
+            c = v.claim
+            where = f"<div class=small>{e(c.measured.where())}</div>" if c.measured else ""
+            out.append(f'<tr data-claim="{e(c.id)}" data-verdict="{e(v.verdict.value)}" '
+                       f'data-implies=""><td>{e(c.quantity)}{where}</td>'
+                       f"<td class=num>{e(v.acid_text)}</td><td>{e(c.note)}</td></tr>")
+        out.append("</table>")
     for s in report.sections:
         out.append(f"<h2>{e(s.title)}</h2>")
         out += [f"<p>{e(p)}</p>" for p in s.paragraphs]
