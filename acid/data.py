@@ -65,6 +65,18 @@ CHANNELS: dict[str, ChannelSpec] = {
     "recirc": ChannelSpec("1", "auxiliary", "recirculated fraction of blower air"),
     "w_cab": ChannelSpec("kg/kg", "auxiliary", "cabin air humidity ratio"),
     "Q_evap": ChannelSpec("W", "auxiliary", "evaporator refrigerant-side heat flow"),
+    "Q_cond": ChannelSpec("W", "auxiliary", "condenser refrigerant-side heat flow"),
+    "Q_lat": ChannelSpec("W", "auxiliary", "latent (condensation) part of the evaporator load"),
+    "W_comp": ChannelSpec("W", "auxiliary", "compressor shaft (fluid) power"),
+    "T_e": ChannelSpec("degC", "auxiliary", "evaporating (saturation) temperature"),
+    "T_c": ChannelSpec("degC", "auxiliary", "condensing (saturation) temperature"),
+    "T_cw": ChannelSpec("degC", "auxiliary", "condenser wall temperature"),
+    "T_int_slow": ChannelSpec("degC", "auxiliary", "slow interior node (seat cores, dash body)"),
+    "p_suc": ChannelSpec("Pa", "auxiliary", "compressor suction (low-side) pressure, absolute"),
+    "p_dis": ChannelSpec("Pa", "auxiliary", "compressor discharge (head) pressure, absolute"),
+    "m_r": ChannelSpec("kg/s", "auxiliary", "refrigerant mass flow"),
+    "m_ca": ChannelSpec("kg/s", "auxiliary", "condenser face air mass flow"),
+    "fan_speed": ChannelSpec("1", "auxiliary", "condenser fan speed fraction (0 off, 1 full)"),
 }
 
 #: Channels the identification and validation of eqs. 1-3 need.

@@ -9,6 +9,7 @@ Stages (cached by their inputs, see :mod:`acid.pipeline`):
     mpc       acid mpc-check with the identified parameters (Figs. 7-10, CAV saving)
     cav       beyond the paper: acid cav-study on a drive cycle (constant bound, ICM and a
               speed-aware NMPC at equal mean cabin temperature, end state charged back)
+    plant_check  the high-fidelity plant's credentials against published references
 
 ``sweep`` and the chain excite -> fit -> (validate, mpc) are independent, so ``--jobs 2``
 runs them side by side. Each stage returns its typed result (:mod:`acid.stage_results`) as
@@ -37,6 +38,7 @@ from acid.stage_results import (
     ExcitationStage,
     FitStage,
     MpcStage,
+    PlantCheckStage,
     StudyResults,
     SweepStage,
     ValidationStage,
@@ -182,6 +184,29 @@ def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     return CavStudyStage.of(d, config["cycle"]).to_json_dict()
 
 
+#: captions of the plant-check figures, by file stem
+PLANT_CHECK_CAPTIONS = {
+    "plant_check_energy": "Plant credentials: (a) Table I with and without the condenser fan, "
+                          "(f) steady COP map",
+    "plant_check_service": "Plant credentials: (d) idle pressures in a service chart's bands, "
+                           "(e) pull-down against the JAF test",
+}
+
+
+def stage_plant_check(workdir: Path, inputs: dict, config: dict, progress) -> dict:
+    """The plant's credentials, each beside a published reference (``acid plant-check``)."""
+    from acid.plant.check import build_plant, plant_check
+    from acid.report.plant import plant_check_figures
+
+    res = plant_check(build_plant("hifi"), progress=progress)
+    write_figure_index(workdir, [
+        save_report_figure(fig, workdir, stem, PLANT_CHECK_CAPTIONS.get(stem, stem))
+        for stem, fig in plant_check_figures(res).items()])
+    d = res.to_json_dict()
+    write_json(workdir / "plant_check.json", d)
+    return PlantCheckStage.of(d).to_json_dict()
+
+
 def build_stages(opts: ReproduceOptions) -> list[Stage]:
     """The stage graph of the reproduction."""
     return [
@@ -200,6 +225,7 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
         Stage("cav", f"beyond the paper: speed preview on {opts.cav_cycle.upper()}", stage_cav,
               {"cycle": opts.cav_cycle, "warmup_s": opts.cav_warmup_s,
                "tail_s": opts.cav_tail_s}, depends=("fit",)),
+        Stage("plant_check", "plant credentials (acid plant-check)", stage_plant_check, {}),
     ]
 
 

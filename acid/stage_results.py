@@ -428,6 +428,46 @@ class CavStudyStage(StageResult):
                    eta_cop_r2=_f((eff.get("quality") or {}).get("r2")))
 
 
+@dataclass(frozen=True)
+class PlantCredential(JsonDataclass):
+    """One plant-check row: a plant quantity beside a published reference (not the paper's).
+
+    ``value`` in ``unit`` (NaN when the check only computes, e.g. a figure); ``passed`` is
+    the plant check's own verdict (None when it could not run).
+    """
+
+    name: str
+    group: str
+    reference: str
+    unit: str
+    value: float = math.nan
+    passed: bool | None = None
+    note: str = ""
+
+
+@stage_result("plant_check")
+@dataclass(frozen=True)
+class PlantCheckStage(StageResult):
+    """``acid plant-check``: the high-fidelity plant's credentials (issue 9)."""
+
+    passed: bool
+    checks: tuple[PlantCredential, ...]
+    cop_steady_30C_standstill: float = math.nan
+    cop_gain_25_vs_0_equal_load_pct: float = math.nan
+
+    @classmethod
+    def of(cls, d: dict) -> PlantCheckStage:
+        """From ``PlantCheckResult.to_json_dict()``."""
+        rows = tuple(PlantCredential(
+            name=str(c["name"]), group=str(c.get("group", "")),
+            reference=str(c.get("reference", "")), unit=str(c.get("unit", "")),
+            value=_f(c.get("value")), passed=c.get("passed"), note=str(c.get("note") or ""))
+            for c in d["checks"])
+        return cls(passed=bool(d["passed"]), checks=rows,
+                   cop_steady_30C_standstill=_f(d.get("cop_steady_30C_standstill")),
+                   cop_gain_25_vs_0_equal_load_pct=_f(d.get("cop_gain_25_vs_0_equal_load_pct")))
+
+
 # ------------------------------------------------------------------------- reading
 @dataclass(frozen=True)
 class StudyResults:
@@ -457,5 +497,6 @@ class StudyResults:
 
 __all__ = ["STAGE_RESULTS", "CavComparisonSummary", "CavStudyStage", "ChannelErrors",
            "ClosedLoopSummary", "Estimate", "ExcitationStage", "FitStage", "JsonDataclass",
-           "MpcStage", "Savings", "StageResult", "StudyResults", "SweepStage",
-           "TimingSummary", "ValidationStage", "field_type", "stage_result"]
+           "MpcStage", "PlantCheckStage", "PlantCredential", "Savings", "StageResult",
+           "StudyResults", "SweepStage", "TimingSummary", "ValidationStage", "field_type",
+           "stage_result"]

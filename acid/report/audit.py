@@ -9,9 +9,9 @@ labelled line, counts
 * its footprint: the pixels it colours when drawn alone, and
 * its visible pixels: those that change when it is removed from the full drawing,
 
-and calls the line hidden when fewer than ``min_share`` of its footprint stays visible. A
-dashed line on top of a solid one leaves the solid one visible in the gaps (about a third),
-a line drawn exactly over another of the same width hides it completely.
+and calls the line hidden when less than ``min_share`` (20 %) of its footprint stays
+visible. A dashed line on top of a solid one of the same width leaves about 23 % of it
+visible in the gaps; a line drawn exactly over another of the same width hides it.
 
 Unlabelled lines (``label`` starting with ``_``, e.g. the thin per-start traces of an
 ensemble) are drawn and can hide others, but are not required to be visible one by one;
@@ -31,8 +31,11 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-#: share of its own footprint a line must keep visible
-MIN_SHARE = 0.25
+#: share of its own footprint a line must keep visible. Calibrated on the case issue 15
+#: reported as invisible (the constant-bound line under the speed-aware one in the cav-study
+#: figure kept 5-19 % of its pixels in its three panels); a solid line under a dashed one of
+#: the same width keeps about 23 %.
+MIN_SHARE = 0.2
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 from acid.report.html import ReportSection
 from acid.report.numbers import format_number
-from acid.stage_results import CavStudyStage, StageResult, StudyResults
+from acid.stage_results import CavStudyStage, PlantCheckStage, StageResult, StudyResults
 
 SECTION_BUILDERS: dict[type[StageResult], Callable[[StageResult], ReportSection]] = {}
 
@@ -60,4 +60,23 @@ def _cav_study(r: CavStudyStage) -> ReportSection:
             f"R^2 = {format_number(r.eta_cop_r2, '.2f')}."),
         header=("controller", "saving raw (%)", "C_eff-corrected (%)", "tail-corrected (%)",
                 "owed to speed, tail-corrected (points)"),
+        rows=rows)
+
+
+@report_section(PlantCheckStage)
+def _plant_check(r: PlantCheckStage) -> ReportSection:
+    word = {True: "pass", False: "FAIL", None: "n/a"}
+    rows = tuple((c.group, c.name, c.reference,
+                  "computed" if c.value != c.value and c.passed is not None else
+                  f"{format_number(c.value, '.4g')} {c.unit}".strip(),
+                  word[c.passed], c.note) for c in r.checks)
+    n_pass = sum(c.passed is True for c in r.checks)
+    n_fail = sum(c.passed is False for c in r.checks)
+    return ReportSection(
+        "Plant credentials (acid plant-check)",
+        paragraphs=(
+            "The high-fidelity plant against published references other than the paper "
+            f"(verdicts are acid plant-check's own criteria): {n_pass} pass, {n_fail} fail, "
+            f"{len(r.checks) - n_pass - n_fail} not run.",),
+        header=("group", "credential", "reference", "plant", "check", "note"),
         rows=rows)
