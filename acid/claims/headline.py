@@ -29,7 +29,12 @@ def _combined_verdict(items: Sequence[Mapping]) -> str:
         if not scope or v == Verdict.DIRECTION.value:
             return v
         return f"{v} ({scope})" if v == Verdict.AGREES.value else f"{v} (rule: {scope})"
-    return "mixed: " + ", ".join(f"{n} {k}" for k, n in kinds.items())
+    return "mixed: " + ", ".join(f"{n} {_plural(k) if n > 1 else k}" for k, n in kinds.items())
+
+
+def _plural(verdict: str) -> str:
+    """'agrees' -> 'agree', 'agrees in direction' -> 'agree in direction'."""
+    return verdict.replace("agrees", "agree").replace("disagrees", "disagree")
 
 
 def headline_rows(summary: Mapping, headline: Sequence[HeadlineRow] = HEADLINE
