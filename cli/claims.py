@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from acid_cli._common import console, handle_errors, print_table, write_summary
+from acid_cli._common import check_paths, handle_errors, print_table, say, write_summary
 
 
 @handle_errors
@@ -24,6 +24,7 @@ def claims(
     """
     from acid.claims import headline_markdown, headline_rows, load_summary, registry_rows
 
+    check_paths(inputs={"SUMMARY": summary}, outputs={"--json": json_path})
     if summary is not None:
         s = load_summary(summary)
         typer.echo(headline_markdown(s), nl=False)
@@ -35,8 +36,8 @@ def claims(
     print_table("Claims of the paper (acid.claims)",
                 ["_id", "_paper", "_where acid measures it", "_rule", "_note"],
                 [list(r) for r in rows])
-    console.print(f"{len(rows)} claims; `acid claims reports/paper/summary.json` prints the "
-                  "headline table of a run", highlight=False)
+    say(f"{len(rows)} claims; `acid claims reports/paper/summary.json` prints the headline "
+        "table of a run")
     write_summary(json_path, {"claims": [
         dict(zip(("id", "paper", "measured_at", "rule", "note"), r, strict=True))
         for r in rows]})

@@ -9,7 +9,17 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure
-from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._common import (
+    check_paths,
+    console,
+    handle_errors,
+    plant_inputs,
+    print_table,
+    progress_bar,
+    require_range,
+    say,
+    write_summary,
+)
 from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 
@@ -47,8 +57,12 @@ def plant_check(
     from acid.report.plant import plant_check_figures
     from acid.units import C2K
 
-    if ambient is not None and not math.isfinite(ambient):
-        raise ConfigError(f"--ambient must be a finite temperature in degC, got {ambient}")
+    check_paths(inputs={"--config": config, **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
+                folders={"--out": (out, ("plant_check_energy.png", "plant_check_service.png",
+                                         "plant_check.json"))})
+    if ambient is not None:
+        require_range(ambient, "--ambient", -60.0, 150.0, "degC")  # kelvin typed by mistake
     choice = plant_choice(plant, fmu_map)
     if config is not None and choice.kind != "hifi":
         raise ConfigError("--config applies to --plant hifi only")
@@ -77,7 +91,7 @@ def plant_check(
     from acid._io import write_json
 
     write_json(out / "plant_check.json", summary)
-    console.print(f"figures written to {out}")
+    say(f"figures written to {out}")
     write_summary(json_path, summary)
     console.print("[bold green]PASS[/]" if result.passed else "[bold red]FAIL[/]")
     if not result.passed:

@@ -13,7 +13,15 @@ from acid.claims import contradictions, counts, headline_rows, load_summary
 from acid.errors import ConfigError
 from acid.pipeline import run_pipeline
 from acid.reproduce import ReproduceOptions, build_stages, write_outputs
-from acid_cli._common import console, err_console, handle_errors, print_table, write_summary
+from acid_cli._common import (
+    check_paths,
+    err_console,
+    handle_errors,
+    print_table,
+    say,
+    warn,
+    write_summary,
+)
 
 
 @handle_errors
@@ -35,6 +43,8 @@ def reproduce(
     Stages are cached by their inputs under OUT/stages, so a second run redoes only what
     changed. Writes OUT/report.html (self-contained) and OUT/summary.json.
     """
+    check_paths(outputs={"--json": json_path},
+                folders={"--out": (out, ("report.html", "summary.json"))})
     if jobs > 8:
         raise ConfigError(f"--jobs {jobs}: at most 8 local processes")
     opts = ReproduceOptions.quick() if quick else ReproduceOptions()
@@ -69,10 +79,10 @@ def reproduce(
                 ["_result", "_paper", "_acid", "_verdict"],
                 [[r[0].replace("*", ""), *r[1:]] for r in headline_rows(summary)])
     n = counts(verdicts)
-    console.print(", ".join(f"{c} {k}" for k, c in n.items()), highlight=False)
+    say(", ".join(f"{c} {k}" for k, c in n.items()))
     bad = contradictions(verdicts)
     if bad:
-        err_console.print("contradictory verdicts: " + "; ".join(bad), highlight=False)
-    console.print(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
+        warn("contradictory verdicts: " + "; ".join(bad))
+    say(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
     if json_path is not None:
         write_summary(json_path, summary)
