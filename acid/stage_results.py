@@ -283,6 +283,7 @@ class ClosedLoopSummary(JsonDataclass):
     max_T_cab_violation_K: float = math.nan
     first_step_violation_K: float = math.nan
     ride_error_K: float = math.nan
+    max_avoidable_violation_K: float = math.nan
     fallbacks: int = 0
     skipped: str | None = None
 
@@ -316,6 +317,7 @@ class TimingSummary(JsonDataclass):
     steps: int
     passed: bool
     criterion: str
+    mean_ms: float = math.nan
 
 
 @stage_result("mpc")
@@ -348,6 +350,7 @@ class MpcStage(StageResult):
                 max_T_cab_violation_K=_f(d.get("max_T_cab_violation_K")),
                 first_step_violation_K=_f(d.get("first_step_violation_K")),
                 ride_error_K=max(ride) if ride else math.nan,
+                max_avoidable_violation_K=_f(d.get("max_avoidable_violation_K")),
                 fallbacks=int(d.get("fallbacks", 0)))
 
         cav = sc.get("cav", {})
@@ -359,7 +362,8 @@ class MpcStage(StageResult):
                    cav_periodic=_comparison(per) if per else None,
                    cycles=int(per.get("cycles", 0)) if per else 0,
                    timing=TimingSummary(median_ms=_f(tm.get("median")), p95_ms=_f(tm.get("p95")),
-                                        max_ms=_f(tm.get("max")), steps=int(tm.get("n", 0)),
+                                        max_ms=_f(tm.get("max")), mean_ms=_f(tm.get("mean")),
+                                        steps=int(tm.get("n", 0)),
                                         passed=bool(tm.get("passed", False)),
                                         criterion=str(tm.get("criterion", ""))))
 

@@ -42,3 +42,7 @@ app.command(name="plant-check")(plant_check.plant_check)
 from acid_cli import export_fmu  # noqa: E402
 
 app.command(name="export-fmu")(export_fmu.export_fmu)
+
+from acid_cli import export_c  # noqa: E402
+
+app.command(name="export-c")(export_c.export_c_cmd)

@@ -149,11 +149,11 @@ def _nmpc_claims() -> list[Claim]:
               Measured(MpcStage, "plant.max_violation_K", spec=".3f"),
               AtMost(limit=0.5, reading="'slight violations'")),
         Claim("nmpc.computation", "Computation",
-              "NMPC time per step (acid: the largest, which bounds the average)",
+              "NMPC time per step, mean over the timed steps (the paper's average)",
               PaperValue(Ts_ms * STUDIES.computation_fraction_of_Ts, "ms", "section IV-B",
                          "average time ... less than one eighth of the sampling period "
                          "(2.2 GHz laptop, MPCTools)", spec=".0f"),
-              Measured(MpcStage, "timing.max_ms", spec=".2f"), AtMost()),
+              Measured(MpcStage, "timing.mean_ms", spec=".2f"), AtMost()),
     ]
 
 

@@ -27,6 +27,7 @@ from pathlib import Path
 
 from acid import __version__
 from acid._io import write_json
+from acid.report.numbers import format_number
 
 #: the stored references of a source checkout
 REFERENCE_FILE = Path(__file__).resolve().parents[2] / "tests" / "references" / "closed_loop.json"
@@ -111,8 +112,8 @@ class Drift:
             return f"{self.case} {self.quantity}: new, {self.now:.6g}"
         if math.isnan(self.now):
             return f"{self.case} {self.quantity}: {self.reference:.6g}, no longer measured"
-        rel = (f" ({100 * (self.now - self.reference) / self.reference:+.2f} %)"
-               if self.reference else "")
+        rel = (f" ({format_number(100 * (self.now - self.reference) / self.reference, '+.2f')}"
+               " %)" if self.reference else "")
         return (f"{self.case} {self.quantity}: {self.reference:.6g} -> {self.now:.6g}{rel}, "
                 f"tolerance {self.tolerance.describe()}")
 
