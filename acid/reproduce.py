@@ -11,32 +11,42 @@ Stages (cached by their inputs, see :mod:`acid.pipeline`):
               --model econ` record and validated beside the paper's model on the same data
     cav       beyond the paper, "where the energy is": acid cav-study on drive cycles
               (A paper NMPC, B ICM, D/E economic NMPC without/with preview, the bound)
+    plant_check  the high-fidelity plant's credentials against published references
 
 ``sweep`` and the chain excite -> fit -> (validate, mpc) are independent, so ``--jobs 2``
-runs them side by side. The report (``report.html`` + ``summary.json``) puts each paper
-result beside what acid measured and says whether they agree.
+runs them side by side. Each stage returns its typed result (:mod:`acid.stage_results`) as
+JSON and lists its figures in ``figures.json``; the report (``report.html`` +
+``summary.json``) reads them back, and every verdict in it comes from the claims registry
+(:mod:`acid.claims`): the paper's value, where acid measures it and the rule.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
-import math
 import platform
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
 from acid import __version__
-from acid._io import save_figure, write_json
+from acid._io import write_json
+from acid.claims import ClaimVerdict, evaluate, summary_claims
+from acid.claims.registry import ENERGY_CYCLES
 from acid.pipeline import Stage, StageOutcome
-from acid.report.html import ComparisonRow, FigureRef
-
-# Paper numbers the report compares against.
-PAPER_TABLE_I_MJ = (1.33, 1.23, 1.17, 1.13, 1.10, 1.07)
-PAPER_TABLE_I_MJ_PER_KM = (None, 0.410, 0.195, 0.126, 0.092, 0.071)
-PAPER_CAV_MJ = (0.113, 0.124)
-PAPER_SAVING_PCT = 9.0
-PAPER_TS_S = 5.0
+from acid.report.figures import read_figure_index, save_report_figure, write_figure_index
+from acid.report.html import Report, ReportFigure, StageTime, write_report
+from acid.stage_results import (
+    CavStudyStage,
+    EconStage,
+    ExcitationStage,
+    FitStage,
+    MpcStage,
+    PlantCheckStage,
+    StudyResults,
+    SweepStage,
+    ValidationStage,
+)
 
 
 @dataclass(frozen=True)
@@ -51,7 +61,7 @@ class ReproduceOptions:
     starts: int = 60
     horizon: int = 300
     timing_repeats: int = 5
-    cav_cycles: tuple[str, ...] = ("udds", "sc03")
+    cav_cycles: tuple[str, ...] = ENERGY_CYCLES
     cav_warmup_s: float = 7200.0
     cav_tail_s: float = 2400.0
     econ_duration_s: float = 6 * 3600.0
@@ -61,23 +71,25 @@ class ReproduceOptions:
     @classmethod
     def quick(cls) -> ReproduceOptions:
         return cls(sweep_duration_s=300.0, excite_duration_s=2 * 3600.0, starts=12,
-                   horizon=120, timing_repeats=1, cav_cycles=("nycc",), cav_warmup_s=300.0,
+                   horizon=120, timing_repeats=1, cav_warmup_s=300.0,
                    cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0,
                    econ_compiled=False)
 
 
 # --------------------------------------------------------------------- stage bodies
+# Each stage returns the JSON form of its typed result (``acid.stage_results``) and lists
+# its figures, with captions and line-visibility audits, in ``figures.json``.
 def stage_sweep(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """Table I / Fig. 3 on the high-fidelity plant."""
     from acid.plant.sweep import speed_sweep
     from acid.report.plant import sweep_figure
 
     res = speed_sweep(duration=config["duration_s"], progress=progress)
-    save_figure(sweep_figure(res), workdir / "fig3_speed_sweep.png")
-    d = res.to_json_dict()
-    write_json(workdir / "sweep.json", d)
-    return {"speeds_mps": d["speeds_mps"], "energy_MJ": d["energy_MJ"],
-            "energy_MJ_per_km": d["energy_MJ_per_km"], "duration_s": config["duration_s"]}
+    write_figure_index(workdir, [save_report_figure(
+        sweep_figure(res), workdir, "fig3_speed_sweep",
+        "Fig. 3: speed sensitivity with the nominal controller")])
+    write_json(workdir / "sweep.json", res.to_json_dict())
+    return SweepStage.of(res).to_json_dict()
 
 
 def stage_excite(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -88,8 +100,9 @@ def stage_excite(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     spec = ExcitationSpec(duration=config["duration_s"], seed=config["seed"])
     ds = excite(make_plant("hifi"), spec, progress=progress)
     ds.to_hdf5(workdir / "excitation.h5", created="reproducible")
-    return {"samples": len(ds), "duration_s": ds.duration, "seed": config["seed"],
-            "T_cab_range_degC": [float(ds["T_cab"].min()), float(ds["T_cab"].max())]}
+    return ExcitationStage(samples=len(ds), duration_s=float(ds.duration), seed=config["seed"],
+                           T_cab_range_degC=(float(ds["T_cab"].min()),
+                                             float(ds["T_cab"].max()))).to_json_dict()
 
 
 def stage_fit(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -111,12 +124,7 @@ def stage_fit(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     params = res.params.replace(provenance=prov, name=f"acid-{config['method']}")
     params.to_json(workdir / "params.json", extra={"fit": res.to_json_dict(),
                                                    "fit_ls": ls.to_json_dict()})
-    return {"method": res.method, "gamma": list(params.gamma), "tau": list(params.tau),
-            "beta": list(params.beta), "ls_gamma": list(ls.params.gamma),
-            "ls_tau": list(ls.params.tau), "eta_cop_estimate": _num(res.eta_cop),
-            "fit_percent_one_step": res.fit_percent_one_step,
-            "fit_percent_simulation": res.fit_percent_simulation,
-            "warnings": list(res.warnings)}
+    return FitStage.of(res, ls).to_json_dict()
 
 
 def stage_validate(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -132,12 +140,22 @@ def stage_validate(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     res = validate(ds, params, starts=config["starts"], horizon=config["horizon"],
                    held_out_fraction=held_out)
     progress(1, 1)
-    save_figure(prediction_figure(res), workdir / "fig5_prediction.png")
-    save_figure(error_figure(res), workdir / "fig6_errors.png")
-    d = res.to_json_dict()
-    write_json(workdir / "validation.json", d)
-    return {"channels": d["channels"], "starts": res.n_starts, "horizon": res.horizon,
-            "at_horizon": d["at_horizon"]}
+    write_figure_index(workdir, [
+        save_report_figure(prediction_figure(res), workdir, "fig5_prediction",
+                           f"Fig. 5: a {res.horizon}-step prediction against the plant"),
+        save_report_figure(error_figure(res), workdir, "fig6_errors",
+                           "Fig. 6: prediction errors of all starts vs time")])
+    write_json(workdir / "validation.json", res.to_json_dict())
+    return ValidationStage.of(res).to_json_dict()
+
+
+#: captions of the mpc-check figures, by file stem
+MPC_CAPTIONS = {
+    "fig7_model": "Fig. 7: NMPC in closed loop with the control-oriented model",
+    "fig8_plant": "Fig. 8: NMPC in closed loop with the high-fidelity plant",
+    "fig9_cav_bound": "Fig. 9: previewed stop-and-go speed and the ICM bound on T_cab",
+    "fig10_cav_comparison": "Fig. 10: Case 1 (ICM) vs Case 2 (constant bound)",
+}
 
 
 def stage_mpc(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -148,11 +166,11 @@ def stage_mpc(workdir: Path, inputs: dict, config: dict, progress) -> dict:
 
     params = ModelParams.from_json(inputs["fit"] / "params.json")
     res = mpc_check(params, timing_repeats=config["timing_repeats"], progress=progress)
-    for stem, fig in mpc_figures(res.scenarios).items():
-        save_figure(fig, workdir / f"{stem}.png")
-    d = res.to_json_dict()
-    write_json(workdir / "check.json", d)
-    return _strip_runs(d)
+    write_figure_index(workdir, [
+        save_report_figure(fig, workdir, stem, MPC_CAPTIONS.get(stem, stem.replace("_", " ")))
+        for stem, fig in mpc_figures(res.scenarios).items()])
+    write_json(workdir / "check.json", res.to_json_dict())
+    return MpcStage.of(res).to_json_dict()
 
 
 def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -170,8 +188,8 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     from acid.report.validation import error_figure
     from acid.validate import validate
 
-    spec = spec_for_model("econ", duration=config["duration_s"], seed=config["seed"])
-    ds = excite(make_plant("hifi"), spec)
+    ds = excite(make_plant("hifi"), spec_for_model("econ", duration=config["duration_s"],
+                                                   seed=config["seed"]))
     progress(1, 4)
     est, _ = ds.split(config["estimation_fraction"])
     with warnings.catch_warnings():
@@ -180,18 +198,16 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
         progress(2, 4)
         paper_fit = ModelFitter(method="oe").fit(est)
     econ.params.to_json(workdir / "econ_params.json", extra={"fit": econ.to_json_dict()})
-    held = 1.0 - config["estimation_fraction"]
-    kw = {"starts": config["starts"], "horizon": config["horizon"], "held_out_fraction": held}
-    val = {"econ": validate(ds, econ.params, **kw), "paper": validate(ds, paper_fit.params, **kw)}
+    kw = {"starts": config["starts"], "horizon": config["horizon"],
+          "held_out_fraction": 1.0 - config["estimation_fraction"]}
+    val_econ, val_paper = validate(ds, econ.params, **kw), validate(ds, paper_fit.params, **kw)
     progress(4, 4)
-    save_figure(error_figure(val["econ"]), workdir / "fig_econ_errors.png")
-    return {"duration_s": ds.duration, "power_map": econ.power_map_quality,
-            "fit_percent_simulation": econ.fit_percent_simulation,
-            "validation": {k: {"channels": {c: {m: v.metrics[c][m] for m in
-                                                ("median_abs", "p90_abs", "max_abs")}
-                                            for c in v.channels},
-                               "extra": v.extra_metrics} for k, v in val.items()},
-            "starts": val["econ"].n_starts, "horizon": val["econ"].horizon}
+    write_figure_index(workdir, [save_report_figure(
+        error_figure(val_econ), workdir, "fig_econ_errors",
+        "Beyond the paper: prediction errors of the econ model (interior and shell "
+        "predicted), the study of Fig. 6")])
+    return EconStage.of(ds.duration, econ.power_map_quality, val_econ,
+                        val_paper).to_json_dict()
 
 
 def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -211,20 +227,26 @@ def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     res = cav_study(params, list(config["cycles"]), cfg, econ=econ,
                     econ_summary={"source": "stage econ", "power_map": econ.power_map.quality},
                     progress=progress)
-    save_figure(energy_figure(res), workdir / "energy.png")
-    for name, st in res.cycles.items():
-        save_figure(trajectory_figure(st), workdir / f"cav_{name}.png")
+    figs = [save_report_figure(energy_figure(res), workdir, "energy",
+                               "Where the energy is: energy per controller and cycle at equal "
+                               "mean cabin temperature, end state charged back")]
+    figs += [save_report_figure(trajectory_figure(st), workdir, f"cav_{name}",
+                                f"Where the energy is, {name.upper()}: paper NMPC (A), "
+                                "economic NMPC with preview (E), the bound replayed")
+             for name, st in res.cycles.items()]
+    write_figure_index(workdir, figs)
     d = res.to_json_dict()
     write_json(workdir / "cav_study.json", d)
-    keys = ("energy_MJ", "tail_corrected_energy_MJ", "saving_raw_pct",
-            "saving_tail_corrected_pct", "gap_to_bound_pct", "pmv_mean", "rh_mean_pct",
-            "w_cab_mean_g_kg", "mean_T_cab_K", "mean_T_evap_set_K", "mean_W_bl_kg_s",
-            "band_vs_pinned_pct", "replay_vs_model_pct")
-    return {"cycles": {name: {"preview_share_points": c["preview_share_points"],
-                              "target_mean_T_cab_K": c["target_mean_T_cab_K"],
-                              "controllers": {k: {f: v.get(f) for f in keys if f in v}
-                                              for k, v in c["controllers"].items()}}
-                       for name, c in d["cycles"].items()}}
+    return CavStudyStage.of(d).to_json_dict()
+
+
+#: captions of the plant-check figures, by file stem
+PLANT_CHECK_CAPTIONS = {
+    "plant_check_energy": "Plant credentials: (a) Table I with and without the condenser fan, "
+                          "(f) steady COP map",
+    "plant_check_service": "Plant credentials: (d) idle pressures in a service chart's bands, "
+                           "(e) pull-down against the JAF test",
+}
 
 
 def stage_plant_check(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -233,44 +255,12 @@ def stage_plant_check(workdir: Path, inputs: dict, config: dict, progress) -> di
     from acid.report.plant import plant_check_figures
 
     res = plant_check(build_plant("hifi"), progress=progress)
-    for name, fig in plant_check_figures(res).items():
-        save_figure(fig, workdir / f"{name}.png")
+    write_figure_index(workdir, [
+        save_report_figure(fig, workdir, stem, PLANT_CHECK_CAPTIONS.get(stem, stem))
+        for stem, fig in plant_check_figures(res).items()])
     d = res.to_json_dict()
     write_json(workdir / "plant_check.json", d)
-    return {"passed": d["passed"], "checks": d["checks"],
-            "cop_steady_30C_standstill": d["cop_steady_30C_standstill"],
-            "cop_gain_25_vs_0_equal_load_pct": d["cop_gain_25_vs_0_equal_load_pct"]}
-
-
-def _plant_check_rows(outcomes: dict[str, StageOutcome]) -> list[ComparisonRow]:
-    """One row per plant-check credential (section "Plant credentials")."""
-    if "plant_check" not in outcomes:
-        return []
-    rows = []
-    for c in outcomes["plant_check"].summary["checks"]:
-        value = c["value"]
-        shown = ("computed" if c["passed"] is not None else "n/a") if value is None \
-            else f"{value:.4g} {c['unit']}"
-        rows.append(ComparisonRow(f"Plant credentials ({c['group']})", c["name"],
-                                  c["reference"], shown, c["passed"],
-                                  c.get("note") or "acid plant-check"))
-    return rows
-
-
-def _strip_runs(d: dict) -> dict:
-    """The mpc-check summary without per-step trajectories (kept in check.json)."""
-    out = dict(d)
-    out["scenarios"] = {k: {kk: vv for kk, vv in s.items() if kk != "runs"}
-                        for k, s in d["scenarios"].items()}
-    return out
-
-
-def _num(x) -> float | None:
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        return None
-    return x if math.isfinite(x) else None
+    return PlantCheckStage.of(d).to_json_dict()
 
 
 def build_stages(opts: ReproduceOptions) -> list[Stage]:
@@ -295,279 +285,62 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
         Stage("cav", "where the energy is: " + ", ".join(c.upper() for c in opts.cav_cycles),
               stage_cav, {"cycles": list(opts.cav_cycles), "warmup_s": opts.cav_warmup_s,
                           "tail_s": opts.cav_tail_s, "econ_horizon_s": opts.econ_horizon_s,
-                          "compiled": opts.econ_compiled},
-              depends=("fit", "econ")),
+                          "compiled": opts.econ_compiled}, depends=("fit", "econ")),
         Stage("plant_check", "plant credentials (acid plant-check)", stage_plant_check, {}),
     ]
 
 
 # --------------------------------------------------------------------------- report
-def _fmt(x, digits=3) -> str:
-    x = _num(x)
-    return "n/a" if x is None else f"{x:.{digits}f}"
+def study_results(outcomes: dict[str, StageOutcome]) -> StudyResults:
+    """The typed results of the stages (read back from their cached summaries)."""
+    return StudyResults.from_summaries({k: o.summary for k, o in outcomes.items()})
 
 
-def comparison_rows(outcomes: dict[str, StageOutcome]) -> list[ComparisonRow]:
-    """One row per paper result: paper value, acid's measurement, agreement and why."""
-    rows: list[ComparisonRow] = []
-    sw = outcomes["sweep"].summary
-    E = [float(e) for e in sw["energy_MJ"]]
-    full = abs(sw["duration_s"] - 600.0) < 1e-9
-    for v, e, ep, epk, ekm in zip(sw["speeds_mps"], E, PAPER_TABLE_I_MJ,
-                                  PAPER_TABLE_I_MJ_PER_KM, sw["energy_MJ_per_km"], strict=True):
-        ok = (abs(e - ep) <= 0.10 * ep) if full else None
-        rows.append(ComparisonRow(
-            "Table I", f"A/C energy over {sw['duration_s']:g} s at {v:g} m/s (MJ; MJ/km)",
-            f"{ep:.2f}; {'NA' if epk is None else f'{epk:.3f}'}",
-            f"{e:.3f}; {'NA' if ekm is None else f'{ekm:.3f}'}", ok,
-            "within 10 %" if ok else ("quick run: shorter than 600 s" if ok is None
-                                      else "more than 10 % from the paper")))
-    ratio = E[-1] / E[0]
-    falls = all(b < a for a, b in zip(E, E[1:], strict=False))
-    rows.append(ComparisonRow("Table I", "E(25 m/s) / E(0 m/s); energy falls with speed",
-                              "0.80; yes", f"{ratio:.3f}; {'yes' if falls else 'no'}",
-                              bool(0.75 <= ratio <= 0.85 and falls),
-                              "ram air lowers the condensing pressure"))
-
-    fit = outcomes["fit"].summary
-    from acid.params import PAPER_GAMMA, PAPER_TAU
-
-    for i, (ours, theirs) in enumerate(zip(fit["gamma"], PAPER_GAMMA, strict=True), start=1):
-        rows.append(ComparisonRow("Identification", f"gamma{i}", f"{theirs:g}", f"{ours:.4g}",
-                                  None, "our plant is not CoolSim: values need not match"))
-    for i, (ours, theirs) in enumerate(zip(fit["tau"], PAPER_TAU, strict=True), start=1):
-        rows.append(ComparisonRow("Identification", f"tau{i} (K)", f"{theirs:g}", f"{ours:.4g}",
-                                  None, "kelvin convention, as the paper's"))
-
-    val = outcomes["validate"].summary
-    for ch in ("T_cab", "T_evap", "T_ain"):
-        m = val["channels"][ch]
-        ok = _num(m.get("p90_abs")) is not None and m["p90_abs"] < 3.0
-        rows.append(ComparisonRow(
-            "Validation", f"{ch}: |error| over {val['horizon']}-step predictions, "
-            f"{val['starts']} starts (median / p90 / max, K)",
-            "within a couple of degrees most of the time",
-            f"{_fmt(m.get('median_abs'), 2)} / {_fmt(m.get('p90_abs'), 2)} / "
-            f"{_fmt(m.get('max_abs'), 2)}", ok, "criterion: p90 below 3 K"))
-
-    mpc = outcomes["mpc"].summary
-    sc = mpc["scenarios"]
-    a = sc["model"]
-    rows.append(ComparisonRow("NMPC on the model (Fig. 7)",
-                              "largest violation after the first step (K)",
-                              "all constraints satisfied", _fmt(a.get("max_violation_K"), 4),
-                              a.get("passed"), a.get("criterion", "")))
-    b = sc["plant"]
-    rows.append(ComparisonRow("NMPC on the plant (Fig. 8)",
-                              "largest violation after the first step (K)",
-                              "slight violations at some instants",
-                              _fmt(b.get("max_violation_K"), 3) if not b.get("skipped")
-                              else b["skipped"], b.get("passed"), b.get("criterion", "")))
-    c = sc["cav"]
-    if not c.get("skipped"):
-        saving = _num(c.get("saving_pct"))
-        rows.append(ComparisonRow(
-            "CAV case (Figs. 9-10)", "A/C energy over 10-85 s, Case 1 (ICM) / Case 2 (MJ)",
-            f"{PAPER_CAV_MJ[0]} / {PAPER_CAV_MJ[1]}",
-            f"{_fmt(c.get('case1_energy_MJ'), 4)} / {_fmt(c.get('case2_energy_MJ'), 4)}",
-            c.get("passed"), "Case 1 uses less energy than Case 2, as in the paper"))
-        blind = (c.get("speed_blind_plant") or {}).get("saving_pct")
-        per = c.get("periodic") or {}
-        agrees = saving is not None and 0.5 * PAPER_SAVING_PCT <= saving <= 1.5 * PAPER_SAVING_PCT
-        why = (f"on a plant with no speed effect the same comparison saves {_fmt(blind, 1)} %: "
-               "most of the saving is heat left in the cabin at the end of the window"
-               if blind is not None else "")
-        if per:
-            why += (f"; over {per.get('cycles')} repeated cycles (stored heat cancels) the "
-                    f"saving is {_fmt(per.get('saving_pct'), 1)} %")
-        rows.append(ComparisonRow("CAV case (Figs. 9-10)", "energy saving of Case 1 (%)",
-                                  f"{PAPER_SAVING_PCT:g}", _fmt(saving, 1), agrees,
-                                  why or "criterion: within half to 1.5 times the paper's"))
-    rows += econ_rows(outcomes["econ"].summary)
-    rows += energy_rows(outcomes["cav"].summary)
-    tm = mpc["timing"]
-    rows.append(ComparisonRow(
-        "Computation", "NMPC time per step, median / p95 / max (ms)",
-        f"average < Ts/8 = {1000 * PAPER_TS_S / 8:g} ms (2.2 GHz laptop, MPCTools)",
-        f"{tm['median']:.2f} / {tm['p95']:.2f} / {tm['max']:.2f}",
-        bool(tm["median"] < 1000 * PAPER_TS_S / 8), tm.get("criterion", "")))
-    rows += _plant_check_rows(outcomes)
-    return rows
+def report_figures(outcomes: dict[str, StageOutcome],
+                   order: list[str] | None = None) -> list[ReportFigure]:
+    """Every figure the stages listed, in stage ``order`` (default: as given)."""
+    names = [n for n in (order or []) if n in outcomes]
+    names += [n for n in outcomes if n not in names]
+    return [ReportFigure(outcomes[n].workdir / r.file, r) for n in names
+            for r in read_figure_index(outcomes[n].workdir)
+            if (outcomes[n].workdir / r.file).is_file()]
 
 
-FIGURES = (
-    ("sweep", "fig3_speed_sweep.png", "Fig. 3: speed sensitivity with the nominal controller"),
-    ("validate", "fig5_prediction.png", "Fig. 5: a 300-step prediction against the plant"),
-    ("validate", "fig6_errors.png", "Fig. 6: prediction errors of all starts vs time"),
-)
-
-
-def report_figures(outcomes: dict[str, StageOutcome]) -> list[FigureRef]:
-    """Every PNG of the stages, paper figures first."""
-    figs = [FigureRef(outcomes[s].workdir / f, cap) for s, f, cap in FIGURES
-            if (outcomes[s].workdir / f).is_file()]
-    mpc_dir = outcomes["mpc"].workdir
-    for p in sorted(mpc_dir.glob("*.png"), key=lambda q: int(q.stem[3:].split("_")[0])):
-        figs.append(FigureRef(p, _mpc_caption(p.stem)))
-    econ_fig = outcomes["econ"].workdir / "fig_econ_errors.png"
-    if econ_fig.is_file():
-        figs.append(FigureRef(econ_fig, "Beyond the paper: prediction errors of the econ model "
-                                        "(interior predicted), same study as Fig. 6"))
-    cav_dir = outcomes["cav"].workdir
-    if (cav_dir / "energy.png").is_file():
-        figs.append(FigureRef(cav_dir / "energy.png", "Where the energy is: energy per "
-                              "controller and cycle at equal mean cabin temperature"))
-    for p in sorted(cav_dir.glob("cav_*.png")):
-        figs.append(FigureRef(p, f"Where the energy is, {p.stem[4:].upper()}: paper NMPC (A), "
-                                 "economic NMPC with preview (E), perfect-information bound"))
-    if "plant_check" in outcomes:
-        for stem, cap in (("plant_check_energy", "Plant credentials: (a) Table I with and "
-                           "without the condenser fan, (f) steady COP map"),
-                          ("plant_check_service", "Plant credentials: (d) idle pressures in a "
-                           "service chart's bands, (e) pull-down against the JAF test")):
-            p = outcomes["plant_check"].workdir / f"{stem}.png"
-            if p.is_file():
-                figs.append(FigureRef(p, cap))
-    return figs
-
-
-# ------------------------------------------------------------- where the energy is
-def econ_rows(summary: dict) -> list[ComparisonRow]:
-    """The econ model's power map and its validation beside the paper's model."""
-    pm = summary["power_map"]
-    rows = [ComparisonRow(
-        "Beyond the paper: econ model", "compressor power map, RMS error (all / near-steady "
-        "samples, % of mean power)", "eq. 4 with eta_cop = 3.5",
-        f"{_fmt(pm.get('rms_pct'), 2)} / {_fmt(pm.get('steady_rms_pct'), 2)}", None,
-        "identified from `acid excite --model econ` data, not read from the plant")]
-    v = summary["validation"]
-    for ch in ("T_cab", "T_evap", "T_ain"):
-        e, p = v["econ"]["channels"][ch], v["paper"]["channels"][ch]
-        rows.append(ComparisonRow(
-            "Beyond the paper: econ model", f"{ch}: |error| median / p90 over "
-            f"{summary['starts']} x {summary['horizon']} steps, econ vs paper model (K)",
-            "a couple of degrees", f"{_fmt(e['median_abs'], 2)} / {_fmt(e['p90_abs'], 2)} vs "
-            f"{_fmt(p['median_abs'], 2)} / {_fmt(p['p90_abs'], 2)}",
-            bool(e["median_abs"] < 2.0), "both fitted and validated on the same record"))
-    return rows
-
-
-def energy_rows(summary: dict) -> list[ComparisonRow]:
-    """The "where the energy is" table: per cycle and controller, and the conclusion."""
-    rows = []
-    for name, c in summary["cycles"].items():
-        ctl = c["controllers"]
-        for key, label in (("B", "ICM bound"), ("D", "economic NMPC, no preview"),
-                           ("E", "economic NMPC, speed preview"), ("bound", "bound, replayed")):
-            if key not in ctl:
-                continue
-            r = ctl[key]
-            rows.append(ComparisonRow(
-                "Where the energy is", f"{name.upper()}, {key} ({label}): saving vs A, end "
-                "state charged back / gap to the bound (%); PMV; cabin humidity (g/kg)",
-                "9 % (B, paper's window)" if key == "B" else "not studied",
-                f"{_fmt(r.get('saving_tail_corrected_pct'), 2)} / "
-                f"{_fmt(r.get('gap_to_bound_pct'), 2)}; {_fmt(r.get('pmv_mean'), 2)}; "
-                f"{_fmt(r.get('w_cab_mean_g_kg'), 2)}", None,
-                f"A: {_fmt(ctl['A'].get('energy_MJ'), 4)} MJ, {key}: "
-                f"{_fmt(r.get('energy_MJ'), 4)} MJ raw"))
-        rows.append(ComparisonRow(
-            "Where the energy is", f"{name.upper()}: preview's share (E minus D, points)",
-            "speed preview is the paper's mechanism", _fmt(c.get("preview_share_points"), 3),
-            None, ""))
-    rows.append(ComparisonRow("Where the energy is", "conclusion (from the numbers above)",
-                              "", "", None, energy_conclusion(summary)))
-    return rows
-
-
-def energy_conclusion(summary: dict) -> str:
-    """A conclusion drawn only from the measured numbers of the study's summary."""
-    cyc = summary["cycles"]
-    if not cyc or any("E" not in c["controllers"] for c in cyc.values()):
-        return "the economic controllers were not run"
-    sav = {n: c["controllers"]["E"].get("saving_tail_corrected_pct") for n, c in cyc.items()}
-    if any(s is None for s in sav.values()):
-        return "savings could not be computed (no tail correction)"
-    prev = [c.get("preview_share_points") or 0.0 for c in cyc.values()]
-    gaps = [c["controllers"]["E"].get("gap_to_bound_pct") for c in cyc.values()]
-    band = [c["controllers"].get("bound", {}).get("band_vs_pinned_pct") for c in cyc.values()]
-    A = [c["controllers"]["A"] for c in cyc.values()]
-    E = [c["controllers"]["E"] for c in cyc.values()]
-    t_A = min(a["mean_T_evap_set_K"] for a in A) - 273.15
-    t_E = sum(e["mean_T_evap_set_K"] for e in E) / len(E) - 273.15
-    w_A = sum(a["w_cab_mean_g_kg"] for a in A) / len(A)
-    w_E = sum(e["w_cab_mean_g_kg"] for e in E) / len(E)
-    lo, hi = min(sav.values()), max(sav.values())
-    span = f"{lo:.1f} %" if abs(hi - lo) < 0.05 else f"{lo:.1f}-{hi:.1f} %"
-    verb = "less" if lo >= 0 else "more (at worst)"
-    parts = [f"at equal mean cabin temperature, end state charged back, the economic NMPC "
-             f"used {span} {verb} energy than the paper's NMPC "
-             f"({', '.join(n.upper() for n in cyc)})"]
-    if all(g is not None for g in gaps):
-        worst = max(gaps)
-        parts.append(f"within {worst:.1f} % of the perfect-information bound replayed on the "
-                     "plant" if worst <= 2.0 else
-                     f"but up to {worst:.1f} % above the perfect-information bound replayed on "
-                     "the plant (its own periodic start; the others start from the warm-up)")
-    big = max(abs(p) for p in prev)
-    parts.append(f"speed preview changed the saving by at most {big:.2f} points" +
-                 (", negligible" if big < 0.5 else ""))
-    if all(b is not None for b in band):
-        parts.append(f"the whole-cycle optimum gains at most {max(band):.2f} % from moving "
-                     "the cabin temperature in time")
-    if t_E > t_A + 1.0:
-        parts.append(f"the saving comes from the operating point: the coil set-point at "
-                     f"{t_E:.1f} degC instead of {t_A:.1f} degC (a cabin at {w_E:.1f} instead "
-                     f"of {w_A:.1f} g/kg: less latent load at a better COP), not from timing "
-                     "cooling to speed" if big < 0.5 else
-                     f"the coil set-point moved from {t_A:.1f} to {t_E:.1f} degC")
-    return "; ".join(parts) + "."
-
-
-def _mpc_caption(stem: str) -> str:
-    captions = {"fig7": "Fig. 7: NMPC in closed loop with the control-oriented model",
-                "fig8": "Fig. 8: NMPC in closed loop with the high-fidelity plant",
-                "fig9": "Fig. 9: previewed stop-and-go speed and the ICM bound on T_cab",
-                "fig10": "Fig. 10: Case 1 (ICM) vs Case 2 (constant bound)"}
-    for key, cap in captions.items():
-        if stem.startswith(key + "_") or stem == key:
-            return cap
-    return stem.replace("_", " ")
-
-
-def summary_dict(outcomes: dict[str, StageOutcome], rows: list[ComparisonRow],
-                 opts: ReproduceOptions, elapsed_s: float) -> dict:
-    """``summary.json``: every stage's summary, the comparison rows and the settings."""
+def summary_dict(outcomes: dict[str, StageOutcome], verdicts: list[ClaimVerdict],
+                 opts: ReproduceOptions, elapsed_s: float,
+                 figures: list[ReportFigure] = ()) -> dict:
+    """``summary.json``: every stage's typed summary, every claim's verdict, the settings."""
     return {
         "acid_version": __version__,
-        "options": opts.__dict__,
+        "options": dataclasses.asdict(opts),
         "elapsed_s": elapsed_s,
         "stages": {k: {"title": o.title, "seconds": o.seconds, "cached": o.cached,
                        "key": o.key, "summary": o.summary} for k, o in outcomes.items()},
-        "comparison": [r.__dict__ for r in rows],
-        "agreement": {"agree": sum(r.agrees is True for r in rows),
-                      "disagree": sum(r.agrees is False for r in rows),
-                      "not_judged": sum(r.agrees is None for r in rows)},
+        "claims": summary_claims(verdicts),
+        "figures": [{"stage": f.path.parent.name, **f.record.to_json_dict()} for f in figures],
     }
 
 
 def write_outputs(out: Path, outcomes: dict[str, StageOutcome], opts: ReproduceOptions,
-                  elapsed_s: float) -> tuple[Path, Path, list[ComparisonRow]]:
-    """Write ``report.html`` and ``summary.json`` into ``out``."""
-    from acid.report.html import write_report
+                  elapsed_s: float) -> tuple[Path, Path, list[ClaimVerdict]]:
+    """Write ``report.html`` and ``summary.json`` into ``out``; the verdicts behind them."""
+    from acid.report.sections import sections_for
 
-    rows = comparison_rows(outcomes)
-    figs = report_figures(outcomes)
+    results = study_results(outcomes)
+    verdicts = evaluate(results)
+    figs = report_figures(outcomes, [s.name for s in build_stages(opts)])
     meta = {"acid": __version__, "python": platform.python_version(),
             "machine": f"{platform.machine()}, {_cpu_count()} cores",
             "generated": datetime.now(timezone.utc).replace(microsecond=0).isoformat(),
             "mode": "quick" if opts == ReproduceOptions.quick() else "full"}
-    html = write_report(out / "report.html",
-                        "acid: Model Predictive Climate Control of CAVs, reproduced",
-                        rows, figs,
-                        [(o.title, o.seconds, o.cached) for o in outcomes.values()], meta)
-    summary = write_json(out / "summary.json", summary_dict(outcomes, rows, opts, elapsed_s))
-    return html, summary, rows
+    html = write_report(out / "report.html", Report(
+        title="acid: Model Predictive Climate Control of CAVs, reproduced",
+        verdicts=verdicts, figures=figs, sections=sections_for(results),
+        stages=[StageTime(o.title, o.seconds, o.cached) for o in outcomes.values()],
+        meta=meta))
+    summary = write_json(out / "summary.json",
+                         summary_dict(outcomes, verdicts, opts, elapsed_s, figs))
+    return html, summary, verdicts
 
 
 def _cpu_count() -> int:
@@ -581,4 +354,4 @@ def load_summary(path: Path) -> dict:
     return json.loads(Path(path).read_text())
 
 
-__all__ = ["ReproduceOptions", "build_stages", "comparison_rows", "write_outputs"]
+__all__ = ["ReproduceOptions", "build_stages", "study_results", "write_outputs"]

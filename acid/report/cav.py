@@ -16,6 +16,10 @@ from acid.units import K2C
 _COLORS = {"A": "tab:blue", "B": "tab:orange", "D": "tab:purple", "E": "tab:green",
            "bound": "black"}
 _STYLE = {"A": "-", "B": "-", "D": ":", "E": "-", "bound": "--"}
+#: A drawn wide under E and the bound: where they coincide all stay visible (the report
+#: audits every figure for hidden lines)
+_WIDTH = {"A": 2.6, "B": 1.6, "D": 1.4, "E": 1.2, "bound": 1.2}
+_Z = {"A": 2, "B": 2, "D": 3, "E": 4, "bound": 3}   # E on top; reference lines below all
 _BAND = {"color": "tab:red", "linestyle": ":", "linewidth": 1.2}
 
 
@@ -61,15 +65,18 @@ def trajectory_figure(study: CycleStudy, keys=("A", "E", "bound")) -> Figure:
         r = study.results[key]
         run, col, ls = r.run, _COLORS[key], _STYLE[key]
         lab = f"{key}: {r.tail_corrected_J / 1e6:.4f} MJ (end state charged back)"
-        axs[1].plot(t, K2C(run.T_cab), color=col, ls=ls, lw=1.1, label=lab)
-        axs[2].step(t[:-1], K2C(run.T_evap_set), where="post", color=col, ls=ls, lw=0.9)
-        axs[3].step(t[:-1], run.W_bl, where="post", color=col, ls=ls, lw=0.9)
-        axs[4].plot(t, 1e3 * run.w_cab, color=col, ls=ls, lw=1.1)
-        axs[5].step(t[:-1], run.P_comp + run.P_bl, where="post", color=col, ls=ls, lw=0.8)
+        kw = {"color": col, "ls": ls, "lw": _WIDTH[key], "zorder": _Z[key], "label": key}
+        axs[1].plot(t, K2C(run.T_cab), **{**kw, "label": lab})
+        axs[2].step(t[:-1], K2C(run.T_evap_set), where="post", **kw)
+        axs[3].step(t[:-1], run.W_bl, where="post", **kw)
+        axs[4].plot(t, 1e3 * run.w_cab, **kw)
+        axs[5].step(t[:-1], run.P_comp + run.P_bl, where="post", **{**kw, "lw": 0.8 * kw["lw"]})
     for T in (study.T_low, study.T_high):
-        axs[1].axhline(K2C(T), **_BAND)
-    axs[1].axhline(K2C(study.target_mean_K), color="grey", lw=0.8,
-                   label=f"target mean {K2C(study.target_mean_K):.2f} °C")
+        axs[1].axhline(K2C(T), zorder=1, **_BAND)
+    axs[1].axhline(K2C(study.target_mean_K), color="grey", lw=0.8, zorder=1,
+                   label="_target")   # a reference, often covered by the runs riding it
+    axs[1].set_title(f"every run's mean: {K2C(study.target_mean_K):.2f} °C (grey line); "
+                     "dotted: the comfort band", fontsize=9)
     axs[1].set_ylabel("$T_{cab}$ (°C)")
     axs[1].legend(fontsize=7, loc="best")
     axs[2].set_ylabel("$T_{evap,set}$ (°C)")
