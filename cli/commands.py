@@ -30,3 +30,7 @@ app.command(name="reproduce")(reproduce.reproduce)
 from acid_cli import cav_study  # noqa: E402
 
 app.command(name="cav-study")(cav_study.cav_study)
+
+from acid_cli import sweep  # noqa: E402
+
+app.command(name="sweep")(sweep.sweep)
