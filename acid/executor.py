@@ -227,15 +227,14 @@ class InlineExecutor(Executor):
         return task
 
     def _run(self, task: _InlineTask) -> None:
-        args = []
-        for a in task.args:
-            if isinstance(a, _InlineTask):
-                if not a.done:
-                    self._run(a)
-                args.append(self.result(a))
-            else:
-                args.append(a)
         try:
+            args = []
+            for a in task.args:
+                if isinstance(a, _InlineTask):
+                    if not a.done:
+                        self._run(a)
+                    a = self.result(a)  # a failed dependency fails this task too
+                args.append(a)
             task.value = task.fn(*args)
         except Exception as exc:  # the caller decides (result re-raises)
             task.error = exc
@@ -299,6 +298,7 @@ class DaskExecutor(Executor):
         except ImportError:
             raise AcidError("parallel runs need Dask: pip install 'acid[distributed]'") from None
         self.cluster = None
+        self._pids: set[int] = set()
         if address:
             self.kind, self.address = "cluster", address
             try:
@@ -315,10 +315,12 @@ class DaskExecutor(Executor):
             with dask.config.set({"distributed.scheduler.allowed-failures": 1,
                                   "distributed.worker.daemon": False}):
                 self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                            dashboard_address=None, silence_logs=logging.ERROR)
+                                            dashboard_address=None,
+                                            silence_logs=logging.CRITICAL)
                 self.client = Client(self.cluster)
             self.address = self.cluster.scheduler_address
             self.client.register_plugin(_ignore_sigint_plugin())
+            self._pids = set(self.client.run(os.getpid).values())
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
 
     def _check_versions(self) -> None:
@@ -367,10 +369,22 @@ class DaskExecutor(Executor):
             with contextlib.suppress(Exception):
                 self.client.close(timeout=5)
             return
+        if interrupted:  # do not wait for running tasks: end our worker processes now
+            self._kill_workers()
         with contextlib.suppress(Exception):
             self.client.close(timeout=2 if interrupted else 10)
         with contextlib.suppress(Exception):
             self.cluster.close(timeout=2 if interrupted else 10)
+        self._kill_workers()  # whatever a close that timed out left running
+
+    def _kill_workers(self) -> None:
+        """SIGKILL the local cluster's worker processes (only children of this process)."""
+        import multiprocessing
+
+        for child in multiprocessing.active_children():
+            if child.pid in self._pids:
+                with contextlib.suppress(Exception):
+                    child.kill()
 
 
 @contextlib.contextmanager

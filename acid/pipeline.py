@@ -30,7 +30,7 @@ from acid import __version__
 from acid._io import write_json
 from acid.errors import AcidError
 from acid.executor import Executor, ProgressReporter, open_executor
-from acid.outdir import TMP_DIR_SUFFIX, claim
+from acid.outdir import TMP_DIR_SUFFIX, claim, clean_stale
 
 STAGE_RECORD = "stage.json"
 
@@ -161,8 +161,11 @@ def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
     with claim(root, "acid reproduce"):
         if executor is not None:
             return _run(stages, root, executor, on_start, on_progress, on_done, force)
-        with open_executor(jobs, scheduler, notice=notice) as ex:
-            return _run(stages, root, ex, on_start, on_progress, on_done, force)
+        try:
+            with open_executor(jobs, scheduler, notice=notice) as ex:
+                return _run(stages, root, ex, on_start, on_progress, on_done, force)
+        finally:  # the workers are gone: a stage folder still under construction is stale
+            clean_stale(root / "stages")
 
 
 def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force):

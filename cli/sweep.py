@@ -10,6 +10,10 @@ import typer
 from acid.errors import ConfigError
 from acid_cli._common import console, err_console, handle_errors, print_table, progress_bar
 
+#: files acid sweep writes into its output folder
+OUTPUTS = ("results.parquet", "results.csv", "summary.json", "saving_vs_ambient.png",
+           "energy_per_cycle.png", "spec.toml", ".acid.lock")
+
 
 def _fmt(v, digits: int = 3) -> str:
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
@@ -62,7 +66,8 @@ def sweep(
     interrupted sweep resumes. Writes OUT/results.parquet, OUT/results.csv, two figures and
     OUT/summary.json.
     """
-    from acid.sweep import load_spec, run_sweep
+    from acid.outdir import claim
+    from acid.sweep import load_spec
 
     if workers is not None and scheduler is not None:
         raise ConfigError("--workers and --scheduler: give one (the cluster has its workers)")
@@ -70,13 +75,19 @@ def sweep(
         raise ConfigError(f"--workers {workers}: must lie in 1..256")
     spec = load_spec(spec_path)
     out = out if out is not None else Path("reports/sweep") / spec_path.stem
-    if json_path is not None and json_path.resolve() == spec_path.resolve():
-        raise ConfigError(f"--json {json_path}: that is the specification itself")
+    if json_path is not None:
+        j = json_path.resolve()
+        if j == spec_path.resolve():
+            raise ConfigError(f"--json {json_path}: that is the specification itself")
+        if j.parent == out.resolve() and j.name in OUTPUTS or out.resolve() in j.parents \
+                and j.parent.name == "scenarios":
+            raise ConfigError(f"--json {json_path}: acid sweep writes that file itself")
     n, m = len(spec.scenarios), len(spec.controllers)
-    console.print(f"{spec_path}: {spec.title!r}: {n} scenario{'s' * (n != 1)} x {m} "
-                  f"controller{'s' * (m != 1)} ({', '.join(c.label for c in spec.controllers)}"
-                  f"; baseline {spec.baseline})", highlight=False)
+    header = (f"{spec_path}: {spec.title!r}: {n} scenario{'s' * (n != 1)} x {m} "
+              f"controller{'s' * (m != 1)} ({', '.join(c.label for c in spec.controllers)}; "
+              f"baseline {spec.baseline})")
     if dry_run:
+        console.print(header, highlight=False, markup=False)
         rows = [[i, s.label, s.duration_s or "cycle", s.warmup_s, s.tail_s, s.params,
                  ", ".join(f"{k}={v}" for k, v in s.plant) or "-"]
                 for i, s in enumerate(spec.scenarios[:20])]
@@ -85,7 +96,15 @@ def sweep(
                      "_plant"], rows)
         console.print("specification OK; nothing run (--dry-run)")
         return
+    with claim(out, "acid sweep"):  # before anything is printed: a busy folder is one line
+        console.print(header, highlight=False, markup=False)
+        _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path)
 
+
+def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path) -> None:
+    from acid.sweep import run_sweep
+
+    n = len(spec.scenarios)
     with progress_bar(f"sweep {spec.title}", total=n) as update:
         def on_start(to_run: int, reused: int, where: str) -> None:
             update(0, max(to_run, 1))

@@ -35,12 +35,12 @@ def dask_sweep(tmp_path_factory):
         assert ex.kind == "local" and ex.workers == 2
         first = run_sweep(spec, out, executor=ex, figures=True,
                           on_progress=lambda done, total: seen.append((done, total)))
-    second = run_sweep(spec, out, workers=2)  # nothing to run: no cluster is started
-    return spec, out, first, second, seen
+        second = run_sweep(spec, out, workers=2)  # nothing to run: no cluster is started
+        yield spec, out, first, second, seen, ex.address
 
 
 def test_four_scenarios_run_on_two_workers_and_stream_to_disk(dask_sweep):
-    spec, out, first, _, seen = dask_sweep
+    spec, out, first, _, seen, _ = dask_sweep
     assert first.computed == 4 and first.reused == 0
     assert seen[-1] == (4, 4)
     assert len(list((out / "scenarios").glob("*.json"))) == 4
@@ -52,7 +52,7 @@ def test_four_scenarios_run_on_two_workers_and_stream_to_disk(dask_sweep):
 
 
 def test_failing_scenario_is_recorded_and_the_others_complete(dask_sweep):
-    _, out, first, _, _ = dask_sweep
+    _, out, first, _, _, _ = dask_sweep
     df = first.table
     bad = df[df["status"] != "ok"]
     assert list(bad["controller"]) == ["fragile"] and list(bad["ambient_C"]) == [41.0]
@@ -71,14 +71,14 @@ def test_failing_scenario_is_recorded_and_the_others_complete(dask_sweep):
 
 
 def test_second_run_resumes_and_does_nothing_new(dask_sweep):
-    _, _, first, second, _ = dask_sweep
+    _, _, first, second, _, _ = dask_sweep
     assert second.computed == 0 and second.reused == 4
     assert second.executor == "nothing to run"
     pd.testing.assert_frame_equal(first.table, second.table)
 
 
 def test_outputs_are_a_tidy_table_and_figures(dask_sweep):
-    _, out, first, _, _ = dask_sweep
+    _, out, first, _, _, _ = dask_sweep
     df = pd.read_parquet(out / "results.parquet")
     assert len(df) == 12 and {"energy_MJ", "saving_pct", "comfort_violation_Ks",
                               "solve_ms_p95", "scenario_key", "acid_version"} <= set(df.columns)
@@ -92,9 +92,18 @@ def test_outputs_are_a_tidy_table_and_figures(dask_sweep):
 
 
 def test_worker_results_equal_an_in_process_run_bit_for_bit(dask_sweep, tmp_path):
-    spec, _, first, _, _ = dask_sweep
+    spec, _, first, _, _, _ = dask_sweep
     one = spec_from_dict({**SPEC, "grid": {"ambient_C": [32.0]}, "scenarios": []}, "one")
     inline = run_sweep(one, tmp_path, executor=InlineExecutor(), figures=False).table
     dask = first.table[first.table["ambient_C"] == 32.0].reset_index(drop=True)
     for col in ("energy_MJ", "mean_T_cab_C", "max_T_cab_C", "tail_energy_MJ", "saving_pct"):
         assert np.array_equal(inline[col].to_numpy(), dask[col].to_numpy()), col
+
+
+def test_an_existing_cluster_is_used_by_its_scheduler_address(dask_sweep, tmp_path):
+    address = dask_sweep[-1]
+    one = spec_from_dict({**SPEC, "grid": {"ambient_C": [30.0]}, "scenarios": [],
+                          "controllers": {"nmpc": {}}}, "one")
+    res = run_sweep(one, tmp_path, scheduler=address, figures=False)
+    assert res.computed == 1 and res.failed == 0
+    assert res.executor == f"2 worker processes (cluster {address})"

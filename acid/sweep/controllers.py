@@ -145,7 +145,7 @@ def build_config(kind: str, table: dict, where: str, plugins: tuple[str, ...] = 
                               f"{', '.join(names) or 'none'})")
         ok, conv = _type_ok(value, hints.get(key, object))
         if not ok:
-            raise ConfigError(f"{where}: {key} = {value!r} must be a "
+            raise ConfigError(f"{where}: {key} = {value!r} must be "
                               f"{_hint_name(hints.get(key))}")
         kwargs[key] = conv
     try:
@@ -156,7 +156,7 @@ def build_config(kind: str, table: dict, where: str, plugins: tuple[str, ...] = 
 
 
 def _hint_name(hint) -> str:
-    names = {float: "number", int: "integer", str: "string", bool: "true or false"}
+    names = {float: "a number", int: "an integer", str: "a string", bool: "true or false"}
     if hint in names:
         return names[hint]
     return str(hint).replace("typing.", "")
