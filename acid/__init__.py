@@ -6,8 +6,22 @@ Connected and Automated Vehicles for Improved Energy Efficiency" (ACC 2018).
 Conventions (see ``ARCHITECTURE.md``): temperatures are kelvin inside every model and
 solver, degrees Celsius in files, tables and figures; flows in kg/s, powers in W, speeds in
 m/s, time in s. The sample time of the control-oriented model is ``Ts = 5 s``.
+
+The main objects are available here, imported on first use (``import acid`` stays light)::
+
+    import acid
+    plant = acid.make_plant("hifi", T_amb=acid.degC(35))       # or "fmu:my.fmu", fmu_map=...
+    data = acid.excite(plant, acid.ExcitationSpec(duration=3600, seed=1))
+    est, val = data.split(0.5)
+    result = acid.fit(est, method="oe")
+    acid.compare(val, result, acid.paper_params()).to_frame()
+
+Temperatures given to the Python API: a plain number is in the documented unit of its
+argument (kelvin, except the degC bounds of ``ExcitationSpec``); ``acid.degC(25)`` and
+``acid.kelvin(298.15)`` are unit-aware values accepted by either.
 """
 
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
 
 try:
@@ -15,4 +29,57 @@ try:
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0.1.0"
 
-__all__ = ["__version__"]
+#: public name -> (module, attribute): resolved lazily by ``__getattr__`` (PEP 562)
+_API = {
+    # units
+    "degC": ("acid.units", "degC"), "kelvin": ("acid.units", "kelvin"),
+    "C2K": ("acid.units", "C2K"), "K2C": ("acid.units", "K2C"),
+    # datasets
+    "Dataset": ("acid.data", "Dataset"), "ChannelMap": ("acid.data", "ChannelMap"),
+    "load_dataset": ("acid.data", "Dataset.from_hdf5"), "from_csv": ("acid.data", "from_csv"),
+    "from_mat": ("acid.data", "from_mat"), "drive_cycle": ("acid.signals", "drive_cycle"),
+    # parameters
+    "ModelParams": ("acid.params", "ModelParams"), "paper_params": ("acid.params", "paper"),
+    "load_params": ("acid.params", "load_params"),
+    # excitation
+    "ExcitationSpec": ("acid.excite", "ExcitationSpec"), "excite": ("acid.excite", "excite"),
+    "make_schedule": ("acid.excite", "make_schedule"),
+    "InputSchedule": ("acid.plant.base", "InputSchedule"),
+    # plants
+    "make_plant": ("acid.plant", "make_plant"), "Plant": ("acid.plant.base", "Plant"),
+    "HifiPlant": ("acid.plant.hifi", "HifiPlant"), "PlantConfig": ("acid.plant.config",
+                                                                   "PlantConfig"),
+    "ModelPlant": ("acid.plant.model_plant", "ModelPlant"),
+    "FmuPlant": ("acid.plant.fmu", "FmuPlant"), "FmuMap": ("acid.plant.fmu", "FmuMap"),
+    "export_fmu": ("acid.plant.fmu_export", "export_fmu"),
+    "speed_sweep": ("acid.plant.sweep", "speed_sweep"),
+    # identification and validation
+    "fit": ("acid.fit", "fit"), "ModelFitter": ("acid.fit", "ModelFitter"),
+    "FitResult": ("acid.fit", "FitResult"),
+    "validate": ("acid.validate", "validate"),
+    "ValidationResult": ("acid.validate", "ValidationResult"),
+    "predict": ("acid.analysis", "predict"), "compare": ("acid.analysis", "compare"),
+    "resid": ("acid.analysis", "resid"),
+    # control
+    "NMPC": ("acid.mpc.nmpc", "NMPC"), "NMPCConfig": ("acid.mpc.nmpc", "NMPCConfig"),
+    "closed_loop": ("acid.mpc.scenarios", "closed_loop"),
+    "mpc_check": ("acid.mpc.scenarios", "mpc_check"),
+}
+
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str):
+    try:
+        module, attr = _API[name]
+    except KeyError:
+        raise AttributeError(f"module 'acid' has no attribute {name!r}") from None
+    obj = import_module(module)
+    for part in attr.split("."):
+        obj = getattr(obj, part)
+    globals()[name] = obj
+    return obj
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

@@ -23,7 +23,7 @@ from acid import signals
 from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.plant.base import InputSchedule, Plant
-from acid.units import C2K
+from acid.units import C2K, in_degC
 
 SIGNAL_TYPES = ("aprbs", "prbs", "multisine")
 
@@ -88,6 +88,9 @@ class ExcitationSpec:
     noise: float = 0.0
 
     def __post_init__(self):
+        for name in ("T_evap_set_bounds", "T_int_bounds", "T_shell_bounds"):
+            # degC bounds; acid.degC(...) / acid.kelvin(...) values are converted, not guessed
+            object.__setattr__(self, name, tuple(float(in_degC(t)) for t in getattr(self, name)))
         for name in ("signal", "signal_T_evap_set"):
             value = getattr(self, name)
             if value is not None and value not in SIGNAL_TYPES:

@@ -185,3 +185,20 @@ def load_params(spec: str | Path | None) -> ModelParams:
     if spec is None or str(spec) == "paper":
         return paper()
     return ModelParams.from_json(spec)
+
+
+def as_params(obj) -> ModelParams:
+    """The model parameters of ``obj``: a ``ModelParams`` as is, the ``params`` of a fit result
+    (``acid.fit.FitResult``), ``None``/``"paper"`` for the preset or a params.json path.
+
+    Lets every function that takes parameters accept what ``acid.fit`` returns.
+    """
+    if isinstance(obj, ModelParams):
+        return obj
+    inner = getattr(obj, "params", None)
+    if isinstance(inner, ModelParams):
+        return inner
+    if obj is None or isinstance(obj, (str, Path)):
+        return load_params(obj)
+    raise DataError(f"expected model parameters (ModelParams, a fit result or a params.json "
+                    f"path), got {type(obj).__name__}")

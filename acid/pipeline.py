@@ -64,15 +64,16 @@ class StageOutcome:
 def source_fingerprint() -> str:
     """Hash of acid's source files and shipped datasets (invalidates caches on any change)."""
     import acid
+    from acid.signals import datasets_dir
 
     pkg = Path(acid.__file__).resolve().parent
     h = hashlib.sha256(__version__.encode())
-    files = sorted(pkg.rglob("*.py"))
-    data = pkg.parent / "datasets"
-    if data.is_dir():
-        files += sorted(p for p in data.rglob("*") if p.is_file() and p.suffix in (".csv", ".toml"))
-    for p in files:
-        h.update(str(p.relative_to(pkg.parent)).encode())
+    files = [(str(p.relative_to(pkg.parent)), p) for p in sorted(pkg.rglob("*.py"))]
+    data = datasets_dir().resolve()  # the shipped data, as importlib.resources finds it
+    files += [(f"datasets/{p.relative_to(data)}", p) for p in sorted(data.rglob("*"))
+              if p.is_file() and p.suffix in (".csv", ".toml")]
+    for name, p in files:
+        h.update(name.encode())
         h.update(p.read_bytes())
     return h.hexdigest()
 

@@ -19,7 +19,6 @@ constant_speed, drive_cycle : vehicle speed profiles (m/s, mean over each sample
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -239,13 +238,11 @@ def slow_exogenous(rng: np.random.Generator, n: int, Ts: float, low: float, high
 
 # ---------------------------------------------------------------------- speed profiles
 def datasets_dir() -> Path:
-    """The shipped ``datasets/`` folder (override with the ``ACID_DATASETS`` environment)."""
-    env = os.environ.get("ACID_DATASETS")
-    if env:
-        return Path(env)
-    import acid
+    """The shipped data: ``datasets/`` of the repository, installed as the package
+    ``acid.datasets`` and found with ``importlib.resources`` (from any directory)."""
+    from importlib.resources import files
 
-    return Path(acid.__file__).resolve().parent.parent / "datasets"
+    return Path(str(files("acid.datasets")))
 
 
 def available_drive_cycles() -> list[str]:

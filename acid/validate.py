@@ -28,7 +28,7 @@ from acid._io import json_safe
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError, DataError
 from acid.metrics import fit_percent
-from acid.params import ModelParams
+from acid.params import ModelParams, as_params
 from acid.units import K2C
 
 #: Validated channels, in the order of the last axis of the result arrays.
@@ -167,7 +167,8 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
     Parameters
     ----------
     ds : dataset with the channels of ``acid.data.MODEL_CHANNELS``, sampled at ``params.Ts``.
-    params : model parameters (kelvin convention).
+    params : model parameters (kelvin convention): ``ModelParams`` or the result of
+        ``acid.fit``.
     starts : number of prediction windows requested (paper: 60).
     horizon : prediction steps per window (paper: 300, i.e. 1500 s at Ts = 5 s).
     exogenous : ``"hold"`` keeps T_int, T_shell at their values at the start (paper);
@@ -199,6 +200,7 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
     shorter than ``starts * horizon``). When fewer distinct admissible starts exist than
     requested, each is used once and a ``UserWarning`` says so.
     """
+    params = as_params(params)  # a FitResult is accepted wherever parameters are
     if exogenous not in EXOGENOUS_MODES:
         raise ConfigError(f"--exogenous: unknown mode {exogenous!r} (choose 'hold' or 'measured')")
     if placement not in PLACEMENTS:

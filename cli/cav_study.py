@@ -14,6 +14,7 @@ from acid.errors import ConfigError
 from acid.params import load_params
 from acid.units import C2K, K2C
 from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -44,6 +45,8 @@ def cav_study(
                              help="Folder for the figure (cav_<cycle>.png)."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figure."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
     """Compare (A) constant bound, (B) ICM bound, (C) speed-aware NMPC on a drive cycle.
 
@@ -63,13 +66,23 @@ def cav_study(
                           f"{', '.join(names)})")
     if not (math.isfinite(identify_duration) and identify_duration > 600.0):
         raise ConfigError(f"--identify-duration must be more than 600 s, got {identify_duration}")
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     p = load_params(params)
+    factory = None
+    if choice.kind == "fmu":
+        choice.check()
+        factory = choice.factory()
+        if speed_blind:
+            console.print("note: an FMU plant has no speed-blind twin; running without it",
+                          highlight=False)
+            speed_blind = False
     config = StudyConfig(cycle=cycle, horizon=horizon, T_low=C2K(T_low), T_high=C2K(T_high),
                          warmup_s=warmup, tail_s=tail, speed_blind=speed_blind)
-    eff = identify_from_plant(duration_s=identify_duration)
+    eff = identify_from_plant(plant=None if factory is None else factory(),
+                              duration_s=identify_duration)
     v, _ = drive_cycle(cycle, Ts=p.Ts)
     with progress_bar(f"cav-study {cycle}", total=estimated_steps(config, v.size, p.Ts)) as up:
-        result = run_study(p, config, efficiency=eff, progress=up)
+        result = run_study(p, config, efficiency=eff, plant_factory=factory, progress=up)
 
     q = eff.quality
     console.print(
@@ -119,7 +132,8 @@ def cav_study(
     summary = {
         "command": "cav-study", "acid_version": __version__,
         "inputs": {"params": params,
-                   "params_sha256": None if params == "paper" else file_sha256(params)},
+                   "params_sha256": None if params == "paper" else file_sha256(params),
+                   **choice.to_json_dict()},
         "figure": fig_path, **d,
     }
     write_summary(json_path, summary)

@@ -31,6 +31,10 @@ from acid_cli import cav_study  # noqa: E402
 
 app.command(name="cav-study")(cav_study.cav_study)
 
+from acid_cli import export_fmu  # noqa: E402
+
+app.command(name="export-fmu")(export_fmu.export_fmu)
+
 from acid_cli import sweep  # noqa: E402
 
 app.command(name="sweep")(sweep.sweep)

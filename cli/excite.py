@@ -14,38 +14,37 @@ from acid.excite import SIGNAL_TYPES, ExcitationSpec
 from acid.excite import excite as run_excitation
 from acid.units import C2K
 from acid_cli._common import handle_errors, print_table, progress_bar, write_summary
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 PLANTS = ("hifi", "model")
 
 
 def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
-                plant_config: Path | None, T_amb: float | None):
+                plant_config: Path | None, T_amb: float | None,
+                fmu_map: Path | None = None):
     """The plant chosen by ``--plant``, with the spec's noise and the noise stream's seed.
 
     A plant that is not available in this installation (``--plant hifi`` before the
     high-fidelity modules exist, or without their dependencies) is a one-line ``ConfigError``.
     """
-    from acid.plant import make_plant
-
-    if name not in PLANTS:
-        raise ConfigError(f"--plant: unknown plant {name!r} (choose {' or '.join(PLANTS)})")
-    if name == "hifi" and params is not None:
+    choice = plant_choice(name, fmu_map, allowed=PLANTS)
+    if choice.kind != "model" and params is not None:
         raise ConfigError("--params applies to --plant model only (the high-fidelity plant "
                           "is configured with --plant-config)")
-    if name == "model" and plant_config is not None:
+    if choice.kind != "hifi" and plant_config is not None:
         raise ConfigError("--plant-config applies to --plant hifi only (the model plant "
-                          "takes --params)")
+                          "takes --params, an FMU plant --fmu-map)")
     if plant_config is not None and not Path(plant_config).is_file():
         raise ConfigError(f"--plant-config: file not found: {plant_config}")
     model_params = None
-    if name == "model":
+    if choice.kind == "model":
         from acid.params import load_params
 
         model_params = load_params(params)
     try:
-        return make_plant(name, config_path=plant_config, params=model_params,
-                          meas_noise_std=spec.noise, rng=spec.rng("noise"),
-                          T_amb=None if T_amb is None else C2K(T_amb))
+        return choice.make(config_path=plant_config, params=model_params,
+                           meas_noise_std=spec.noise, rng=spec.rng("noise"),
+                           T_amb=None if T_amb is None else C2K(T_amb))
     except ImportError as exc:
         raise ConfigError(f"--plant {name}: not available in this installation ({exc}); "
                           f"use --plant model") from None
@@ -62,9 +61,8 @@ def _summary_rows(ds: Dataset) -> list[list[str]]:
 @handle_errors
 def excite(
     out: Path = typer.Option(..., "--out", "-o", help="HDF5 dataset to write (atomically)."),
-    plant: str = typer.Option("hifi", "--plant",
-                              help="Plant to excite: 'hifi' (high-fidelity) or 'model' "
-                                   "(paper eqs. 1-5)."),
+    plant: str = plant_option("hifi", PLANTS),
+    fmu_map: Path | None = fmu_map_option(),
     duration: float = typer.Option(7200.0, "--duration", help="Record length, s."),
     signal: str = typer.Option("aprbs", "--signal",
                                help=f"Input signal: {', '.join(SIGNAL_TYPES)}."),
@@ -99,7 +97,7 @@ def excite(
         from acid.signals import drive_cycle
 
         drive_cycle(cycle, n=1, Ts=spec.Ts)  # unknown names fail before the plant is built
-    the_plant = build_plant(plant, spec, params, plant_config, t_amb)
+    the_plant = build_plant(plant, spec, params, plant_config, t_amb, fmu_map)
     t0 = time.perf_counter()
     with progress_bar(f"exciting {plant} plant", spec.n_samples) as update:
         ds = run_excitation(the_plant, spec, progress=update)

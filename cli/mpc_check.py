@@ -15,6 +15,7 @@ from acid.mpc.nmpc import NMPCConfig
 from acid.mpc.scenarios import mpc_check as run_check
 from acid.params import load_params
 from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -43,8 +44,10 @@ def mpc_check(
     skip_plant: bool = typer.Option(False, "--skip-plant",
                                     help="Only scenario (a), on the control-oriented model."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figures."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
-    """Run the NMPC scenarios: (a) on the model, (b) on the high-fidelity plant, (c) CAV case.
+    """Run the NMPC scenarios: (a) on the model, (b) on the plant, (c) CAV case.
 
     Reports A/C energy (MJ), constraint violations (K), whole-step solve time (ms) and
     fallbacks per scenario, with PASS/FAIL against the stated criteria; exits 1 on any FAIL.
@@ -53,12 +56,18 @@ def mpc_check(
         raise ConfigError(f"--first-move must be 'free' or 'pinned', got {first_move!r}")
     if solver not in ("fatrop", "ipopt"):
         raise ConfigError(f"--solver must be 'fatrop' or 'ipopt', got {solver!r}")
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     p = load_params(params)
     config = NMPCConfig(first_move=first_move, solver=solver)
+    factory = None
+    if choice.kind == "fmu" and not skip_plant:
+        choice.check()
+        factory = choice.factory()
 
     t0 = time.perf_counter()
     with progress_bar("mpc-check", total=1) as update:
-        result = run_check(p, config, plant=not skip_plant, progress=update)
+        result = run_check(p, config, plant=not skip_plant, progress=update,
+                           plant_factory=factory)
     elapsed = time.perf_counter() - t0
 
     console.print(f"NMPC: N = {config.N}, solver {solver}, first move {first_move}, "
@@ -122,7 +131,8 @@ def mpc_check(
         "command": "mpc-check",
         "acid_version": __version__,
         "inputs": {"params": params,
-                   "params_sha256": None if params == "paper" else file_sha256(params)},
+                   "params_sha256": None if params == "paper" else file_sha256(params),
+                   **choice.to_json_dict()},
         "elapsed_s": elapsed,
         "figures": fig_paths,
         **result.to_json_dict(),

@@ -10,6 +10,7 @@ import typer
 from acid import __version__
 from acid._io import file_sha256, save_figure, write_json
 from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -24,6 +25,8 @@ def speed_sweep(
     out: Path = typer.Option(Path("reports/speed-sweep"), "--out",
                              help="Folder for the figure and the result JSON."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    plant: str = plant_option("hifi", ("hifi",)),
+    fmu_map: Path | None = fmu_map_option(),
 ) -> None:
     """Run the nominal controller at 0-25 m/s for --duration s and compare with Table I.
 
@@ -37,10 +40,19 @@ def speed_sweep(
 
     if not math.isfinite(duration) or duration <= 0:
         raise ConfigError(f"--duration must be a positive number of seconds, got {duration}")
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
+    if config is not None and choice.kind != "hifi":
+        raise ConfigError("--config applies to --plant hifi only (an FMU plant is configured "
+                          "through --fmu-map)")
+    factory = None
+    if choice.kind == "fmu":
+        choice.check(mode="nominal")
+        factory = choice.factory(mode="nominal")
     cfg = PlantConfig.from_toml(config) if config is not None else PlantConfig()
     speeds = PAPER_TABLE_I["speeds_mps"]
     with progress_bar("speed sweep", total=len(speeds)) as update:
-        result = run_sweep(cfg, speeds=speeds, duration=duration, progress=update)
+        result = run_sweep(cfg, speeds=speeds, duration=duration, progress=update,
+                           plant_factory=factory)
 
     paper_E = PAPER_TABLE_I["energy_MJ"]
     paper_km = PAPER_TABLE_I["energy_MJ_per_km"]
@@ -55,7 +67,7 @@ def speed_sweep(
                   + ("" if duration == 600.0 else "  [paper values are for 600 s]"))
 
     summary = result.to_json_dict()
-    summary.update(acid_version=__version__,
+    summary.update(acid_version=__version__, **choice.to_json_dict(),
                    config_path=str(config) if config is not None else None,
                    config_sha256=file_sha256(config) if config is not None else None)
     figure_path = save_figure(sweep_figure(result), out / "speed_sweep.png")

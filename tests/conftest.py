@@ -6,6 +6,8 @@ temperatures in degC, so the true parameters are ``acid.params.paper()``.
 ``noisy_model_dataset``: the same run with 0.05 K measurement noise on T_cab, T_evap, T_ain.
 Both are session-scoped (built once, ~20 ms each): treat them as read-only (use
 ``ds.window(...)`` or copies before modifying).
+``exported_fmu``: ``acid export-fmu`` of the default high-fidelity plant (FMI 2.0) and its
+map, built once per session (~0.1 s).
 """
 
 from __future__ import annotations
@@ -42,3 +44,14 @@ def noisy_model_dataset(model_spec):
     spec = model_spec.replace(noise=0.05)
     plant = make_plant("model", meas_noise_std=spec.noise, rng=spec.rng("noise"))
     return excite(plant, spec)
+
+
+@pytest.fixture(scope="session")
+def exported_fmu(tmp_path_factory):
+    """acid's high-fidelity plant exported once per session as an FMI 2.0 FMU, with its map:
+    ``(fmu_path, map_path)``."""
+    from acid.plant.fmu_export import export_fmu
+
+    folder = tmp_path_factory.mktemp("fmu")
+    result = export_fmu(folder / "plant.fmu", map_out=folder / "plant.toml")
+    return result.fmu, result.fmu_map

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -184,11 +186,20 @@ def test_unknown_drive_cycle_lists_available():
     assert "'autobahn'" in msg and "udds" in msg and "wltc3" in msg and "\n" not in msg
 
 
-def test_datasets_dir_can_be_overridden(tmp_path, monkeypatch):
+def test_datasets_dir_is_the_acid_datasets_package_resource():
+    from importlib.resources import files
+
+    folder = signals.datasets_dir()
+    assert folder == Path(str(files("acid.datasets")))
+    assert (folder / "drive_cycles" / "udds.csv").is_file()
+    assert "nycc" in signals.available_drive_cycles()
+
+
+def test_drive_cycles_are_read_from_datasets_dir(tmp_path, monkeypatch):
     (tmp_path / "drive_cycles").mkdir()
     (tmp_path / "drive_cycles" / "ramp.csv").write_text(
         "time_s,speed_mps\n" + "\n".join(f"{i},{i}" for i in range(10)) + "\n")
-    monkeypatch.setenv("ACID_DATASETS", str(tmp_path))
+    monkeypatch.setattr(signals, "datasets_dir", lambda: tmp_path)
     assert signals.available_drive_cycles() == ["ramp"]
     v, _ = signals.drive_cycle("ramp", Ts=5.0)
     np.testing.assert_allclose(v, [2.0, 7.0])

@@ -234,7 +234,9 @@ class NMPC:
     """
 
     def __init__(self, params: ModelParams, config: NMPCConfig | None = None):
-        self.params = params
+        from acid.params import as_params
+
+        self.params = as_params(params)  # ModelParams or a FitResult
         self.config = config or NMPCConfig()
         self.N = int(self.config.N)
         self._build()

@@ -614,10 +614,13 @@ def run_cav_scenario(params: ModelParams, config: NMPCConfig | None = None,
 
 
 def mpc_check(params: ModelParams, config: NMPCConfig | None = None, plant: bool = True,
-              timing_repeats: int = 5, progress: Progress | None = None) -> CheckResult:
+              timing_repeats: int = 5, progress: Progress | None = None,
+              plant_factory: Callable[[], Plant] | None = None) -> CheckResult:
     """Run scenarios (a), (b), (c) and the timing check; see :class:`CheckResult`.
 
     ``plant=False`` skips (b) and (c) (they need the high-fidelity plant and take longer).
+    ``plant_factory`` runs (b) and (c) on another plant (e.g. an FMU; default the
+    high-fidelity plant); (c) then has no speed-blind twin.
     The timing statistics pool the whole ``make_step`` wall times of scenario (a) run
     ``timing_repeats`` times (at least once), so that the p95 rests on a few hundred steps.
     ``progress(done, total)`` is called after every closed-loop step.
@@ -641,8 +644,10 @@ def mpc_check(params: ModelParams, config: NMPCConfig | None = None, plant: bool
     for _ in range(repeats - 1):
         timed += list(run_model_scenario(params, config, progress=tick).runs)
     if plant:
-        scen["plant"] = run_plant_scenario(params, config, progress=tick)
-        scen["cav"] = run_cav_scenario(params, config, progress=tick)
+        scen["plant"] = run_plant_scenario(params, config, plant_factory=plant_factory,
+                                           progress=tick)
+        scen["cav"] = run_cav_scenario(params, config, plant_factory=plant_factory,
+                                       progress=tick)
     else:
         why = "skipped: --skip-plant"
         scen["plant"] = ScenarioResult(name="plant", title="NMPC on the high-fidelity plant "

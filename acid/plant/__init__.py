@@ -1,24 +1,48 @@
-"""Plants: the high-fidelity A/C + cabin simulator and the control-oriented model as a plant.
+"""Plants: the high-fidelity A/C + cabin simulator, the control-oriented model as a plant, and
+any FMI 2.0 / 3.0 co-simulation FMU (``acid.plant.fmu``).
 
-Both implement the protocol of ``acid.plant.base.Plant`` (reset / step / simulate).
+All implement the protocol of ``acid.plant.base.Plant`` (reset / step / measure / simulate).
 """
 
 from acid.plant.base import InputSchedule, Measurement, Plant, measurements_to_dataset
 from acid.plant.model_plant import ModelPlant
 
-__all__ = ["InputSchedule", "Measurement", "ModelPlant", "Plant", "make_plant",
+__all__ = ["FMU_PREFIX", "InputSchedule", "Measurement", "ModelPlant", "Plant", "make_plant",
            "measurements_to_dataset"]
 
 
+#: Prefix of an FMU plant in ``--plant`` / ``make_plant``: ``"fmu:PATH.fmu"``.
+FMU_PREFIX = "fmu:"
+
+
 def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: float = 0.0,
-               process_noise_std: float = 0.0, rng=None, T_amb: float | None = None) -> Plant:
-    """The plant chosen by ``--plant``: ``"hifi"`` (high-fidelity, default) or ``"model"``.
+               process_noise_std: float = 0.0, rng=None, T_amb: float | None = None,
+               fmu_map=None, mode: str = "direct") -> Plant:
+    """The plant chosen by ``--plant``: ``"hifi"`` (high-fidelity, default), ``"model"`` or
+    ``"fmu:PATH.fmu"`` (an FMI co-simulation FMU driven through the map ``fmu_map``).
 
     ``config_path`` is a TOML plant configuration (hifi); ``params`` the model parameters
-    (model plant); noise levels in K; ``T_amb`` in K overrides the ambient temperature.
+    (model plant); noise levels in K; ``T_amb`` in K overrides the ambient temperature;
+    ``mode`` is "direct" (inputs commanded) or "nominal" (the plant's own controller; hifi
+    and FMU plants).
     """
     from acid.errors import ConfigError
 
+    if T_amb is not None and not 200.0 < float(T_amb) < 400.0:
+        raise ConfigError(f"ambient temperature T_amb = {T_amb} is not plausible in kelvin "
+                          "(give kelvin, or acid.degC(...))")
+    if name.startswith(FMU_PREFIX):
+        from acid.plant.fmu import FmuPlant
+
+        path = name[len(FMU_PREFIX):]
+        if not path:
+            raise ConfigError("--plant fmu:PATH: the FMU path is missing")
+        if fmu_map is None:
+            raise ConfigError(f"--plant {name}: an FMU plant needs --fmu-map MAP.toml")
+        return FmuPlant(path, fmu_map, mode=mode, meas_noise_std=meas_noise_std, rng=rng,
+                        T_amb=T_amb)
+    if fmu_map is not None:
+        raise ConfigError("--fmu-map applies to --plant fmu:PATH.fmu only")
     if name == "model":
         kw = {} if T_amb is None else {"T_amb": T_amb}
         return ModelPlant(params=params, meas_noise_std=meas_noise_std,
@@ -30,5 +54,6 @@ def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: floa
         cfg = PlantConfig.from_toml(config_path) if config_path else PlantConfig()
         if T_amb is not None:
             cfg = cfg.replace(T_amb=T_amb)
-        return HifiPlant(cfg, meas_noise_std=meas_noise_std, rng=rng)
-    raise ConfigError(f"--plant: unknown plant {name!r} (choose 'hifi' or 'model')")
+        return HifiPlant(cfg, mode=mode, meas_noise_std=meas_noise_std, rng=rng)
+    raise ConfigError(f"--plant: unknown plant {name!r} (choose 'hifi', 'model' or "
+                      "'fmu:PATH.fmu')")

@@ -101,6 +101,11 @@ class Plant(abc.ABC):
     def config(self) -> dict:
         """The plant's resolved configuration, JSON-serialisable (stored with datasets)."""
 
+    def units(self) -> dict[str, str]:
+        """Units of the channels this plant reports that ``acid.data.CHANNELS`` does not
+        know, in the plant's inside units (K for temperatures). Empty by default."""
+        return {}
+
     def simulate(self, schedule: InputSchedule, initial: dict[str, float] | None = None,
                  progress: Callable[[int, int], None] | None = None,
                  metadata: dict | None = None) -> Dataset:
@@ -126,16 +131,24 @@ class Plant(abc.ABC):
         if "seed" in schedule.spec:
             meta["seed"] = schedule.spec["seed"]
         meta.update(metadata or {})
-        return measurements_to_dataset(rows, self.Ts, meta)
+        return measurements_to_dataset(rows, self.Ts, meta, units=self.units())
 
 
-def measurements_to_dataset(rows: list[Measurement], Ts: float, metadata: dict) -> Dataset:
-    """Stack per-step measurements (K inside) into a dataset with temperatures in degC."""
+def measurements_to_dataset(rows: list[Measurement], Ts: float, metadata: dict,
+                            units: dict[str, str] | None = None) -> Dataset:
+    """Stack per-step measurements (K inside) into a dataset with temperatures in degC.
+
+    ``units`` gives the inside unit of channels that ``CHANNELS`` does not know.
+    """
     names = list(rows[0])
+    known = units or {}
     channels, units = {}, {}
     for name in names:
         v = np.array([r[name] for r in rows], dtype=float)
-        unit = CHANNELS[name].unit if name in CHANNELS else _guess_unit(name)
+        if name in CHANNELS:
+            unit = CHANNELS[name].unit
+        else:
+            unit = known.get(name) or _guess_unit(name)
         if is_temperature(unit):
             v, unit = K2C(v), "degC"
         channels[name], units[name] = v, unit

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from acid import model
-from acid.params import ModelParams, paper
+from acid.params import ModelParams, as_params, paper
 from acid.plant.base import Measurement, Plant
 from acid.units import C2K
 
@@ -32,7 +32,7 @@ class ModelPlant(Plant):
     def __init__(self, params: ModelParams | None = None, T_amb: float = C2K(30.0),
                  meas_noise_std: float = 0.0, process_noise_std: float = 0.0,
                  rng: np.random.Generator | None = None):
-        self.params = params or paper()
+        self.params = paper() if params is None else as_params(params)
         self.Ts = self.params.Ts
         self.T_amb = float(T_amb)
         self.meas_noise_std = float(meas_noise_std)

@@ -84,7 +84,8 @@ class SweepResult:
 
 def speed_sweep(config: PlantConfig | None = None,
                 speeds: Sequence[float] = (0, 5, 10, 15, 20, 25), duration: float = 600.0,
-                progress: Callable[[int, int], None] | None = None) -> SweepResult:
+                progress: Callable[[int, int], None] | None = None,
+                plant_factory: Callable[[], object] | None = None) -> SweepResult:
     """Run the nominal controller at each constant speed from the same hot soak.
 
     Parameters
@@ -93,6 +94,9 @@ def speed_sweep(config: PlantConfig | None = None,
     speeds : vehicle speeds, m/s.
     duration : simulated time per speed, s (rounded to whole samples of Ts).
     progress : ``progress(done, total)`` called after each speed.
+    plant_factory : another plant in its nominal mode (e.g. an FMU plant running its own
+        controller), built once per speed; default ``HifiPlant(config, mode="nominal")``.
+        Channels it does not report are NaN in the traces.
 
     Returns
     -------
@@ -111,11 +115,14 @@ def speed_sweep(config: PlantConfig | None = None,
     traces = {name: np.empty((speeds.size, n)) for name in TRACE_CHANNELS}
     E_c, E_b, E_f = (np.empty(speeds.size) for _ in range(3))
     for s, v in enumerate(speeds):
-        plant = HifiPlant(config, mode="nominal")
+        plant = (HifiPlant(config, mode="nominal") if plant_factory is None
+                 else plant_factory())
+        if abs(plant.Ts - Ts) > 1e-9:
+            raise ConfigError(f"plant sample time {plant.Ts:g} s differs from {Ts:g} s")
         plant.reset()
         rows = [plant.step(0.0, config.T_ew_set, float(v)) for _ in range(n)]
         for name in TRACE_CHANNELS:
-            traces[name][s] = [r[name] for r in rows]
+            traces[name][s] = [r.get(name, np.nan) for r in rows]
         E_c[s] = traces["P_comp"][s].sum() * Ts / 1e6
         E_b[s] = traces["P_bl"][s].sum() * Ts / 1e6
         E_f[s] = traces["P_fan"][s].sum() * Ts / 1e6

@@ -1,0 +1,409 @@
+"""``predict``, ``compare`` and ``resid`` for the control-oriented model (MATLAB SITB vocabulary).
+
+* :func:`predict` -- k-step-ahead predictions of T_cab, T_evap, T_ain along a dataset (MATLAB
+  ``predict(sys, data, K)``): sample n is predicted from the measured state at n - k and the
+  measured inputs and disturbances (W_bl, T_evap_set, T_int, T_shell) in between; ``k=None``
+  simulates each experiment from its first sample (MATLAB ``sim``; ``compare``'s default).
+* :func:`compare` -- several models against one dataset: fit per channel with MATLAB's
+  definition ``100 (1 - ||y - y_hat|| / ||y - mean(y)||)`` (``acid.metrics.fit_percent``).
+* :func:`resid` -- the one-step prediction errors and the two classical tests (Ljung 1999,
+  sec. 16.6): their autocorrelation (whiteness) and their cross-correlation with the inputs
+  (independence), each with the 99 % band ``+-2.576/sqrt(N)`` that holds when the residuals are
+  white and independent of the inputs; Ljung-Box portmanteau p-values beside them.
+
+Predictions never cross an experiment boundary. Temperatures are kelvin inside the results;
+``to_frame()`` and ``plot()`` show degC (the edge). Parameters are ``ModelParams`` or what
+``acid.fit`` returns.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acid import model
+from acid._io import json_safe
+from acid.data import MODEL_CHANNELS, Dataset
+from acid.errors import ConfigError, DataError
+from acid.metrics import fit_percent, rmse
+from acid.params import as_params
+from acid.units import K2C
+
+__all__ = ["PREDICTED_CHANNELS", "RESIDUAL_INPUTS", "CompareResult", "PredictionResult",
+           "ResidualResult", "compare", "predict", "resid"]
+
+#: Channels the model predicts, in the order of the arrays' last axis.
+PREDICTED_CHANNELS = ("T_cab", "T_evap", "T_ain")
+#: Inputs whose cross-correlation with the residuals ``resid`` tests.
+RESIDUAL_INPUTS = ("W_bl", "T_evap_set")
+#: Two-sided 99 % standard-normal quantile.
+Z99 = 2.5758293035489004
+
+
+# ------------------------------------------------------------------------- results
+@dataclass(frozen=True)
+class PredictionResult:
+    """k-step-ahead predictions along a dataset.
+
+    Attributes
+    ----------
+    time : (N,) sample times, s.
+    measured, predicted : (N, 3) T_cab, T_evap, T_ain, K (``predicted`` NaN where no
+        prediction exists: the first k samples of each experiment).
+    horizon : k, steps (None: simulation from each experiment's first sample).
+    Ts : sample time, s.
+    model : the parameters' name.
+    source : the dataset's source.
+    channels : ``PREDICTED_CHANNELS``.
+    """
+
+    time: np.ndarray
+    measured: np.ndarray
+    predicted: np.ndarray
+    horizon: int | None
+    Ts: float
+    model: str
+    source: str
+    channels: tuple[str, ...] = PREDICTED_CHANNELS
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(N,) samples that have a prediction."""
+        return np.all(np.isfinite(self.predicted), axis=1)
+
+    @property
+    def errors(self) -> np.ndarray:
+        """(N, 3) measured - predicted, K (NaN where no prediction)."""
+        return self.measured - self.predicted
+
+    @property
+    def fit_percent(self) -> dict[str, float]:
+        """MATLAB fit per channel over the predicted samples, % (100 is perfect)."""
+        m = self.valid
+        return {c: float(fit_percent(self.measured[m, i], self.predicted[m, i]))
+                for i, c in enumerate(self.channels)}
+
+    @property
+    def rmse(self) -> dict[str, float]:
+        """Root-mean-square prediction error per channel, K."""
+        m = self.valid
+        return {c: float(rmse(self.measured[m, i], self.predicted[m, i]))
+                for i, c in enumerate(self.channels)}
+
+    @property
+    def label(self) -> str:
+        return "simulation" if self.horizon is None else f"{self.horizon}-step"
+
+    def to_frame(self):
+        """DataFrame indexed by time (s): ``<channel>`` measured and ``<channel>_pred``, degC."""
+        import pandas as pd
+
+        cols = {}
+        for i, c in enumerate(self.channels):
+            cols[c] = K2C(self.measured[:, i])
+            cols[f"{c}_pred"] = K2C(self.predicted[:, i])
+        df = pd.DataFrame(cols, index=pd.Index(self.time, name="time_s"))
+        df.attrs.update(units="degC", horizon=self.label, model=self.model)
+        return df
+
+    def plot(self, title: str | None = None):
+        """Measured and predicted T_cab, T_evap, T_ain (degC) over time; returns the figure."""
+        return _trace_figure(self.time, self.measured, {self.model: self}, self.channels,
+                             title or f"{self.label} prediction ({self.source})")
+
+    def to_json_dict(self) -> dict:
+        return json_safe({"horizon": self.horizon, "Ts_s": self.Ts, "model": self.model,
+                          "source": self.source, "fit_percent": self.fit_percent,
+                          "rmse_K": self.rmse, "samples": int(self.valid.sum())})
+
+
+@dataclass(frozen=True)
+class CompareResult:
+    """Several models against one dataset (MATLAB ``compare``).
+
+    Attributes
+    ----------
+    predictions : {model label: PredictionResult}, same data and horizon.
+    horizon : k (None: simulation).
+    """
+
+    predictions: dict[str, PredictionResult]
+    horizon: int | None
+
+    @property
+    def fit_percent(self) -> dict[str, dict[str, float]]:
+        """{model: {channel: fit %}}."""
+        return {label: p.fit_percent for label, p in self.predictions.items()}
+
+    def to_frame(self):
+        """DataFrame of fit % (rows: models, columns: T_cab, T_evap, T_ain)."""
+        import pandas as pd
+
+        df = pd.DataFrame(self.fit_percent).T
+        df.index.name = "model"
+        df.attrs.update(unit="%", definition="100 (1 - ||y - y_hat|| / ||y - mean(y)||)",
+                        horizon="simulation" if self.horizon is None else self.horizon)
+        return df
+
+    def plot(self, title: str | None = None):
+        """Measured data and every model's prediction (fit % in the legend); the figure."""
+        first = next(iter(self.predictions.values()))
+        label = "simulation" if self.horizon is None else f"{self.horizon}-step prediction"
+        return _trace_figure(first.time, first.measured, self.predictions, first.channels,
+                             title or f"compare: {label} ({first.source})")
+
+    def to_json_dict(self) -> dict:
+        return json_safe({"horizon": self.horizon, "fit_percent": self.fit_percent})
+
+
+@dataclass(frozen=True)
+class ResidualResult:
+    """Residual analysis (MATLAB ``resid``): whiteness and independence from the inputs.
+
+    Attributes
+    ----------
+    prediction : the k-step predictions the residuals come from (k = 1 by default).
+    lags : (M + 1,) autocorrelation lags 0..M; ``cross_lags`` (2M + 1,) -M..M, samples.
+    autocorrelation : (M + 1, 3) normalised autocorrelation of each channel's residual.
+    cross_correlation : (2M + 1, 2, 3) normalised cross-correlation r_ue(tau) of input u
+        (``RESIDUAL_INPUTS``) at t with the residual at t + tau (tau > 0: the residual after
+        the input; significant values at tau < 0 suggest feedback).
+    band99 : half-width of the 99 % band under whiteness/independence, 2.576 / sqrt(N).
+    n : residual samples used.
+    ljung_box : {channel: {"Q", "p_value", "lags"}} portmanteau test of whiteness.
+    inputs : ``RESIDUAL_INPUTS``.
+    """
+
+    prediction: PredictionResult
+    lags: np.ndarray
+    cross_lags: np.ndarray
+    autocorrelation: np.ndarray
+    cross_correlation: np.ndarray
+    band99: float
+    n: int
+    ljung_box: dict[str, dict[str, float]]
+    inputs: tuple[str, ...] = RESIDUAL_INPUTS
+    channels: tuple[str, ...] = PREDICTED_CHANNELS
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def residuals(self) -> np.ndarray:
+        """(N, 3) measured - predicted, K (NaN where no prediction)."""
+        return self.prediction.errors
+
+    @property
+    def white(self) -> dict[str, bool]:
+        """Per channel: every autocorrelation at lags 1..M inside the 99 % band."""
+        a = np.abs(self.autocorrelation[1:])
+        return {c: bool(np.all(a[:, i] <= self.band99)) for i, c in enumerate(self.channels)}
+
+    @property
+    def independent(self) -> dict[str, dict[str, bool]]:
+        """{input: {channel: every cross-correlation inside the 99 % band}}."""
+        a = np.abs(self.cross_correlation)
+        return {u: {c: bool(np.all(a[:, j, i] <= self.band99))
+                    for i, c in enumerate(self.channels)} for j, u in enumerate(self.inputs)}
+
+    def to_frame(self):
+        """DataFrame indexed by lag (-M..M): ``acf <channel>`` (lags >= 0) and
+        ``ccf <input> <channel>``; ``attrs["band99"]`` the 99 % band."""
+        import pandas as pd
+
+        df = pd.DataFrame(index=pd.Index(self.cross_lags, name="lag"))
+        M = int(self.lags[-1])
+        for i, c in enumerate(self.channels):
+            col = np.full(self.cross_lags.shape, np.nan)
+            col[M:] = self.autocorrelation[:, i]
+            df[f"acf {c}"] = col
+        for j, u in enumerate(self.inputs):
+            for i, c in enumerate(self.channels):
+                df[f"ccf {u} {c}"] = self.cross_correlation[:, j, i]
+        df.attrs.update(band99=self.band99, n=self.n, horizon=self.prediction.horizon)
+        return df
+
+    def plot(self, title: str | None = None):
+        """Autocorrelations (top) and input cross-correlations (bottom) with the 99 % band."""
+        import matplotlib.pyplot as plt
+
+        fig, axes = plt.subplots(2, len(self.channels), figsize=(11, 5.5), sharey="row",
+                                 constrained_layout=True)
+        for i, c in enumerate(self.channels):
+            ax = axes[0, i]
+            ax.bar(self.lags, self.autocorrelation[:, i], width=0.6, color="tab:blue")
+            ax.set_title(f"{c}: residual autocorrelation")
+            ax2 = axes[1, i]
+            for j, u in enumerate(self.inputs):
+                ax2.plot(self.cross_lags, self.cross_correlation[:, j, i], marker=".", lw=0.8,
+                         label=u)
+            ax2.set_title(f"{c}: cross-correlation with inputs")
+            ax2.set_xlabel("lag (samples)")
+            for a in (ax, ax2):
+                a.axhspan(-self.band99, self.band99, color="0.85", zorder=0,
+                          label="99 % band")
+                a.axhline(0.0, color="0.3", lw=0.6)
+        axes[1, 0].legend(fontsize=8)
+        fig.suptitle(title or f"resid: {self.prediction.label} prediction errors "
+                              f"({self.prediction.model}, N = {self.n})")
+        return fig
+
+    def to_json_dict(self) -> dict:
+        return json_safe({"horizon": self.prediction.horizon, "n": self.n,
+                          "band99": self.band99, "white": self.white,
+                          "independent": self.independent, "ljung_box": self.ljung_box,
+                          "lags": self.lags, "autocorrelation": self.autocorrelation,
+                          "cross_lags": self.cross_lags,
+                          "cross_correlation": self.cross_correlation})
+
+
+# ----------------------------------------------------------------------- functions
+def predict(data: Dataset, params, k: int | None = 1) -> PredictionResult:
+    """k-step-ahead predictions of T_cab, T_evap, T_ain along ``data`` (eqs. 1-3).
+
+    Parameters
+    ----------
+    data : dataset with ``acid.data.MODEL_CHANNELS`` at the model's sample time.
+    params : ``ModelParams`` or the result of ``acid.fit``.
+    k : prediction horizon in samples (>= 1); None simulates every experiment from its first
+        sample (no measured state after that).
+
+    Returns
+    -------
+    PredictionResult (NaN predictions for the first k samples of each experiment).
+    """
+    p = as_params(params)
+    data.validate(require=MODEL_CHANNELS)
+    if not math.isclose(data.Ts, p.Ts, rel_tol=1e-6):
+        raise DataError(f"{data.source}: sample time {data.Ts:g} s differs from the model's "
+                        f"Ts = {p.Ts:g} s (parameters {p.name!r})")
+    if k is not None and (isinstance(k, bool) or int(k) != k or int(k) < 1):
+        raise ConfigError(f"predict: horizon k must be a whole number of samples >= 1 or None, "
+                          f"got {k!r}")
+    T_cab, T_evap, T_ain, T_set, T_int, T_shell = (
+        data.get(n, "K") for n in ("T_cab", "T_evap", "T_ain", "T_evap_set", "T_int",
+                                   "T_shell"))
+    W_bl = data.get("W_bl", "kg/s")
+    n = len(data)
+    cab, evap = np.full(n, np.nan), np.full(n, np.nan)
+    for a, b in data.segments():
+        steps = (b - a - 1) if k is None else int(k)
+        if steps < 1 or b - a <= (0 if k is None else steps):
+            continue
+        starts = np.array([a]) if k is None else np.arange(a, b - steps)
+        idx = starts[:, None] + np.arange(steps)[None, :]
+        x0 = np.stack([T_cab[starts], T_evap[starts]], axis=-1)
+        c, e, _ = model.simulate(x0, W_bl[idx], T_set[idx], T_int[idx], T_shell[idx], p)
+        if k is None:
+            cab[a:b], evap[a:b] = c[0], e[0]
+        else:
+            cab[starts + steps], evap[starts + steps] = c[:, -1], e[:, -1]
+    ain = model.inlet_air(evap, W_bl, p)  # eq. 3 of the predicted evaporator wall
+    return PredictionResult(
+        time=data.time.copy(), measured=np.stack([T_cab, T_evap, T_ain], axis=-1),
+        predicted=np.stack([cab, evap, ain], axis=-1), horizon=None if k is None else int(k),
+        Ts=data.Ts, model=p.name, source=data.source)
+
+
+def compare(data: Dataset, *models, k: int | None = None,
+            labels: list[str] | None = None) -> CompareResult:
+    """Fit % per channel of one or more models on ``data`` (MATLAB ``compare``).
+
+    ``models`` are ``ModelParams`` or fit results; ``k`` as in :func:`predict` (default None:
+    simulation, as MATLAB's default); ``labels`` name them (default: the parameters' names,
+    made unique).
+    """
+    if not models:
+        raise ConfigError("compare: give at least one model")
+    if labels is not None and len(labels) != len(models):
+        raise ConfigError(f"compare: {len(labels)} labels for {len(models)} models")
+    preds: dict[str, PredictionResult] = {}
+    for i, m in enumerate(models):
+        pr = predict(data, m, k)
+        label = labels[i] if labels is not None else pr.model
+        if label in preds:
+            label = f"{label} ({i + 1})"
+        preds[label] = pr
+    return CompareResult(predictions=preds, horizon=None if k is None else int(k))
+
+
+def resid(data: Dataset, params, max_lag: int = 25, k: int = 1) -> ResidualResult:
+    """Residual tests of a model on ``data`` (MATLAB ``resid``).
+
+    Parameters
+    ----------
+    data : dataset (``MODEL_CHANNELS``).
+    params : ``ModelParams`` or the result of ``acid.fit``.
+    max_lag : M, the largest lag tested (samples).
+    k : horizon of the prediction errors (1: the innovations MATLAB tests).
+
+    Returns
+    -------
+    ResidualResult: autocorrelations (lags 0..M), cross-correlations with W_bl and T_evap_set
+    (lags -M..M), the 99 % band 2.576/sqrt(N) and Ljung-Box tests.
+    """
+    from scipy.stats import chi2
+
+    if int(max_lag) < 1:
+        raise ConfigError(f"resid: max_lag must be >= 1, got {max_lag}")
+    M = int(max_lag)
+    pr = predict(data, params, k)
+    e = pr.errors
+    valid = pr.valid
+    nv = int(valid.sum())
+    if nv <= M + 1:
+        raise DataError(f"{data.source}: {nv} residual samples are too few for {M} lags")
+    exp = data.experiment
+    e = e - np.nanmean(e[valid], axis=0)
+    e[~valid] = 0.0
+    u = np.stack([data.get("W_bl", "kg/s"), data.get("T_evap_set", "K")], axis=-1)
+    u = u - u[valid].mean(axis=0)
+    u[~valid] = 0.0
+
+    def pairs(lag: int) -> tuple[slice, slice, np.ndarray]:
+        """Index slices (t, t + lag) and the mask of pairs inside one experiment."""
+        if lag >= 0:
+            s0, s1 = slice(0, len(e) - lag), slice(lag, len(e))
+        else:
+            s0, s1 = slice(-lag, len(e)), slice(0, len(e) + lag)
+        mask = valid[s0] & valid[s1] & (exp[s0] == exp[s1])
+        return s0, s1, mask
+
+    ee0 = np.sum(e * e, axis=0)
+    uu0 = np.sum(u * u, axis=0)
+    acf = np.empty((M + 1, 3))
+    for lag in range(M + 1):
+        s0, s1, m = pairs(lag)
+        acf[lag] = np.sum(e[s0][m] * e[s1][m], axis=0) / ee0
+    cross_lags = np.arange(-M, M + 1)
+    ccf = np.empty((cross_lags.size, 2, 3))
+    norm = np.sqrt(uu0[:, None] * ee0[None, :])
+    for i, lag in enumerate(cross_lags):
+        s0, s1, m = pairs(int(lag))
+        ccf[i] = np.einsum("tj,tc->jc", u[s0][m], e[s1][m]) / norm
+    lags = np.arange(M + 1)
+    q = nv * (nv + 2) * np.sum(acf[1:] ** 2 / (nv - lags[1:, None]), axis=0)
+    ljung = {c: {"Q": float(q[i]), "p_value": float(chi2.sf(q[i], M)), "lags": M}
+             for i, c in enumerate(pr.channels)}
+    return ResidualResult(prediction=pr, lags=lags, cross_lags=cross_lags,
+                          autocorrelation=acf, cross_correlation=ccf,
+                          band99=float(Z99 / math.sqrt(nv)), n=nv, ljung_box=ljung,
+                          settings={"max_lag": M, "k": k})
+
+
+# --------------------------------------------------------------------------- figures
+def _trace_figure(time, measured, predictions: dict, channels, title: str):
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(len(channels), 1, figsize=(10, 2.3 * len(channels)), sharex=True,
+                             constrained_layout=True)
+    for i, (ax, c) in enumerate(zip(np.atleast_1d(axes), channels, strict=True)):
+        ax.plot(time, K2C(measured[:, i]), color="k", lw=1.0, label="measured")
+        for label, pr in predictions.items():
+            ax.plot(time, K2C(pr.predicted[:, i]), lw=1.0,
+                    label=f"{label}: fit {pr.fit_percent[c]:.1f} %")
+        ax.set_ylabel(f"{c} (degC)")
+        ax.legend(fontsize=8, loc="upper right")
+    np.atleast_1d(axes)[-1].set_xlabel("time (s)")
+    fig.suptitle(title)
+    return fig

@@ -1,0 +1,108 @@
+"""``--plant`` and ``--fmu-map``: the plant options every command that drives a plant shares.
+
+One place for the options and the construction behind them, so that every command (excite,
+mpc-check, cav-study, speed-sweep, plant-check, and those still to come) accepts the same
+plants: ``hifi`` (acid's high-fidelity plant), ``model`` (paper eqs. 1-5, where a command
+allows it) and ``fmu:PATH.fmu`` (an FMI 2.0 / 3.0 co-simulation FMU, with ``--fmu-map``)::
+
+    plant: str = plant_option(),
+    fmu_map: Path | None = fmu_map_option(),
+    ...
+    choice = plant_choice(plant, fmu_map, allowed=("hifi",))
+    factory = choice.factory(mode="nominal")      # a fresh plant per call
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import typer
+
+from acid.errors import ConfigError
+from acid.plant import FMU_PREFIX, make_plant
+
+_NAMES = {"hifi": "'hifi' (high-fidelity)", "model": "'model' (paper eqs. 1-5)"}
+
+
+def plant_option(default: str = "hifi", allowed: tuple[str, ...] = ("hifi", "model")):
+    """The ``--plant`` option (``allowed`` built-in plants, or ``fmu:PATH.fmu``)."""
+    names = ", ".join(_NAMES[a] for a in allowed)
+    return typer.Option(default, "--plant",
+                        help=f"Plant: {names} or 'fmu:PATH.fmu' (your FMI 2.0/3.0 "
+                             "co-simulation FMU, with --fmu-map).")
+
+
+def fmu_map_option():
+    """The ``--fmu-map`` option (the TOML map of an FMU plant)."""
+    return typer.Option(None, "--fmu-map",
+                        help="FMU map (TOML) for --plant fmu:...: which FMU variables are "
+                             "acid's channels, their units, start values and parameters "
+                             "(datasets/FORMAT.md).")
+
+
+@dataclass(frozen=True)
+class PlantChoice:
+    """A validated ``--plant`` / ``--fmu-map`` pair.
+
+    Attributes
+    ----------
+    spec : ``"hifi"``, ``"model"`` or ``"fmu:PATH"`` (what ``acid.plant.make_plant`` takes).
+    fmu_map : the map of an FMU plant, else None.
+    """
+
+    spec: str
+    fmu_map: Path | None = None
+
+    @property
+    def kind(self) -> str:
+        """``"hifi"``, ``"model"`` or ``"fmu"``."""
+        return "fmu" if self.spec.startswith(FMU_PREFIX) else self.spec
+
+    @property
+    def is_builtin_hifi(self) -> bool:
+        return self.kind == "hifi"
+
+    def make(self, **kwargs):
+        """A new plant (keywords as ``acid.plant.make_plant``: rng, T_amb (K), mode, ...)."""
+        return make_plant(self.spec, fmu_map=self.fmu_map, **kwargs)
+
+    def factory(self, **kwargs) -> Callable:
+        """A picklable callable returning a fresh plant on every call."""
+        return functools.partial(make_plant, self.spec, fmu_map=self.fmu_map, **kwargs)
+
+    def check(self, **kwargs) -> None:
+        """Build the plant once and release it, so a bad FMU or map fails before long work."""
+        if self.kind == "fmu":
+            plant = self.make(**kwargs)
+            plant.close()
+
+    def to_json_dict(self) -> dict:
+        return {"plant": self.spec,
+                "fmu_map": None if self.fmu_map is None else str(self.fmu_map)}
+
+
+def plant_choice(plant: str, fmu_map: Path | None,
+                 allowed: tuple[str, ...] = ("hifi", "model")) -> PlantChoice:
+    """Check ``--plant`` and ``--fmu-map`` (one-line ``ConfigError`` naming the option)."""
+    if plant.startswith(FMU_PREFIX):
+        path = Path(plant[len(FMU_PREFIX):])
+        if not str(path) or str(path) == ".":
+            raise ConfigError("--plant fmu:PATH.fmu: the FMU path is missing")
+        if not path.is_file():
+            raise ConfigError(f"--plant: FMU not found: {path}")
+        if fmu_map is None:
+            raise ConfigError(f"--plant {plant}: an FMU plant needs --fmu-map MAP.toml "
+                              "(see datasets/FORMAT.md)")
+        if not Path(fmu_map).is_file():
+            raise ConfigError(f"--fmu-map: file not found: {fmu_map}")
+        return PlantChoice(spec=plant, fmu_map=Path(fmu_map))
+    if plant not in allowed:
+        names = " or ".join(f"'{a}'" for a in allowed)
+        raise ConfigError(f"--plant: unknown plant {plant!r} (choose {names} or "
+                          "'fmu:PATH.fmu')")
+    if fmu_map is not None:
+        raise ConfigError("--fmu-map applies to --plant fmu:PATH.fmu only")
+    return PlantChoice(spec=plant)
