@@ -76,32 +76,47 @@ def check_interrupt() -> None:
         raise KeyboardInterrupt
 
 
-def _on_sigint(signum, frame):
-    if _interrupted.is_set():  # the first Ctrl-C was not honoured in time: stop now
-        with contextlib.suppress(OSError):
-            os.write(2, b"interrupted (forced)\n")
-        os._exit(130)
-    _interrupted.set()
-    raise KeyboardInterrupt
+def _chained(previous):
+    """A handler that remembers the interrupt, then does what ``previous`` did."""
+
+    def handler(signum, frame):
+        first = not _interrupted.is_set()
+        _interrupted.set()
+        if callable(previous) and previous is not signal.default_int_handler:
+            return previous(signum, frame)  # e.g. the CLI's guard (exit code, second signal)
+        if not first:  # the first interrupt was not honoured in time: stop now
+            with contextlib.suppress(OSError):
+                os.write(2, b"interrupted (forced)\n")
+            os._exit(128 + signum)
+        raise KeyboardInterrupt
+
+    return handler
 
 
 @contextlib.contextmanager
 def interrupt_guard() -> Iterator[None]:
-    """SIGINT that survives C extensions: see the module docstring (re-entrant).
+    """Interrupts that survive C extensions: see the module docstring (re-entrant).
 
-    Does nothing outside the main thread or when SIGINT is ignored (``nohup``, a
+    SIGINT (and SIGTERM when a Python handler already catches it) additionally set the flag
+    that :func:`check_interrupt` reads; the handler found in place still runs (the CLI's
+    guard decides the exit code and what a second signal does). Nothing is installed outside
+    the main thread or for a signal that is ignored or at its default (``nohup``, a
     background job of a non-interactive shell): that choice of the caller is kept.
     """
-    install = (_guard_depth[0] == 0 and threading.current_thread() is threading.main_thread()
-               and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-    prev = signal.signal(signal.SIGINT, _on_sigint) if install else None
+    saved = {}
+    if _guard_depth[0] == 0 and threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            current = signal.getsignal(sig)
+            if callable(current):
+                saved[sig] = signal.signal(sig, _chained(current))
     _guard_depth[0] += 1
     try:
         yield
     finally:
         _guard_depth[0] -= 1
-        if install:
-            signal.signal(signal.SIGINT, prev)
+        for sig, previous in saved.items():
+            signal.signal(sig, previous)
+        if saved:
             _interrupted.clear()
 
 

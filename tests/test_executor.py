@@ -10,7 +10,7 @@ import textwrap
 
 import pytest
 
-from acid.executor import InlineExecutor, open_executor
+from acid.executor import InlineExecutor, check_interrupt, interrupt_guard, open_executor
 
 
 def add(a, b):
@@ -49,6 +49,28 @@ def test_progress_reaches_the_callback_in_this_process():
         ex.wait_any([h])
         ex.pump()
     assert seen == [("stage", 1, 3), ("stage", 2, 3), ("stage", 3, 3)]
+
+
+def test_guard_remembers_the_interrupt_and_keeps_the_handler_in_place():
+    """The CLI's own handler still decides; the flag outlives a swallowed interrupt."""
+    calls = []
+
+    def outer(signum, frame):
+        calls.append(signum)
+        raise KeyboardInterrupt
+
+    prev = signal.signal(signal.SIGINT, outer)
+    try:
+        with interrupt_guard():
+            with pytest.raises(KeyboardInterrupt):
+                signal.raise_signal(signal.SIGINT)
+            assert calls == [signal.SIGINT]
+            with pytest.raises(KeyboardInterrupt):  # e.g. after CasADi swallowed the first
+                check_interrupt()
+        check_interrupt()  # cleared when the guard ends
+        assert signal.getsignal(signal.SIGINT) is outer
+    finally:
+        signal.signal(signal.SIGINT, prev)
 
 
 LOOP = textwrap.dedent("""
