@@ -15,7 +15,7 @@ on an otherwise idle 2-core machine.
 
 Usage::
 
-    python benchmarks/bench_sweep.py [--repeat 2] [--json PATH]
+    python benchmarks/bench_sweep.py [--repeat 3] [--json PATH]
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ def compute_only(workers: int, root: Path) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()
     times: dict[str, dict[int, list[float]]] = {"end to end": {1: [], 2: []},

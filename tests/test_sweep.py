@@ -107,3 +107,26 @@ def test_an_existing_cluster_is_used_by_its_scheduler_address(dask_sweep, tmp_pa
     res = run_sweep(one, tmp_path, scheduler=address, figures=False)
     assert res.computed == 1 and res.failed == 0
     assert res.executor == f"2 worker processes (cluster {address})"
+
+
+def test_identification_runs_once_per_plant_configuration(tmp_path, monkeypatch):
+    d = {"defaults": {"cycle": 15.0, "duration_s": 60.0, "warmup_s": 60.0,
+                      "params": "identify"},
+         "grid": {"cycle": [15.0, 5.0]}, "identify": {"duration_s": 1800.0, "method": "ls"},
+         "controllers": {"nmpc": {}}}
+    import acid.sweep.runner as runner
+
+    calls, real = [], runner.identify_params
+
+    def counted(cfg, settings):
+        calls.append(settings)
+        return real(cfg, settings)
+
+    monkeypatch.setattr(runner, "identify_params", counted)
+    res = run_sweep(spec_from_dict(d, "ident"), tmp_path, executor=InlineExecutor(),
+                    figures=False)
+    assert len(calls) == 1 and res.failed == 0
+    recs = [json.loads(p.read_text()) for p in (tmp_path / "scenarios").glob("*.json")]
+    assert len(recs) == 2 and recs[0]["params"] == recs[1]["params"]
+    assert recs[0]["params"]["name"] == "identified-ls"
+    assert set(res.table["params"]) == {"identified-ls"}
