@@ -17,6 +17,7 @@ from pathlib import Path
 
 from acid import __version__
 from acid._io import save_figure, write_json
+from acid.errors import AcidError
 from acid.executor import Executor, check_interrupt, open_executor
 from acid.outdir import claim
 from acid.sweep.results import (
@@ -101,6 +102,11 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
     """
     t0 = time.perf_counter()
     out = Path(out)
+    try:
+        import pyarrow  # noqa: F401  (the Parquet table; checked before hours of work)
+    except ImportError:
+        raise AcidError("acid sweep writes Parquet with pyarrow: pip install "
+                        "'acid[distributed]'") from None
     with claim(out, "acid sweep"):
         store = ResultStore(out)
         tasks = spec.tasks()
