@@ -66,9 +66,10 @@ def test_conflicting_options(tmp_path, no_workers, args, fragment):
 
 @pytest.mark.slow
 def test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes(tmp_path):
-    spec = tmp_path / "six.toml"
+    spec = tmp_path / "twelve.toml"
     spec.write_text('[defaults]\ncycle = 15.0\nduration_s = 300.0\nwarmup_s = 300.0\n'
-                    '[grid]\nambient_C = [26.0, 29.0, 32.0, 35.0, 38.0, 41.0]\n')
+                    '[grid]\nambient_C = [26.0, 29.0, 32.0, 35.0, 38.0, 41.0]\n'
+                    'humidity_pct = [30.0, 60.0]\n')
     out = tmp_path / "out"
     p = start("sweep", str(spec), "--out", str(out), "--workers", "2")
 
@@ -85,11 +86,11 @@ def test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes(tmp_path):
     assert wait_for(lambda: not alive(kids), 30), alive(kids)
     assert not (out / "results.parquet").exists() and hidden(out) == []
     kept = finished()
-    assert 1 <= kept < 6
+    assert 1 <= kept < 12
     for f in (out / "scenarios").glob("*.json"):
         assert json.loads(f.read_text())["status"] == "ok"
     res = runner.invoke(app, ["sweep", str(spec), "--out", str(out), "--workers", "1",
                               "--no-figures", "--json", str(tmp_path / "s.json")])
     assert res.exit_code == 0, res.output
     s = json.loads((tmp_path / "s.json").read_text())
-    assert (s["computed"], s["reused"], s["failed"]) == (6 - kept, kept, 0)
+    assert (s["computed"], s["reused"], s["failed"]) == (12 - kept, kept, 0)

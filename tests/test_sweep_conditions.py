@@ -11,7 +11,8 @@ from acid.units import C2K
 
 
 def test_default_conditions_reproduce_the_default_plant():
-    """30 degC, 50 %, 800 W/m2, R134a and a 22 degC set-point are PlantConfig()'s own."""
+    """30 degC, 50 %, the reference irradiance, R134a and a 22 degC set-point are
+    PlantConfig()'s own."""
     cfg = plant_config_for(Conditions(setpoint_C=22.0))
     assert cfg == PlantConfig()
 
@@ -23,10 +24,10 @@ def test_climate_maps_onto_the_plant():
     assert cfg.T_amb == C2K(40.0) and cfg.RH_amb == pytest.approx(0.7)
     assert cfg.refrigerant == "R1234yf" and cfg.T_cab_set == C2K(25.0)
     assert cfg.Q_solar_shell == pytest.approx(ref.Q_solar_shell * 400.0 / G_REF)
-    assert cfg.Q_solar_int == pytest.approx(ref.Q_solar_int / 2)
+    assert cfg.Q_solar_int == pytest.approx(ref.Q_solar_int * 400.0 / G_REF)
     # hot soak: walls at ambient, the cabin's excess over ambient halves with half the sun
     assert cfg.T_ew0 == cfg.T_cw0 == C2K(40.0)
-    assert cfg.T_cab0 - cfg.T_amb == pytest.approx((ref.T_cab0 - ref.T_amb) / 2)
+    assert cfg.T_cab0 - cfg.T_amb == pytest.approx((ref.T_cab0 - ref.T_amb) * 400.0 / G_REF)
 
 
 def test_no_sun_means_no_soak_and_no_solar_gain():

@@ -10,10 +10,10 @@ Mapping onto the current ``PlantConfig``
 ----------------------------------------
 * ambient -> ``T_amb``; humidity -> ``RH_amb`` (fraction); refrigerant -> ``refrigerant``;
   set-point -> ``T_cab_set`` (the nominal controller's target).
-* solar irradiance ``G`` scales the two absorbed solar gains of the default calibration,
-  which correspond to ``G_REF = 800 W/m2`` (``Q_solar_shell``: "1.5 m^2 roof x 800 W/m^2 x
-  0.6 + sides"): ``Q_solar_int = Q_solar_int_default G / G_REF`` and the same for
-  ``Q_solar_shell``.
+* solar irradiance ``G``: a plant configuration with an irradiance field (``G_solar``,
+  W/m2; the plant of issue 9) takes it as is; the current one has two absorbed solar gains
+  whose default corresponds to ``G_REF = 800 W/m2`` (``Q_solar_shell``: "1.5 m^2 roof x
+  800 W/m^2 x 0.6 + sides"), scaled by ``G / G_REF``.
 * the hot soak the plant starts from follows the climate: the evaporator and condenser
   walls start at ambient, the cabin air, interior and shell at ambient plus the default
   soak's excess over its 30 degC ambient, scaled by ``G / G_REF`` (no sun, no soak).
@@ -27,12 +27,15 @@ from acid.errors import ConfigError
 from acid.plant.config import REFRIGERANTS, PlantConfig
 from acid.units import C2K
 
-#: irradiance behind the default solar gains of ``PlantConfig``, W/m2
-G_REF = 800.0
+#: True when the plant configuration has an irradiance field (W/m2) rather than gains (W)
+HAS_IRRADIANCE = "G_solar" in PlantConfig.field_names()
+
+#: irradiance of the default plant configuration, W/m2 (the solar gains' reference)
+G_REF = float(PlantConfig().G_solar) if HAS_IRRADIANCE else 800.0
 
 #: plant fields set by the conditions (a sweep's ``plant`` overrides may not set them)
 MAPPED_FIELDS = {"T_amb": "ambient_C", "RH_amb": "humidity_pct", "refrigerant": "refrigerant",
-                 "T_cab_set": "setpoint_C", "Q_solar_int": "solar_W_m2",
+                 "T_cab_set": "setpoint_C", "G_solar": "solar_W_m2", "Q_solar_int": "solar_W_m2",
                  "Q_solar_shell": "solar_W_m2", "T_cab0": "ambient_C", "T_int0": "ambient_C",
                  "T_shell0": "ambient_C", "T_ew0": "ambient_C", "T_cw0": "ambient_C"}
 
@@ -124,10 +127,11 @@ def plant_config_for(conditions: Conditions, overrides: dict | None = None,
     ref = PlantConfig()
     sun = conditions.solar_W_m2 / G_REF
     T_amb = conditions.T_amb
+    solar = ({"G_solar": conditions.solar_W_m2} if HAS_IRRADIANCE else
+             {"Q_solar_int": ref.Q_solar_int * sun, "Q_solar_shell": ref.Q_solar_shell * sun})
     return cfg.replace(
         T_amb=T_amb, RH_amb=conditions.humidity_pct / 100.0,
-        refrigerant=conditions.refrigerant, T_cab_set=conditions.T_set,
-        Q_solar_int=ref.Q_solar_int * sun, Q_solar_shell=ref.Q_solar_shell * sun,
+        refrigerant=conditions.refrigerant, T_cab_set=conditions.T_set, **solar,
         T_cab0=T_amb + (ref.T_cab0 - ref.T_amb) * sun,
         T_int0=T_amb + (ref.T_int0 - ref.T_amb) * sun,
         T_shell0=T_amb + (ref.T_shell0 - ref.T_amb) * sun,

@@ -16,7 +16,7 @@ The format (edge units: degC, %, W/m2, m/s, s; plant overrides in SI and kelvin)
     duration_s = 0                     # 0: one pass of the cycle (600 s at constant speed)
     ambient_C = 30.0
     humidity_pct = 50.0
-    solar_W_m2 = 800.0
+    solar_W_m2 = 800.0                 # (default: the plant configuration's reference)
     refrigerant = "R134a"
     setpoint_C = 24.0
     band_C = [22.0, 26.0]              # comfort band
@@ -57,7 +57,7 @@ from pathlib import Path
 from acid import __version__
 from acid.errors import AcidError, ConfigError
 from acid.plant.config import REFRIGERANTS, PlantConfig
-from acid.sweep.conditions import RANGES, Conditions, plant_config_for
+from acid.sweep.conditions import G_REF, RANGES, Conditions, plant_config_for
 
 MAX_SCENARIOS = 100_000
 MAX_DURATION_S = 86_400.0
@@ -69,7 +69,7 @@ FIT_METHODS = ("ls", "cvx", "oe")
 TOP_KEYS = ("title", "baseline", "plugins", "defaults", "grid", "scenarios", "controllers",
             "identify")
 SCENARIO_DEFAULTS = {"cycle": "udds", "duration_s": 0.0, "ambient_C": 30.0,
-                     "humidity_pct": 50.0, "solar_W_m2": 800.0, "refrigerant": "R134a",
+                     "humidity_pct": 50.0, "solar_W_m2": G_REF, "refrigerant": "R134a",
                      "setpoint_C": 24.0, "band_C": (22.0, 26.0), "warmup_s": 1800.0,
                      "tail_s": 0.0, "params": "paper", "plant": {}}
 SCENARIO_KEYS = tuple(SCENARIO_DEFAULTS)
