@@ -37,7 +37,7 @@ def test_no_sun_means_no_soak_and_no_solar_gain():
 
 
 def test_overrides_apply_but_may_not_contradict_the_conditions():
-    assert plant_config_for(Conditions(), {"UA_cr": 1000.0}).UA_cr == 1000.0
+    assert plant_config_for(Conditions(), {"V_disp": 4.0e-5}).V_disp == 4.0e-5
     with pytest.raises(ConfigError, match="'RH_amb' is set by the scenario's humidity_pct"):
         plant_config_for(Conditions(), {"RH_amb": 0.3})
 

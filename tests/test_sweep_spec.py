@@ -7,6 +7,7 @@ import pytest
 
 import acid.sweep.spec as spec_mod
 from acid.errors import ConfigError
+from acid.plant.config import PlantConfig
 from acid.sweep import spec_from_dict
 from acid.sweep.spec import load_spec
 
@@ -26,12 +27,12 @@ def test_grid_is_the_cartesian_product_then_the_list():
 
 
 def test_defaults_and_plant_overrides_merge():
-    s = spec_from_dict({"defaults": {"setpoint_C": 23.0, "plant": {"UA_cr": 1100.0}},
-                        "grid": {"plant": [{"C_int": 50e3}, {"UA_cr": 1500.0}]}})
+    s = spec_from_dict({"defaults": {"setpoint_C": 23.0, "plant": {"V_disp": 4.0e-5}},
+                        "grid": {"plant": [{"C_int": 50e3}, {"V_disp": 2.5e-5}]}})
     a, b = s.scenarios
-    assert dict(a.plant) == {"UA_cr": 1100.0, "C_int": 50e3} and dict(b.plant) == {
-        "UA_cr": 1500.0}
-    assert a.plant_config().UA_cr == 1100.0 and b.plant_config().C_int == 65e3
+    assert dict(a.plant) == {"V_disp": 4.0e-5, "C_int": 50e3} and dict(b.plant) == {
+        "V_disp": 2.5e-5}
+    assert a.plant_config().V_disp == 4.0e-5 and b.plant_config().C_int == PlantConfig().C_int
     assert a.conditions.setpoint_C == 23.0
 
 
@@ -89,7 +90,7 @@ BAD = [
     ({"scenarios": [{"duration_s": 5.0}]}, "duration_s = 5 is shorter than two samples"),
     ({"scenarios": [{"plant": {"T_amb": 300.0}}]}, "'T_amb' is set by the scenario's "
                                                    "ambient_C"),
-    ({"scenarios": [{"plant": {"UA_cr": -1.0}}]}, "plant: UA_cr must be positive"),
+    ({"scenarios": [{"plant": {"V_disp": -1.0}}]}, "plant: V_disp must be positive"),
     ({"scenarios": [{"plant": {"bogus": 1.0}}]}, "unknown key 'bogus'"),
     ({"scenarios": [{"params": "nope.json"}]}, "params: 'nope.json': parameter file not found"),
     ({**GRID, "identify": {"method": "magic"}}, "identify: method = 'magic' unknown"),

@@ -23,7 +23,7 @@ The format (edge units: degC, %, W/m2, m/s, s; plant overrides in SI and kelvin)
     warmup_s = 1800.0                  # common warm-up to a steady state (0: hot soak)
     tail_s = 0.0                       # common continuation charging back the end state
     params = "paper"                   # "paper", "identify" or a params.json (from acid fit)
-    plant = { UA_cr = 1300.0 }         # PlantConfig overrides (acid.plant.config)
+    plant = { V_disp = 4.0e-5 }        # PlantConfig overrides (acid.plant.config)
 
     [grid]                             # cartesian product of these lists ...
     ambient_C = [25.0, 35.0, 45.0]
