@@ -234,6 +234,10 @@ def run_scenario(task: ScenarioTask, params: ModelParams | None = None,
         if b is None or label not in runs:
             row["saving_pct"] = row["saving_tail_corrected_pct"] = float("nan")
             continue
+        if label == task.baseline:
+            row["saving_pct"] = 0.0
+            row["saving_tail_corrected_pct"] = 0.0 if s.tail_s > 0 else float("nan")
+            continue
         E_b, E_x = b.run.energy_J(), runs[label].run.energy_J()
         row["saving_pct"] = _pct(E_b, E_x)
         row["saving_tail_corrected_pct"] = _pct(E_b, E_x + tails[label] - tails[task.baseline])
