@@ -1,39 +1,159 @@
 """Atomic file output: write to a temporary file beside the target, then rename.
 
 An interrupted write never leaves a partial file, and an existing file is only replaced
-once the new one is complete.
+once the new one is complete. Temporary files are named ``.<target>.<pid>.<random>.part``;
+a writer killed outright (SIGKILL, power loss) leaves one behind, and the next write to the
+same folder removes it once its process is gone (``clean_stale_parts``).
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import math
 import os
 import tempfile
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
+from acid.errors import OutputError
+
+PART_SUFFIX = ".part"
+
+#: A temporary file without a readable process id (older naming) counts as stale after this, s.
+LEGACY_PART_AGE_S = 3600.0
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # somebody else's live process
+        return True
+    return True
+
+
+def _part_owner(name: str) -> int | None:
+    """Process id in ``.<target>.<pid>.<random>.part``, or None for another naming."""
+    stem = name[:-len(PART_SUFFIX)]
+    parts = stem.rsplit(".", 2)
+    if len(parts) == 3 and parts[1].isdigit():
+        return int(parts[1])
+    return None
+
+
+def clean_stale_parts(folder: str | os.PathLike) -> list[Path]:
+    """Remove temporary ``.*.part`` files in ``folder`` whose writer is no longer running.
+
+    Returns the removed paths. Files of live processes (another acid writing right now) are
+    kept; files without a process id in their name are removed once older than
+    ``LEGACY_PART_AGE_S``.
+    """
+    folder = Path(folder)
+    removed = []
+    try:
+        candidates = [p for p in folder.iterdir()
+                      if p.name.startswith(".") and p.name.endswith(PART_SUFFIX)]
+    except OSError:
+        return removed
+    now = time.time()
+    for p in candidates:
+        pid = _part_owner(p.name)
+        try:
+            if pid is not None:
+                stale = pid != os.getpid() and not _pid_alive(pid)
+            else:
+                stale = now - p.lstat().st_mtime > LEGACY_PART_AGE_S
+            if stale and not p.is_dir():
+                p.unlink()
+                removed.append(p)
+        except OSError:
+            continue
+    return removed
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or exc.__class__.__name__
+
+
+def check_writable_file(path: str | os.PathLike) -> Path:
+    """Refuse, with an ``OutputError``, a file output that cannot be written.
+
+    The target must not be a folder; its nearest existing ancestor must be a folder that
+    this process can write into (missing folders in between are created by the write).
+    """
+    path = Path(path)
+    if str(path) in ("", "."):
+        raise OutputError(f"{path}: an output file needs a name")
+    if path.is_dir():
+        raise OutputError(f"{path}: is a folder, expected a file name")
+    _check_parent(path)
+    return path
+
+
+def _check_parent(path: Path) -> None:
+    parent = path.parent
+    while not parent.exists():
+        if parent.is_symlink():
+            raise OutputError(f"{path}: cannot create folder {parent} (dangling link)")
+        parent = parent.parent
+    if not parent.is_dir():
+        raise OutputError(f"{path}: cannot create it, {parent} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputError(f"{path}: folder {parent} is not writable")
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary path in the target's folder; rename it onto ``path`` on success."""
+    """Yield a temporary path in the target's folder; rename it onto ``path`` on success.
+
+    Failures to create, write or rename (a folder in the way, a file where a folder should
+    be, no permission, a full disk) are ``OutputError``; the temporary file is removed on
+    every failure and on interruption.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    check_writable_file(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot create folder {path.parent} ({_reason(exc)})") from None
+    clean_stale_parts(path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=PART_SUFFIX,
+                                   dir=path.parent)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write in {path.parent} ({_reason(exc)})") from None
     os.close(fd)
     tmp_path = Path(tmp)
     try:
-        yield tmp_path
-        # mkstemp creates 0600 files; give the result the mode a plain open() would have
-        os.chmod(tmp_path, path.stat().st_mode & 0o777 if path.exists() else 0o666 & ~_umask())
-        os.replace(tmp_path, path)
+        try:
+            yield tmp_path
+            _fsync(tmp_path)
+            # mkstemp creates 0600 files; give the result the mode a plain open() would have
+            mode = path.stat().st_mode & 0o777 if path.exists() else 0o666 & ~_umask()
+            os.chmod(tmp_path, mode)
+            os.replace(tmp_path, path)
+        except OSError as exc:
+            if exc.errno in (errno.EISDIR, errno.ENOTEMPTY, errno.EEXIST):
+                raise OutputError(f"{path}: is a folder, expected a file name") from None
+            raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
+        with contextlib.suppress(OSError):
             tmp_path.unlink()
         raise
+
+
+def _fsync(path: Path) -> None:
+    """Flush a finished temporary file to disk before it replaces the target."""
+    with open(path, "rb") as fh:
+        os.fsync(fh.fileno())
 
 
 def _umask() -> int:

@@ -18,7 +18,9 @@ one-line ``DataError`` naming file and channel.
 from __future__ import annotations
 
 import json
+import math
 import os
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -39,11 +41,14 @@ ROLES = ("input", "state", "output", "exogenous", "auxiliary")
 
 @dataclass(frozen=True)
 class ChannelSpec:
-    """What a channel is: canonical unit, role in the model, description."""
+    """What a channel is: canonical unit, role in the model, description, and the physical
+    range its values must lie in (in ``unit``; ``None``: unbounded on that side)."""
 
     unit: str
     role: str
     description: str
+    lo: float | None = None
+    hi: float | None = None
 
 
 #: The channels acid knows by name (others are allowed, as auxiliary channels).
@@ -51,24 +56,61 @@ CHANNELS: dict[str, ChannelSpec] = {
     "T_cab": ChannelSpec("degC", "state", "cabin air temperature"),
     "T_evap": ChannelSpec("degC", "state", "evaporator wall temperature"),
     "T_ain": ChannelSpec("degC", "output", "cabin inlet (supply) air temperature"),
-    "W_bl": ChannelSpec("kg/s", "input", "blower air mass flow"),
+    "W_bl": ChannelSpec("kg/s", "input", "blower air mass flow", 0.0, 1.0),
     "T_evap_set": ChannelSpec("degC", "input", "evaporator wall temperature set-point"),
     "T_int": ChannelSpec("degC", "exogenous", "cabin interior (seats, dash) temperature"),
     "T_shell": ChannelSpec("degC", "exogenous", "cabin shell (roof, doors, glass) temperature"),
     "T_amb": ChannelSpec("degC", "exogenous", "ambient air temperature"),
-    "v_veh": ChannelSpec("m/s", "exogenous", "vehicle speed"),
-    "N_comp": ChannelSpec("rpm", "auxiliary", "compressor speed"),
+    "v_veh": ChannelSpec("m/s", "exogenous", "vehicle speed", 0.0, 100.0),
+    "N_comp": ChannelSpec("rpm", "auxiliary", "compressor speed", 0.0, None),
     "P_comp": ChannelSpec("W", "auxiliary", "compressor electrical power"),
     "P_bl": ChannelSpec("W", "auxiliary", "blower electrical power"),
     "P_fan": ChannelSpec("W", "auxiliary", "condenser fan electrical power"),
     "COP": ChannelSpec("1", "auxiliary", "cycle coefficient of performance Q_e / P_comp"),
-    "recirc": ChannelSpec("1", "auxiliary", "recirculated fraction of blower air"),
-    "w_cab": ChannelSpec("kg/kg", "auxiliary", "cabin air humidity ratio"),
+    "recirc": ChannelSpec("1", "auxiliary", "recirculated fraction of blower air", 0.0, 1.0),
+    "w_cab": ChannelSpec("kg/kg", "auxiliary", "cabin air humidity ratio", 0.0, 0.2),
     "Q_evap": ChannelSpec("W", "auxiliary", "evaporator refrigerant-side heat flow"),
+    "Q_cond": ChannelSpec("W", "auxiliary", "condenser refrigerant-side heat flow"),
+    "Q_lat": ChannelSpec("W", "auxiliary", "latent (condensation) part of the evaporator load"),
+    "W_comp": ChannelSpec("W", "auxiliary", "compressor shaft (fluid) power"),
+    "T_e": ChannelSpec("degC", "auxiliary", "evaporating (saturation) temperature"),
+    "T_c": ChannelSpec("degC", "auxiliary", "condensing (saturation) temperature"),
+    "T_cw": ChannelSpec("degC", "auxiliary", "condenser wall temperature"),
+    "T_int_slow": ChannelSpec("degC", "auxiliary", "slow interior node (seat cores, dash body)"),
+    "p_suc": ChannelSpec("Pa", "auxiliary", "compressor suction (low-side) pressure, absolute"),
+    "p_dis": ChannelSpec("Pa", "auxiliary", "compressor discharge (head) pressure, absolute"),
+    "m_r": ChannelSpec("kg/s", "auxiliary", "refrigerant mass flow"),
+    "m_ca": ChannelSpec("kg/s", "auxiliary", "condenser face air mass flow"),
+    "fan_speed": ChannelSpec("1", "auxiliary", "condenser fan speed fraction (0 off, 1 full)"),
 }
 
 #: Channels the identification and validation of eqs. 1-3 need.
 MODEL_CHANNELS = ("T_cab", "T_evap", "T_ain", "W_bl", "T_evap_set", "T_int", "T_shell")
+
+#: Most samples a dataset (or an imported column) may hold: checked before anything of that
+#: size is allocated. 20 million samples are 3 years at Ts = 5 s or 55 h of a 0.01 s export.
+MAX_SAMPLES = 20_000_000
+
+#: Channel names: a letter, then letters, digits and underscores (safe as HDF5 names).
+CHANNEL_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+
+def check_sample_time(Ts, where: str) -> float:
+    """``Ts`` as a float if it is a finite positive number (not a bool or a string)."""
+    if isinstance(Ts, bool) or not isinstance(Ts, (int, float, np.integer, np.floating)):
+        raise DataError(f"{where} must be a number of seconds, got {Ts!r}")
+    Ts = float(Ts)
+    if not (math.isfinite(Ts) and Ts > 0.0):
+        raise DataError(f"{where} must be a finite positive number of seconds, got {Ts!r}")
+    return Ts
+
+
+def check_size(n: float, where: str) -> int:
+    """Refuse more than ``MAX_SAMPLES`` samples before they are allocated."""
+    if not n <= MAX_SAMPLES:
+        raise DataError(f"{where}: {n:.3g} samples is more than acid handles "
+                        f"({MAX_SAMPLES:.0e})")
+    return int(n)
 
 
 def _now_iso() -> str:
@@ -229,10 +271,16 @@ class Dataset:
         uniform at ``Ts``, temperatures consistent with their declared unit, enough samples.
         """
         src = self.source
+        check_sample_time(self.Ts, f"{src}: sample time Ts")
         for name in require:
             if name not in self.channels:
                 raise DataError(f"{src}: missing channel {name!r}")
         n = len(self)
+        if self.time.ndim != 1:
+            raise DataError(f"{src}: time must be a vector, got shape {self.time.shape}")
+        if self.experiment.shape != (n,):
+            raise DataError(f"{src}: experiment ids have shape {self.experiment.shape}, "
+                            f"time has {n} samples")
         for name, v in self.channels.items():
             if v.shape != (n,):
                 raise DataError(f"{src}: channel {name!r} has {v.shape[0]} samples, time has {n}")
@@ -249,6 +297,7 @@ class Dataset:
                 other = "K" if unit == "degC" else "degC"
                 raise DataError(f"{src}: channel {name!r} is declared in {unit} but its values "
                                 f"({v.min():.1f} .. {v.max():.1f}) look like {other}")
+            _check_physical(name, v, unit, self.time, src)
         if not np.all(np.isfinite(self.time)):
             raise DataError(f"{src}: time has NaN/inf values")
         if n >= 2:
@@ -293,14 +342,21 @@ class Dataset:
             raise DataError(f"{path}: dataset file not found")
         try:
             with h5py.File(path, "r") as f:
-                if f.attrs.get("format") != FORMAT_NAME:
+                if _attr_text(f, "format", str(path)) != FORMAT_NAME:
                     raise DataError(f"{path}: not an acid dataset (missing format={FORMAT_NAME!r};"
                                     " import CSV or MAT files with `acid import`)")
                 ds = _read_group(f, str(path))
                 if "fine" in f:
-                    ds.fine = _read_group(f["fine"], f"{path}:/fine")
+                    ds.fine = _read_group(_member(f, "fine", str(path), group=True),
+                                          f"{path}:/fine")
+        except DataError:
+            raise
         except OSError as exc:
-            raise DataError(f"{path}: cannot read as HDF5 ({exc})") from None
+            raise DataError(f"{path}: cannot read as HDF5 ({_first_line(exc)})") from None
+        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as exc:
+            # h5py's own refusals of a damaged or foreign file (the checks above name most)
+            raise DataError(f"{path}: malformed acid dataset ({exc.__class__.__name__}: "
+                            f"{_first_line(exc)})") from None
         return ds.validate(require=require, min_samples=min_samples)
 
 
@@ -317,6 +373,8 @@ def _write_group(g, ds: Dataset, meta: dict | None) -> None:
     g.create_dataset("experiment", data=ds.experiment.astype(np.int32), track_times=False)
     ch = g.create_group("channels", track_order=True)
     for name, values in ds.channels.items():
+        if "/" in name or name in ("", ".", ".."):
+            raise DataError(f"{ds.source}: channel name {name!r} cannot be stored in HDF5")
         d = ch.create_dataset(name, data=values, track_times=False)
         d.attrs["unit"] = ds.units[name]
         d.attrs["role"] = ds.roles.get(name, "auxiliary")
@@ -332,47 +390,175 @@ def _json_safe(obj):
     return str(obj)
 
 
-def _read_group(g, source: str) -> Dataset:
-    if "time" not in g:
-        raise DataError(f"{source}: missing /time")
-    if "channels" not in g:
-        raise DataError(f"{source}: missing /channels group")
-    Ts = g.attrs.get("Ts")
-    if Ts is None:
-        raise DataError(f"{source}: missing attribute Ts (sample time)")
-    channels, units, roles = {}, {}, {}
-    for name, d in g["channels"].items():
-        unit = d.attrs.get("unit")
-        if unit is None:
-            raise DataError(f"{source}: channel {name!r} has no unit attribute")
-        channels[name] = d[()]
-        units[name] = unit.decode() if isinstance(unit, bytes) else str(unit)
-        roles[name] = str(d.attrs.get("role", "auxiliary"))
-    meta = {}
-    if "metadata" in g.attrs:
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else exc.__class__.__name__
+
+
+def _attr(obj, name: str, source: str):
+    """An HDF5 attribute, or None when absent; ``DataError`` when it cannot be read."""
+    try:
+        if name not in obj.attrs:
+            return None
+        return obj.attrs[name]
+    except Exception as exc:  # noqa: BLE001 - h5py raises many types for foreign attributes
+        raise DataError(f"{source}: attribute {name!r} cannot be read "
+                        f"({exc.__class__.__name__})") from None
+
+
+def _scalar(value):
+    """A one-element array as its element; anything else unchanged."""
+    if isinstance(value, np.ndarray) and value.size == 1:
+        return value.reshape(()).item() if value.dtype.kind != "O" else value.reshape(())[()]
+    return value
+
+
+def _attr_text(obj, name: str, source: str) -> str | None:
+    """A text attribute (str or UTF-8 bytes), or None when absent or not text."""
+    value = _scalar(_attr(obj, name, source))
+    if isinstance(value, (bytes, np.bytes_)):
         try:
-            meta = json.loads(g.attrs["metadata"])
-        except json.JSONDecodeError:
-            raise DataError(f"{source}: metadata attribute is not valid JSON") from None
-    exp = g["experiment"][()] if "experiment" in g else None
-    time = g["time"][()]
-    if exp is not None and exp.shape != time.shape:
-        raise DataError(f"{source}: /experiment has {exp.shape[0]} samples, "
-                        f"time has {time.shape[0]}")
-    return Dataset(time=time, channels=channels, units=units, Ts=float(Ts), experiment=exp,
+            return bytes(value).decode("utf-8")
+        except UnicodeDecodeError:
+            return None
+    return str(value) if isinstance(value, str) else None
+
+
+def _member(g, name: str, source: str, group: bool = False):
+    """``g[name]`` as a dataset (or a group with ``group``), else a one-line ``DataError``."""
+    import h5py
+
+    where = f"{g.name.rstrip('/')}/{name}"
+    try:
+        obj = g.get(name)
+    except Exception as exc:  # noqa: BLE001 - broken links, foreign objects
+        raise DataError(f"{source}: {where} cannot be opened ({exc.__class__.__name__})") from None
+    kind = h5py.Group if group else h5py.Dataset
+    if obj is None:
+        return None
+    if not isinstance(obj, kind):
+        raise DataError(f"{source}: {where} must be {'a group' if group else 'an array'}")
+    return obj
+
+
+def _read_vector(d, what: str, source: str, integer: bool = False) -> np.ndarray:
+    """A 1-D numeric HDF5 array as float (or int) values, checked before it is read."""
+    if d.ndim != 1:
+        raise DataError(f"{source}: {what} must be a vector, got shape {d.shape}")
+    if d.dtype.kind not in ("iu" if integer else "biuf"):
+        raise DataError(f"{source}: {what} must hold {'integers' if integer else 'numbers'}, "
+                        f"got {d.dtype}")
+    check_size(d.shape[0], f"{source}: {what}")
+    try:
+        values = d[()]
+    except Exception as exc:  # noqa: BLE001 - damaged chunks, missing filters
+        raise DataError(f"{source}: {what} cannot be read ({_first_line(exc)})") from None
+    return np.asarray(values, dtype=np.int64 if integer else float)
+
+
+def _read_group(g, source: str) -> Dataset:
+    time_d = _member(g, "time", source)
+    if time_d is None:
+        raise DataError(f"{source}: missing /time")
+    chan_g = _member(g, "channels", source, group=True)
+    if chan_g is None:
+        raise DataError(f"{source}: missing /channels group")
+    raw_Ts = _scalar(_attr(g, "Ts", source))
+    if raw_Ts is None:
+        raise DataError(f"{source}: missing attribute Ts (sample time)")
+    Ts = check_sample_time(raw_Ts, f"{source}: attribute Ts (sample time)")
+    time = _read_vector(time_d, "/time", source)
+    channels, units, roles = {}, {}, {}
+    for name in chan_g:
+        where = f"channel {name!r}"
+        d = _member(chan_g, name, source)
+        unit = _attr_text(d, "unit", source)
+        if unit is None:
+            raise DataError(f"{source}: {where} has no text unit attribute")
+        role = _attr_text(d, "role", source)
+        if role is None:
+            role = CHANNELS[name].role if name in CHANNELS else "auxiliary"
+        if role not in ROLES:
+            raise DataError(f"{source}: {where} has unknown role {role!r} "
+                            f"(known: {', '.join(ROLES)})")
+        channels[name] = _read_vector(d, where, source)
+        units[name], roles[name] = unit, role
+    meta = {}
+    if _attr(g, "metadata", source) is not None:
+        text = _attr_text(g, "metadata", source)
+        try:
+            meta = json.loads(text) if text is not None else None
+        except (json.JSONDecodeError, RecursionError):
+            meta = None
+        if not isinstance(meta, dict):
+            raise DataError(f"{source}: attribute metadata is not a JSON object")
+    exp_d = _member(g, "experiment", source)
+    exp = None if exp_d is None else _read_vector(exp_d, "/experiment", source, integer=True)
+    if exp is not None:
+        if exp.shape != time.shape:
+            raise DataError(f"{source}: /experiment has {exp.shape[0]} samples, "
+                            f"time has {time.shape[0]}")
+        if exp.size and (exp.min() < np.iinfo(np.int32).min or exp.max() > np.iinfo(np.int32).max):
+            raise DataError(f"{source}: /experiment ids must fit in 32 bits")
+    return Dataset(time=time, channels=channels, units=units, Ts=Ts, experiment=exp,
                    roles=roles, metadata=meta, source=source)
 
 
+def _check_physical(name: str, v: np.ndarray, unit: str, time: np.ndarray, src: str) -> None:
+    """A known channel must carry its unit (any temperature unit for a temperature) and lie
+    inside its physical range (``ChannelSpec.lo``/``hi``)."""
+    spec = CHANNELS.get(name)
+    if spec is None:
+        return
+    if unit != spec.unit and not (is_temperature(spec.unit) and is_temperature(unit)):
+        raise DataError(f"{src}: channel {name!r} is declared in {unit!r}, expected "
+                        f"{spec.unit!r} ({spec.description})")
+    if unit != spec.unit or v.size == 0:
+        return
+    for bound, bad in ((spec.lo, v < spec.lo if spec.lo is not None else None),
+                       (spec.hi, v > spec.hi if spec.hi is not None else None)):
+        if bad is not None and bad.any():
+            i = int(np.argmax(bad))
+            side = "below" if bound == spec.lo else "above"
+            when = f"t = {time[i]:g} s" if time.shape == v.shape else f"sample {i}"
+            span = f"[{_fmt_bound(spec.lo, '-inf')}, {_fmt_bound(spec.hi, 'inf')}]"
+            raise DataError(f"{src}: channel {name!r} has {int(bad.sum())} values {side} its "
+                            f"physical range {span} {spec.unit} (first {v[i]:g} at {when})")
+
+
+def _fmt_bound(v: float | None, unbounded: str) -> str:
+    return unbounded if v is None else f"{v:g}"
+
+
 # ------------------------------------------------------------------ importers
+#: How a channel map brings a record onto its ``Ts`` grid (``ChannelMap.resample``).
+RESAMPLE_MODES = ("mean", "sample", "none")
+
+#: Keys a channel map may have.
+MAP_KEYS = ("time", "Ts", "resample", "channels", "description")
+
+
 @dataclass(frozen=True)
 class ChannelMap:
     """How columns of a foreign file become acid channels.
 
-    ``time``: name of the time column (s); ``channels``: {acid name: (column, unit)}.
+    ``time``: name of the time column (s); ``channels``: {acid name: (column, unit)};
+    ``Ts``: the sample time of the dataset, s (``None``: the file's own, which must be
+    uniform); ``resample``: how the record gets onto the ``Ts`` grid:
+
+    * ``"mean"``: the sample convention: states, inputs and exogenous channels sampled at
+      t_k, outputs and powers averaged over [t_k, t_k + Ts) (energy kept);
+    * ``"sample"``: every channel sampled at t_k (linear interpolation);
+    * ``"none"``: no resampling; the file must already be uniform at ``Ts``;
+    * not given: ``"mean"``, unless the file is already sampled every ``Ts``: then it is
+      taken as it is (averaging again would smear outputs and powers), with a note in
+      ``metadata["resample"]``.
+
     Loaded from TOML or JSON::
 
         time = "t"
-        Ts = 5.0            # optional: resample onto this grid by linear interpolation
+        Ts = 5.0             # optional
+        resample = "mean"    # optional: "mean", "sample" or "none"
         [channels]
         T_cab = { column = "CabinAirTemp", unit = "degC" }
         W_bl  = { column = "BlowerFlow", unit = "kg/s" }
@@ -381,6 +567,8 @@ class ChannelMap:
     time: str
     channels: Mapping[str, tuple[str, str]]
     Ts: float | None = None
+    resample: str | None = None
+    source: str = field(default="channel map", compare=False)
 
     @classmethod
     def from_file(cls, path: str | os.PathLike) -> ChannelMap:
@@ -388,66 +576,158 @@ class ChannelMap:
         if not path.is_file():
             raise DataError(f"{path}: channel map not found")
         try:
+            text = path.read_text(encoding="utf-8")
             if path.suffix.lower() == ".json":
-                d = json.loads(path.read_text())
+                d = json.loads(text)
             else:
                 try:
                     import tomllib
                 except ModuleNotFoundError:  # Python < 3.11
                     import tomli as tomllib
-                d = tomllib.loads(path.read_text())
-        except Exception as exc:
-            raise DataError(f"{path}: cannot parse channel map ({exc})") from None
+                d = tomllib.loads(text)
+        except Exception as exc:  # noqa: BLE001 - any parser failure is the file's fault
+            raise DataError(f"{path}: cannot parse channel map ({_first_line(exc)})") from None
         return cls.from_dict(d, str(path))
 
     @classmethod
     def from_dict(cls, d: dict, source: str = "channel map") -> ChannelMap:
+        if not isinstance(d, Mapping):
+            raise DataError(f"{source}: a channel map is a table with 'time' and [channels], "
+                            f"got {type(d).__name__}")
+        unknown = [k for k in d if k not in MAP_KEYS]
+        if unknown:
+            raise DataError(f"{source}: unknown key {unknown[0]!r} (known: {', '.join(MAP_KEYS)})")
         if "time" not in d or "channels" not in d:
             raise DataError(f"{source}: needs 'time' and a [channels] table")
+        if not isinstance(d["time"], str) or not d["time"]:
+            raise DataError(f"{source}: 'time' must be the name of the time column, "
+                            f"got {d['time']!r}")
         if not isinstance(d["channels"], Mapping):
             raise DataError(f"{source}: [channels] must be a table of channel = column entries")
         chans = {}
         for name, spec in d["channels"].items():
+            if not isinstance(name, str) or not CHANNEL_NAME.fullmatch(name):
+                raise DataError(f"{source}: channel name {name!r} must be a letter followed by "
+                                "letters, digits or underscores")
             if isinstance(spec, str):
                 spec = {"column": spec}
             if not isinstance(spec, Mapping):
                 raise DataError(f"{source}: channel {name!r} must be a column name or "
                                 f"{{ column = ..., unit = ... }}, got {spec!r}")
+            extra = [k for k in spec if k not in ("column", "unit")]
+            if extra:
+                raise DataError(f"{source}: channel {name!r} has unknown key {extra[0]!r} "
+                                "(known: column, unit)")
             col = spec.get("column")
             unit = spec.get("unit", CHANNELS[name].unit if name in CHANNELS else None)
             if col is None or unit is None:
                 raise DataError(f"{source}: channel {name!r} needs 'column' and 'unit'")
-            if unit not in KNOWN_UNITS:
-                raise DataError(f"{source}: channel {name!r} has unknown unit {unit!r}")
-            chans[name] = (str(col), str(unit))
+            if not isinstance(col, str) or not col:
+                raise DataError(f"{source}: channel {name!r}: 'column' must be a column name, "
+                                f"got {col!r}")
+            if not isinstance(unit, str) or unit not in KNOWN_UNITS:
+                raise DataError(f"{source}: channel {name!r} has unknown unit {unit!r} "
+                                f"(known: {', '.join(KNOWN_UNITS)})")
+            chans[name] = (col, unit)
         Ts = d.get("Ts")
-        return cls(time=str(d["time"]), channels=chans, Ts=None if Ts is None else float(Ts))
+        if Ts is not None:
+            Ts = check_sample_time(Ts, f"{source}: Ts")
+        resample = d.get("resample")
+        if resample is not None:
+            if not isinstance(resample, str) or resample not in RESAMPLE_MODES:
+                raise DataError(f"{source}: resample must be one of "
+                                f"{', '.join(map(repr, RESAMPLE_MODES))}, got {resample!r}")
+            if Ts is None:
+                raise DataError(f"{source}: resample = {resample!r} needs Ts (the grid to "
+                                "resample onto)")
+        return cls(time=d["time"], channels=chans, Ts=Ts, resample=resample, source=source)
+
+
+def _numeric_column(values, name: str, source: str) -> np.ndarray:
+    """A foreign column or variable as a float vector, or a one-line ``DataError``."""
+    if isinstance(values, Mapping) or hasattr(values, "_fieldnames"):
+        fields = list(values) if isinstance(values, Mapping) else list(values._fieldnames)
+        hint = f", e.g. '{name}.{fields[0]}'" if fields else ""
+        raise DataError(f"{source}: variable {name!r} is a struct, not a vector; name one of "
+                        f"its fields{hint}")
+    try:
+        arr = np.asarray(values)
+    except Exception:  # noqa: BLE001 - ragged or foreign objects
+        raise DataError(f"{source}: column {name!r} is not a numeric vector") from None
+    if arr.dtype.kind not in "biuf":
+        what = {"O": "objects (a cell or struct array?)", "U": "text", "S": "text",
+                "c": "complex numbers"}.get(arr.dtype.kind, str(arr.dtype))
+        raise DataError(f"{source}: column {name!r} is not numeric (it holds {what})")
+    if sum(s > 1 for s in arr.shape) > 1:
+        raise DataError(f"{source}: column {name!r} is a {'x'.join(map(str, arr.shape))} "
+                        "array, expected a vector")
+    check_size(arr.size, f"{source}: column {name!r}")
+    return arr.astype(float).ravel()
 
 
 def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
               metadata: dict) -> Dataset:
     if cmap.time not in columns:
         raise DataError(f"{source}: missing time column {cmap.time!r}")
-    time = np.asarray(columns[cmap.time], dtype=float).ravel()
+    time = _numeric_column(columns[cmap.time], cmap.time, source)
     chans, units = {}, {}
     for name, (col, unit) in cmap.channels.items():
         if col not in columns:
             raise DataError(f"{source}: missing column {col!r} (for channel {name!r})")
-        v = np.asarray(columns[col], dtype=float).ravel()
+        v = _numeric_column(columns[col], col, source)
         if v.shape != time.shape:
             raise DataError(f"{source}: column {col!r} has {v.size} values, time has {time.size}")
         chans[name], units[name] = v, unit
+    resample_record = None
     if cmap.Ts is not None:
-        bad = ~np.isfinite(time)
-        if bad.any() or np.any(np.diff(time) <= 0):
-            raise DataError(f"{source}: time column {cmap.time!r} is not strictly increasing")
-        chans = _resample(time, chans, cmap.Ts, source)
-        time, Ts = np.arange(len(next(iter(chans.values())))) * cmap.Ts + time[0], cmap.Ts
+        if not np.all(np.isfinite(time)) or np.any(np.diff(time) <= 0):
+            raise DataError(f"{source}: time column {cmap.time!r} is not strictly increasing "
+                            "and finite")
+        mode, note = _resample_mode(time, cmap, source)
+        resample_record = {"mode": mode, "Ts": cmap.Ts, "automatic": cmap.resample is None}
+        if note:
+            resample_record["note"] = note
+        if mode != "none":
+            chans = _resample(time, chans, cmap.Ts, source, mean=mode == "mean")
+            time = np.arange(len(next(iter(chans.values())))) * cmap.Ts + time[0]
+        Ts = cmap.Ts
     else:
         Ts = float(np.median(np.diff(time))) if time.size > 1 else 1.0
+        if not (math.isfinite(Ts) and Ts > 0):
+            raise DataError(f"{source}: time column {cmap.time!r} is not strictly increasing "
+                            "and finite")
     meta = {"source": source, "channel_map": {k: list(v) for k, v in cmap.channels.items()}}
+    if resample_record is not None:
+        meta["resample"] = resample_record
     meta.update(metadata)
     return Dataset(time=time, channels=chans, units=units, Ts=Ts, metadata=meta, source=source)
+
+
+def _resample_mode(time: np.ndarray, cmap: ChannelMap, source: str) -> tuple[str, str | None]:
+    """The resampling a map asks for on this record, and a note when it was decided here."""
+    Ts = cmap.Ts
+    if time.size < 2:
+        raise DataError(f"{source}: record too short to resample ({time.size} sample)")
+    dt = np.diff(time)
+    at_Ts = bool(np.allclose(dt, Ts, rtol=1e-6, atol=1e-6 * Ts))
+    step = float(np.median(dt))
+    if cmap.resample == "none":
+        return "none", None
+    if at_Ts:
+        if cmap.resample == "mean":
+            raise DataError(f"{source}: resample = 'mean' in {cmap.source} on data already "
+                            f"sampled every Ts = {Ts:g} s would average outputs and powers a "
+                            "second time; set resample = 'none'")
+        if cmap.resample is None:
+            return "none", (f"data already sampled every Ts = {Ts:g} s: taken as they are, not "
+                            "resampled (set resample = 'mean' or 'sample' in the map to change)")
+        return cmap.resample, None
+    if step > Ts * (1 + 1e-6):
+        raise DataError(f"{source}: Ts = {Ts:g} s in {cmap.source} is finer than the data's "
+                        f"own step ({step:g} s); acid resamples onto a coarser grid only")
+    check_size((time[-1] - time[0]) / Ts, f"{source}: resampling onto Ts = {Ts:g} s "
+               f"({cmap.source})")
+    return cmap.resample or "mean", None
 
 
 def _is_interval_mean(name: str) -> bool:
@@ -457,12 +737,13 @@ def _is_interval_mean(name: str) -> bool:
 
 
 def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
-              source: str) -> dict[str, np.ndarray]:
+              source: str, mean: bool = True) -> dict[str, np.ndarray]:
     """Resample a finely sampled record onto a Ts grid following the sample convention.
 
-    States, inputs and exogenous signals are sampled at t_k (linear interpolation); outputs
-    and powers become their mean over [t_k, t_k + Ts), from the cumulative trapezoidal
-    integral, so energies are preserved (a CoolSim export at 0.01 s keeps its P * dt).
+    States, inputs and exogenous signals are sampled at t_k (linear interpolation); with
+    ``mean``, outputs and powers become their mean over [t_k, t_k + Ts), from the cumulative
+    trapezoidal integral, so energies are preserved (a CoolSim export at 0.01 s keeps its
+    P * dt); without it they are sampled at t_k too.
     """
     from scipy.integrate import cumulative_trapezoid
 
@@ -472,7 +753,7 @@ def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
     edges = time[0] + Ts * np.arange(n + 1)
     out = {}
     for name, v in chans.items():
-        if _is_interval_mean(name):
+        if mean and _is_interval_mean(name):
             integral = np.interp(edges, time, cumulative_trapezoid(v, time, initial=0.0))
             out[name] = np.diff(integral) / Ts
         else:
@@ -498,14 +779,21 @@ def from_csv(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
         raise DataError(f"{path}: CSV file not found")
     try:
         df = pd.read_csv(path)
-    except Exception as exc:
-        raise DataError(f"{path}: cannot parse CSV ({exc.__class__.__name__})") from None
-    cols = {}
+    except Exception as exc:  # noqa: BLE001 - any parser failure is the file's fault
+        raise DataError(f"{path}: cannot parse CSV ({exc.__class__.__name__}: "
+                        f"{_first_line(exc)})") from None
+    wanted = {cmap.time, *(c for c, _ in cmap.channels.values())}
+    cols: dict[str, object] = {}
     for c in df.columns:
+        key = str(c).strip()
+        if key in cols and key in wanted:
+            raise DataError(f"{path}: column {key!r} appears more than once")
+        if key not in wanted:
+            continue
         try:
-            cols[str(c).strip()] = pd.to_numeric(df[c], errors="raise").to_numpy(dtype=float)
+            cols[key] = pd.to_numeric(df[c], errors="raise").to_numpy(dtype=float)
         except (ValueError, TypeError):
-            continue  # non-numeric columns are only an error if the map asks for them
+            cols[key] = df[c].to_numpy(dtype=object)  # refused by name if the map uses it
     return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "csv"}).validate())
 
 
@@ -513,7 +801,7 @@ def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
     """Import a MATLAB .mat file (v5 via scipy, v7.3 via h5py) through a channel map.
 
     Columns are variable names; ``struct.field`` reaches into a struct (as CoolSim's
-    "To Workspace" blocks export). Each variable must be a vector.
+    "To Workspace" blocks export). Each variable must be a numeric vector.
     """
     path = Path(path)
     if not path.is_file():
@@ -524,12 +812,15 @@ def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
     try:
         major, _ = scipy.io.matlab.matfile_version(path)
         cols = _read_mat73(path, wanted) if major == 2 else _read_mat5(path, wanted)
-    except (ValueError, OSError) as exc:
-        raise DataError(f"{path}: cannot read as a MAT file ({exc})") from None
+    except DataError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - scipy/h5py raise many types on foreign files
+        raise DataError(f"{path}: cannot read as a MAT file ({exc.__class__.__name__}: "
+                        f"{_first_line(exc)})") from None
     return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "mat"}).validate())
 
 
-def _read_mat5(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+def _read_mat5(path: Path, wanted: list[str]) -> dict[str, object]:
     """Variables (``struct.field`` paths) of a MATLAB v4/v5/v7 file, via scipy."""
     import scipy.io
 
@@ -538,23 +829,32 @@ def _read_mat5(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
     for key in wanted:
         obj, ok = mat, True
         for part in key.split("."):
-            ok = part in obj if isinstance(obj, dict) else hasattr(obj, part)
+            ok = part in obj if isinstance(obj, dict) else (
+                hasattr(obj, "_fieldnames") and part in obj._fieldnames)
             obj = obj.get(part) if isinstance(obj, dict) else getattr(obj, part, None)
             if not ok:
                 break
         if ok:
-            cols[key] = np.asarray(obj, dtype=float).ravel()
+            cols[key] = obj
     return cols
 
 
-def _read_mat73(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+def _read_mat73(path: Path, wanted: list[str]) -> dict[str, object]:
     """Variables of a MATLAB v7.3 file (HDF5 inside; structs are groups), via h5py."""
     import h5py
 
-    cols = {}
+    cols: dict[str, object] = {}
     with h5py.File(path, "r") as f:
         for key in wanted:
             h5key = key.replace(".", "/")
-            if h5key in f:
-                cols[key] = np.asarray(f[h5key][()], dtype=float).ravel()
+            if not h5key or h5key.startswith("/") or "//" in h5key or h5key not in f:
+                continue
+            obj = f[h5key]
+            if isinstance(obj, h5py.Group):
+                cols[key] = {name: None for name in obj}  # a struct: refused by name
+            elif obj.dtype.kind not in "biuf":
+                cols[key] = np.empty(0, dtype=object)  # references (cells), text: refused
+            else:
+                check_size(obj.size, f"{path}: variable {key!r}")
+                cols[key] = obj[()]
     return cols

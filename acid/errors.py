@@ -6,7 +6,7 @@ from __future__ import annotations
 class AcidError(Exception):
     """A user-facing error: its message is printed as one line and the CLI exits non-zero.
 
-    The message should name the file, channel or option at fault.
+    The message should name the file, channel, key or option at fault.
     """
 
     exit_code = 2
@@ -17,7 +17,12 @@ class DataError(AcidError):
 
 
 class ConfigError(AcidError):
-    """A configuration (plant, excitation, controller) is invalid."""
+    """A configuration (plant, excitation, controller, option) is invalid."""
+
+
+class OutputError(AcidError):
+    """An output path cannot be written, or writing it would destroy an input or another
+    output of the same command."""
 
 
 class IdentifiabilityWarning(UserWarning):
@@ -26,3 +31,7 @@ class IdentifiabilityWarning(UserWarning):
 
 class SolverWarning(UserWarning):
     """A numerical solver failed or returned an inaccurate solution; a fallback was used."""
+
+
+class InSampleWarning(UserWarning):
+    """A model is validated on (part of) the data it was fitted on."""

@@ -30,6 +30,13 @@ SIGNAL_TYPES = ("aprbs", "prbs", "multisine")
 #: Fixed child-stream index of every random source (never renumber; append new ones).
 STREAMS = {"W_bl": 0, "T_evap_set": 1, "T_int": 2, "T_shell": 3, "noise": 4}
 
+#: Longest record ``excite`` makes (30 days: about 0.9 GB at Ts = 5 s on the hifi plant), s.
+MAX_DURATION_S = 30 * 86400.0
+#: Fastest vehicle speed accepted, m/s (360 km/h; Table I goes to 25 m/s).
+MAX_SPEED = 100.0
+#: Largest measurement noise standard deviation accepted, K.
+MAX_NOISE_K = 10.0
+
 #: Table II input bounds.
 W_BL_BOUNDS = (0.05, 0.15)          # kg/s
 T_EVAP_SET_BOUNDS_C = (3.0, 10.0)   # degC
@@ -96,23 +103,28 @@ class ExcitationSpec:
             if value is not None and value not in SIGNAL_TYPES:
                 raise ConfigError(f"--signal: unknown signal {value!r} "
                                   f"(choose {', '.join(SIGNAL_TYPES)})")
-        if not (math.isfinite(self.duration) and self.duration > 0):
-            raise ConfigError(f"--duration must be a positive number of seconds, "
-                              f"got {self.duration}")
-        if not self.Ts > 0:
+        if not (math.isfinite(self.duration) and 0 < self.duration <= MAX_DURATION_S):
+            raise ConfigError(f"--duration must be a positive number of seconds up to "
+                              f"{MAX_DURATION_S:g} (30 days), got {self.duration}")
+        if not (math.isfinite(self.Ts) and self.Ts > 0):
             raise ConfigError(f"sample time must be positive, got {self.Ts}")
         if self.n_samples < 2:
             raise ConfigError(f"--duration {self.duration:g} s gives {self.n_samples} samples "
                               f"at Ts = {self.Ts:g} s; at least 2 are needed")
+        for name in ("min_dwell", "max_dwell"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0 < value <= MAX_DURATION_S):
+                raise ConfigError(f"--{name.replace('_', '-')} must be a positive number of "
+                                  f"seconds up to {MAX_DURATION_S:g}, got {value}")
         if not 0 < self.min_dwell <= self.max_dwell:
-            raise ConfigError(f"dwell times must satisfy 0 < min <= max, "
+            raise ConfigError(f"dwell times must satisfy 0 < --min-dwell <= --max-dwell, "
                               f"got {self.min_dwell:g} .. {self.max_dwell:g} s")
-        if not (math.isfinite(self.noise) and self.noise >= 0):
-            raise ConfigError(f"--noise must be >= 0 K, got {self.noise}")
-        if not (math.isfinite(self.speed) and self.speed >= 0):
-            raise ConfigError(f"--speed must be >= 0 m/s, got {self.speed}")
-        if int(self.seed) < 0:
-            raise ConfigError(f"--seed must be >= 0, got {self.seed}")
+        if not (math.isfinite(self.noise) and 0 <= self.noise <= MAX_NOISE_K):
+            raise ConfigError(f"--noise must be in [0, {MAX_NOISE_K:g}] K, got {self.noise}")
+        if not (math.isfinite(self.speed) and 0 <= self.speed <= MAX_SPEED):
+            raise ConfigError(f"--speed must be in [0, {MAX_SPEED:g}] m/s, got {self.speed}")
+        if not 0 <= int(self.seed) < 2**63:
+            raise ConfigError(f"--seed must be an integer >= 0, got {self.seed}")
         for name in ("W_bl_bounds", "T_evap_set_bounds", "T_int_bounds", "T_shell_bounds"):
             lo, hi = getattr(self, name)
             if not lo < hi:

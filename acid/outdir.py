@@ -3,10 +3,10 @@
 ``acid reproduce`` and ``acid sweep`` write many files into one folder over minutes. Two runs
 into the same folder would overwrite each other's half-finished stages (two ``reproduce
 --force`` used to die with ``OSError: Directory not empty``), and a run killed with SIGKILL
-leaves hidden temporaries behind (``.name.XXXX.part`` files of :func:`acid._io.atomic_path`,
-stage folders under construction). :func:`claim` takes an exclusive lock on the folder for
-the whole run and, once it holds the lock, removes those temporaries: nothing else may be
-writing them.
+leaves hidden temporaries behind (``.name.PID.XXXX.part`` files of
+:func:`acid._io.atomic_path`, stage folders under construction). :func:`claim` takes an
+exclusive lock on the folder for the whole run and, once it holds the lock, removes those
+temporaries: nothing else may be writing them.
 
 The lock is ``fcntl.flock`` on ``FOLDER/.acid.lock``: the kernel releases it when the process
 ends, however it ends (SIGKILL included), so a stale lock cannot block the next run. The file
@@ -29,8 +29,6 @@ from acid.errors import AcidError
 LOCK_NAME = ".acid.lock"
 #: suffix of temporary folders that become a result by a rename (``tempfile.mkdtemp``)
 TMP_DIR_SUFFIX = ".tmp"
-#: suffix of temporary files of ``acid._io.atomic_path``
-TMP_FILE_SUFFIX = ".part"
 
 _held: dict[Path, list] = {}  # folder -> [file object, depth]
 
@@ -71,26 +69,25 @@ def _lock(fh) -> bool:
 def clean_stale(folder: str | os.PathLike) -> list[Path]:
     """Remove temporaries that a killed run left in ``folder``; returns what was removed.
 
-    Hidden files ending in ``.part`` anywhere below ``folder``, and hidden folders ending in
-    ``.tmp`` (a stage or result under construction). Call only while holding the folder
-    (:func:`claim`): a live run's temporaries look the same.
+    Hidden folders ending in ``.tmp`` (a stage or result under construction) anywhere below
+    ``folder``, and the ``.part`` files of writers that are no longer running
+    (:func:`acid._io.clean_stale_parts`, in every folder below). Call only while holding the
+    folder (:func:`claim`): a live run's temporary folders look the same.
     """
+    from acid._io import clean_stale_parts
+
     folder = Path(folder)
     removed: list[Path] = []
     if not folder.is_dir():
         return removed
-    for dirpath, dirnames, filenames in os.walk(folder):
+    for dirpath, dirnames, _ in os.walk(folder):
         base = Path(dirpath)
         for d in list(dirnames):
             if d.startswith(".") and d.endswith(TMP_DIR_SUFFIX):
                 shutil.rmtree(base / d, ignore_errors=True)
                 removed.append(base / d)
                 dirnames.remove(d)
-        for f in filenames:
-            if f.startswith(".") and f.endswith(TMP_FILE_SUFFIX):
-                with contextlib.suppress(FileNotFoundError):
-                    (base / f).unlink()
-                removed.append(base / f)
+        removed += clean_stale_parts(base)
     return removed
 
 

@@ -45,6 +45,16 @@ PAPER_GAMMA = (0.2451, 0.0867, 1.2999, 1.0047, -0.5176, 0.4553, 34.9579)
 PAPER_TAU = (-0.1842, -1.3226, 154.4995)
 PAPER_BETA = (24156.0, -1974.2, 49.318)
 
+#: Table II range of the blower flow W_bl (kg/s) over which the cabin pole is checked.
+W_BL_RANGE = (0.05, 0.15)
+#: Operating point at which steady temperatures are checked for plausibility (K, kg/s).
+CHECK_T_EVAP_SET, CHECK_W_BL = 278.15, 0.1
+#: A steady temperature outside this range (K) means parameters in another convention.
+PLAUSIBLE_STEADY_K = (200.0, 400.0)
+#: Plausible specific heat of air, J/(kg K) (Table II: 1008), and COP range.
+C_P_RANGE = (900.0, 1100.0)
+ETA_COP_RANGE = (0.1, 50.0)
+
 
 @dataclass(frozen=True)
 class ModelParams:
@@ -105,6 +115,50 @@ class ModelParams:
         t = np.array(self.tau) * (1 + rel * rng.standard_normal(3))
         return self.replace(gamma=tuple(g), tau=tuple(t), name=f"{self.name}-perturbed")
 
+    # ------------------------------------------------------------ plausibility
+    def stability_problems(self) -> list[str]:
+        """Why eqs. 1-3 with these parameters are unstable or not in kelvin (empty if fine).
+
+        * eq. 2: T_evap(k+1) = (gamma4 + gamma5) T_evap(k) + ...: needs |gamma4 + gamma5| < 1;
+        * eq. 1: the cabin pole 1 - gamma1 - gamma2 - gamma3 W_bl must lie inside the unit
+          circle over Table II's W_bl range (0.05-0.15 kg/s; it is linear in W_bl, so both
+          ends suffice);
+        * the steady T_evap at a 5 degC set-point and eq. 3's T_ain there at 0.1 kg/s must be
+          temperatures in kelvin (200-400 K): parameters fitted in degC fail this.
+        """
+        g, t = self.gamma, self.tau
+        out = []
+        a_evap = g[3] + g[4]
+        if not abs(a_evap) < 1.0:
+            out.append(f"eq. 2 is unstable: gamma4 + gamma5 = {a_evap:.6g}, needs "
+                       "|gamma4 + gamma5| < 1")
+        for W in W_BL_RANGE:
+            pole = 1.0 - g[0] - g[1] - g[2] * W
+            if not abs(pole) < 1.0:
+                out.append(f"eq. 1 is unstable: the cabin pole 1 - gamma1 - gamma2 - gamma3 "
+                           f"W_bl = {pole:.6g} at W_bl = {W:g} kg/s lies outside the unit "
+                           "circle (gamma1, gamma2, gamma3)")
+                break
+        if not out:
+            lo, hi = PLAUSIBLE_STEADY_K
+            T_evap = (t[1] - g[4] * CHECK_T_EVAP_SET) / (1.0 - a_evap)
+            T_ain = g[5] * T_evap + g[6] * CHECK_W_BL + t[2]
+            for name, value, keys in (("steady T_evap", T_evap, "gamma4, gamma5, tau2"),
+                                      ("eq. 3 T_ain", T_ain, "gamma6, gamma7, tau3")):
+                if not (math.isfinite(value) and lo <= value <= hi):
+                    out.append(f"{name} = {value:.6g} K at a 5 degC set-point and W_bl = "
+                               f"{CHECK_W_BL:g} kg/s is not a plausible temperature in kelvin "
+                               f"({keys})")
+                    break
+        return out
+
+    def check_stable(self, source: str = "parameters") -> ModelParams:
+        """Refuse (``DataError``, one line) what ``stability_problems`` finds; returns self."""
+        problems = self.stability_problems()
+        if problems:
+            raise DataError(f"{source}: {problems[0]} (--allow-unstable uses them anyway)")
+        return self
+
     # ------------------------------------------------------------------- I/O
     def to_json_dict(self) -> dict:
         return {
@@ -128,30 +182,38 @@ class ModelParams:
 
     @classmethod
     def from_json_dict(cls, d: dict, source: str = "params") -> ModelParams:
+        """Build from a parsed params.json, checking every key's type (one-line errors)."""
         if not isinstance(d, dict):
             raise DataError(f"{source}: expected a JSON object with gamma, tau, beta")
         for key in ("gamma", "tau"):
             if key not in d:
                 raise DataError(f"{source}: missing key {key!r}")
         units = d.get("units", UNITS_CONVENTION)
-        if isinstance(units, str) and "celsius" in units.lower():
+        if not isinstance(units, str):
+            raise DataError(f"{source}: 'units' must be a text, got {type(units).__name__}")
+        if "celsius" in units.lower():
             raise DataError(f"{source}: parameters in a Celsius convention are not supported "
                             "(acid's gamma/tau are in kelvin)")
+        vectors = {key: _numbers(d.get(key, default), key, n, source)
+                   for key, n, default in (("gamma", 7, None), ("tau", 3, None),
+                                           ("beta", 3, PAPER_BETA))}
+        scalars = {key: _number(d.get(key, default), key, source)
+                   for key, default in (("c_p", 1008.0), ("eta_cop", 3.5), ("Ts", 5.0))}
+        for key, (lo, hi) in (("c_p", C_P_RANGE), ("eta_cop", ETA_COP_RANGE)):
+            if not lo <= scalars[key] <= hi:
+                raise DataError(f"{source}: {key} = {scalars[key]:g} is implausible "
+                                f"(expected {lo:g}..{hi:g})")
+        name = d.get("name", Path(source).stem)
+        if not isinstance(name, str):
+            raise DataError(f"{source}: 'name' must be a text, got {type(name).__name__}")
+        provenance = d.get("provenance") or {}
+        if not isinstance(provenance, dict):
+            raise DataError(f"{source}: 'provenance' must be a JSON object, got "
+                            f"{type(provenance).__name__}")
         try:
-            return cls(
-                gamma=tuple(d["gamma"]),
-                tau=tuple(d["tau"]),
-                beta=tuple(d.get("beta", PAPER_BETA)),
-                c_p=d.get("c_p", 1008.0),
-                eta_cop=d.get("eta_cop", 3.5),
-                Ts=d.get("Ts", 5.0),
-                name=str(d.get("name", Path(source).stem)),
-                provenance=d.get("provenance", {}) or {},
-            )
+            return cls(**vectors, **scalars, name=name, provenance=provenance)
         except DataError as exc:
             raise DataError(f"{source}: {exc}") from None
-        except (TypeError, ValueError) as exc:
-            raise DataError(f"{source}: malformed parameter values ({exc})") from None
 
     @classmethod
     def from_json(cls, path: str | Path) -> ModelParams:
@@ -160,9 +222,12 @@ class ModelParams:
         if not path.is_file():
             raise DataError(f"{path}: parameter file not found")
         try:
-            d = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise DataError(f"{path}: not valid JSON ({exc.__class__.__name__}: {exc})") from None
+            d = json.loads(path.read_text(encoding="utf-8"))
+        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+            raise DataError(f"{path}: not valid JSON ({exc.__class__.__name__}: "
+                            f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
+        except OSError as exc:
+            raise DataError(f"{path}: cannot read ({exc.strerror or exc})") from None
         return cls.from_json_dict(d, source=str(path))
 
 
@@ -180,11 +245,46 @@ def paper() -> ModelParams:
     )
 
 
-def load_params(spec: str | Path | None) -> ModelParams:
-    """``None`` or ``"paper"`` gives the paper preset; anything else is a params.json path."""
+def _number(value, key: str, source: str) -> float:
+    """A JSON number (not a bool, not a string) as float."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DataError(f"{source}: malformed parameter values: {key!r} must be a number, "
+                        f"got {_show(value)}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise DataError(f"{source}: {key!r} = {value} is too large") from None
+
+
+def _numbers(value, key: str, n: int, source: str) -> tuple[float, ...]:
+    """A JSON list of ``n`` numbers as a float tuple (a string or an object is refused)."""
+    if not isinstance(value, (list, tuple)):
+        raise DataError(f"{source}: malformed parameter values: {key!r} must be a list of {n} "
+                        f"numbers, got {_show(value)}")
+    if len(value) != n:
+        raise DataError(f"{source}: parameter {key!r} needs {n} numbers, got {len(value)}")
+    out = tuple(_number(v, f"{key}[{i}]", source) for i, v in enumerate(value))
+    if not all(math.isfinite(v) for v in out):
+        raise DataError(f"{source}: parameter {key!r} has a non-finite value: {out}")
+    return out
+
+
+def _show(value) -> str:
+    text = json.dumps(value) if isinstance(value, (str, int, float, bool, type(None))) else \
+        f"a JSON {'object' if isinstance(value, dict) else type(value).__name__}"
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def load_params(spec: str | Path | None, allow_unstable: bool = False) -> ModelParams:
+    """``None`` or ``"paper"`` gives the paper preset; anything else is a params.json path.
+
+    Unstable or implausible parameters (``ModelParams.stability_problems``) are refused with
+    a one-line ``DataError`` unless ``allow_unstable``.
+    """
     if spec is None or str(spec) == "paper":
         return paper()
-    return ModelParams.from_json(spec)
+    p = ModelParams.from_json(spec)
+    return p if allow_unstable else p.check_stable(str(spec))
 
 
 def as_params(obj) -> ModelParams:

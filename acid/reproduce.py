@@ -167,6 +167,36 @@ def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
             "eta_cop": d["efficiency"]}
 
 
+def stage_plant_check(workdir: Path, inputs: dict, config: dict, progress) -> dict:
+    """The plant's credentials, each beside a published reference (``acid plant-check``)."""
+    from acid.plant.check import build_plant, plant_check
+    from acid.report.plant import plant_check_figures
+
+    res = plant_check(build_plant("hifi"), progress=progress)
+    for name, fig in plant_check_figures(res).items():
+        save_figure(fig, workdir / f"{name}.png")
+    d = res.to_json_dict()
+    write_json(workdir / "plant_check.json", d)
+    return {"passed": d["passed"], "checks": d["checks"],
+            "cop_steady_30C_standstill": d["cop_steady_30C_standstill"],
+            "cop_gain_25_vs_0_equal_load_pct": d["cop_gain_25_vs_0_equal_load_pct"]}
+
+
+def _plant_check_rows(outcomes: dict[str, StageOutcome]) -> list[ComparisonRow]:
+    """One row per plant-check credential (section "Plant credentials")."""
+    if "plant_check" not in outcomes:
+        return []
+    rows = []
+    for c in outcomes["plant_check"].summary["checks"]:
+        value = c["value"]
+        shown = ("computed" if c["passed"] is not None else "n/a") if value is None \
+            else f"{value:.4g} {c['unit']}"
+        rows.append(ComparisonRow(f"Plant credentials ({c['group']})", c["name"],
+                                  c["reference"], shown, c["passed"],
+                                  c.get("note") or "acid plant-check"))
+    return rows
+
+
 def _strip_runs(d: dict) -> dict:
     """The mpc-check summary without per-step trajectories (kept in check.json)."""
     out = dict(d)
@@ -201,6 +231,7 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
         Stage("cav", f"beyond the paper: speed preview on {opts.cav_cycle.upper()}", stage_cav,
               {"cycle": opts.cav_cycle, "warmup_s": opts.cav_warmup_s,
                "tail_s": opts.cav_tail_s}, depends=("fit",)),
+        Stage("plant_check", "plant credentials (acid plant-check)", stage_plant_check, {}),
     ]
 
 
@@ -302,6 +333,7 @@ def comparison_rows(outcomes: dict[str, StageOutcome]) -> list[ComparisonRow]:
         f"average < Ts/8 = {1000 * PAPER_TS_S / 8:g} ms (2.2 GHz laptop, MPCTools)",
         f"{tm['median']:.2f} / {tm['p95']:.2f} / {tm['max']:.2f}",
         bool(tm["median"] < 1000 * PAPER_TS_S / 8), tm.get("criterion", "")))
+    rows += _plant_check_rows(outcomes)
     return rows
 
 
@@ -322,6 +354,14 @@ def report_figures(outcomes: dict[str, StageOutcome]) -> list[FigureRef]:
     for p in sorted(outcomes["cav"].workdir.glob("*.png")):
         figs.append(FigureRef(p, "Beyond the paper: constant bound (A), ICM bound (B) and "
                                  "speed-aware NMPC (C) on a drive cycle at equal mean T_cab"))
+    if "plant_check" in outcomes:
+        for stem, cap in (("plant_check_energy", "Plant credentials: (a) Table I with and "
+                           "without the condenser fan, (f) steady COP map"),
+                          ("plant_check_service", "Plant credentials: (d) idle pressures in a "
+                           "service chart's bands, (e) pull-down against the JAF test")):
+            p = outcomes["plant_check"].workdir / f"{stem}.png"
+            if p.is_file():
+                figs.append(FigureRef(p, cap))
     return figs
 
 

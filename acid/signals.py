@@ -75,8 +75,9 @@ def aprbs(rng: np.random.Generator, n: int, low: float, high: float, min_dwell: 
         steps = rng.integers(1, int(levels), size=m)
         idx = (rng.integers(int(levels)) + np.cumsum(steps) - steps[0]) % int(levels)
         values = grid[idx]
-    u = np.repeat(values, dwell)[:n]
-    n_steps = int(np.count_nonzero(np.cumsum(dwell) < n)) + 1
+    ends = np.cumsum(dwell)
+    n_steps = int(np.count_nonzero(ends < n)) + 1  # segments that reach into the record
+    u = np.repeat(values[:n_steps], np.minimum(dwell[:n_steps], n))[:n]
     spec = {"type": "aprbs", "n": int(n), "low": float(low), "high": float(high),
             "min_dwell_samples": min_dwell, "max_dwell_samples": max_dwell,
             "levels": None if levels is None else int(levels), "n_steps": n_steps}

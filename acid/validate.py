@@ -43,6 +43,71 @@ CONSTANT_TRUTH_STD_K = 1e-9
 EXOGENOUS_MODES = ("hold", "measured")
 PLACEMENTS = ("even", "random")
 
+#: Most prediction samples (starts x (horizon + 1)) one study may hold (about 1 GB of arrays).
+MAX_PREDICTION_SAMPLES = 5_000_000
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """Which part of a record a validation uses, why, and whether it is in-sample.
+
+    ``fraction``: the last fraction of the samples (``None``: the whole record); ``source``:
+    "--held-out-fraction", "params provenance" or "whole record"; ``warning``: set when the
+    validated part overlaps the data the parameters were fitted on.
+    """
+
+    fraction: float | None
+    source: str
+    warning: str | None = None
+
+
+def held_out_part(provenance: dict, data: str, data_sha256: str,
+                  requested: float | None = None) -> HeldOut:
+    """The part of ``data`` to validate on, from the fit's provenance (``acid fit`` records
+    ``data_sha256``/``data_file`` and ``estimation_fraction``) and an explicit request.
+
+    Parameters fitted on this file (same SHA-256, or the same path when no hash was
+    recorded) are validated on the part after their estimation fraction; when they were
+    fitted on all of it, or the requested part overlaps the estimation part, the result is
+    in-sample and ``warning`` says so.
+    """
+    prov = provenance if isinstance(provenance, dict) else {}
+    fitted_on, fitted_file = prov.get("data_sha256"), prov.get("data_file")
+    if isinstance(fitted_on, str):
+        same_file = maybe_same = fitted_on == data_sha256
+    else:  # no hash: the recorded path, if any, decides; nothing recorded: maybe this file
+        same_file = isinstance(fitted_file, str) and _same_path(fitted_file, data)
+        maybe_same = same_file or not isinstance(fitted_file, str)
+    est = prov.get("estimation_fraction")
+    est = float(est) if isinstance(est, (int, float)) and not isinstance(est, bool) else None
+    if est is not None and not (math.isfinite(est) and 0.0 < est <= 1.0):
+        est = None
+    if requested is not None:
+        warning = None
+        if same_file and (est is None or float(requested) > 1.0 - est + 1e-12):
+            fitted = "all" if est is None or est >= 1.0 else f"the first {100 * est:g} %"
+            warning = (f"{data}: the validated part (last {100 * float(requested):g} %) "
+                       f"overlaps {fitted} of the record, on which the parameters were "
+                       "fitted: this validation is partly in-sample")
+        return HeldOut(float(requested), "--held-out-fraction", warning)
+    if maybe_same and est is not None and est < 1.0:
+        return HeldOut(1.0 - est, "params provenance")
+    if same_file:
+        return HeldOut(None, "whole record",
+                       f"{data}: the parameters were fitted on this whole record (no held-out "
+                       "part): this validation is in-sample; fit with --estimation-fraction "
+                       "0.5 or validate on another record")
+    return HeldOut(None, "whole record")
+
+
+def _same_path(a: str, b: str) -> bool:
+    import os
+
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
 
 @dataclass(frozen=True)
 class ValidationResult:
@@ -204,11 +269,13 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
     if exogenous not in EXOGENOUS_MODES:
         raise ConfigError(f"--exogenous: unknown mode {exogenous!r} (choose 'hold' or 'measured')")
     if placement not in PLACEMENTS:
-        raise ConfigError(f"placement: unknown mode {placement!r} (choose 'even' or 'random')")
+        raise ConfigError(f"--placement: unknown mode {placement!r} (choose 'even' or 'random')")
     if int(starts) < 1:
         raise ConfigError(f"--starts must be at least 1, got {starts}")
     if int(horizon) < 1:
         raise ConfigError(f"--horizon must be at least 1 step, got {horizon}")
+    if not 0 <= int(seed) < 2**63:
+        raise ConfigError(f"--seed must be an integer >= 0, got {seed}")
     starts, horizon = int(starts), int(horizon)
     src = ds.source
     ds.validate(require=MODEL_CHANNELS)
@@ -227,7 +294,11 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
             f"({longest * ds.Ts:g} s){where}{range_note}, "
             f"the study needs {horizon + 1} consecutive samples ({horizon * ds.Ts:g} s) "
             f"for a {horizon}-step prediction")
-    k0 = _place_starts(admissible, starts, placement, seed)
+    k0 = _place_starts(admissible, min(starts, admissible.size), placement, seed)
+    if k0.size * (horizon + 1) > MAX_PREDICTION_SAMPLES:
+        raise ConfigError(f"--starts {k0.size} x --horizon {horizon} steps is "
+                          f"{k0.size * (horizon + 1):.3g} prediction samples, more than "
+                          f"{MAX_PREDICTION_SAMPLES:.0e}: lower --starts or --horizon")
     if k0.size < starts:
         warnings.warn(f"{src}: only {k0.size} distinct start instants fit a {horizon}-step "
                       f"window; using {k0.size} instead of {starts}", UserWarning,
@@ -243,16 +314,22 @@ def validate(ds: Dataset, params: ModelParams, starts: int = 60, horizon: int = 
         T_int = np.broadcast_to(T_int[:, :1], T_int.shape)
         T_shell = np.broadcast_to(T_shell[:, :1], T_shell.shape)
     x0 = np.stack([T_cab[:, 0], T_evap[:, 0]], axis=-1)
-    cab_hat, evap_hat, _ = model.simulate(x0, W_bl[:, :-1], T_evap_set[:, :-1],
-                                          T_int[:, :-1], T_shell[:, :-1], params)
-    ain_hat = model.inlet_air(evap_hat, W_bl, params)  # eq. 3 at i = 0 .. H
+    with np.errstate(over="ignore", invalid="ignore"):  # divergence is refused just below
+        cab_hat, evap_hat, _ = model.simulate(x0, W_bl[:, :-1], T_evap_set[:, :-1],
+                                              T_int[:, :-1], T_shell[:, :-1], params)
+        ain_hat = model.inlet_air(evap_hat, W_bl, params)  # eq. 3 at i = 0 .. H
+    if not (np.all(np.isfinite(cab_hat)) and np.all(np.isfinite(evap_hat))
+            and np.all(np.isfinite(ain_hat))):
+        raise DataError(f"{src}: the predictions with parameters {params.name!r} diverge "
+                        "(values beyond the range of floating point): the model is unstable")
 
     predicted = np.stack([cab_hat, evap_hat, ain_hat], axis=-1)
     measured = np.stack([T_cab, T_evap, T_ain], axis=-1)
     errors = predicted - measured
 
     horizon_s = np.arange(horizon + 1) * ds.Ts
-    envelope, metrics, per_start = _statistics(measured, predicted, errors)
+    with np.errstate(over="ignore", invalid="ignore"):  # --allow-unstable: huge errors
+        envelope, metrics, per_start = _statistics(measured, predicted, errors)
     settings = {
         "exogenous": exogenous,
         "starts_requested": starts,

@@ -1,10 +1,24 @@
-"""What every command shares: one-line errors, progress bars, JSON summaries, tables."""
+"""What every command shares: one-line errors, interrupts, output-path checks, progress bars,
+JSON summaries, tables.
+
+Conventions for a command module (see ``ARCHITECTURE.md``):
+
+* decorate the command with ``@handle_errors``;
+* call ``check_paths(inputs=..., outputs=..., folders=...)`` first, before any work, with
+  every file it reads and writes, labelled by its option (``--out``) or argument (``DATA``);
+* check option values with ``require`` / ``require_range`` (one line naming the option);
+* print user-derived text (paths, channel names, messages) with ``say`` / ``warn`` / ``note``
+  or ``print_table``: they print it literally, never as rich markup.
+"""
 
 from __future__ import annotations
 
 import functools
+import math
+import os
+import re
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -13,32 +27,205 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
+from rich.text import Text
 
-from acid._io import write_json
-from acid.errors import AcidError
+from acid._io import check_writable_file, write_json
+from acid.errors import AcidError, ConfigError, DataError, OutputError
+from acid_cli._signals import InterruptGuard
+
+try:  # typer >= 0.2x vendors click
+    from typer._click.exceptions import ClickException
+except ImportError:  # pragma: no cover - older typer on top of click
+    from click.exceptions import ClickException
 
 console = Console()
 err_console = Console(stderr=True)
 
+#: Set to show the traceback of an unexpected error (a bug) instead of one line.
+DEBUG_ENV = "ACID_DEBUG"
 
+
+# ----------------------------------------------------------------------------- printing
+def one_line(message: object) -> str:
+    """``message`` as one line (line breaks become spaces)."""
+    return re.sub(r"\s*[\r\n]+\s*", " ", str(message)).strip()
+
+
+def say(text: object, *, style: str | None = None) -> None:
+    """Print ``text`` literally on stdout (no rich markup, no highlighting)."""
+    console.print(Text(str(text), style=style or ""), highlight=False)
+
+
+def _tagged(tag: str, style: str, message: object) -> Text:
+    return Text.assemble((tag, style), " ", one_line(message))
+
+
+def error_line(message: object) -> None:
+    """Print ``error: <message>`` as one literal line on stderr."""
+    err_console.print(_tagged("error:", "bold red", message), soft_wrap=True, highlight=False)
+
+
+def warn(message: object) -> None:
+    """Print ``warning: <message>`` as one literal line on stderr."""
+    err_console.print(_tagged("warning:", "bold yellow", message), soft_wrap=True,
+                      highlight=False)
+
+
+def note(message: object) -> None:
+    """Print ``note: <message>`` as one literal line on stdout."""
+    console.print(_tagged("note:", "bold", message), soft_wrap=True, highlight=False)
+
+
+# ------------------------------------------------------------------------------- errors
 def handle_errors(func: Callable) -> Callable:
-    """Turn ``AcidError`` (and a few obvious user mistakes) into one line and exit code 2."""
+    """Run a command: ``AcidError`` becomes one ``error:`` line and exit 2; Ctrl-C/SIGTERM
+    exit 130/143 with nothing partial left; an unexpected exception (a bug) is one line and
+    exit 1 (``ACID_DEBUG=1`` shows its traceback)."""
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        try:
-            return func(*args, **kwargs)
-        except AcidError as exc:
-            err_console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False,
-                              soft_wrap=True)
-            raise typer.Exit(code=exc.exit_code) from None
-        except KeyboardInterrupt:
-            err_console.print("[bold red]interrupted[/]: nothing half-written was kept")
-            raise typer.Exit(code=130) from None
+        with InterruptGuard() as guard:
+            try:
+                return func(*args, **kwargs)
+            except AcidError as exc:
+                error_line(exc)
+                raise typer.Exit(code=exc.exit_code) from None
+            except KeyboardInterrupt:
+                err_console.print(Text.assemble(("interrupted", "bold red"),
+                                                ": stopped, no partial output was kept"),
+                                  highlight=False)
+                raise typer.Exit(code=guard.exit_code) from None
+            except (typer.Exit, typer.Abort, ClickException):
+                raise
+            except MemoryError:
+                error_line("out of memory: the requested size is too large for this machine")
+                raise typer.Exit(code=2) from None
+            except Exception as exc:
+                if os.environ.get(DEBUG_ENV):
+                    raise
+                error_line(f"internal error ({exc.__class__.__name__}: {exc}); this is a bug "
+                           f"in acid, {DEBUG_ENV}=1 shows the traceback")
+                raise typer.Exit(code=1) from None
 
     return wrapper
 
 
+def require(condition: bool, option: str, message: str) -> None:
+    """Refuse an option value: ``ConfigError("<option> <message>")`` unless ``condition``."""
+    if not condition:
+        raise ConfigError(f"{option} {message}")
+
+
+def require_range(value: float, option: str, lo: float | None = None, hi: float | None = None,
+                  unit: str = "", *, lo_open: bool = False, integer: bool = False) -> None:
+    """Refuse a number outside ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``) or not finite."""
+    u = f" {unit}" if unit else ""
+    if lo is None:
+        span = f"<= {hi:g}{u}"
+    elif hi is None:
+        span = f"{'>' if lo_open else '>='} {lo:g}{u}"
+    else:
+        span = f"in {'(' if lo_open else '['}{lo:g}, {hi:g}]{u}"
+    ok = isinstance(value, (int, float)) and math.isfinite(value)
+    if ok and lo is not None:
+        ok = value > lo if lo_open else value >= lo
+    if ok and hi is not None:
+        ok = value <= hi
+    if ok and integer:
+        ok = float(value).is_integer()
+    require(ok, option, f"must be {'an integer ' if integer else ''}{span}, got {value!r}")
+
+
+# --------------------------------------------------------------------------- file paths
+PathLike = str | os.PathLike
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
+                outputs: Mapping[str, PathLike | None] | None = None,
+                folders: Mapping[str, tuple[PathLike | None, Iterable[str]]] | None = None
+                ) -> None:
+    """Check a command's files before any work; one line naming the option on a problem.
+
+    Parameters
+    ----------
+    inputs : {label: path} files the command reads (``None`` values are skipped): each must
+        exist and be a file.
+    outputs : {label: path} files the command writes: none may be a folder, sit under a file,
+        or lie in a folder this process cannot write.
+    folders : {label: (folder, names)} folders the command writes the files ``names`` into.
+
+    No output may be an input (the same file by any path: links, ``..``, symlinks), and no
+    two outputs may be the same file. Labels are the option or argument names the user typed
+    (``--out``, ``--json``, ``DATA``) and appear in the messages.
+    """
+    ins = [(k, Path(v)) for k, v in (inputs or {}).items() if v is not None]
+    outs = [(k, Path(v)) for k, v in (outputs or {}).items() if v is not None]
+    dirs = [(k, Path(v), tuple(names)) for k, (v, names) in (folders or {}).items()
+            if v is not None]
+
+    for label, p in ins:
+        if not p.exists():
+            raise DataError(f"{label} {p}: file not found")
+        if p.is_dir():
+            raise DataError(f"{label} {p}: is a folder, expected a file")
+
+    written: list[tuple[str, Path]] = list(outs)
+    for label, d, names in dirs:
+        if str(d) == "":
+            raise OutputError(f"{label}: an output folder needs a name")
+        if d.exists() and not d.is_dir():
+            raise OutputError(f"{label} {d}: is a file, expected a folder")
+        _check_folder_writable(label, d)
+        written.extend((label, d / n) for n in names)
+
+    for label, p in written:
+        try:
+            check_writable_file(p)
+        except OutputError as exc:
+            raise OutputError(f"{label} {exc}") from None
+        for in_label, q in ins:
+            if _same(p, q):
+                raise OutputError(f"{label} {p}: is also the input {in_label} ({q}); refusing "
+                                  "to overwrite it")
+    for i, (label, p) in enumerate(written):
+        for other, q in written[:i]:
+            if _same(p, q):
+                by = "twice" if other == label else f"also by {other} ({q})"
+                raise OutputError(f"{label} {p}: would be written {by}; give each output "
+                                  "its own path")
+
+
+def _check_folder_writable(label: str, d: Path) -> None:
+    probe = d
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir():
+        raise OutputError(f"{label} {d}: cannot create it, {probe} is a file, not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise OutputError(f"{label} {d}: folder {probe} is not writable")
+
+
+def plant_inputs(plant: str | None, fmu_map: PathLike | None) -> dict[str, PathLike | None]:
+    """The files behind ``--plant fmu:PATH.fmu`` and ``--fmu-map`` (for ``check_paths``)."""
+    fmu = plant[len("fmu:"):] if plant and plant.startswith("fmu:") else None
+    return {"--plant": fmu or None, "--fmu-map": fmu_map}
+
+
+def params_input(spec: str | None) -> str | None:
+    """The file behind a ``--params``/``--reference`` value (``None`` for the 'paper' preset)."""
+    return None if spec is None or str(spec) == "paper" else spec
+
+
+# ------------------------------------------------------------------------ progress, io
 @contextmanager
 def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator[Callable]:
     """A rich progress bar; yields ``update(done, total)`` for library callbacks.
@@ -52,7 +239,7 @@ def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator
                   TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
                   TimeRemainingColumn(), console=err_console, transient=False,
                   disable=not sys.stderr.isatty()) as prog:
-        task = prog.add_task(description, total=total)
+        task = prog.add_task(escape(description), total=total)
 
         def update(done: int, total_: int | None = None) -> None:
             prog.update(task, completed=done, total=total_ if total_ is not None else total)
@@ -64,19 +251,19 @@ def write_summary(path: Path | None, summary: dict) -> None:
     """Write the machine-readable summary when ``--json`` was given."""
     if path is not None:
         write_json(path, summary)
-        console.print(f"summary written to {path}")
+        say(f"summary written to {path}")
 
 
 def print_table(title: str, columns: list[str], rows: list[list], **kwargs) -> None:
-    """Print a rich table (cells are converted with ``str``).
+    """Print a rich table (cells are converted with ``str`` and shown literally).
 
     Columns are right-aligned (numbers); a leading ``_`` in a column name asks for a
     left-aligned column and is not shown.
     """
-    table = Table(title=title, **kwargs)
+    table = Table(title=Text(str(title), style="table.title"), **kwargs)
     for c in columns:
         left = c.startswith("_")
         table.add_column(c[1:] if left else c, justify="left" if left else "right")
     for r in rows:
-        table.add_row(*[str(c) for c in r])
+        table.add_row(*[Text(str(c)) for c in r])
     console.print(table)

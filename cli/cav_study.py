@@ -13,8 +13,23 @@ from acid._io import file_sha256, save_figure
 from acid.errors import ConfigError
 from acid.params import load_params
 from acid.units import C2K, K2C
-from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._common import (
+    check_paths,
+    handle_errors,
+    note,
+    params_input,
+    plant_inputs,
+    print_table,
+    progress_bar,
+    require_range,
+    say,
+    write_summary,
+)
 from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+
+#: Longest NMPC horizon (steps) and warm-up / tail / identification record accepted.
+MAX_HORIZON = 200
+MAX_SECONDS = 7 * 86400.0
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -45,6 +60,9 @@ def cav_study(
                              help="Folder for the figure (cav_<cycle>.png)."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figure."),
+    allow_unstable: bool = typer.Option(
+        False, "--allow-unstable",
+        help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
     plant: str = plant_option("hifi", ("hifi",)),
     fmu_map: Path | None = fmu_map_option(),
 ) -> None:
@@ -60,21 +78,30 @@ def cav_study(
     from acid.mpc.speed_model import identify_from_plant
     from acid.signals import available_drive_cycles, drive_cycle
 
+    check_paths(inputs={"--params": params_input(params), **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
+                folders={"--out": (out if figures else None, (f"cav_{cycle}.png",))})
+    require_range(horizon, "--horizon", 2, MAX_HORIZON, "steps")
+    require_range(T_low, "--t-low", 0.0, 50.0, "degC")
+    require_range(T_high, "--t-high", 0.0, 50.0, "degC")
+    if not T_low < T_high:
+        raise ConfigError(f"--t-low {T_low:g} degC must be below --t-high {T_high:g} degC")
+    require_range(warmup, "--warmup", 0.0, MAX_SECONDS, "s")
+    require_range(tail, "--tail", 0.0, MAX_SECONDS, "s")
+    require_range(identify_duration, "--identify-duration", 600.0, MAX_SECONDS, "s",
+                  lo_open=True)
     names = available_drive_cycles()
     if cycle not in names:
         raise ConfigError(f"--cycle: unknown drive cycle {cycle!r} (available: "
                           f"{', '.join(names)})")
-    if not (math.isfinite(identify_duration) and identify_duration > 600.0):
-        raise ConfigError(f"--identify-duration must be more than 600 s, got {identify_duration}")
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
-    p = load_params(params)
+    p = load_params(params, allow_unstable=allow_unstable)
     factory = None
     if choice.kind == "fmu":
         choice.check()
         factory = choice.factory()
         if speed_blind:
-            console.print("note: an FMU plant has no speed-blind twin; running without it",
-                          highlight=False)
+            note("an FMU plant has no speed-blind twin; running without it")
             speed_blind = False
     config = StudyConfig(cycle=cycle, horizon=horizon, T_low=C2K(T_low), T_high=C2K(T_high),
                          warmup_s=warmup, tail_s=tail, speed_blind=speed_blind)
@@ -85,11 +112,11 @@ def cav_study(
         result = run_study(p, config, efficiency=eff, plant_factory=factory, progress=up)
 
     q = eff.quality
-    console.print(
+    say(
         f"eta_cop(v) = {eff.eta0:.3f} (+/- {eff.stderr[0]:.3f}) + {eff.eta1:.4f} "
         f"(+/- {eff.stderr[1]:.4f}) v [v in m/s]; R^2 {q['r2']:.3f} (constant eta "
         f"{q['const_eta']:.3f}: R^2 {q['const_r2']:.3f}), RMSE {q['rmse_W']:.0f} W, "
-        f"n = {q['n']}; eta(25)/eta(0) = {eff.ratio(25.0):.3f}", highlight=False)
+        f"n = {q['n']}; eta(25)/eta(0) = {eff.ratio(25.0):.3f}")
     studies = [result.main] + ([result.blind] if result.blind is not None else [])
     rows, lines = [], []
     for st in studies:
@@ -110,25 +137,24 @@ def cav_study(
     print_table(f"{cycle.upper()} ({v.size * p.Ts:g} s, mean {v.mean():.1f} m/s), N = {horizon}",
                 ["_plant", "_case", "E MJ", "mean C", "max C", "viol Ks", "Ceff MJ", "tail MJ",
                  "ms"], rows)
-    console.print("A: constant bound, B: ICM bound, C: speed-aware NMPC; "
-                  "E: compressor + blower over the cycle; viol: K s outside the band; Ceff, "
-                  "tail: end-state corrections vs A; ms: median whole NMPC step", highlight=False)
+    say("A: constant bound, B: ICM bound, C: speed-aware NMPC; "
+        "E: compressor + blower over the cycle; viol: K s outside the band; Ceff, "
+        "tail: end-state corrections vs A; ms: median whole NMPC step")
     for line in lines:
-        console.print(line, highlight=False)
+        say(line)
     d = result.to_json_dict()
     if "saving_from_speed_pct" in d:
         sp = d["saving_from_speed_pct"]
-        console.print("part of the saving owed to speed (plant minus speed-blind twin, "
-                      "points): " + "; ".join(
-                          f"{k}: " + ", ".join(f"{m} {_fmt(v_, 2)}" for m, v_ in sp[k].items())
-                          for k in ("B", "C")), highlight=False)
+        say("part of the saving owed to speed (plant minus speed-blind twin, points): "
+            + "; ".join(f"{k}: " + ", ".join(f"{m} {_fmt(v_, 2)}" for m, v_ in sp[k].items())
+                        for k in ("B", "C")))
 
     fig_path = None
     if figures:
         from acid.report.cav import cav_study_figure
 
         fig_path = str(save_figure(cav_study_figure(result), out / f"cav_{cycle}.png"))
-        console.print(f"figure written to {fig_path}")
+        say(f"figure written to {fig_path}")
     summary = {
         "command": "cav-study", "acid_version": __version__,
         "inputs": {"params": params,

@@ -13,15 +13,27 @@ from acid.errors import ConfigError
 from acid.excite import SIGNAL_TYPES, ExcitationSpec
 from acid.excite import excite as run_excitation
 from acid.units import C2K
-from acid_cli._common import handle_errors, print_table, progress_bar, write_summary
+from acid_cli._common import (
+    check_paths,
+    handle_errors,
+    plant_inputs,
+    print_table,
+    progress_bar,
+    require_range,
+    write_summary,
+)
 from acid_cli._plant import fmu_map_option, plant_choice, plant_option
 
 PLANTS = ("hifi", "model")
 
+#: Ambient temperatures accepted here, degC: a kelvin value typed by mistake is refused; the
+#: plant refuses what its own tables do not cover.
+T_AMB_RANGE_C = (-60.0, 150.0)
+
 
 def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
                 plant_config: Path | None, T_amb: float | None,
-                fmu_map: Path | None = None):
+                fmu_map: Path | None = None, allow_unstable: bool = False):
     """The plant chosen by ``--plant``, with the spec's noise and the noise stream's seed.
 
     A plant that is not available in this installation (``--plant hifi`` before the
@@ -40,7 +52,7 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
     if choice.kind == "model":
         from acid.params import load_params
 
-        model_params = load_params(params)
+        model_params = load_params(params, allow_unstable=allow_unstable)
     try:
         return choice.make(config_path=plant_config, params=model_params,
                            meas_noise_std=spec.noise, rng=spec.rng("noise"),
@@ -85,9 +97,17 @@ def excite(
     t_amb: float | None = typer.Option(None, "--t-amb",
                                        help="Ambient temperature, degC (default: the "
                                             "plant's, 30 degC in Table II)."),
+    allow_unstable: bool = typer.Option(
+        False, "--allow-unstable",
+        help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
     json_out: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
     """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
+    check_paths(inputs={"--params": params, "--plant-config": plant_config,
+                        **plant_inputs(plant, fmu_map)},
+                outputs={"--out": out, "--json": json_out})
+    if t_amb is not None:
+        require_range(t_amb, "--t-amb", *T_AMB_RANGE_C, "degC")
     if cycle is not None and speed != 0.0:
         raise ConfigError("--speed and --cycle are exclusive (give one speed profile)")
     spec = ExcitationSpec(signal=signal, duration=duration, seed=seed, speed=speed,
@@ -97,7 +117,7 @@ def excite(
         from acid.signals import drive_cycle
 
         drive_cycle(cycle, n=1, Ts=spec.Ts)  # unknown names fail before the plant is built
-    the_plant = build_plant(plant, spec, params, plant_config, t_amb, fmu_map)
+    the_plant = build_plant(plant, spec, params, plant_config, t_amb, fmu_map, allow_unstable)
     t0 = time.perf_counter()
     with progress_bar(f"exciting {plant} plant", spec.n_samples) as update:
         ds = run_excitation(the_plant, spec, progress=update)

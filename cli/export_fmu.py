@@ -10,7 +10,7 @@ import typer
 from acid import __version__
 from acid._io import file_sha256
 from acid.errors import ConfigError
-from acid_cli._common import console, handle_errors, print_table, write_summary
+from acid_cli._common import check_paths, handle_errors, print_table, say, write_summary
 
 
 @handle_errors
@@ -42,6 +42,8 @@ def export_fmu(
     if out.suffix != ".fmu":
         raise ConfigError(f"--out: an FMU file name ends in .fmu, got {out}")
     map_out = map_out if map_out is not None else out.with_suffix(".toml")
+    check_paths(inputs={"--plant-config": plant_config},
+                outputs={"--out": out, "--map": map_out, "--json": json_out})
     if map_out.resolve() == out.resolve():
         raise ConfigError("--map must differ from --out")
     cfg = PlantConfig.from_toml(plant_config) if plant_config is not None else PlantConfig()
@@ -53,9 +55,8 @@ def export_fmu(
                 ["_variables", "count", "_names"],
                 [["state.*", len(result.states), ", ".join(result.states)],
                  ["mean.*", len(result.means), ", ".join(result.means)]])
-    console.print(f"FMU map written to {result.fmu_map}")
-    console.print(f"drive it with: --plant fmu:{out} --fmu-map {result.fmu_map}",
-                  highlight=False)
+    say(f"FMU map written to {result.fmu_map}")
+    say(f"drive it with: --plant fmu:{out} --fmu-map {result.fmu_map}")
     write_summary(json_out, {
         "command": "export-fmu", "acid_version": __version__, **result.to_json_dict(),
         "fmu_sha256": file_sha256(out), "elapsed_s": elapsed,

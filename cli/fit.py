@@ -11,9 +11,30 @@ import typer
 from acid import __version__
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError
-from acid.fit import COVARIANCES, DEFAULT_COVARIANCE, EQUATION_CHANNEL, ModelFitter
+from acid.fit import (
+    COVARIANCES,
+    DEFAULT_COVARIANCE,
+    EQUATION_CHANNEL,
+    LOSSES,
+    METHODS,
+    ModelFitter,
+)
 from acid.params import load_params
-from acid_cli._common import console, err_console, handle_errors, print_table, write_summary
+from acid_cli._common import (
+    check_paths,
+    handle_errors,
+    note,
+    params_input,
+    print_table,
+    require,
+    require_range,
+    say,
+    warn,
+    write_summary,
+)
+
+#: Largest output-error window and HAC lag accepted, samples.
+MAX_WINDOW = 100_000
 
 
 def _num(v: float, digits: int = 5) -> str:
@@ -67,11 +88,17 @@ def fit(
     Prints the parameter table with the reference (paper) values beside ours, the
     conditioning of each regression and the one-step and multi-step fit %.
     """
-    if not 0.0 < estimation_fraction <= 1.0:
-        raise ConfigError(f"--estimation-fraction must be in (0, 1], got {estimation_fraction}")
+    check_paths(inputs={"DATA": data, "--reference": params_input(reference)},
+                outputs={"--out": out, "--json": json_path})
+    require_range(estimation_fraction, "--estimation-fraction", 0.0, 1.0, lo_open=True)
+    require(method in METHODS, "--method", f"must be one of {', '.join(METHODS)}, "
+            f"got {method!r}")
+    require(loss in LOSSES, "--loss", f"must be one of {', '.join(LOSSES)}, got {loss!r}")
+    require_range(oe_window, "--oe-window", 5, MAX_WINDOW, "samples")
     bandwidth: str | int = hac_bandwidth
     if hac_bandwidth.strip().isdigit():
         bandwidth = int(hac_bandwidth)
+        require_range(bandwidth, "--hac-bandwidth", 0, MAX_WINDOW, "samples")
     elif hac_bandwidth not in ("auto", "nw"):
         raise ConfigError(f"--hac-bandwidth must be 'auto', 'nw' or an integer >= 0, "
                           f"got {hac_bandwidth!r}")
@@ -96,7 +123,7 @@ def fit(
     report = result.to_json_dict()
     params.to_json(out, extra={"fit": report})
 
-    console.print(f"{data}: {len(est)} of {len(ds)} samples ({est.duration:g} s), method "
+    say(f"{data}: {len(est)} of {len(ds)} samples ({est.duration:g} s), method "
                   f"{method}, loss {loss}, covariance {covariance}"
                   + (f" (lags {_lags(result.hac_bandwidth)})" if result.hac_bandwidth else "")
                   + f" ({result.elapsed_s * 1e3:.0f} ms)")
@@ -125,16 +152,19 @@ def fit(
                 ["eq.", "channel", "rank", "cond", "cond raw", "resid", "fit %", "solver"],
                 eq_rows)
     sim = ", ".join(f"{c} {v:.2f} %" for c, v in result.fit_percent_simulation.items())
-    console.print(f"{oe_window}-step simulation fit from measured states: {sim}")
+    say(f"{oe_window}-step simulation fit from measured states: {sim}")
     if "oe" in result.solver_status:
-        console.print(f"output error: {result.solver_status['oe']}")
+        say(f"output error: {result.solver_status['oe']}")
     if result.active_constraints:
-        console.print("active constraints: " + "; ".join(result.active_constraints))
+        say("active constraints: " + "; ".join(result.active_constraints))
     for line in result.notes:
-        console.print(f"note: {line}", highlight=False)
+        note(line)
     for line in result.warnings:
-        err_console.print(f"[bold yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
-    console.print(f"parameters written to {out}")
+        warn(line)
+    for line in params.stability_problems():
+        warn(f"{out}: the fitted {line}; acid validate and mpc-check refuse these parameters "
+             "without --allow-unstable")
+    say(f"parameters written to {out}")
     write_summary(json_path, {"command": "fit", "acid_version": __version__,
                               "inputs": {"data": str(data), "reference": reference},
                               "estimation_fraction": estimation_fraction, "out": str(out),

@@ -2,12 +2,46 @@
 
 from __future__ import annotations
 
-import typer
+from acid_cli import _signals
 
-from acid import __version__
+_signals.begin_startup()  # Ctrl-C while the modules below import: exit 130 quietly
+
+import sys  # noqa: E402
+
+import typer  # noqa: E402
+from typer.core import TyperGroup  # noqa: E402
+
+from acid import __version__  # noqa: E402
+from acid_cli._common import ClickException, error_line  # noqa: E402
+
+
+class AcidGroup(TyperGroup):
+    """Typer's group, with usage errors (unknown option, bad integer, missing argument) as one
+    ``error:`` line naming the option, like every other acid error, instead of a panel."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
+             **extra):
+        if not standalone_mode:
+            return super().main(args=args, prog_name=prog_name, complete_var=complete_var,
+                                standalone_mode=False, **extra)
+        try:
+            rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var,
+                              standalone_mode=False, **extra)
+        except ClickException as exc:
+            if type(exc).__name__ == "NoArgsIsHelpError":  # bare `acid`: the help, as usual
+                typer.echo(exc.ctx.get_help() if exc.ctx else str(exc), err=True)
+                sys.exit(exc.exit_code)
+            where = f" (see `{exc.ctx.command_path} --help`)" if getattr(exc, "ctx", None) else ""
+            error_line(f"{exc.format_message()}{where}")
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            sys.exit(130)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
 
 app = typer.Typer(
     name="acid",
+    cls=AcidGroup,
     help="A/C system identification, model validation and predictive climate control "
          "of electrified vehicles (reproduces Wang et al., ACC 2018).",
     no_args_is_help=True,
@@ -31,3 +65,5 @@ def main(version: bool = typer.Option(False, "--version", callback=_version, is_
 
 # Sub-commands register themselves here, one line each (keep this list sorted by pipeline).
 from acid_cli import commands  # noqa: E402,F401  (registers the sub-commands on ``app``)
+
+_signals.end_startup()

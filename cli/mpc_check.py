@@ -14,8 +14,21 @@ from acid.errors import ConfigError
 from acid.mpc.nmpc import NMPCConfig
 from acid.mpc.scenarios import mpc_check as run_check
 from acid.params import load_params
-from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid_cli._common import (
+    check_paths,
+    console,
+    handle_errors,
+    params_input,
+    plant_inputs,
+    print_table,
+    progress_bar,
+    say,
+    write_summary,
+)
 from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+
+FIGURES = ("fig7_model.png", "fig8_plant.png", "fig9_cav_bound.png",
+           "fig10_cav_comparison.png")
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -44,6 +57,9 @@ def mpc_check(
     skip_plant: bool = typer.Option(False, "--skip-plant",
                                     help="Only scenario (a), on the control-oriented model."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figures."),
+    allow_unstable: bool = typer.Option(
+        False, "--allow-unstable",
+        help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
     plant: str = plant_option("hifi", ("hifi",)),
     fmu_map: Path | None = fmu_map_option(),
 ) -> None:
@@ -52,12 +68,15 @@ def mpc_check(
     Reports A/C energy (MJ), constraint violations (K), whole-step solve time (ms) and
     fallbacks per scenario, with PASS/FAIL against the stated criteria; exits 1 on any FAIL.
     """
+    check_paths(inputs={"--params": params_input(params), **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
+                folders={"--out": (out if figures else None, FIGURES)})
     if first_move not in ("free", "pinned"):
         raise ConfigError(f"--first-move must be 'free' or 'pinned', got {first_move!r}")
     if solver not in ("fatrop", "ipopt"):
         raise ConfigError(f"--solver must be 'fatrop' or 'ipopt', got {solver!r}")
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
-    p = load_params(params)
+    p = load_params(params, allow_unstable=allow_unstable)
     config = NMPCConfig(first_move=first_move, solver=solver)
     factory = None
     if choice.kind == "fmu" and not skip_plant:
@@ -70,8 +89,8 @@ def mpc_check(
                            plant_factory=factory)
     elapsed = time.perf_counter() - t0
 
-    console.print(f"NMPC: N = {config.N}, solver {solver}, first move {first_move}, "
-                  f"parameters {p.name!r} ({elapsed:.1f} s)")
+    say(f"NMPC: N = {config.N}, solver {solver}, first move {first_move}, "
+        f"parameters {p.name!r} ({elapsed:.1f} s)")
     rows, notes = [], []
     for key, s in result.scenarios.items():
         if s.skipped is not None:
@@ -93,7 +112,7 @@ def mpc_check(
                 ["scenario", "verdict", "energy MJ", "max viol", "T_cab viol", "1st step",
                  "step ms med/p95/max", "fallbacks"], rows)
     for line in notes:
-        console.print(f"  {line}", highlight=False)
+        say(f"  {line}")
     cav = result.scenarios.get("cav")
     if cav is not None and cav.skipped is None:
         m = cav.metrics
@@ -104,7 +123,7 @@ def mpc_check(
             line += (f"; speed-blind plant: {_fmt(m['speed_blind_plant']['saving_pct'], 1)} %, "
                      f"so {_fmt(m['saving_from_speed_pct'], 1)} points come from "
                      "speed-dependent efficiency")
-        console.print(line, highlight=False)
+        say(line)
         per = m.get("periodic")
         if per:
             line = (f"CAV periodic ({per['cycles']} cycles of {per['period_s']:g} s, energy over "
@@ -114,9 +133,9 @@ def mpc_check(
             if "saving_from_speed_pct" in per:
                 line += (f"; speed-blind plant {_fmt(per['speed_blind_plant']['saving_pct'], 1)}"
                          f" %, from speed {_fmt(per['saving_from_speed_pct'], 1)} points")
-            console.print(line, highlight=False)
-        console.print("  (cav max viol is T_evap above 12 degC while the compressor is shut off "
-                      "open loop, by design)", highlight=False)
+            say(line)
+        say("  (cav max viol is T_evap above 12 degC while the compressor is shut off "
+            "open loop, by design)")
 
     fig_paths = {}
     if figures:
@@ -125,7 +144,7 @@ def mpc_check(
         for stem, fig in mpc_figures(result.scenarios).items():
             fig_paths[stem] = str(save_figure(fig, out / f"{stem}.png"))
         if fig_paths:
-            console.print(f"figures written to {out}/")
+            say(f"figures written to {out}/")
 
     summary = {
         "command": "mpc-check",

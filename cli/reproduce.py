@@ -13,7 +13,14 @@ from acid.errors import ConfigError
 from acid.outdir import claim
 from acid.pipeline import run_pipeline
 from acid.reproduce import ReproduceOptions, build_stages, write_outputs
-from acid_cli._common import console, err_console, handle_errors, print_table, write_summary
+from acid_cli._common import (
+    check_paths,
+    err_console,
+    handle_errors,
+    print_table,
+    say,
+    write_summary,
+)
 
 
 @handle_errors
@@ -39,6 +46,8 @@ def reproduce(
     Stages are cached by their inputs under OUT/stages, so a second run redoes only what
     changed. Writes OUT/report.html (self-contained) and OUT/summary.json.
     """
+    check_paths(outputs={"--json": json_path},
+                folders={"--out": (out, ("report.html", "summary.json"))})
     if jobs > 8:
         raise ConfigError(f"--jobs {jobs}: at most 8 local processes")
     opts = ReproduceOptions.quick() if quick else ReproduceOptions()
@@ -78,6 +87,6 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
     verdict = {True: "yes", False: "NO", None: "n/a"}
     print_table("Paper vs acid", ["result", "quantity", "paper", "acid", "agrees"],
                 [[r.section, r.quantity, r.paper, r.acid, verdict[r.agrees]] for r in rows])
-    console.print(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
+    say(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
     if json_path is not None:
         write_summary(json_path, __import__("json").loads(summary_path.read_text()))

@@ -9,8 +9,21 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure, write_json
-from acid_cli._common import console, handle_errors, print_table, progress_bar, write_summary
+from acid.errors import ConfigError
+from acid_cli._common import (
+    check_paths,
+    handle_errors,
+    plant_inputs,
+    print_table,
+    progress_bar,
+    require_range,
+    say,
+    write_summary,
+)
 from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+
+#: Longest simulated time per speed accepted, s (one day).
+MAX_DURATION_S = 86400.0
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -32,14 +45,15 @@ def speed_sweep(
 
     Energy is compressor + blower (as in the paper), in MJ and MJ/km.
     """
-    from acid.errors import ConfigError
     from acid.plant.config import PlantConfig
     from acid.plant.sweep import PAPER_TABLE_I
     from acid.plant.sweep import speed_sweep as run_sweep
     from acid.report.plant import sweep_figure
 
-    if not math.isfinite(duration) or duration <= 0:
-        raise ConfigError(f"--duration must be a positive number of seconds, got {duration}")
+    check_paths(inputs={"--config": config, **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
+                folders={"--out": (out, ("speed_sweep.png", "speed_sweep.json"))})
+    require_range(duration, "--duration", 0.0, MAX_DURATION_S, "s", lo_open=True)
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     if config is not None and choice.kind != "hifi":
         raise ConfigError("--config applies to --plant hifi only (an FMU plant is configured "
@@ -62,7 +76,7 @@ def speed_sweep(
                                         strict=True)]
     print_table(f"A/C energy over {result.duration_s:g} s (compressor + blower)",
                 ["speed (m/s)", "energy (MJ)", "paper (MJ)", "MJ/km", "paper MJ/km"], rows)
-    console.print(f"E({speeds[-1]:g})/E({speeds[0]:g}) = {result.ratio_last_first:.3f} "
+    say(f"E({speeds[-1]:g})/E({speeds[0]:g}) = {result.ratio_last_first:.3f} "
                   f"(paper {paper_E[-1] / paper_E[0]:.3f})"
                   + ("" if duration == 600.0 else "  [paper values are for 600 s]"))
 
@@ -73,5 +87,5 @@ def speed_sweep(
     figure_path = save_figure(sweep_figure(result), out / "speed_sweep.png")
     summary["figure"] = str(figure_path)
     write_json(out / "speed_sweep.json", summary)
-    console.print(f"figure written to {figure_path}")
+    say(f"figure written to {figure_path}")
     write_summary(json_path, summary)

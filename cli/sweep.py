@@ -6,9 +6,17 @@ import math
 from pathlib import Path
 
 import typer
+from rich.text import Text
 
 from acid.errors import ConfigError
-from acid_cli._common import console, err_console, handle_errors, print_table, progress_bar
+from acid_cli._common import (
+    check_paths,
+    err_console,
+    handle_errors,
+    print_table,
+    progress_bar,
+    say,
+)
 
 #: files acid sweep writes into its output folder
 OUTPUTS = ("results.parquet", "results.csv", "summary.json", "saving_vs_ambient.png",
@@ -69,35 +77,33 @@ def sweep(
     from acid.outdir import claim
     from acid.sweep import load_spec
 
+    out = out if out is not None else Path("reports/sweep") / spec_path.stem
+    check_paths(inputs={"SPEC.toml": spec_path}, outputs={"--json": json_path},
+                folders={"--out": (out, OUTPUTS)})
+    if json_path is not None and (out / "scenarios").resolve() in json_path.resolve().parents:
+        raise ConfigError(f"--json {json_path}: inside {out / 'scenarios'}, where acid sweep "
+                          "keeps its records")
     if workers is not None and scheduler is not None:
         raise ConfigError("--workers and --scheduler: give one (the cluster has its workers)")
     if workers is not None and not 1 <= workers <= 256:
         raise ConfigError(f"--workers {workers}: must lie in 1..256")
     spec = load_spec(spec_path)
-    out = out if out is not None else Path("reports/sweep") / spec_path.stem
-    if json_path is not None:
-        j = json_path.resolve()
-        if j == spec_path.resolve():
-            raise ConfigError(f"--json {json_path}: that is the specification itself")
-        if j.parent == out.resolve() and j.name in OUTPUTS or out.resolve() in j.parents \
-                and j.parent.name == "scenarios":
-            raise ConfigError(f"--json {json_path}: acid sweep writes that file itself")
     n, m = len(spec.scenarios), len(spec.controllers)
     header = (f"{spec_path}: {spec.title!r}: {n} scenario{'s' * (n != 1)} x {m} "
               f"controller{'s' * (m != 1)} ({', '.join(c.label for c in spec.controllers)}; "
               f"baseline {spec.baseline})")
     if dry_run:
-        console.print(header, highlight=False, markup=False)
+        say(header)
         rows = [[i, s.label, s.duration_s or "cycle", s.warmup_s, s.tail_s, s.params,
                  ", ".join(f"{k}={v}" for k, v in s.plant) or "-"]
                 for i, s in enumerate(spec.scenarios[:20])]
         print_table("Scenarios" + (f" (first 20 of {n})" if n > 20 else ""),
                     ["#", "_scenario", "duration s", "warm-up s", "tail s", "_params",
                      "_plant"], rows)
-        console.print("specification OK; nothing run (--dry-run)")
+        say("specification OK; nothing run (--dry-run)")
         return
     with claim(out, "acid sweep"):  # before anything is printed: a busy folder is one line
-        console.print(header, highlight=False, markup=False)
+        say(header)
         _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path)
 
 
@@ -109,8 +115,8 @@ def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path)
         def on_start(to_run: int, reused: int, where: str) -> None:
             update(0, max(to_run, 1))
             done = f"{reused} scenario{'s' * (reused != 1)} finished earlier"
-            err_console.print(f"{done}; running {to_run} on {where}" if to_run else
-                              f"{done}: nothing to run", highlight=False)
+            err_console.print(Text(f"{done}; running {to_run} on {where}" if to_run else
+                                   f"{done}: nothing to run"), highlight=False)
 
         result = run_sweep(spec, out, workers=workers, scheduler=scheduler, force=force,
                            retry_failed=retry_failed, figures=figures, on_progress=update,
@@ -128,15 +134,15 @@ def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path)
                 ["_controller", "ok", "fail", "E MJ", "saving %", "range %", "tail-corr %",
                  "T_cab C", "viol Ks", "ms"], rows)
     for f in d["failures"][:10]:
-        console.print(f"failed: scenario {f['scenario']} ({f['label']}), {f['controller']}: "
-                      f"{f['error']}", highlight=False, markup=False)
+        say(f"failed: scenario {f['scenario']} ({f['label']}), {f['controller']}: "
+            f"{f['error']}")
     if len(d["failures"]) > 10:
-        console.print(f"... {len(d['failures']) - 10} more failures in the table")
-    console.print(f"{d['computed']} computed ({d['failed']} failed), {d['reused']} reused, "
-                  f"{result.executor}, {result.elapsed_s:.1f} s", highlight=False)
+        say(f"... {len(d['failures']) - 10} more failures in the table")
+    say(f"{d['computed']} computed ({d['failed']} failed), {d['reused']} reused, "
+        f"{result.executor}, {result.elapsed_s:.1f} s")
     for key in ("parquet", "csv", "saving_figure", "energy_figure", "summary"):
         if key in result.files:
-            console.print(f"{key.replace('_', ' ')}: {result.files[key]}", highlight=False)
+            say(f"{key.replace('_', ' ')}: {result.files[key]}")
     if json_path is not None:
         from acid_cli._common import write_summary
 

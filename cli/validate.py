@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from pathlib import Path
 
 import typer
@@ -12,27 +13,23 @@ from acid import __version__
 from acid._io import file_sha256, save_figure
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.params import load_params
+from acid.validate import EXOGENOUS_MODES, PLACEMENTS, held_out_part
 from acid.validate import validate as run_validation
-from acid_cli._common import console, handle_errors, print_table, write_summary
+from acid_cli._common import (
+    check_paths,
+    handle_errors,
+    params_input,
+    print_table,
+    require,
+    require_range,
+    say,
+    warn,
+    write_summary,
+)
 
-
-def _default_held_out(provenance: dict, data_sha256: str) -> float | None:
-    """Held-out fraction implied by the fit's ``provenance.estimation_fraction``, if any.
-
-    ``None`` (the whole record) when the parameters were fitted on another file
-    (``provenance.data_sha256`` differs from this file's hash).
-    """
-    if not isinstance(provenance, dict):
-        return None
-    fitted_on = provenance.get("data_sha256")
-    if fitted_on is not None and fitted_on != data_sha256:
-        return None
-    frac = provenance.get("estimation_fraction")
-    try:
-        frac = float(frac)
-    except (TypeError, ValueError):
-        return None
-    return 1.0 - frac if math.isfinite(frac) and 0.0 < frac < 1.0 else None
+FIGURES = ("fig5_prediction.png", "fig6_errors.png")
+#: Largest --starts and --horizon accepted.
+MAX_STARTS, MAX_HORIZON = 100_000, 1_000_000
 
 
 def _fmt(v: float, digits: int = 3) -> str:
@@ -61,6 +58,9 @@ def validate(
     seed: int = typer.Option(0, "--seed", help="Seed of --placement random."),
     out: Path = typer.Option(Path("reports/validate"), "--out",
                              help="Folder for the figures (fig5/fig6 PNG)."),
+    allow_unstable: bool = typer.Option(
+        False, "--allow-unstable",
+        help="Validate parameters even if eqs. 1-3 are unstable or not in kelvin."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
@@ -70,22 +70,37 @@ def validate(
     """
     from acid.report.validation import error_figure, prediction_figure
 
-    p = load_params(params)
+    check_paths(inputs={"DATA": data, "--params": params_input(params)},
+                outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
+    require_range(starts, "--starts", 1, MAX_STARTS)
+    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
+    require_range(seed, "--seed", 0, 2**63 - 1)
+    require(exogenous in EXOGENOUS_MODES, "--exogenous",
+            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
+    require(placement in PLACEMENTS, "--placement",
+            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
+    if held_out_fraction is not None:
+        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+    p = load_params(params, allow_unstable=allow_unstable)
     ds = Dataset.from_hdf5(data, require=MODEL_CHANNELS)
     data_sha256 = file_sha256(data)
-    fraction_source = "--held-out-fraction"
-    if held_out_fraction is None:
-        held_out_fraction = _default_held_out(p.provenance, data_sha256)
-        fraction_source = "params provenance" if held_out_fraction is not None else "whole record"
+    part = held_out_part(p.provenance, str(data), data_sha256, held_out_fraction)
+    if part.warning:
+        warn(part.warning)
 
     t0 = time.perf_counter()
-    result = run_validation(ds, p, starts=starts, horizon=horizon, exogenous=exogenous,
-                            held_out_fraction=held_out_fraction, placement=placement,
-                            seed=seed)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run_validation(ds, p, starts=starts, horizon=horizon, exogenous=exogenous,
+                                held_out_fraction=part.fraction, placement=placement,
+                                seed=seed)
     elapsed = time.perf_counter() - t0
+    for w in caught:
+        warn(w.message)
+    fraction_source = part.source
 
     lo, hi = result.settings["sample_range"]
-    console.print(f"{data}: {result.n_starts} starts x {result.horizon} steps "
+    say(f"{data}: {result.n_starts} starts x {result.horizon} steps "
                   f"({result.horizon_s[-1]:g} s), samples {lo}..{hi - 1} ({fraction_source}), "
                   f"T_int/T_shell {exogenous}, parameters {p.name!r} ({elapsed * 1e3:.0f} ms)")
     rows = []
@@ -105,7 +120,7 @@ def validate(
 
     fig5 = save_figure(prediction_figure(result), out / "fig5_prediction.png")
     fig6 = save_figure(error_figure(result), out / "fig6_errors.png")
-    console.print(f"figures written to {fig5} and {fig6}")
+    say(f"figures written to {fig5} and {fig6}")
 
     summary = {
         "command": "validate",
@@ -114,6 +129,7 @@ def validate(
                    "params": params,
                    "params_sha256": None if params == "paper" else file_sha256(params)},
         "held_out_fraction_source": fraction_source,
+        "in_sample_warning": part.warning,
         "elapsed_s": elapsed,
         "figures": {"fig5_prediction": str(fig5), "fig6_errors": str(fig6)},
         **result.to_json_dict(),

@@ -55,6 +55,13 @@ def alive(procs) -> list[int]:
     return out
 
 
+def dead_pid() -> int:
+    """The process id of a process that has ended (for stale temporary-file names)."""
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
 def interrupt(proc: subprocess.Popen) -> None:
     """Ctrl-C: SIGINT to the command's whole process group."""
     os.killpg(proc.pid, signal.SIGINT)

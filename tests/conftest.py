@@ -14,9 +14,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 from acid.excite import ExcitationSpec, excite
 from acid.plant import make_plant
+
+# Property-based tests: modest in the suite, thorough on demand
+# (pytest --hypothesis-profile=acid-thorough tests/test_readers_property.py).
+_PROFILE = {"deadline": None, "database": None, "derandomize": False,
+            "suppress_health_check": [HealthCheck.too_slow, HealthCheck.data_too_large,
+                                      HealthCheck.filter_too_much]}
+settings.register_profile("acid-ci", max_examples=150, **_PROFILE)
+settings.register_profile("acid-thorough", max_examples=1500, **_PROFILE)
+settings.load_profile("acid-ci")
 
 
 @pytest.fixture

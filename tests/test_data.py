@@ -376,3 +376,90 @@ def test_mat_v73_import_reads_hdf5_inside(tmp_path):
     ds = from_mat(src, cmap)
     assert len(ds) == 12 and ds.metadata["imported_from"] == "mat"
     np.testing.assert_allclose(ds["T_cab"], 30.0 - 0.05 * ds.time, atol=1e-9)
+
+
+# ------------------------------------------------------------- resampling, ranges
+def _at_5s(tmp_path, n: int = 40):
+    t = np.arange(n) * 5.0
+    src = tmp_path / "run.csv"
+    _write_csv(src, t, Tcabin=300 + 0.01 * t, blower=0.1 + 0 * t, Tevap=5 + 0 * t,
+               Pc=1000 + 100 * np.sin(t / 20))
+    return src, t
+
+
+def _pmap(**extra):
+    return ChannelMap.from_dict({"time": "t", **extra, "channels": {
+        "T_cab": {"column": "Tcabin", "unit": "K"}, "W_bl": "blower", "T_evap": "Tevap",
+        "P_comp": {"column": "Pc", "unit": "W"}}})
+
+
+def test_data_already_at_Ts_are_not_averaged_again(tmp_path):
+    src, t = _at_5s(tmp_path)
+    ds = from_csv(src, _pmap(Ts=5.0))
+    np.testing.assert_array_equal(ds["P_comp"], 1000 + 100 * np.sin(t / 20))
+    assert ds.metadata["resample"]["mode"] == "none"
+    assert "already sampled every Ts = 5 s" in ds.metadata["resample"]["note"]
+    with pytest.raises(DataError) as e:
+        from_csv(src, _pmap(Ts=5.0, resample="mean"))
+    _assert_one_line(e, "resample = 'mean'", "second time")
+
+
+def test_resample_sample_interpolates_outputs_too(tmp_path):
+    t = np.arange(0, 100.01, 0.5)
+    src = tmp_path / "run.csv"
+    _write_csv(src, t, Tcabin=300 + 0 * t, blower=0.1 + 0 * t, Tevap=5 + 0 * t, Pc=10 * t)
+    ds = from_csv(src, _pmap(Ts=5.0, resample="sample"))
+    np.testing.assert_allclose(ds["P_comp"], 10 * ds.time)  # point samples, not means
+    mean = from_csv(src, _pmap(Ts=5.0, resample="mean"))
+    np.testing.assert_allclose(mean["P_comp"], 10 * (ds.time + 2.5))  # interval means
+
+
+@pytest.mark.parametrize("Ts,fragment", [("5", "number"), (0, "positive"), (float("nan"),
+                                         "positive"), ([5.0], "number"), (True, "number")])
+def test_channel_map_Ts_must_be_a_positive_number(Ts, fragment):
+    with pytest.raises(DataError, match=fragment):
+        _pmap(Ts=Ts)
+
+
+def test_channel_map_Ts_finer_than_the_data_is_refused(tmp_path):
+    src, _ = _at_5s(tmp_path)
+    with pytest.raises(DataError) as e:
+        from_csv(src, _pmap(Ts=1e-9))
+    _assert_one_line(e, "Ts = 1e-09 s", "finer than the data's own step (5 s)")
+
+
+def test_negative_blower_flow_is_refused_with_the_channel_named(tmp_path):
+    ds = _small()
+    ds.channels["W_bl"] = -ds.channels["W_bl"]
+    path = ds.to_hdf5(tmp_path / "d.h5")
+    with pytest.raises(DataError) as e:
+        Dataset.from_hdf5(path)
+    _assert_one_line(e, "'W_bl'", "below its physical range [0, 1] kg/s")
+
+
+@pytest.mark.parametrize("edit,fragment", [
+    (lambda f: f.attrs.__setitem__("Ts", "5"), "Ts"),
+    (lambda f: f.attrs.__setitem__("Ts", np.array([5.0, 5.0])), "Ts"),
+    (lambda f: f["channels/T_cab"].attrs.__setitem__("unit", np.array([1, 2])), "'T_cab'"),
+    (lambda f: f.attrs.__setitem__("metadata", "[1]"), "metadata"),
+])
+def test_foreign_attribute_types_are_one_line_errors(tmp_path, edit, fragment):
+    path = _small().to_hdf5(tmp_path / "d.h5")
+    with h5py.File(path, "r+") as f:
+        edit(f)
+    with pytest.raises(DataError) as e:
+        Dataset.from_hdf5(path)
+    _assert_one_line(e, str(path), fragment)
+
+
+def test_mat_struct_variable_names_its_fields(tmp_path):
+    import scipy.io
+
+    t = np.arange(0, 60.0, 1.0)
+    src = tmp_path / "run.mat"
+    scipy.io.savemat(src, {"sim": {"time": t, "T": 300 + 0 * t}})
+    cmap = ChannelMap.from_dict({"time": "sim.time", "Ts": 5.0, "channels": {
+        "T_cab": {"column": "sim", "unit": "K"}}})
+    with pytest.raises(DataError) as e:
+        from_mat(src, cmap)
+    _assert_one_line(e, "'sim' is a struct", "'sim.")

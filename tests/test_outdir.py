@@ -7,6 +7,7 @@ import sys
 import textwrap
 
 import pytest
+from _procs import dead_pid
 
 from acid.errors import AcidError
 from acid.outdir import LOCK_NAME, FolderBusyError, claim, clean_stale
@@ -58,9 +59,10 @@ def test_stale_temporaries_are_removed_and_results_kept(tmp_path):
     (tmp_path / "stages" / ".fit.ab12.tmp" / "params.json").write_text("{}")
     (tmp_path / "stages" / "sweep").mkdir()
     (tmp_path / "stages" / "sweep" / "sweep.json").write_text("{}")
-    (tmp_path / ".report.html.x1y2.part").write_text("<html")
+    pid = dead_pid()
+    (tmp_path / f".report.html.{pid}.x1y2.part").write_text("<html")
     (tmp_path / "scenarios").mkdir()
-    (tmp_path / "scenarios" / ".0123.json.zz.part").write_text("{")
+    (tmp_path / "scenarios" / f".0123.json.{pid}.zz.part").write_text("{")
     (tmp_path / "keep.txt").write_text("mine")
     with claim(tmp_path, "acid test"):
         left = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*"))

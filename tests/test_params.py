@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -103,3 +104,52 @@ def test_params_are_frozen_and_perturbation_is_seeded():
     b = p.perturbed(0.1, np.random.default_rng(1))
     assert a == b and a != p and a.beta == PAPER_BETA
     assert p.gamma == PAPER_GAMMA and p.tau == PAPER_TAU
+
+
+# ----------------------------------------------------------------- plausibility
+def _with_gamma(i: int, value: float):
+    g = list(paper().gamma)
+    g[i] = value
+    return paper().replace(gamma=tuple(g))
+
+
+def test_the_paper_parameters_are_stable_and_in_kelvin():
+    assert paper().stability_problems() == []
+
+
+@pytest.mark.parametrize("p,fragment", [
+    (_with_gamma(3, 3.0), "|gamma4 + gamma5| < 1"),          # evaporator pole 2.48
+    (_with_gamma(0, 50.0), "cabin pole"),                      # 1 - 50 - ... = -49
+    (_with_gamma(0, 1e308), "cabin pole"),
+    (_with_gamma(6, 1e308), "T_ain"),                          # stable but not a temperature
+    (paper().replace(tau=(-0.1842, -300.0, 154.4995)), "steady T_evap"),
+])
+def test_unstable_or_non_kelvin_parameters_are_named(p, fragment):
+    problems = p.stability_problems()
+    assert problems and fragment in problems[0]
+    with pytest.raises(DataError, match="allow-unstable"):
+        p.check_stable("p.json")
+
+
+def test_load_params_refuses_unstable_files_unless_allowed(tmp_path):
+    path = _with_gamma(3, 3.0).to_json(tmp_path / "p.json")
+    with pytest.raises(DataError, match="gamma4"):
+        load_params(path)
+    assert load_params(path, allow_unstable=True).gamma[3] == 3.0
+
+
+@pytest.mark.parametrize("key,value,fragment", [
+    ("gamma", "1111111", "'gamma' must be a list"),
+    ("gamma", {str(i): 0.1 for i in range(7)}, "'gamma' must be a list"),
+    ("gamma", [0.1, 0.1, 0.1, True, 0.1, 0.1, 0.1], "'gamma[3]' must be a number"),
+    ("c_p", "1008", "'c_p' must be a number"),
+    ("c_p", 1.008, "c_p = 1.008 is implausible"),
+    ("name", ["x"], "'name' must be a text"),
+    ("provenance", [1], "'provenance' must be a JSON object"),
+])
+def test_values_of_the_wrong_type_are_refused_not_iterated(tmp_path, key, value, fragment):
+    d = paper().to_json_dict()
+    d[key] = value
+    path = _write(tmp_path, json.dumps(d))
+    with pytest.raises(DataError, match=re.escape(fragment)):
+        ModelParams.from_json(path)

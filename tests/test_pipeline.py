@@ -73,7 +73,9 @@ def test_next_run_removes_what_a_killed_run_left(tmp_path):
     stale = tmp_path / "stages" / ".a.k1ll3d.tmp"
     stale.mkdir(parents=True)
     (stale / "number.json").write_text('{"value": 99}')
-    (tmp_path / ".summary.json.x9.part").write_text("{")
+    from _procs import dead_pid
+
+    (tmp_path / f".summary.json.{dead_pid()}.x9.part").write_text("{")
     out = run_pipeline(_stages(), tmp_path)
     assert out["sum"].summary == {"sum": 3}
     assert not list(tmp_path.rglob(".*.tmp")) and not list(tmp_path.rglob(".*.part"))

@@ -48,14 +48,18 @@ def test_frozen_and_replace():
 @pytest.mark.parametrize("changes, message", [
     ({"C_cab": -10.0}, "C_cab must be positive"),
     ({"C_int": 0.0}, "C_int must be positive"),
-    ({"Q_solar_int": -1.0}, "Q_solar_int must not be negative"),
+    ({"G_solar": -1.0}, "G_solar must not be negative"),
+    ({"C_int_slow": -5.0}, "C_int_slow must be positive"),
+    ({"p_derate": 4.0e6}, "bounds out of order: p_derate"),
+    ({"T_ew_set_max": 270.0}, "bounds out of order: T_ew_set"),
+    ({"k_ram": 0.03}, "generation-1 parameter"),
     ({"W_bl_min": 0.2}, "bounds out of order: W_bl_min"),
     ({"N_min": 9000.0}, "bounds out of order: N_min"),
     ({"T_amb": 30.0}, "temperatures are in kelvin"),
     ({"refrigerant": "R744"}, "refrigerant 'R744' not supported"),
     ({"RH_amb": 1.5}, "RH_amb must lie in"),
     ({"dt_int": 0.3}, "must divide Ts"),
-    ({"eta_motor": 1.2}, "eta_motor must not exceed 1"),
+    ({"eta_fan": 1.2}, "eta_fan must not exceed 1"),
 ])
 def test_invalid_values_are_refused_in_one_line(changes, message):
     with pytest.raises(ConfigError, match=message) as exc:
@@ -71,10 +75,10 @@ def test_refrigerant_options():
 def test_from_toml_flat_and_sectioned(tmp_path):
     path = tmp_path / "plant.toml"
     path.write_text('refrigerant = "R1234yf"\nT_amb = 308.15\n'
-                    "[cabin]\nC_int = 70000\n[condenser]\nk_ram = 0.03\n")
+                    "[cabin]\nC_int = 70000\n[condenser]\nC_ram = 0.45\n")
     cfg = PlantConfig.from_toml(path)
-    assert (cfg.refrigerant, cfg.T_amb, cfg.C_int, cfg.k_ram) == ("R1234yf", 308.15, 70000.0,
-                                                                   0.03)
+    assert (cfg.refrigerant, cfg.T_amb, cfg.C_int, cfg.C_ram) == ("R1234yf", 308.15, 70000.0,
+                                                                   0.45)
     assert isinstance(cfg.C_int, float)
 
 
@@ -100,3 +104,37 @@ def test_from_toml_refuses_bad_files_naming_key_and_file(tmp_path, text, message
 def test_from_toml_missing_file(tmp_path):
     with pytest.raises(ConfigError, match="not found"):
         PlantConfig.from_toml(tmp_path / "nope.toml")
+
+
+def test_every_parameter_cites_a_source_or_says_assumption():
+    """Each field's source names a reference key of datasets/plant/SOURCES.md, the paper, a
+    standard physical constant, or labels itself an assumption / calibrated."""
+    import re
+    from pathlib import Path
+
+    sources = (Path(__file__).parents[1] / "datasets" / "plant" / "SOURCES.md").read_text()
+    keys = set(re.findall(r"^\| \[([A-Za-z0-9.-]+)\]", sources, flags=re.M))
+    for name, _unit, _section, source in PlantConfig.parameter_table():
+        cited = re.findall(r"\[([A-Za-z0-9.-]+)\]", source)
+        for key in cited:
+            assert key in keys, f"{name}: [{key}] is not in SOURCES.md"
+        assert cited or re.search(r"assumption|calibrated|reference|standard|fixed|latent|"
+                                  r"paper|PLANT.md|False|internal step", source), name
+
+
+def test_solar_is_one_irradiance_times_cited_areas():
+    cfg = PlantConfig()
+    dark = cfg.replace(G_solar=0.0)
+    assert dark.Q_solar_int == 0.0 and dark.Q_solar_shell == 0.0
+    sun = cfg.replace(G_solar=1000.0)
+    assert sun.Q_solar_int == pytest.approx(1000.0 * cfg.A_glass_sun * cfg.tau_glass)
+    assert sun.Q_solar_shell == pytest.approx(1000.0 * cfg.A_shell_sun * cfg.alpha_shell)
+
+
+def test_flat_plate_shell_convection_and_speed_blind_switches():
+    cfg = PlantConfig()
+    h25 = (cfg.hA_ext(25.0) - cfg.hA_ext0) / cfg.A_shell
+    assert 40.0 < h25 < 65.0  # PLANT.md: 40-60 W/(m^2 K) at 25 m/s on top of the parked value
+    blind = cfg.replace(k_ram=0.0, hA_ext_v=0.0)  # generation-1 names, as callers use them
+    assert not blind.front_end_speed and not blind.cabin_speed
+    assert blind.hA_ext(25.0) == blind.hA_ext0

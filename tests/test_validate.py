@@ -216,3 +216,41 @@ def test_shared_fixtures_noise_free_and_noisy(model_dataset, noisy_model_dataset
     noisy = validate(noisy_model_dataset, paper(), exogenous="measured")
     for name in VALIDATED_CHANNELS:  # 0.05 K measurement noise, a contractive model
         assert 0.03 < noisy.metrics[name]["rmse"] < 0.08, name
+
+
+# ------------------------------------------------------------- held-out, in-sample
+SHA = "a" * 64
+
+
+@pytest.mark.parametrize("prov,requested,fraction,source,in_sample", [
+    ({"data_sha256": SHA, "estimation_fraction": 0.5}, None, 0.5, "params provenance", False),
+    ({"data_sha256": SHA, "estimation_fraction": 1.0}, None, None, "whole record", True),
+    ({"data_sha256": SHA}, None, None, "whole record", True),
+    ({"data_sha256": "b" * 64, "estimation_fraction": 0.5}, None, None, "whole record", False),
+    ({"estimation_fraction": 0.5}, None, 0.5, "params provenance", False),  # no record: ours
+    ({}, None, None, "whole record", False),                                  # e.g. paper
+    ({"data_sha256": SHA, "estimation_fraction": 0.5}, 0.5, 0.5, "--held-out-fraction", False),
+    ({"data_sha256": SHA, "estimation_fraction": 0.5}, 0.8, 0.8, "--held-out-fraction", True),
+])
+def test_held_out_part_and_in_sample_warning(prov, requested, fraction, source, in_sample):
+    from acid.validate import held_out_part
+
+    part = held_out_part(prov, "d.h5", SHA, requested)
+    assert (part.fraction, part.source) == (fraction, source)
+    assert (part.warning is not None) == in_sample
+    if in_sample:
+        assert "in-sample" in part.warning and "d.h5" in part.warning
+
+
+def test_diverging_predictions_are_an_error_not_nan(varying):
+    g = list(paper().gamma)
+    g[0] = 1e300  # cabin pole -1e300: overflows within a few steps
+    with pytest.raises(DataError, match="diverge"):
+        validate(varying, paper().replace(gamma=tuple(g)), starts=3, horizon=50)
+
+
+def test_more_starts_than_admissible_allocates_nothing_large(varying):
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        res = validate(varying, paper(), starts=10**9, horizon=50)
+    assert res.n_starts <= len(varying)

@@ -1,10 +1,11 @@
 """Configuration of the high-fidelity plant: every parameter with its unit and its source.
 
-``PlantConfig()`` is the frozen default calibration documented in ``/work/shared/PLANT.md``.
-Parameters anchored in the paper (Wang et al., ACC 2018) say so in their ``source``; all
-others are engineering assumptions for a compact electric vehicle, labelled as such, and were
-chosen (once, then frozen) so that the nominal-controller speed sweep lands in the bands of the
-paper's Table I (``acid.plant.sweep``).
+``PlantConfig()`` is the frozen default (second generation, issue 9). Every field's
+``source`` names a reference key of ``datasets/plant/SOURCES.md`` (full bibliographic detail
+there), the paper ([Wang2018]), or says *assumption* with its reason; the few *calibrated*
+ones (UA_ca0) stay inside a stated range. The calibration targets E(0) of the paper's Table I
+and the idle service chart of ``acid plant-check``; with the cited physics Table I falls
+further with speed than the paper's (SOURCES.md says by how much and why).
 
 Units are SI with **temperatures in kelvin** (the library's inside), also in TOML files::
 
@@ -32,6 +33,15 @@ REFRIGERANTS = ("R134a", "R1234yf")
 SECTIONS = ("ambient", "cabin", "hvac", "evaporator", "condenser", "compressor", "controller",
             "initial", "solver")
 
+#: Air properties at 300 K for the shell's flat-plate convection, [Incropera] Table A.4:
+#: conductivity W/(m K), kinematic viscosity m^2/s, Prandtl number.
+K_AIR, NU_AIR, PR_AIR = 0.0263, 15.89e-6, 0.707
+
+#: Generation-1 parameter names still accepted by ``replace`` with the value 0 only (callers
+#: that build the speed-blind counterfactual): name -> (switch it turns off, meaning).
+_LEGACY_ZERO = {"k_ram": ("front_end_speed", "no ram air"),
+                "hA_ext_v": ("cabin_speed", "no speed-dependent shell convection")}
+
 
 def _p(default, unit: str, section: str, source: str):
     """A configuration field with its unit, section and source in the field metadata."""
@@ -51,40 +61,70 @@ class PlantConfig:
     """
 
     # ---------------------------------------------------------------- ambient / boundary
-    T_amb: float = _p(303.15, "K", "ambient", "paper Table II (30 degC)")
+    T_amb: float = _p(303.15, "K", "ambient", "[Wang2018] Table II (30 degC)")
     RH_amb: float = _p(0.5, "1", "ambient", "assumption: 50 % relative humidity (PLANT.md)")
     p_atm: float = _p(101325.0, "Pa", "ambient", "standard atmosphere")
-    Q_solar_int: float = _p(350.0, "W", "ambient",
-                            "assumption: solar gain absorbed by seats/dash through the glass")
-    Q_solar_shell: float = _p(900.0, "W", "ambient",
-                              "assumption: solar gain absorbed by roof, doors and glass "
-                              "(~1.5 m^2 roof x 800 W/m^2 x 0.6 + sides); keeps T_shell above "
-                              "T_amb under sun")
+    G_solar: float = _p(850.0, "W/m^2", "ambient",
+                        "[CFR86.161] SC03 solar load 850 W/m^2; sweep 0-1000 W/m^2 maps here")
+    A_glass_sun: float = _p(0.9, "m^2", "ambient",
+                            "assumption: sunlit glazing area projected normal to the sun "
+                            "(windshield + share of side glass of a compact car)")
+    tau_glass: float = _p(0.5, "1", "ambient",
+                          "[CARB2009] total solar transmittance of a windshield, TST <= 50 %")
+    A_shell_sun: float = _p(1.8, "m^2", "ambient",
+                            "assumption: sunlit opaque area projected normal to the sun (roof "
+                            "about 1.5 m^2 plus share of pillars and upper doors)")
+    alpha_shell: float = _p(0.6, "1", "ambient",
+                            "assumption: solar absorptance of a mid-colour paint (0.3 white to "
+                            "0.95 black, [Levinson2011])")
     Q_pass: float = _p(80.0, "W", "ambient", "assumption: sensible heat of one occupant")
     m_moist_pass: float = _p(1.4e-5, "kg/s", "ambient",
                              "assumption: moisture of one occupant (about 50 g/h)")
 
     # ---------------------------------------------------------------- cabin
     C_cab: float = _p(3877.0, "J/K", "cabin",
-                      "paper gamma3: c_p Ts / gamma3 = 1008*5/1.2999 (about 3.3 m^3 of air)")
-    hA_int: float = _p(190.0, "W/K", "cabin", "paper gamma1: gamma1 C_cab / Ts")
-    hA_sh: float = _p(67.2, "W/K", "cabin", "paper gamma2: gamma2 C_cab / Ts")
-    C_int: float = _p(65.0e3, "J/K", "cabin", "assumption: seats, dash, panels (PLANT.md 60-70)")
-    C_sh: float = _p(65.0e3, "J/K", "cabin", "assumption: roof, doors, glass (PLANT.md 60-70)")
-    hA_ext0: float = _p(60.0, "W/K", "cabin",
-                        "assumption: shell-to-ambient conductance at standstill")
-    hA_ext_v: float = _p(9.0, "W/K/(m/s)^0.8", "cabin",
-                         "assumption: forced-convection increase, hA_ext = hA_ext0 + "
-                         "hA_ext_v V^0.8 (flat-plate turbulent exponent)")
+                      "[Wang2018] gamma3: c_p Ts / gamma3 = 1008*5/1.2999 (about 3.3 m^3 of air)")
+    hA_int: float = _p(190.0, "W/K", "cabin", "[Wang2018] gamma1: gamma1 C_cab / Ts")
+    hA_sh: float = _p(67.2, "W/K", "cabin", "[Wang2018] gamma2: gamma2 C_cab / Ts")
+    C_int: float = _p(35.0e3, "J/K", "cabin",
+                      "assumption: fast interior node (seat covers, dash skin, trim surfaces) "
+                      "that the cabin air sees; with C_int_slow 125 kJ/K in all, inside the "
+                      "100-150 kJ/K of issue 9")
+    C_int_slow: float = _p(90.0e3, "J/K", "cabin",
+                           "assumption: slow interior node (seat foam cores, dash substrate, "
+                           "floor); see C_int")
+    hA_int_slow: float = _p(60.0, "W/K", "cabin",
+                            "assumption: conduction fast -> slow interior node (time constant "
+                            "C_int_slow / hA_int_slow = 25 min)")
+    C_sh: float = _p(80.0e3, "J/K", "cabin",
+                     "assumption from masses: ~100 kg steel x 460 + ~25 kg glass x 840 + "
+                     "~15 kg trim x "
+                      "1500 J/(kg K), about 80 kJ/K")
+    A_shell: float = _p(9.0, "m^2", "cabin",
+                        "assumption: outer cabin surface swept by the air stream (roof 1.6, sides "
+                        "2 x 2.5, windshield 1.1, rear glass 0.8, pillars; PLANT.md about 10)")
+    L_shell: float = _p(4.0, "m", "cabin", "assumption: flow length along the car (its length)")
+    h_ext_nat: float = _p(9.0, "W/(m^2 K)", "cabin",
+                          "assumption: parked outer coefficient, natural convection + "
+                          "linearised radiation (PLANT.md 8-10)")
+    m_inf0: float = _p(0.001, "kg/s", "cabin",
+                       "[Knibbs2009], [Ott2008]: closed, parked cabins about 0-1.4 air changes "
+                       "per hour; 1 ACH of 3.3 m^3")
+    k_inf: float = _p(2.0e-4, "kg/s/(m/s)", "cabin",
+                      "[Ott2008]: linear in speed, below 6.6 ACH at 32-116 km/h with windows "
+                      "closed and fan off; 5.7 ACH at 25 m/s here")
 
     # ---------------------------------------------------------------- HVAC air side
-    c_p_air: float = _p(1008.0, "J/(kg K)", "hvac", "paper Table II")
+    c_p_air: float = _p(1008.0, "J/(kg K)", "hvac", "[Wang2018] Table II")
     h_fg: float = _p(2.45e6, "J/kg", "hvac", "latent heat of water near 20 degC")
-    W_bl_min: float = _p(0.05, "kg/s", "hvac", "paper Table II")
-    W_bl_max: float = _p(0.15, "kg/s", "hvac", "paper Table II")
-    beta1: float = _p(24156.0, "W s^2/kg^2", "hvac", "paper eq. 5")
-    beta2: float = _p(-1974.2, "W s/kg", "hvac", "paper eq. 5")
-    beta3: float = _p(49.318, "W", "hvac", "paper eq. 5")
+    W_bl_min: float = _p(0.05, "kg/s", "hvac", "[Wang2018] Table II")
+    W_bl_max: float = _p(0.15, "kg/s", "hvac", "[Wang2018] Table II")
+    beta1: float = _p(24156.0, "W s^2/kg^2", "hvac", "[Wang2018] eq. 5")
+    beta2: float = _p(-1974.2, "W s/kg", "hvac", "[Wang2018] eq. 5")
+    beta3: float = _p(49.318, "W", "hvac", "[Wang2018] eq. 5")
+    f_bl_heat: float = _p(1.0, "1", "hvac",
+                          "assumption: share of the blower's electric power that ends as heat in "
+                          "the air ahead of the evaporator (motor in the air stream)")
     k_rec: float = _p(0.1, "1/K", "hvac",
                       "assumption: recirculation r = sat(k_rec (T_amb - T_cab), 0, r_max); the "
                       "paper only says proportional and saturated")
@@ -95,49 +135,111 @@ class PlantConfig:
     UA_ea0: float = _p(280.0, "W/K", "evaporator",
                        "assumption: air-side conductance at W_ea0 (epsilon about 0.94)")
     W_ea0: float = _p(0.1, "kg/s", "evaporator", "reference flow of UA_ea0")
-    n_ea: float = _p(0.6, "1", "evaporator", "air-side Nusselt exponent, UA ~ W^0.6 (PLANT.md)")
-    UA_er: float = _p(900.0, "W/K", "evaporator",
-                      "assumption: refrigerant-side (two-phase) conductance")
+    n_ea: float = _p(0.51, "1", "evaporator",
+                     "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ W^0.51")
+    UA_er0: float = _p(5000.0, "W/K", "evaporator",
+                       "calibrated (idle low side, plant-check d) at the top of PLANT.md's "
+                       "3-5 kW/K (an assumption): two-phase refrigerant side at "
+                       "m_r0 (flow boiling 2-5 kW/(m^2 K) on about 1-1.5 m^2)")
+    m_r0: float = _p(0.05, "kg/s", "evaporator",
+                     "reference refrigerant flow of UA_er0, UA_cr0, dT_suc0 (33 cc at 8000 rpm)")
+    n_r: float = _p(0.8, "1", "evaporator",
+                    "[Incropera] Dittus-Boelter exponent: UA_r = UA_r0 (m_r/m_r0)^0.8")
+    dT_suc0: float = _p(1.0, "K", "evaporator",
+                        "calibrated (idle low side) to [ASHRAE-R]'s design value: suction line "
+                        "pressure drop as a saturation-temperature drop at m_r0, "
+                        "scaling with m_r^2: [ASHRAE-R] sizes suction lines for about 1 K")
 
-    # ---------------------------------------------------------------- condenser
+    # ---------------------------------------------------------------- condenser / front end
     C_cw: float = _p(3000.0, "J/K", "condenser", "assumption: ~3 kg aluminium + refrigerant")
-    UA_cr: float = _p(1300.0, "W/K", "condenser",
-                      "calibrated to Table I: refrigerant-side conductance (mean over "
-                      "desuperheating and two-phase)")
-    m_ca_fan: float = _p(0.9, "kg/s", "condenser",
-                         "assumption (brief): condenser air by the fan at standstill")
-    k_ram: float = _p(0.028, "kg/s/(m/s)", "condenser",
-                      "assumption: ram air per unit vehicle speed, linear fan + ram "
-                      "superposition (0.9 -> 1.6 kg/s from 0 to 25 m/s)")
-    UA_ca0: float = _p(720.0, "W/K", "condenser",
-                       "calibrated to Table I: air-side conductance at m_ca_fan "
-                       "(epsilon 0.55 at standstill, 0.45 at 25 m/s)")
-    n_ca: float = _p(0.6, "1", "condenser", "air-side exponent, UA ~ m_ca^0.6 (PLANT.md)")
-    P_fan: float = _p(150.0, "W", "condenser",
-                      "assumption: condenser fan (reported, not counted, as in the paper)")
+    UA_cr0: float = _p(2500.0, "W/K", "condenser",
+                       "assumption: refrigerant side at m_r0 (mean over desuperheating and "
+                       "two-phase), scaling with (m_r/m_r0)^n_r")
+    UA_ca0: float = _p(1200.0, "W/K", "condenser",
+                       "calibrated (E(0) of Table I, idle head pressures) at the top of "
+                       "700-1200 W/K, an assumption: a compact condenser rejecting ~10 kW at "
+                       "~17 K inlet difference and 1 kg/s has eps ~0.6, NTU ~0.9, UA ~900 W/K")
+    m_ca0: float = _p(1.0, "kg/s", "condenser", "reference air flow of UA_ca0")
+    n_ca: float = _p(0.51, "1", "condenser",
+                     "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ m^0.51")
+    A_cond: float = _p(0.25, "m^2", "condenser",
+                       "assumption: condenser face area of a compact car (about 0.62 x 0.40 m)")
+    K_front: float = _p(100.0, "Pa s^2/m^6", "condenser",
+                        "grille + condenser + radiator resistance dp = K Q^2: 56 Pa at 3 m/s "
+                        "face velocity (PLANT.md 50-100 Pa: K 89-178, an assumption)")
+    C_ram: float = _p(0.5, "1", "condenser",
+                      "assumption: ram pressure recovery 1/2 rho C_ram v^2 (PLANT.md 0.4-0.6)")
+    dp_fan0: float = _p(200.0, "Pa", "condenser",
+                        "assumption: fan shut-off pressure at full speed (PLANT.md 150-250)")
+    Q_fan_free: float = _p(0.69, "m^3/s", "condenser",
+                           "calibrated (idle head pressure) inside PLANT.md's idle face velocity "
+                           "1.5-2.5 m/s (an assumption): fan free delivery; gives 2.48 m/s face "
+                           "velocity (PLANT.md 1.5-2.5) and about 100 W of fan power")
+    K_fan_off: float = _p(20.0, "Pa s^2/m^6", "condenser",
+                          "assumption: resistance of the stopped, windmilling fan and shroud")
+    s_fan_low: float = _p(0.6, "1", "condenser", "assumption: low fan stage, speed fraction")
+    eta_fan: float = _p(0.25, "1", "condenser",
+                        "assumption: fan + motor efficiency of an automotive axial fan")
+    v_fan_off: float = _p(15.0, "m/s", "condenser",
+                          "assumption: the fan's floor speed s_fan_low fades linearly to 0 at "
+                          "this vehicle speed; above it the fan runs only on head pressure")
+    p_fan_high: float = _p(1.621e6, "Pa", "condenser",
+                           "[HondaPS] fan to high above 1520 kPa gauge (1621 kPa absolute)")
+    p_fan_low: float = _p(1.031e6, "Pa", "condenser",
+                          "[HondaPS] fan back to low below 930 kPa gauge")
+    dT_recirc: float = _p(4.0, "K", "condenser",
+                          "calibrated (Table I shape, idle head pressure) inside PLANT.md's 3-8 K "
+                          "(an assumption): idle hot-air recirculation raises the condenser "
+                          "inlet air, fading linearly to 0 at v_recirc")
+    v_recirc: float = _p(5.0, "m/s", "condenser", "assumption: PLANT.md, fading by about 5 m/s")
 
     # ---------------------------------------------------------------- compressor / cycle
     refrigerant: str = _p("R134a", "-", "compressor", "paper era default; R1234yf option")
-    V_disp: float = _p(33.0e-6, "m^3", "compressor", "assumption: electric scroll (PLANT.md)")
+    V_disp: float = _p(33.0e-6, "m^3", "compressor",
+                       "assumption: electric scroll, inside the 20-35 cc of issue 9")
     N_min: float = _p(800.0, "rpm", "compressor", "assumption: scroll minimum speed")
     N_max: float = _p(8000.0, "rpm", "compressor", "assumption: scroll maximum speed")
     tau_N: float = _p(2.0, "s", "compressor", "assumption: speed response of motor + inverter")
     superheat: float = _p(5.0, "K", "compressor", "fixed evaporator superheat (PLANT.md)")
     subcool: float = _p(5.0, "K", "compressor", "fixed condenser subcooling (PLANT.md)")
-    eta_v0: float = _p(0.95, "1", "compressor",
-                       "assumption: volumetric efficiency eta_v = eta_v0 - k_v (PR - 1)")
-    k_v: float = _p(0.025, "1", "compressor", "assumption: re-expansion / leakage slope")
-    eta_is_max: float = _p(0.68, "1", "compressor",
-                           "assumption: isentropic efficiency "
-                           "eta_is = eta_is_max - k_is (PR - PR_opt)^2")
-    k_is: float = _p(0.008, "1", "compressor", "assumption: off-design curvature")
-    PR_opt: float = _p(3.0, "1", "compressor", "assumption: built-in pressure ratio of the scroll")
-    eta_motor: float = _p(0.88, "1", "compressor", "assumption: motor + inverter efficiency")
+    eta_v0: float = _p(1.0, "1", "compressor",
+                       "[Cuevas2010] eta_v from about 1.0 at PR 1.3 falling linearly: "
+                       "eta_v = eta_v0 - k_v (PR - 1) - c_L / N")
+    k_v: float = _p(0.02, "1", "compressor",
+                    "[Cuevas2010] (1.0 - 0.83) / (9.7 - 1.3) = 0.020 per unit pressure ratio")
+    c_L: float = _p(100.0, "rpm", "compressor",
+                    "assumption inside PLANT.md's 80-150 rpm: leakage through a fixed "
+                    "equivalent nozzle [Winandy2002], a loss c_L / N of displacement flow")
+    eta_is_max: float = _p(0.72, "1", "compressor",
+                           "[Cuevas2010] maximal isentropic efficiency 72 % at PR 2.5-2.6: "
+                           "eta_is = eta_is_max - k_is (PR - PR_opt)^2 - c_is_lo / N "
+                           "- c_is_hi (N / N_max)^2")
+    k_is: float = _p(0.008, "1", "compressor", "assumption: off-design curvature in PR")
+    PR_opt: float = _p(2.55, "1", "compressor", "[Cuevas2010] peak at PR 2.5-2.6")
+    c_is_lo: float = _p(150.0, "rpm", "compressor",
+                        "assumption: low-speed loss (leakage re-compression, heat) c_is_lo / N: "
+                        "10-20 points below 1500 rpm (PLANT.md, shape as [Li2013])")
+    c_is_hi: float = _p(0.05, "1", "compressor",
+                        "assumption: port/valve pressure loss at N_max, about 5 points (PLANT.md)")
+    P_loss0: float = _p(60.0, "W", "compressor",
+                        "assumption: inverter + motor no-load loss (switching, control)")
+    P_loss_N: float = _p(120.0, "W", "compressor",
+                         "assumption: speed-proportional loss at N_max (iron, friction)")
+    P_loss_cu: float = _p(150.0, "W", "compressor",
+                          "assumption: copper + conduction loss at P_rated, ~ (shaft power)^2; "
+                          "with P_loss0 and P_loss_N gives 0.80-0.83 at light load and 0.93 at "
+                          "rated (PLANT.md)")
+    P_rated: float = _p(4500.0, "W", "compressor", "assumption: rated shaft power at N_max")
 
     # ---------------------------------------------------------------- nominal controller
     T_cab_set: float = _p(295.15, "K", "controller", "assumption (brief): 22 degC")
     T_ew_set: float = _p(276.15, "K", "controller",
-                         "assumption: 3 degC, lower bound of paper Table II T_evap_set")
+                         "assumption: 3 degC, lower bound of [Wang2018] Table II T_evap_set")
+    T_ew_set_max: float = _p(283.15, "K", "controller",
+                             "[Wang2018] Table II: evaporator set-point reset up to 10 degC")
+    k_reset: float = _p(0.01, "1/s", "controller",
+                        "assumption: set-point reset rate, K/s per K of cabin undershoot while "
+                        "the blower sits at its minimum")
     Kp_comp: float = _p(200.0, "rpm/K", "controller", "assumption: tuned for a 20-60 s response")
     Ki_comp: float = _p(15.0, "rpm/(K s)", "controller", "assumption: tuned as Kp_comp")
     hyst_off: float = _p(2.0, "K", "controller", "paper/brief: A/C off below T_ew,set - 2 K")
@@ -146,21 +248,39 @@ class PlantConfig:
     Ki_bl: float = _p(4.0e-4, "kg/s/(K s)", "controller", "assumption: blower PI integral gain")
     anti_windup: bool = _p(True, "-", "controller",
                            "conditional integration (False: integrators never stop, for tests)")
+    p_derate: float = _p(2.6e6, "Pa", "controller",
+                         "assumption: inverter derates speed above 26 bar head pressure "
+                         "(PLANT.md 26-28), linearly to N_min at p_cut")
+    p_cut: float = _p(3.241e6, "Pa", "controller",
+                      "[HondaPS] compressor off above 3140 kPa gauge (3241 kPa absolute)")
+    T_e_min: float = _p(272.15, "K", "controller",
+                        "assumption: frost protection keeps the evaporating temperature above "
+                        "-1 degC (PLANT.md)")
+    K_frost: float = _p(2000.0, "rpm/K", "controller",
+                        "assumption: speed cap reduction per K below T_e_min")
 
     # ---------------------------------------------------------------- initial hot soak
     T_cab0: float = _p(313.15, "K", "initial", "assumption: hot soak 40 degC (PLANT.md 38-42)")
     T_int0: float = _p(315.15, "K", "initial", "assumption: sun-heated seats and dash")
-    T_shell0: float = _p(315.15, "K", "initial", "assumption: sun-heated roof and glass")
+    T_shell0: float = _p(313.15, "K", "initial",
+                         "assumption: shell at its parked equilibrium with the 40 degC soak: "
+                         "(Q_solar_shell + hA_ext0 T_amb + hA_sh T_cab0) / (hA_ext0 + hA_sh)")
     T_ew0: float = _p(303.15, "K", "initial", "assumption: HVAC box at ambient after the soak")
     T_cw0: float = _p(303.15, "K", "initial", "assumption: front end at ambient")
-    RH_cab0: float = _p(0.4, "1", "initial",
-                        "assumption: cabin relative humidity at T_cab0 after the soak")
+
+    front_end_speed: bool = _p(True, "-", "condenser",
+                               "False: the front end sees standstill at every vehicle speed (no "
+                               "ram air, idle recirculation and fan staging): the speed-blind "
+                               "counterfactual")
+    cabin_speed: bool = _p(True, "-", "cabin",
+                           "False: shell convection and infiltration at their parked values at "
+                           "every speed (speed-blind counterfactual)")
 
     # ---------------------------------------------------------------- solver
-    Ts: float = _p(5.0, "s", "solver", "paper: sampling at 0.2 Hz")
+    Ts: float = _p(5.0, "s", "solver", "[Wang2018]: sampling at 0.2 Hz")
     dt_int: float = _p(0.5, "s", "solver",
-                       "internal step; quartering it changes 600 s energy < 0.5 % "
-                       "(tests/test_plant_hifi.py)")
+                       "internal step; 600 s energy within 0.12 % of 0.01 s "
+                       "(acid plant-check, check c)")
 
     # ---------------------------------------------------------------- construction
     def __post_init__(self):
@@ -174,10 +294,50 @@ class PlantConfig:
     def replace(self, **changes) -> PlantConfig:
         """A copy with some parameters changed (validated; unknown names refused)."""
         names = set(self.field_names())
-        for key in changes:
-            if key not in names:
+        changes = dict(changes)
+        for key in list(changes):
+            if key in _LEGACY_ZERO and key not in names:
+                switch, meaning = _LEGACY_ZERO[key]
+                if changes.pop(key) != 0.0:
+                    raise ConfigError(f"PlantConfig: {key} is a generation-1 parameter; only "
+                                      f"{key}=0 ({meaning}) is still accepted, as {switch}=False")
+                changes[switch] = False
+            elif key not in names:
                 raise ConfigError(f"PlantConfig: unknown parameter {key!r}")
         return dataclasses.replace(self, **changes)
+
+    # ---------------------------------------------------------------- derived quantities
+    @property
+    def Q_solar_int(self) -> float:
+        """Solar heat absorbed by the interior through the glazing, G A_glass tau, W."""
+        return self.G_solar * self.A_glass_sun * self.tau_glass
+
+    @property
+    def Q_solar_shell(self) -> float:
+        """Solar heat absorbed by the shell, G A_shell_sun alpha_shell, W."""
+        return self.G_solar * self.A_shell_sun * self.alpha_shell
+
+    @property
+    def hA_ext0(self) -> float:
+        """Parked shell-to-ambient conductance A_shell h_ext_nat, W/K."""
+        return self.A_shell * self.h_ext_nat
+
+    @property
+    def hA_ext_v(self) -> float:
+        """Forced-convection coefficient: hA_ext(v) = hA_ext0 + hA_ext_v v^0.8, W/K/(m/s)^0.8.
+
+        Fully turbulent flat plate, [Incropera] eq. 7.38 without the laminar correction:
+        Nu_L = 0.037 Re_L^0.8 Pr^(1/3), so h = 0.037 (k/L) Pr^(1/3) (v L / nu)^0.8.
+        Zero when ``cabin_speed`` is False.
+        """
+        if not self.cabin_speed:
+            return 0.0
+        return (self.A_shell * 0.037 * K_AIR / self.L_shell * PR_AIR ** (1.0 / 3.0)
+                * (self.L_shell / NU_AIR) ** 0.8)
+
+    def hA_ext(self, v_veh: float) -> float:
+        """Shell-to-ambient conductance at vehicle speed ``v_veh`` (m/s), W/K."""
+        return self.hA_ext0 + self.hA_ext_v * max(float(v_veh), 0.0) ** 0.8
 
     @classmethod
     def from_dict(cls, d: dict, source: str = "plant config") -> PlantConfig:
@@ -255,36 +415,47 @@ class PlantConfig:
                 continue
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
                 bad(f"{f.name} must be a finite number, got {v!r}")
-            if f.metadata["unit"] == "K" and f.name not in ("superheat", "subcool",
-                                                             "hyst_off", "hyst_on"):
+            if f.metadata["unit"] == "K" and f.name not in ("superheat", "subcool", "dT_suc0",
+                                                             "dT_recirc", "hyst_off",
+                                                             "hyst_on"):
                 if not 150.0 < v < 450.0:
                     bad(f"{f.name} = {v} K is implausible (temperatures are in kelvin)")
+        if not 233.15 <= self.T_amb <= 330.15:
+            bad(f"T_amb = {self.T_amb} K is outside the refrigerant property tables "
+                "(233.15-330.15 K, -40 to 57 degC)")
         if self.refrigerant not in REFRIGERANTS:
             bad(f"refrigerant {self.refrigerant!r} not supported (choose "
                 f"{' or '.join(REFRIGERANTS)})")
-        positive = ("C_cab", "C_int", "C_sh", "C_ew", "C_cw", "hA_int", "hA_sh", "hA_ext0",
-                    "c_p_air", "h_fg", "UA_ea0", "W_ea0", "UA_er", "UA_cr", "m_ca_fan",
-                    "UA_ca0", "V_disp", "tau_N", "eta_v0", "eta_is_max", "eta_motor", "Ts",
-                    "dt_int", "p_atm", "W_bl_min")
+        positive = ("C_cab", "C_int", "C_int_slow", "C_sh", "C_ew", "C_cw", "hA_int", "hA_sh",
+                    "hA_int_slow", "A_shell", "L_shell", "h_ext_nat", "c_p_air", "h_fg",
+                    "UA_ea0", "W_ea0", "UA_er0", "UA_cr0", "m_r0", "UA_ca0", "m_ca0", "A_cond",
+                    "K_front", "dp_fan0", "Q_fan_free", "K_fan_off", "s_fan_low", "eta_fan",
+                    "v_recirc", "V_disp", "tau_N", "eta_v0", "eta_is_max", "P_rated", "Ts",
+                    "dt_int", "p_atm", "W_bl_min", "p_fan_high", "p_fan_low", "p_derate",
+                    "p_cut")
         for name in positive:
             if getattr(self, name) <= 0.0:
                 bad(f"{name} must be positive, got {getattr(self, name)}")
-        nonneg = ("Q_solar_int", "Q_solar_shell", "Q_pass", "m_moist_pass", "hA_ext_v",
-                  "k_ram", "P_fan", "k_rec", "r_max", "superheat", "subcool", "k_v", "k_is",
-                  "Kp_comp", "Ki_comp", "hyst_off", "hyst_on", "Kp_bl", "Ki_bl")
+        nonneg = ("G_solar", "A_glass_sun", "tau_glass", "A_shell_sun", "alpha_shell",
+                  "Q_pass", "m_moist_pass", "m_inf0", "k_inf", "f_bl_heat", "k_rec", "r_max",
+                  "n_ea", "n_r", "n_ca", "dT_suc0", "C_ram", "v_fan_off", "dT_recirc",
+                  "superheat", "subcool", "k_v", "c_L", "k_is", "c_is_lo", "c_is_hi",
+                  "P_loss0", "P_loss_N", "P_loss_cu", "k_reset", "K_frost", "Kp_comp",
+                  "Ki_comp", "hyst_off", "hyst_on", "Kp_bl", "Ki_bl")
         for name in nonneg:
             if getattr(self, name) < 0.0:
                 bad(f"{name} must not be negative, got {getattr(self, name)}")
-        for lo, hi in (("W_bl_min", "W_bl_max"), ("N_min", "N_max")):
+        for lo, hi in (("W_bl_min", "W_bl_max"), ("N_min", "N_max"), ("T_ew_set", "T_ew_set_max"),
+                       ("p_fan_low", "p_fan_high"), ("p_derate", "p_cut")):
             if not getattr(self, lo) < getattr(self, hi):
                 bad(f"bounds out of order: {lo} = {getattr(self, lo)} must be below "
                     f"{hi} = {getattr(self, hi)}")
         if self.N_min <= 0.0:
             bad(f"N_min must be positive, got {self.N_min}")
-        for name in ("RH_amb", "RH_cab0", "r_max"):
+        for name in ("RH_amb", "r_max", "tau_glass", "alpha_shell", "f_bl_heat", "s_fan_low"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 bad(f"{name} must lie in [0, 1], got {getattr(self, name)}")
-        for name in ("eta_v0", "eta_is_max", "eta_motor"):
+        for name in ("eta_v0", "eta_is_max", "eta_fan"):
             if getattr(self, name) > 1.0:
                 bad(f"{name} must not exceed 1, got {getattr(self, name)}")
         ratio = self.Ts / self.dt_int

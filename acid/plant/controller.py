@@ -1,4 +1,4 @@
-"""The nominal A/C controller of the high-fidelity plant (paper section II-A).
+"""The nominal A/C controller of the high-fidelity plant (paper section II-A) and protections.
 
 "Two PI control loops with anti-windup and A/C on-off logic": the compressor speed tracks an
 evaporator-wall temperature set-point, the blower flow tracks the cabin-air set-point; the
@@ -14,7 +14,16 @@ A/C on/off logic (hysteresis): the compressor stops when T_ew < T_ew,set - hyst_
 2 K) and restarts when T_ew > T_ew,set + hyst_on (1 K), from its minimum speed.
 
 In the plant's "direct" mode (excitation, MPC) only ``CompressorLoop`` runs, tracking the
-commanded T_evap_set; the blower flow is an input. In "nominal" mode ``BlowerLoop`` sets W_bl.
+commanded T_evap_set; the blower flow is an input. In "nominal" mode ``BlowerLoop`` sets W_bl
+and the evaporator set-point is reset within paper Table II's 3-10 degC when the blower sits at
+its minimum and the cabin is still below its set-point (no overcooling at low load); when
+even the fully reset evaporator overcools the cabin by 0.5 K the A/C demand switches off (the
+compressor stops, the blower ventilates) until the cabin is 0.5 K above its set-point.
+
+Protections (both modes, in ``acid.plant.hifi``): the compressor speed is capped by a
+head-pressure derate (linear from N_max at ``p_derate`` to N_min at ``p_cut``) and by frost
+protection (``K_frost`` rpm per K of evaporating temperature below ``T_e_min``); above
+``p_cut`` the compressor stops until the head pressure falls 0.6 MPa below it.
 """
 
 from __future__ import annotations
@@ -51,8 +60,14 @@ class CompressorLoop:
         self.on = bool(on)
         self.integ = self.N_min
 
-    def update(self, T_ew: float, T_set: float, dt: float, enabled: bool = True) -> float:
-        """Advance by ``dt`` s and return the commanded speed, rpm."""
+    def update(self, T_ew: float, T_set: float, dt: float, enabled: bool = True,
+               N_cap: float | None = None) -> float:
+        """Advance by ``dt`` s and return the commanded speed, rpm.
+
+        ``N_cap`` (rpm, between N_min and N_max) is the protections' speed limit (head-pressure
+        derate, frost protection); the PI clamps and stops integrating against it.
+        """
+        N_hi = self.N_max if N_cap is None else N_cap
         if not enabled:
             self.on = False
             self.integ = self.N_min
@@ -68,10 +83,12 @@ class CompressorLoop:
         else:
             return 0.0
         u = self.Kp * e + self.integ
-        if not self.anti_windup or not ((u >= self.N_max and e > 0.0)
+        if not self.anti_windup or not ((u >= N_hi and e > 0.0)
                                         or (u <= self.N_min and e < 0.0)):
             self.integ += self.Ki * e * dt
-        return self.N_min if u < self.N_min else (self.N_max if u > self.N_max else u)
+        if self.anti_windup and self.integ > N_hi:
+            self.integ = N_hi  # a falling cap pulls the integrator down with it
+        return self.N_min if u < self.N_min else (N_hi if u > N_hi else u)
 
 
 class BlowerLoop:

@@ -69,3 +69,76 @@ def _colormap():
     from matplotlib import colormaps
 
     return colormaps["viridis"]
+
+
+def plant_check_figures(result) -> dict[str, Figure]:
+    """Figures of ``acid plant-check`` from a ``PlantCheckResult`` (nothing computed here).
+
+    ``"plant_check_energy"``: Table I beside the paper (with and without the condenser fan)
+    and the steady COP map; ``"plant_check_service"``: idle pressures against the service
+    chart's bands, and the pull-down traces against the JAF user test.
+    """
+    figs = {}
+    fig = Figure(figsize=(11.0, 4.5), layout="constrained")
+    ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    t = result.table_i
+    if t:
+        x = np.arange(len(t["speeds_mps"]))
+        ax1.bar(x - 0.27, t["energy_MJ"], width=0.27, color="tab:blue",
+                label="plant: compressor + blower")
+        ax1.bar(x, t["energy_with_fan_MJ"], width=0.27, color="tab:cyan",
+                label="plant: + condenser fan")
+        ax1.bar(x + 0.27, t["paper_MJ"], width=0.27, color="0.6", label="paper Table I")
+        ax1.set_xticks(x, [f"{v:g}" for v in t["speeds_mps"]])
+        ax1.legend(fontsize=8, loc="lower left")
+    ax1.set_xlabel("vehicle speed (m/s)")
+    ax1.set_ylabel("A/C energy over 600 s (MJ)")
+    ax1.set_title("(a) Table I")
+    ax1.grid(True, axis="y", alpha=0.3)
+    cm = result.cop_map
+    if cm:
+        N = cm["grid"]["N_rpm"]
+        for key, vals in cm["cop"].items():
+            Ta, v = key.split("_")
+            ax2.plot(N, vals, marker="o", ls="-" if v == "0mps" else "--",
+                     label=f"{Ta[:-1]} °C, {v[:-3]} m/s")
+        ax2.legend(fontsize=7, ncols=2)
+    ax2.set_xlabel("compressor speed (rpm)")
+    ax2.set_ylabel("steady COP Q_e / P_comp (1)")
+    ax2.set_title("(f) steady COP, evaporator wall 5 °C")
+    ax2.grid(True, alpha=0.3)
+    figs["plant_check_energy"] = fig
+
+    fig = Figure(figsize=(11.0, 4.5), layout="constrained")
+    ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    s = result.service
+    if s:
+        for T, (hlo, hhi, llo, lhi) in s["chart"].items():
+            T = float(T)
+            ax1.plot([T, T], [hlo, hhi], color="0.6", lw=8, alpha=0.6)
+            ax1.plot([T, T], [llo, lhi], color="0.6", lw=8, alpha=0.6)
+        ax1.plot(s["ambient_C"], s["high_kPa"], "o-", color="tab:red", label="plant high side")
+        ax1.plot(s["ambient_C"], s["low_kPa"], "o-", color="tab:blue", label="plant low side")
+        ax1.plot([], [], color="0.6", lw=8, alpha=0.6, label="service chart band")
+        ax1.set_yscale("log")
+        ax1.legend(fontsize=8)
+    ax1.set_xlabel("ambient temperature (°C)")
+    ax1.set_ylabel("idle pressure (kPa gauge)")
+    ax1.set_title("(d) idle service chart")
+    ax1.grid(True, alpha=0.3)
+    p = result.pulldown
+    if p:
+        for label, name in (("jaf", "55 °C soak (JAF conditions)"), ("soak43", "43 °C soak")):
+            d = p[label]
+            tt = np.asarray(d["time_s"]) / 60.0
+            ax2.plot(tt, d["T_cab_C"], label=f"T_cab, {name}")
+        ax2.errorbar([10.0], [28.5], yerr=[[1.0], [1.0]], fmt="s", color="k", capsize=4,
+                     label="JAF 2016: 27.5-29.5 °C at 10 min")
+        ax2.axhline(25.0, color="0.5", ls=":", lw=1)
+        ax2.legend(fontsize=8)
+    ax2.set_xlabel("time (min)")
+    ax2.set_ylabel("cabin air temperature (°C)")
+    ax2.set_title("(e) pull-down at standstill")
+    ax2.grid(True, alpha=0.3)
+    figs["plant_check_service"] = fig
+    return figs

@@ -1,0 +1,112 @@
+"""Interrupts (Ctrl-C, SIGTERM) in the CLI: stop promptly, exit 130, keep nothing partial.
+
+* During start-up (imports, before a command runs) an interrupt exits at once and quietly
+  with 130: nothing has been written yet.
+* While a command runs, the first SIGINT or SIGTERM raises ``KeyboardInterrupt`` in the main
+  thread, so every ``acid._io.atomic_path`` removes its temporary file and the command ends
+  with 128 + the signal number (130 for Ctrl-C); a second signal leaves at once (a temporary
+  file left then is removed by the next write into that folder).
+* A run started as a background job of a non-interactive shell inherits SIGINT *ignored*
+  (POSIX job control), so Python would never see Ctrl-C or ``kill -INT``: acid takes SIGINT
+  back. This was why ``acid excite`` sometimes finished and exited 0 after Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+
+HANDLED = (signal.SIGINT, signal.SIGTERM)
+_startup_saved: dict[int, object] = {}
+
+
+def _in_main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+def _flush() -> None:
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except Exception:  # noqa: BLE001 - a closed pipe must not stop the exit
+            pass
+
+
+def _exit_now(signum: int, frame=None) -> None:
+    _flush()
+    try:
+        os.write(2, b"interrupted\n")
+    except OSError:
+        pass
+    os._exit(128 + signum)
+
+
+def begin_startup() -> None:
+    """Exit quietly (130) on SIGINT while the CLI is importing its modules."""
+    if not _in_main_thread():
+        return
+    try:
+        _startup_saved[signal.SIGINT] = signal.signal(signal.SIGINT, _exit_now)
+    except (ValueError, OSError):
+        pass
+
+
+def end_startup() -> None:
+    """Restore the previous SIGINT handler, taking SIGINT back if it was ignored."""
+    if signal.SIGINT not in _startup_saved:
+        return
+    previous = _startup_saved.pop(signal.SIGINT)
+    if previous in (signal.SIG_IGN, None):
+        previous = signal.default_int_handler
+    signal.signal(signal.SIGINT, previous)
+
+
+class InterruptGuard:
+    """Context manager turning SIGINT/SIGTERM into ``KeyboardInterrupt`` for one command.
+
+    ``exit_code`` is 128 + the number of the signal received (130 when none was: a
+    ``KeyboardInterrupt`` raised some other way). Previous handlers are restored on exit, so
+    the guard is harmless in tests that call commands in-process.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._count = 0
+        self._saved: dict[int, object] = {}
+        self._pid = os.getpid()
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + (self.signum or signal.SIGINT)
+
+    def _handler(self, signum: int, frame) -> None:
+        if os.getpid() != self._pid:  # a forked child: behave as if we were not here
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+            return
+        self._count += 1
+        self.signum = signum
+        if self._count > 1:
+            _exit_now(signum)
+        raise KeyboardInterrupt
+
+    def __enter__(self) -> InterruptGuard:
+        if _in_main_thread():
+            for sig in HANDLED:
+                try:
+                    self._saved[sig] = signal.signal(sig, self._handler)
+                except (ValueError, OSError):
+                    pass
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for sig, previous in self._saved.items():
+            if previous is None:
+                previous = signal.SIG_DFL
+            try:
+                signal.signal(sig, previous)
+            except (ValueError, OSError):
+                pass
+        self._saved.clear()

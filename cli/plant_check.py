@@ -1,0 +1,98 @@
+"""``acid plant-check``: the plant's credentials (issue 9), each beside a published reference."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import typer
+
+from acid import __version__
+from acid._io import file_sha256, save_figure
+from acid_cli._common import (
+    check_paths,
+    console,
+    handle_errors,
+    plant_inputs,
+    print_table,
+    progress_bar,
+    require_range,
+    say,
+    write_summary,
+)
+from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+
+
+def _fmt(v) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "n/a"
+    return f"{v:.4g}"
+
+
+def _verdict(passed) -> str:
+    return "n/a" if passed is None else ("PASS" if passed else "FAIL")
+
+
+@handle_errors
+def plant_check(
+    plant: str = plant_option(),
+    fmu_map: Path | None = fmu_map_option(),
+    config: Path | None = typer.Option(None, "--config",
+                                       help="Plant configuration (TOML, SI units, K)."),
+    ambient: float | None = typer.Option(None, "--ambient",
+                                         help="Ambient for checks (a)-(c), degC "
+                                              "(default: the configuration's, 30 degC)."),
+    out: Path = typer.Option(Path("reports/plant-check"), "--out",
+                             help="Folder for the figures and the result JSON."),
+    json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+) -> None:
+    """Check the plant: (a) Table I, (b) balances, (c) step size, (d) idle service chart,
+    (e) pull-down, (f) steady COP map, (g) COP gain at speed. Exits 1 on any FAIL.
+
+    Sources of every reference: datasets/plant/SOURCES.md.
+    """
+    from acid.errors import ConfigError
+    from acid.plant.check import build_plant
+    from acid.plant.check import plant_check as run_check
+    from acid.report.plant import plant_check_figures
+    from acid.units import C2K
+
+    check_paths(inputs={"--config": config, **plant_inputs(plant, fmu_map)},
+                outputs={"--json": json_path},
+                folders={"--out": (out, ("plant_check_energy.png", "plant_check_service.png",
+                                         "plant_check.json"))})
+    if ambient is not None:
+        require_range(ambient, "--ambient", -60.0, 150.0, "degC")  # kelvin typed by mistake
+    choice = plant_choice(plant, fmu_map)
+    if config is not None and choice.kind != "hifi":
+        raise ConfigError("--config applies to --plant hifi only")
+    T_amb = None if ambient is None else C2K(ambient)
+    extra = {"fmu_map": choice.fmu_map} if choice.kind == "fmu" else {}
+    the_plant = build_plant(choice.spec, config, T_amb, **extra)
+    nominal = (choice.factory(mode="nominal", T_amb=T_amb) if choice.kind == "fmu" else None)
+    with progress_bar("plant check", total=13) as update:
+        result = run_check(the_plant, progress=update, nominal_factory=nominal)
+
+    rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r.passed)]
+            for r in result.rows]
+    print_table(f"acid plant-check: {result.plant}",
+                ["_", "_check", "value", "_unit", "_reference", "_verdict"], rows)
+    console.print(f"cop_steady_30C_standstill = {_fmt(result.cop_steady_30C_standstill)}, "
+                  f"cop_gain_25_vs_0_equal_load_pct = "
+                  f"{_fmt(result.cop_gain_25_vs_0_equal_load_pct)} %")
+    summary = result.to_json_dict()
+    summary.update(acid_version=__version__, **choice.to_json_dict(),
+                   config_path=str(config) if config is not None else None,
+                   config_sha256=file_sha256(config) if config is not None else None)
+    figures = {}
+    for name, fig in plant_check_figures(result).items():
+        figures[name] = str(save_figure(fig, out / f"{name}.png"))
+    summary["figures"] = figures
+    from acid._io import write_json
+
+    write_json(out / "plant_check.json", summary)
+    say(f"figures written to {out}")
+    write_summary(json_path, summary)
+    console.print("[bold green]PASS[/]" if result.passed else "[bold red]FAIL[/]")
+    if not result.passed:
+        raise typer.Exit(code=1)

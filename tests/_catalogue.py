@@ -1,0 +1,704 @@
+"""A catalogue of bad inputs for every command, one row per case (used by
+``tests/test_cli_catalogue.py``; run as a script to classify every case, also against an
+older acid, for a before/after measurement).
+
+Every case must end with exactly one ``error: ...`` line that names the culprit (the file,
+channel, key or option: ``Case.names``), exit 2, no traceback, no output written and no file
+of the workspace changed. ``classify`` sorts an outcome into ``clean``, ``traceback``,
+``exit0`` (exit 0 on nonsense), ``dataloss`` (an existing file changed or vanished),
+``internal`` (acid's one-line internal-error net caught a bug) or ``unclear`` (anything
+else: several lines, another exit code, the culprit not named, a new file written).
+
+Add a case: append a ``Case`` to ``CASES`` (arguments use ``{w}`` for the workspace folder;
+``make`` builds extra files into it). New commands: add their bad inputs the same way.
+
+    python tests/_catalogue.py                 # classify every case in-process
+    python tests/_catalogue.py --subprocess    # one process per case (timeouts, memory cap)
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import sys
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+MODEL = ("T_cab", "T_evap", "T_ain", "W_bl", "T_evap_set", "T_int", "T_shell")
+CSV_COLUMNS = {"T_cab": "Tcab", "T_evap": "Tevap", "T_ain": "Tain", "W_bl": "Wbl",
+               "T_evap_set": "Tset", "T_int": "Tint", "T_shell": "Tshell"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One bad input: ``args`` after ``acid`` (``{w}``: workspace), the ``names`` the error
+    line must contain, the class of bad input, and an optional file builder."""
+
+    id: str
+    cls: str
+    args: tuple[str, ...]
+    names: tuple[str, ...]
+    make: Callable[[Path], None] | None = field(default=None, compare=False)
+
+    def argv(self, w: Path) -> list[str]:
+        return [a.replace("{w}", str(w)) for a in self.args]
+
+    def fragments(self, w: Path) -> list[str]:
+        return [n.replace("{w}", str(w)) for n in self.names]
+
+
+# ------------------------------------------------------------------------- workspace
+def build_workspace(w: Path) -> Path:
+    """The files every case starts from (a copy per case): a 2 h model-plant dataset
+    ``d.h5``, parameters ``p.json`` fitted on its first half, a CSV export with its map, a
+    MAT file with its map, a file ``afile``, a folder ``adir`` and an earlier output."""
+    import scipy.io
+
+    from acid.excite import ExcitationSpec, excite
+    from acid.params import paper
+    from acid.plant import make_plant
+
+    w.mkdir(parents=True, exist_ok=True)
+    spec = ExcitationSpec(seed=0)
+    ds = excite(make_plant("model", rng=spec.rng("noise")), spec)
+    ds.to_hdf5(w / "d.h5", created="2026-01-01T00:00:00+00:00")
+    sha = hashlib.sha256((w / "d.h5").read_bytes()).hexdigest()
+    p = paper().replace(name="fitted", provenance={"estimation_fraction": 0.5,
+                                                   "data_sha256": sha})
+    p.to_json(w / "p.json")
+    rows = 300
+    cols = {"t": ds.time[:rows]}
+    cols.update({CSV_COLUMNS[n]: ds[n][:rows] for n in MODEL})
+    header = ",".join(cols)
+    body = "\n".join(",".join(f"{cols[c][i]:.6g}" for c in cols) for i in range(rows))
+    (w / "run.csv").write_text(header + "\n" + body + "\n")
+    (w / "map.toml").write_text(_map_toml())
+    t = np.arange(0.0, 600.0, 1.0)
+    sim = {"time": t, "T_cabin_air": 303.15 - 0.01 * t, "m_dot_blower": 0.05 + 0 * t}
+    scipy.io.savemat(w / "run.mat", {"sim": sim, "cellvar": np.array([[1.0], "x"],
+                                                                     dtype=object)})
+    (w / "mat_map.toml").write_text(
+        'time = "sim.time"\nTs = 5.0\n[channels]\n'
+        'T_cab = { column = "sim.T_cabin_air", unit = "K" }\n'
+        'W_bl = { column = "sim.m_dot_blower", unit = "kg/s" }\n')
+    (w / "afile").write_text("a plain file\n")
+    (w / "adir").mkdir()
+    (w / "prev.json").write_text('{"earlier": "output"}\n')
+    return w
+
+
+def _map_toml(extra: str = "", channels: dict | None = None) -> str:
+    chans = channels if channels is not None else CSV_COLUMNS
+    lines = ['time = "t"', extra, "[channels]"]
+    lines += [f'{k} = {{ column = "{v}", unit = "{"kg/s" if k == "W_bl" else "degC"}" }}'
+              for k, v in chans.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _write(name: str, text: str) -> Callable[[Path], None]:
+    def make(w: Path) -> None:
+        (w / name).write_text(text)
+    return make
+
+
+def _params(name: str, **changes) -> Callable[[Path], None]:
+    """A params.json from the paper preset with some keys replaced (raw JSON values)."""
+    def make(w: Path) -> None:
+        from acid.params import paper
+
+        d = paper().to_json_dict()
+        for k, v in changes.items():
+            if k.startswith("gamma") and k[5:].isdigit():
+                d["gamma"][int(k[5:]) - 1] = v
+            else:
+                d[k] = v
+        (w / name).write_text(json.dumps(d))
+    return make
+
+
+def _h5(name: str, edit: Callable) -> Callable[[Path], None]:
+    """A copy of d.h5 changed by ``edit(h5py.File)``."""
+    def make(w: Path) -> None:
+        import h5py
+
+        shutil.copy(w / "d.h5", w / name)
+        with h5py.File(w / name, "r+") as f:
+            edit(f)
+    return make
+
+
+def _set_attr(path: str, key: str, value) -> Callable:
+    def edit(f):
+        f[path].attrs[key] = value
+    return edit
+
+
+def _replace(path: str, value) -> Callable:
+    def edit(f):
+        del f[path]
+        f[path] = value
+        if path.startswith("channels/"):
+            f[path].attrs["unit"] = "degC"
+    return edit
+
+
+def _scale_channel(name: str, factor: float) -> Callable:
+    def edit(f):
+        f[f"channels/{name}"][...] = f[f"channels/{name}"][()] * factor
+    return edit
+
+
+def _add_channel(name: str, value: float, unit: str) -> Callable:
+    def edit(f):
+        if name in f["channels"]:
+            del f["channels"][name]
+        d = f.create_dataset(f"channels/{name}", data=np.full(f["time"].shape, value))
+        d.attrs["unit"] = unit
+    return edit
+
+
+def _copy(src: str, dst: str) -> Callable[[Path], None]:
+    def make(w: Path) -> None:
+        (w / dst).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(w / src, w / dst)
+    return make
+
+
+def _symlink(target: str, link: str) -> Callable[[Path], None]:
+    def make(w: Path) -> None:
+        (w / link).symlink_to(w / target)
+    return make
+
+
+def _csv_with(column: str, values: str, name: str = "bad.csv") -> Callable[[Path], None]:
+    """run.csv with one column's values replaced (``values``: a Python expression of x)."""
+    def make(w: Path) -> None:
+        lines = (w / "run.csv").read_text().splitlines()
+        head = lines[0].split(",")
+        j = head.index(column)
+        out = [lines[0]]
+        for ln in lines[1:]:
+            cells = ln.split(",")
+            cells[j] = str(eval(values, {}, {"x": float(cells[j])}))  # noqa: S307 - test data
+            out.append(",".join(cells))
+        (w / name).write_text("\n".join(out) + "\n")
+    return make
+
+
+def _both(*makers) -> Callable[[Path], None]:
+    def make(w: Path) -> None:
+        for m in makers:
+            m(w)
+    return make
+
+
+D, P = "{w}/d.h5", "{w}/p.json"
+V = ("validate", D, "--out", "{w}/figs", "--starts", "5", "--horizon", "50")
+IMP = ("import", "{w}/run.csv", "--map", "{w}/map.toml", "--out", "{w}/run.h5")
+EXC = ("excite", "--plant", "model", "--duration", "600")
+
+CASES: list[Case] = [
+    # ---------------------------------------------------- outputs colliding with inputs
+    Case("fit-out-is-data", "collision", ("fit", D, "--out", D), ("--out", "d.h5", "DATA")),
+    Case("validate-json-is-data", "collision", (*V, "--json", D), ("--json", "d.h5")),
+    Case("import-out-is-src", "collision", (*IMP[:4], "--out", "{w}/run.csv"),
+         ("--out", "run.csv", "SRC")),
+    Case("import-out-is-map", "collision", (*IMP[:4], "--out", "{w}/map.toml"),
+         ("--out", "map.toml", "--map")),
+    Case("excite-out-is-json", "collision", (*EXC, "--out", "{w}/x.h5", "--json", "{w}/x.h5"),
+         ("--json", "x.h5", "--out")),
+    Case("fit-out-is-json", "collision", ("fit", D, "--out", "{w}/q.json", "--json",
+                                          "{w}/q.json"), ("--json", "q.json", "--out")),
+    Case("fit-out-is-reference", "collision", ("fit", D, "--out", P, "--reference", P),
+         ("--out", "p.json", "--reference")),
+    Case("validate-json-is-params", "collision", (*V, "--params", P, "--json", P),
+         ("--json", "p.json", "--params")),
+    Case("validate-out-folder-is-data", "collision", ("validate", D, "--out", D),
+         ("--out", "d.h5")),
+    Case("validate-json-is-a-figure", "collision",
+         (*V, "--json", "{w}/figs/fig5_prediction.png"), ("--json", "fig5_prediction.png")),
+    Case("excite-out-is-params", "collision", (*EXC, "--params", P, "--out", P),
+         ("--out", "p.json", "--params")),
+    Case("mpc-check-json-is-params", "collision", ("mpc-check", "--params", P, "--json", P),
+         ("--json", "p.json")),
+    Case("cav-study-json-is-params", "collision", ("cav-study", "--params", P, "--json", P),
+         ("--json", "p.json")),
+    Case("speed-sweep-json-is-config", "collision",
+         ("speed-sweep", "--config", "{w}/plant.toml", "--out", "{w}/sw", "--json",
+          "{w}/plant.toml"), ("--json", "plant.toml"), _write("plant.toml", "")),
+    Case("reproduce-json-is-report", "collision",
+         ("reproduce", "--out", "{w}/r", "--json", "{w}/r/report.html"),
+         ("--json", "report.html")),
+    Case("fit-out-is-symlink-to-data", "collision", ("fit", D, "--out", "{w}/link.h5"),
+         ("--out", "link.h5", "DATA"), _symlink("d.h5", "link.h5")),
+    Case("fit-out-is-data-via-dotdot", "collision", ("fit", D, "--out", "{w}/adir/../d.h5"),
+         ("--out", "d.h5")),
+    Case("import-out-is-json", "collision", (*IMP[:4], "--out", "{w}/x.h5", "--json",
+                                             "{w}/x.h5"), ("--json", "x.h5")),
+    # ------------------------------------------------------------ unwritable outputs
+    Case("fit-out-under-a-file", "output", ("fit", D, "--out", "{w}/afile/p.json"),
+         ("--out", "afile", "not a folder")),
+    Case("fit-out-is-a-folder", "output", ("fit", D, "--out", "{w}/adir"),
+         ("--out", "adir", "folder")),
+    Case("excite-out-under-dev-null", "output", (*EXC, "--out", "/dev/null/x.h5"),
+         ("--out", "/dev/null")),
+    Case("validate-out-is-a-file", "output", ("validate", D, "--out", "{w}/afile"),
+         ("--out", "afile")),
+    Case("mpc-check-out-under-a-file", "output", ("mpc-check", "--out", "{w}/afile/figs"),
+         ("--out", "afile")),
+    Case("reproduce-out-is-a-file", "output", ("reproduce", "--out", "{w}/afile"),
+         ("--out", "afile")),
+    Case("speed-sweep-out-is-a-file", "output", ("speed-sweep", "--out", "{w}/afile"),
+         ("--out", "afile")),
+    Case("fit-json-empty-path", "output", ("fit", D, "--out", "{w}/q.json", "--json", ""),
+         ("--json",)),
+    Case("excite-out-is-a-folder", "output", (*EXC, "--out", "{w}/adir"), ("--out", "adir")),
+    Case("import-out-deep-under-a-file", "output", (*IMP[:4], "--out", "{w}/afile/a/b.h5"),
+         ("--out", "afile")),
+    # ------------------------------------------------------- markup in user-given text
+    Case("markup-missing-data-path", "markup", ("fit", "{w}/[/x].h5", "--out", "{w}/q.json"),
+         ("[/x].h5",)),
+    Case("markup-missing-params", "markup", (*V, "--params", "{w}/[red]p.json"),
+         ("[red]p.json",)),
+    Case("markup-data-path-with-brackets", "markup",
+         ("fit", "{w}/[bold]d.h5", "--out", "{w}/[bold]d.h5"), ("[bold]d.h5", "--out"),
+         _copy("d.h5", "[bold]d.h5")),
+    Case("markup-out-under-bracket-file", "markup", ("fit", D, "--out", "{w}/[/]/q.json"),
+         ("[/]/q.json",), _write("[", "x")),
+    Case("markup-missing-column", "markup", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("[red]Tcab",), _write("m.toml", _map_toml(channels={**CSV_COLUMNS,
+                                                             "T_cab": "[red]Tcab"}))),
+    # ---------------------------------------------------------------- parameter files
+    Case("params-gamma4-unstable", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma4"), _params("b.json", gamma4=3.0)),
+    Case("params-gamma1-50", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma1"), _params("b.json", gamma1=50.0)),
+    Case("params-gamma1-1e308", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma1"), _params("b.json", gamma1=1e308)),
+    Case("params-gamma7-1e308", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma7"), _params("b.json", gamma7=1e308)),
+    Case("params-gamma-string", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma"), _params("b.json", gamma="1111111")),
+    Case("params-gamma-object", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma"), _params("b.json", gamma={str(i): 0.1 for i in range(7)})),
+    Case("params-gamma-six", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma"), _params("b.json", gamma=[0.1] * 6)),
+    Case("params-gamma-null", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma"), _params("b.json", gamma1=None)),
+    Case("params-gamma-bool", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "gamma"), _params("b.json", gamma1=True)),
+    Case("params-tau-nan", "params", (*V, "--params", "{w}/b.json"), ("b.json", "tau"),
+         _write("b.json", '{"gamma": [0.2451, 0.0867, 1.2999, 1.0047, -0.5176, 0.4553, '
+                          '34.9579], "tau": [NaN, -1.3226, 154.4995]}')),
+    Case("params-cp-string", "params", (*V, "--params", "{w}/b.json"), ("b.json", "c_p"),
+         _params("b.json", c_p="1008")),
+    Case("params-cp-kilojoule", "params", (*V, "--params", "{w}/b.json"), ("b.json", "c_p"),
+         _params("b.json", c_p=1.008)),
+    Case("params-eta-negative", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "eta_cop"), _params("b.json", eta_cop=-1)),
+    Case("params-Ts-zero", "params", (*V, "--params", "{w}/b.json"), ("b.json", "Ts"),
+         _params("b.json", Ts=0)),
+    Case("params-list", "params", (*V, "--params", "{w}/b.json"), ("b.json", "object"),
+         _write("b.json", "[1, 2, 3]")),
+    Case("params-binary", "params", (*V, "--params", "{w}/b.json"), ("b.json", "JSON"),
+         lambda w: (w / "b.json").write_bytes(b"\xff\xfe\x00garbage")),
+    Case("params-provenance-list", "params", (*V, "--params", "{w}/b.json"),
+         ("b.json", "provenance"), _params("b.json", provenance=[1, 2])),
+    Case("params-celsius", "params", (*V, "--params", "{w}/b.json"), ("b.json", "Celsius"),
+         _params("b.json", units="degC (Celsius)")),
+    Case("mpc-check-unstable", "params", ("mpc-check", "--params", "{w}/b.json"),
+         ("b.json", "gamma4"), _params("b.json", gamma4=3.0)),
+    Case("excite-model-unstable", "params", (*EXC, "--params", "{w}/b.json", "--out",
+                                             "{w}/x.h5"), ("b.json", "gamma1"),
+         _params("b.json", gamma1=50.0)),
+    Case("cav-study-unstable", "params", ("cav-study", "--params", "{w}/b.json"),
+         ("b.json", "gamma4"), _params("b.json", gamma4=-3.0)),
+    Case("fit-reference-malformed", "params", ("fit", D, "--out", "{w}/q.json", "--reference",
+                                               "{w}/b.json"), ("b.json", "gamma"),
+         _params("b.json", gamma="abc")),
+    # -------------------------------------------------------------------- HDF5 files
+    Case("h5-Ts-string", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"), ("b.h5", "Ts"),
+         _h5("b.h5", _set_attr("/", "Ts", "5"))),
+    Case("h5-Ts-zero", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"), ("b.h5", "Ts"),
+         _h5("b.h5", _set_attr("/", "Ts", 0.0))),
+    Case("h5-Ts-nan", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"), ("b.h5", "Ts"),
+         _h5("b.h5", _set_attr("/", "Ts", float("nan")))),
+    Case("h5-Ts-array", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"), ("b.h5", "Ts"),
+         _h5("b.h5", _set_attr("/", "Ts", np.array([5.0, 5.0])))),
+    Case("h5-unit-int-array", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "T_cab", "unit"), _h5("b.h5", _set_attr("channels/T_cab", "unit",
+                                                          np.array([1, 2])))),
+    Case("h5-channel-2d", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "T_cab"), _h5("b.h5", _replace("channels/T_cab", np.zeros((1440, 2))))),
+    Case("h5-time-strings", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "time"), _h5("b.h5", _replace("time", np.array([b"t"] * 1440)))),
+    Case("h5-channel-is-group", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "channels"), _h5("b.h5", lambda f: f.create_group("channels/sub"))),
+    Case("h5-experiment-float", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "experiment"), _h5("b.h5", _replace("experiment", np.full(1440, 0.5)))),
+    Case("h5-metadata-list", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "metadata"), _h5("b.h5", _set_attr("/", "metadata", "[1, 2]"))),
+    Case("h5-format-array", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "not an acid dataset"),
+         _h5("b.h5", _set_attr("/", "format", np.array([1, 2])))),
+    Case("h5-not-hdf5", "hdf5", ("fit", "{w}/afile", "--out", "{w}/q.json"),
+         ("afile", "HDF5")),
+    Case("h5-negative-W_bl", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "W_bl"), _h5("b.h5", _scale_channel("W_bl", -1.0))),
+    Case("h5-W_bl-in-wrong-unit", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "W_bl", "kg/s"), _h5("b.h5", _set_attr("channels/W_bl", "unit", "degC"))),
+    Case("h5-negative-speed", "hdf5", (*V[:1], "{w}/b.h5", *V[2:]), ("b.h5", "v_veh"),
+         _h5("b.h5", _add_channel("v_veh", -1.0, "m/s"))),
+    Case("h5-wrong-Ts", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "Ts"), _h5("b.h5", _set_attr("/", "Ts", 2.0))),
+    # ------------------------------------------------------------- channel maps, import
+    Case("map-Ts-string", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "Ts"), _write("m.toml", _map_toml('Ts = "5"'))),
+    Case("map-Ts-zero", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "Ts"), _write("m.toml", _map_toml("Ts = 0"))),
+    Case("map-Ts-nan", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "Ts"), _write("m.toml", _map_toml("Ts = nan"))),
+    Case("map-Ts-list", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "Ts"), _write("m.toml", _map_toml("Ts = [5.0]"))),
+    Case("map-Ts-1e-9", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "Ts"), _write("m.toml", _map_toml("Ts = 1e-9"))),
+    Case("map-Ts-bool", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "Ts"), _write("m.toml", _map_toml("Ts = true"))),
+    Case("map-resample-unknown", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "resample"), _write("m.toml", _map_toml('Ts = 5.0\nresample = "cubic"'))),
+    Case("map-mean-on-data-at-Ts", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "resample", "Ts = 5"),
+         _write("m.toml", _map_toml('Ts = 5.0\nresample = "mean"'))),
+    Case("map-resample-without-Ts", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "resample"), _write("m.toml", _map_toml('resample = "mean"'))),
+    Case("map-unknown-key", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "Tss"), _write("m.toml", _map_toml("Tss = 5.0"))),
+    Case("map-time-number", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "time"), _write("m.toml", _map_toml().replace('time = "t"', "time = 5"))),
+    Case("map-column-list", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "T_cab"),
+         _write("m.toml", _map_toml().replace('column = "Tcab"', 'column = ["Tcab"]'))),
+    Case("map-channel-name-slash", "map", (*IMP[:2], "--map", "{w}/m.json", *IMP[4:]),
+         ("m.json", "a/b"), _write("m.json", json.dumps({"time": "t", "channels": {
+             "a/b": {"column": "Tcab", "unit": "degC"}}}))),
+    Case("map-json-list", "map", (*IMP[:2], "--map", "{w}/m.json", *IMP[4:]),
+         ("m.json",), _write("m.json", "[1, 2]")),
+    Case("map-unknown-unit", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "T_cab", "furlong"),
+         _write("m.toml", _map_toml().replace('"Tcab", unit = "degC"',
+                                              '"Tcab", unit = "furlong"'))),
+    Case("map-missing", "map", (*IMP[:2], "--map", "{w}/none.toml", *IMP[4:]),
+         ("--map", "none.toml")),
+    Case("mat-struct-variable", "mat", ("import", "{w}/run.mat", "--map", "{w}/m.toml",
+                                        "--out", "{w}/run.h5"), ("run.mat", "sim"),
+         _write("m.toml", 'time = "sim.time"\nTs = 5.0\n[channels]\n'
+                          'T_cab = { column = "sim", unit = "K" }\n')),
+    Case("mat-cell-variable", "mat", ("import", "{w}/run.mat", "--map", "{w}/m.toml",
+                                      "--out", "{w}/run.h5"), ("run.mat", "cellvar"),
+         _write("m.toml", 'time = "sim.time"\nTs = 5.0\n[channels]\n'
+                          'T_cab = { column = "cellvar", unit = "K" }\n')),
+    Case("mat-garbage", "mat", ("import", "{w}/g.mat", "--map", "{w}/mat_map.toml", "--out",
+                                "{w}/run.h5"), ("g.mat", "MAT"),
+         _write("g.mat", "MATLAB 5.0 MAT-file but not really\n")),
+    Case("csv-text-column", "csv", ("import", "{w}/bad.csv", *IMP[2:]), ("bad.csv", "Tcab"),
+         _csv_with("Tcab", "'warm'")),
+    Case("csv-negative-W_bl", "csv", ("import", "{w}/bad.csv", *IMP[2:]),
+         ("bad.csv", "W_bl"), _csv_with("Wbl", "-x")),
+    Case("csv-empty", "csv", ("import", "{w}/bad.csv", *IMP[2:]), ("bad.csv",),
+         _write("bad.csv", "")),
+    Case("csv-kelvin-as-degC", "csv", ("import", "{w}/bad.csv", *IMP[2:]),
+         ("bad.csv", "T_cab"), _csv_with("Tcab", "x + 273.15")),
+    Case("import-unknown-suffix", "csv", ("import", "{w}/afile", *IMP[2:]), ("afile",)),
+    Case("import-min-samples-zero", "options", (*IMP, "--min-samples", "0"),
+         ("--min-samples",)),
+    # ------------------------------------------------------------------- options
+    Case("validate-seed-negative", "options", (*V, "--seed", "-1"), ("--seed",)),
+    Case("validate-starts-zero", "options", (*V[:4], "--starts", "0"), ("--starts",)),
+    Case("validate-starts-1e9", "options", (*V[:4], "--starts", "1000000000"), ("--starts",)),
+    Case("validate-horizon-zero", "options", (*V[:6], "--horizon", "0"), ("--horizon",)),
+    Case("validate-horizon-too-long", "options", (*V[:6], "--horizon", "5000"),
+         ("d.h5", "too short")),
+    Case("validate-held-out-1.5", "options", (*V, "--held-out-fraction", "1.5"),
+         ("--held-out-fraction",)),
+    Case("validate-held-out-nan", "options", (*V, "--held-out-fraction", "nan"),
+         ("--held-out-fraction",)),
+    Case("validate-placement", "options", (*V, "--placement", "diagonal"), ("--placement",)),
+    Case("validate-exogenous", "options", (*V, "--exogenous", "guess"), ("--exogenous",)),
+    Case("fit-estimation-fraction-zero", "options",
+         ("fit", D, "--out", "{w}/q.json", "--estimation-fraction", "0"),
+         ("--estimation-fraction",)),
+    Case("fit-method", "options", ("fit", D, "--out", "{w}/q.json", "--method", "magic"),
+         ("--method",)),
+    Case("fit-loss", "options", ("fit", D, "--out", "{w}/q.json", "--loss", "cubic"),
+         ("--loss",)),
+    Case("fit-oe-window-zero", "options", ("fit", D, "--out", "{w}/q.json", "--oe-window", "0"),
+         ("--oe-window",)),
+    Case("fit-hac-negative", "options",
+         ("fit", D, "--out", "{w}/q.json", "--hac-bandwidth", "-3"), ("--hac-bandwidth",)),
+    Case("excite-duration-1e12", "sizes", ("excite", "--out", "{w}/x.h5", "--duration",
+                                           "1e12"), ("--duration",)),
+    Case("excite-duration-nan", "options", ("excite", "--out", "{w}/x.h5", "--duration",
+                                            "nan"), ("--duration",)),
+    Case("excite-max-dwell-1e9", "sizes", ("excite", "--out", "{w}/x.h5", "--max-dwell",
+                                           "1e9"), ("--max-dwell",)),
+    Case("excite-min-dwell-inf", "options", ("excite", "--out", "{w}/x.h5", "--min-dwell",
+                                             "inf", "--max-dwell", "inf"), ("--min-dwell",)),
+    Case("excite-speed-1e6", "sizes", ("excite", "--out", "{w}/x.h5", "--speed", "1e6"),
+         ("--speed",)),
+    Case("excite-speed-negative", "options", ("excite", "--out", "{w}/x.h5", "--speed", "-1"),
+         ("--speed",)),
+    Case("excite-noise-huge", "options", (*EXC, "--out", "{w}/x.h5", "--noise", "1e300"),
+         ("--noise",)),
+    Case("excite-seed-negative", "options", (*EXC, "--out", "{w}/x.h5", "--seed", "-1"),
+         ("--seed",)),
+    Case("excite-seed-not-int", "options", (*EXC, "--out", "{w}/x.h5", "--seed", "1.5"),
+         ("--seed",)),
+    Case("excite-signal", "options", (*EXC, "--out", "{w}/x.h5", "--signal", "chirp"),
+         ("--signal",)),
+    Case("excite-plant", "options", ("excite", "--out", "{w}/x.h5", "--plant", "wind"),
+         ("--plant",)),
+    Case("excite-t-amb-kelvin", "options", (*EXC, "--out", "{w}/x.h5", "--t-amb", "303.15"),
+         ("--t-amb",)),
+    Case("excite-cycle-unknown", "options", (*EXC, "--out", "{w}/x.h5", "--cycle", "moon"),
+         ("moon",)),
+    Case("excite-speed-and-cycle", "options",
+         (*EXC, "--out", "{w}/x.h5", "--cycle", "udds", "--speed", "5"), ("--speed",)),
+    Case("excite-plant-config-missing", "options",
+         ("excite", "--out", "{w}/x.h5", "--plant-config", "{w}/none.toml"),
+         ("--plant-config", "none.toml")),
+    Case("excite-plant-config-bad-key", "options",
+         ("excite", "--out", "{w}/x.h5", "--plant-config", "{w}/c.toml"), ("c.toml", "warp"),
+         _write("c.toml", "warp = 9\n")),
+    Case("excite-missing-out", "options", ("excite", "--duration", "600"), ("--out",)),
+    Case("excite-unknown-option", "options", (*EXC, "--out", "{w}/x.h5", "--turbo"),
+         ("--turbo",)),
+    Case("speed-sweep-duration-1e12", "sizes", ("speed-sweep", "--out", "{w}/sw",
+                                                "--duration", "1e12"), ("--duration",)),
+    Case("speed-sweep-duration-zero", "options", ("speed-sweep", "--out", "{w}/sw",
+                                                  "--duration", "0"), ("--duration",)),
+    Case("mpc-check-solver", "options", ("mpc-check", "--solver", "excel"), ("--solver",)),
+    Case("mpc-check-first-move", "options", ("mpc-check", "--first-move", "late"),
+         ("--first-move",)),
+    Case("cav-study-horizon-zero", "options", ("cav-study", "--horizon", "0"), ("--horizon",)),
+    Case("cav-study-horizon-1e5", "sizes", ("cav-study", "--horizon", "100000"),
+         ("--horizon",)),
+    Case("cav-study-band-inverted", "options", ("cav-study", "--t-low", "26", "--t-high",
+                                                "22"), ("--t-low",)),
+    Case("cav-study-warmup-negative", "options", ("cav-study", "--warmup", "-1"),
+         ("--warmup",)),
+    Case("cav-study-tail-1e12", "sizes", ("cav-study", "--tail", "1e12"), ("--tail",)),
+    Case("cav-study-cycle", "options", ("cav-study", "--cycle", "moon"), ("--cycle",)),
+    # ------------------------------------- plant-check, export-fmu, --plant fmu:PATH
+    Case("plant-check-json-is-config", "collision",
+         ("plant-check", "--config", "{w}/plant.toml", "--json", "{w}/plant.toml"),
+         ("--json", "plant.toml"), _write("plant.toml", "")),
+    Case("plant-check-out-is-a-file", "output", ("plant-check", "--out", "{w}/afile"),
+         ("--out", "afile")),
+    Case("plant-check-ambient-kelvin", "options", ("plant-check", "--ambient", "303.15"),
+         ("--ambient",)),
+    Case("plant-check-fmu-missing", "options",
+         ("plant-check", "--plant", "fmu:{w}/none.fmu", "--fmu-map", "{w}/mat_map.toml"),
+         ("--plant", "none.fmu")),
+    Case("export-fmu-out-is-config", "collision",
+         ("export-fmu", "--out", "{w}/c.fmu", "--plant-config", "{w}/c.fmu"),
+         ("--out", "c.fmu", "--plant-config"), _write("c.fmu", "")),
+    Case("export-fmu-map-is-json", "collision",
+         ("export-fmu", "--out", "{w}/p.fmu", "--map", "{w}/m.toml", "--json", "{w}/m.toml"),
+         ("--json", "m.toml")),
+    Case("export-fmu-out-under-a-file", "output", ("export-fmu", "--out", "{w}/afile/p.fmu"),
+         ("--out", "afile")),
+    Case("export-fmu-version", "options", ("export-fmu", "--out", "{w}/p.fmu",
+                                           "--fmi-version", "4"), ("--fmi-version",)),
+    Case("excite-out-is-fmu-map", "collision",
+         ("excite", "--plant", "fmu:{w}/g.fmu", "--fmu-map", "{w}/mat_map.toml", "--out",
+          "{w}/mat_map.toml"), ("--out", "mat_map.toml", "--fmu-map"),
+         _write("g.fmu", "not a zip")),
+    Case("excite-fmu-garbage", "options",
+         ("excite", "--plant", "fmu:{w}/g.fmu", "--fmu-map", "{w}/f.toml", "--out", "{w}/y.h5"),
+         ("g.fmu",), _both(_write("g.fmu", "not a zip"), _write(
+             "f.toml", '[inputs]\nW_bl = { name = "a" }\nT_evap_set = { name = "b" }\n'
+                       '[states]\nT_cab = { name = "c" }\nT_evap = { name = "d" }\n'
+                       'T_int = { name = "e" }\nT_shell = { name = "f" }\n'
+                       '[outputs]\nT_ain = { name = "g" }\n'))),
+    Case("mpc-check-fmu-missing", "options",
+         ("mpc-check", "--plant", "fmu:{w}/none.fmu", "--fmu-map", "{w}/mat_map.toml"),
+         ("--plant", "none.fmu")),
+    Case("speed-sweep-fmu-without-map", "options",
+         ("speed-sweep", "--out", "{w}/sw", "--plant", "fmu:{w}/g.fmu"), ("--fmu-map",),
+         _write("g.fmu", "not a zip")),
+    Case("cav-study-fmu-map-missing", "options",
+         ("cav-study", "--plant", "fmu:{w}/g.fmu", "--fmu-map", "{w}/none.toml"),
+         ("--fmu-map", "none.toml"), _write("g.fmu", "not a zip")),
+    Case("reproduce-jobs-zero", "options", ("reproduce", "--out", "{w}/r", "--jobs", "0"),
+         ("--jobs",)),
+    Case("reproduce-jobs-100", "options", ("reproduce", "--out", "{w}/r", "--jobs", "100"),
+         ("--jobs",)),
+    # ------------------------------------------------------------------ acid sweep
+    Case("sweep-spec-missing", "options", ("sweep", "{w}/none.toml", "--out", "{w}/o"),
+         ("SPEC.toml", "none.toml")),
+    Case("sweep-spec-not-toml", "options", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "not valid TOML"), _write("s.toml", "[grid\n")),
+    Case("sweep-unknown-controller", "options", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "controllers.turbo", "unknown controller"),
+         _write("s.toml", "[grid]\nambient_C = [30.0]\n[controllers.turbo]\n")),
+    Case("sweep-negative-humidity", "options", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "grid", "humidity_pct = -5"),
+         _write("s.toml", "[grid]\nhumidity_pct = [50.0, -5.0]\n")),
+    Case("sweep-empty-grid", "options", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "ambient_C is empty"), _write("s.toml", "[grid]\nambient_C = []\n")),
+    Case("sweep-plant-override-unknown", "options",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o"), ("s.toml", "scenarios #1", "'warp'"),
+         _write("s.toml", "[[scenarios]]\nplant = { warp = 9.0 }\n")),
+    Case("sweep-params-missing", "params", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "params", "none.json"),
+         _write("s.toml", "[defaults]\nparams = \"none.json\"\n[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-json-is-spec", "collision",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o", "--json", "{w}/s.toml"),
+         ("--json", "s.toml"), _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-json-is-results", "collision",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o", "--json", "{w}/o/results.csv"),
+         ("--json", "results.csv"), _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-out-is-a-file", "output", ("sweep", "{w}/s.toml", "--out", "{w}/afile"),
+         ("--out", "afile"), _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-workers-zero", "options",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o", "--workers", "0"), ("--workers",),
+         _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-workers-and-scheduler", "options",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o", "--workers", "2", "--scheduler",
+          "tcp://127.0.0.1:1"), ("--workers", "--scheduler"),
+         _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("markup-sweep-spec-path", "markup", ("sweep", "{w}/[red]s.toml", "--out", "{w}/o"),
+         ("[red]s.toml",)),
+]
+
+
+# ------------------------------------------------------------------------- running
+def snapshot(w: Path) -> dict[str, str]:
+    """{relative path: sha256 or '<dir>'} of everything in the workspace."""
+    out = {}
+    for p in sorted(w.rglob("*")):
+        rel = str(p.relative_to(w))
+        if p.is_symlink():
+            out[rel] = "<link>" + os.readlink(p)
+        elif p.is_dir():
+            out[rel] = "<dir>"
+        else:
+            out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+@dataclass
+class Outcome:
+    case: Case
+    exit_code: int | None
+    output: str
+    traceback: bool
+    changed: list[str]
+    created: list[str]
+    result: object = None  # the CliRunner result
+
+    @property
+    def lines(self) -> list[str]:
+        return [ln for ln in self.output.splitlines() if ln.strip()]
+
+
+def classify(o: Outcome, w: Path) -> str:
+    """clean / traceback / exit0 / dataloss / internal / unclear (see the module docstring)."""
+    if o.changed:
+        return "dataloss"
+    if o.traceback:
+        return "traceback"
+    if o.exit_code == 0:
+        return "exit0"
+    flat = " ".join(o.output.split())
+    if "internal error" in flat:
+        return "internal"
+    if (o.exit_code == 2 and len(o.lines) == 1 and o.lines[0].startswith("error:")
+            and all(f in flat for f in o.case.fragments(w)) and not o.created):
+        return "clean"
+    return "unclear"
+
+
+def run_case(case: Case, template: Path, w: Path) -> Outcome:
+    """Copy the workspace, build the case's files, run it in-process (CliRunner)."""
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    if w.exists():
+        shutil.rmtree(w)
+    shutil.copytree(template, w, symlinks=True)
+    if case.make is not None:
+        case.make(w)
+    before = snapshot(w)
+    res = CliRunner().invoke(app, case.argv(w))
+    after = snapshot(w)
+    tb = ("Traceback" in res.output
+          or (res.exception is not None and not isinstance(res.exception, SystemExit)))
+    changed = [k for k, v in before.items() if after.get(k) != v]
+    created = [k for k in after if k not in before]
+    return Outcome(case, res.exit_code, res.output, tb, changed, created, res)
+
+
+def _run_one_in_subprocess(case: Case, template: Path, w: Path, timeout: float) -> str:
+    import subprocess
+
+    cmd = [sys.executable, __file__, "--one", case.id, str(template), str(w)]
+    try:
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                           preexec_fn=_limit_memory)
+    except subprocess.TimeoutExpired:
+        return "timeout"
+    last = r.stdout.strip().splitlines()[-1:] or [""]
+    return last[0] if last[0] in ("clean", "traceback", "exit0", "dataloss", "internal",
+                                  "unclear") else ("crash" if r.returncode else "unclear")
+
+
+def _limit_memory() -> None:
+    import resource
+
+    cap = 4 * 1024 ** 3  # 4 GiB: sizes that used to exhaust memory fail here instead
+    resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+
+def main(argv: list[str]) -> int:
+    import tempfile
+
+    if argv[:1] == ["--one"]:
+        case = next(c for c in CASES if c.id == argv[1])
+        o = run_case(case, Path(argv[2]), Path(argv[3]))
+        print(o.output)
+        print(classify(o, Path(argv[3])))
+        return 0
+    sub = "--subprocess" in argv
+    root = Path(tempfile.mkdtemp(prefix="acid-catalogue-"))
+    template = build_workspace(root / "template")
+    counts: Counter = Counter()
+    by_class: dict[str, Counter] = {}
+    for case in CASES:
+        w = root / "case"
+        if sub:
+            verdict = _run_one_in_subprocess(case, template, w, timeout=120)
+        else:
+            o = run_case(case, template, w)
+            verdict = classify(o, w)
+        counts[verdict] += 1
+        by_class.setdefault(case.cls, Counter())[verdict] += 1
+        if verdict != "clean":
+            print(f"{verdict:9s} {case.id}", flush=True)
+    print(f"{len(CASES)} cases: " + ", ".join(f"{k} {v}" for k, v in counts.most_common()))
+    for cls, c in by_class.items():
+        print(f"  {cls:10s} " + ", ".join(f"{k} {v}" for k, v in c.most_common()))
+    shutil.rmtree(root, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    raise SystemExit(main(sys.argv[1:]))
