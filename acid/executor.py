@@ -327,7 +327,10 @@ class DaskExecutor(Executor):
             if n < 1:
                 raise AcidError(f"workers must be at least 1, got {n}")
             self.kind = "local"
+            # one task per worker at a time, the rest queued on the scheduler: a long task is
+            # never parked behind another on a busy worker while one idles
             with dask.config.set({"distributed.scheduler.allowed-failures": 1,
+                                  "distributed.scheduler.worker-saturation": 1.0,
                                   "distributed.worker.daemon": False}):
                 self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                             dashboard_address=None,
