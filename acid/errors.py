@@ -33,5 +33,9 @@ class SolverWarning(UserWarning):
     """A numerical solver failed or returned an inaccurate solution; a fallback was used."""
 
 
+class CodegenWarning(UserWarning):
+    """Generated C could not be compiled or loaded; the CasADi solver is used instead."""
+
+
 class InSampleWarning(UserWarning):
     """A model is validated on (part of) the data it was fitted on."""

@@ -39,9 +39,19 @@ def step(T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell, p: ModelParams):
             evap_step(T_evap, T_evap_set, p), T_ain)
 
 
-def compressor_power(W_bl, T_ain, T_amb, p: ModelParams):
-    """Eq. 4: P_c = c_p / eta_cop * W_bl * (T_amb - T_ain), W."""
-    return p.c_p / p.eta_cop * W_bl * (T_amb - T_ain)
+def air_heat_flow(W_bl, T_ain, T_amb, c_p):
+    """Numerator of eq. 4: c_p * W_bl * (T_amb - T_ain), W (c_p in J/(kg K))."""
+    return c_p * W_bl * (T_amb - T_ain)
+
+
+def compressor_power(W_bl, T_ain, T_amb, p: ModelParams, eta_cop=None):
+    """Eq. 4: P_c = c_p / eta_cop * W_bl * (T_amb - T_ain), W.
+
+    ``eta_cop`` overrides ``p.eta_cop`` (a scalar, an array per stage broadcasting against
+    ``W_bl``, or a CasADi symbol), e.g. a speed-dependent efficiency previewed per stage.
+    """
+    eta = p.eta_cop if eta_cop is None else eta_cop
+    return air_heat_flow(W_bl, T_ain, T_amb, p.c_p) / eta
 
 
 def blower_power(W_bl, p: ModelParams):

@@ -20,6 +20,10 @@ Choices the paper leaves open, documented here
   terminal state with the last input held, ``u(N|k) := u(N-1|k)``.
 * **Slacks.** ``x(0|k)`` is fixed by eq. 13, so its slack would only add a constant to the
   objective; slacks are defined for ``i = 1 .. N`` (the states the inputs can influence).
+  The NLP carries one slack per bound (upper and lower, of T_cab and T_evap) rather than
+  one per state: since ``x_min < x_max`` at most one of the two is positive, so the optimum
+  and eq. 7 are the same, and each slack then sits in one constraint only, which keeps the
+  active sets of the SQP solver non-degenerate.
 * **Eq. 4 sign.** ``P_c = c_p / eta_cop * W_bl * (T_amb - T_ain)`` is used as published. It
   turns negative if ``T_ain > T_amb`` (never within Table II's bounds with the paper's
   parameters: ``T_ain`` stays below 21 degC), so the optimiser cannot profit from it there.
@@ -38,26 +42,56 @@ Choices the paper leaves open, documented here
     computation takes up to one period; the solver chooses ``u(1|k) ..`` and ``u(1|k)`` is
     committed for the next period. ``make_step`` keeps the committed input.
 
+Beyond the paper
+----------------
+* **Offset-free prediction** (``NMPCConfig.offset_free``, default on): eqs. 1-2 carry
+  additive disturbances ``d = [d_cab, d_evap]`` (K per step), estimated in ``make_step`` by
+  the Kalman filter of :mod:`acid.mpc.estimator` on the model augmented with them and held
+  over the horizon, so that the plant, not only the model, rides an active bound. On the
+  control-oriented model itself the estimate stays at zero (to rounding) and nothing
+  changes.
+* **Exact bounds.** Interior-point solvers relax every bound by ``1e-8 max(1, |bound|)`` in
+  the NLP's units (IPOPT's ``bound_relax_factor``, set to 0 here; fatrop's is fixed). With
+  ``T <= T_max`` written directly that is 2.7e-6 K at 300 K, at every stage. So every state
+  bound is a constraint ``T - T_max - v_sl <= 0`` with the bound an NLP parameter and the
+  limit exactly 0, and the inputs are offsets from the maximum-cooling corner in g/s and K:
+  a relaxed bound moves the cabin by about 1e-9 K (measured: at most 1e-9 K above an
+  active bound, against 2.7e-6 K before).
+  The reported objective is eq. 7 evaluated at the applied plan: the predicted trajectory is
+  recomputed from the plan (clipped to its bounds) with :mod:`acid.model`, the slacks are
+  its actual violations.
+* **Model parameters as NLP parameters.** gamma, tau, beta, c_p enter as parameters, so one
+  built (and compiled) solver serves every parameter set of the same horizon and options.
+
 Solver
 ------
-The NLP is built once, variables ordered stage by stage ``[x_0, u_0, s_1, x_1, u_1, s_2, ...,
-x_N]`` so that CasADi's structure-exploiting interior-point solver **fatrop** (shipped in the
-casadi wheel) detects the optimal-control structure (``structure_detection='auto'``); IPOPT
-solves the identical NLP (``solver="ipopt"``). Exact derivatives (CasADi AD) in both. Each
-solve is warm-started from the previous solution shifted by one stage (primal; the shifted
-multipliers are passed too, IPOPT ignores them with its default cold dual start). Measured
-on the scenario (a) states (``benchmarks/bench_mpc.py``): fatrop about 1 ms per whole step,
-IPOPT about 5-6 ms, the same optimum to 3e-6.
-Time-varying bounds enter as numeric ``lbg``/``ubg``, the initial state and disturbances
-(``T_int``, ``T_shell``, ``T_amb``) as NLP parameters, so nothing is rebuilt between solves.
+The NLP is built once from a declared layout (:class:`acid.mpc.layout.BlockVector`: named
+blocks per stage ``[x_0, u_0, s_1, x_1, u_1, s_2, ..., x_N]``; every index map is derived
+from it) so that CasADi's structure-exploiting interior-point solver **fatrop** (shipped in
+the casadi wheel) detects the optimal-control structure (``structure_detection='auto'``);
+IPOPT solves the identical NLP (``solver="ipopt"``), and so does an SQP method with the
+active-set QP solver qrqp (``solver="sqp"``, the algorithm of ``acid export-c``; it starts
+from the cold guess at every solve, because warm-started from the shifted plan the
+active-set method meets degenerate active sets and can fail or stall). Exact
+derivatives (CasADi AD) in all. :class:`acid.mpc.solver.NLPSolver` runs fatrop and SQP as
+**generated C**, compiled at first use into a per-user cache (``NMPCConfig.compiled``;
+without a C compiler, inside CasADi with one notice: the same answers), with a wall-clock
+cap per solve (``NMPCConfig.max_solve_s``). Each solve is warm-started from the previous
+solution shifted by one stage. Time-varying bounds, the initial state, the disturbances and
+their estimates enter as NLP parameters, so nothing is rebuilt between solves.
 
-If the solver fails (or raises), ``make_step`` applies a safe fallback -- the rest of the last
-successful plan, shifted, else a conservative input (maximum cooling) -- counts it in
-``NMPC.fallbacks``, emits a :class:`acid.errors.SolverWarning` and carries on.
+Inputs are checked before the solver: non-finite values are refused, and temperatures must
+be plausible in kelvin (a state given in degC is refused with a message saying so).
+
+If the solver fails, times out or its input is a non-finite measurement, ``make_step``
+applies a safe fallback -- the rest of the last successful plan, shifted, else a
+conservative input (maximum cooling) -- counts it in ``NMPC.fallbacks``, emits a
+:class:`acid.errors.SolverWarning` and carries on.
 """
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -66,15 +100,36 @@ import casadi as ca
 import numpy as np
 
 from acid import model
-from acid.errors import ConfigError, SolverWarning
-from acid.params import ModelParams
+from acid.errors import ConfigError, DataError, SolverWarning
+from acid.mpc.estimator import (
+    BackoffConfig,
+    ErrorBackoff,
+    EstimatorConfig,
+    OffsetFreeEstimator,
+)
+
+__all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog", "predict"]
+from acid.mpc.layout import BlockVector
+from acid.mpc.solver import NLPSolver
+from acid.params import ModelParams, as_params
 from acid.units import C2K
 
-#: Variables per stage: x = [T_cab, T_evap], u = [W_bl, T_evap_set], s = [v_sl,cab, v_sl,evap]
-_NX, _NU, _NS = 2, 2, 2
-_NW = _NX + _NU + _NS
-#: Constraints per stage: 2 dynamics (eqs. 1-2) + 4 slack-relaxed state bounds (eqs. 10-11)
-_NG = 6
+#: x = [T_cab, T_evap], u = [W_bl, T_evap_set], slacks s of the upper and lower bounds of
+#: T_cab and T_evap (one per bound: see the module docstring)
+_NX, _NU, _NS = 2, 2, 4
+#: The interior-point solvers relax every bound by 1e-8 max(1, |bound|) in the NLP's own
+#: units (fatrop cannot be told not to). So the NLP's inputs are offsets from the maximum
+#: cooling corner in g/s and K (``u_nlp = (u - [W_bl_max, T_evap_set_min]) * _U_SCALE``) and
+#: the state bounds are constraints with zero limits: a relaxed bound then moves the cabin
+#: by about 1e-9 K, instead of 1e-7 K (W_bl in kg/s) or 3e-6 K (limits of ~300 K).
+_U_SCALE = np.array([1e3, 1.0])
+SOLVERS = ("fatrop", "ipopt", "sqp")
+DISTURBANCES = ("state", "inlet")
+#: plausible temperatures inside the model, K (-60 .. 150 degC): anything else is an error
+T_PLAUSIBLE_K = (213.15, 423.15)
+#: SQP tolerance on the constraint violation (K) and the scaled dual infeasibility: SQP
+#: converges quadratically, so a tight tolerance costs about one iteration
+SQP_TOL = 1e-10
 
 
 @dataclass(frozen=True)
@@ -85,19 +140,40 @@ class NMPCConfig:
     ----------
     N : prediction = constraint = control horizon ``Np = Nc = Nu`` (Table II: 6 steps).
     first_move : ``"free"`` (default) or ``"pinned"``, the two readings of eq. 13.
-    solver : ``"fatrop"`` (default, structure-exploiting) or ``"ipopt"``.
+    solver : ``"fatrop"`` (default, structure-exploiting interior point), ``"ipopt"`` or
+        ``"sqp"`` (SQP with the active-set QP solver qrqp; the algorithm of the C export).
     slack_penalty : ``a_sl``, W per K of violation, per state (paper: 1e5).
     T_amb : ambient temperature in eq. 4, K (Table II: 30 degC).
     T_cab_min : lower cabin bound, K (Table II: 20 degC); the upper bound is previewed.
     T_evap_min, T_evap_max : evaporator wall bounds, K (Table II: 0 and 12 degC).
     W_bl_min, W_bl_max : blower air flow bounds, kg/s (Table II: 0.05, 0.15).
     T_evap_set_min, T_evap_set_max : set-point bounds, K (Table II: 3, 10 degC).
-    tol : solver convergence tolerance (on the objective scaled by ``cost_scale``).
+    tol : convergence tolerance of fatrop and IPOPT (on the NLP with the objective scaled
+        by ``cost_scale``); 1e-10 makes the first move agree with the SQP solver (and with
+        ``acid export-c``) to about 1e-10 relative, for about one more iteration than 1e-8.
     max_iter : iteration limit of the solver.
     cost_scale : factor applied to the objective inside the NLP (kW instead of W) for
         conditioning; reported objectives are unscaled (W summed over the stages).
     fallback_input : conservative input (W_bl kg/s, T_evap_set K) when no plan is left:
         maximum cooling, by default.
+    compiled : run the solver as generated C (``"auto"``: when a C compiler works, else
+        inside CasADi with one notice; ``False``: always inside CasADi). IPOPT cannot be
+        generated and always runs inside CasADi.
+    max_solve_s : wall-clock cap per solve, s; a solve still running then is abandoned and
+        the fallback applied (the paper's budget is an *average* of Ts/8 = 0.625 s). The
+        solve then runs in a worker thread (about 15-30 us per step on an idle machine, more
+        when the other cores are busy); None runs it in the caller's thread, without a cap
+        (the inputs are still checked, so no NaN reaches the solver).
+    offset_free : estimate disturbances in ``make_step`` with a Kalman filter and predict
+        with them (:class:`acid.mpc.estimator.OffsetFreeEstimator`).
+    disturbance : where the disturbances enter, ``"state"`` (added to eqs. 1-2) or
+        ``"inlet"`` (added to eq. 3's inlet air and to eq. 2); see :func:`predict`.
+    estimator : tuning of that Kalman filter.
+    backoff : tighten the cabin bounds in ``make_step`` by the recent one-step prediction
+        errors of T_cab (:class:`acid.mpc.estimator.ErrorBackoff`); None (default): off, the
+        paper's NMPC. Scenario (b) of ``acid mpc-check`` turns it on. It assumes the errors
+        are the model's: with the compressor shut off open loop (the CAV case) they are
+        not, and the margin would grow for nothing.
     """
 
     N: int = 6
@@ -112,20 +188,39 @@ class NMPCConfig:
     W_bl_max: float = 0.15
     T_evap_set_min: float = C2K(3.0)
     T_evap_set_max: float = C2K(10.0)
-    tol: float = 1e-8
+    tol: float = 1e-10
     max_iter: int = 200
     cost_scale: float = 1e-3
     fallback_input: tuple[float, float] | None = None
+    compiled: bool | str = "auto"
+    max_solve_s: float | None = 2.5
+    offset_free: bool = False
+    disturbance: str = "state"
+    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+    backoff: BackoffConfig | None = None
 
     def __post_init__(self):
         if self.first_move not in ("free", "pinned"):
             raise ConfigError(f"first_move must be 'free' or 'pinned', got {self.first_move!r}")
-        if self.solver not in ("fatrop", "ipopt"):
-            raise ConfigError(f"solver must be 'fatrop' or 'ipopt', got {self.solver!r}")
+        if self.solver not in SOLVERS:
+            raise ConfigError(f"solver must be one of {', '.join(SOLVERS)}, got "
+                              f"{self.solver!r}")
         if int(self.N) < 2:
             raise ConfigError(f"horizon N must be at least 2, got {self.N}")
         if not (self.W_bl_min < self.W_bl_max and self.T_evap_set_min < self.T_evap_set_max):
             raise ConfigError("input bounds must satisfy min < max")
+        if self.compiled not in ("auto", True, False):
+            raise ConfigError(f"compiled must be 'auto', True or False, got {self.compiled!r}")
+        if self.disturbance not in DISTURBANCES:
+            raise ConfigError(f"disturbance must be one of {', '.join(DISTURBANCES)}, got "
+                              f"{self.disturbance!r}")
+        if self.max_solve_s is not None and not (math.isfinite(self.max_solve_s)
+                                                 and self.max_solve_s > 0):
+            raise ConfigError(f"max_solve_s must be a positive number of seconds or None, "
+                              f"got {self.max_solve_s}")
+        for name in ("T_amb", "T_cab_min", "T_evap_min", "T_evap_max", "T_evap_set_min",
+                     "T_evap_set_max"):
+            _check_kelvin(getattr(self, name), f"NMPCConfig.{name}")
 
     @property
     def u_min(self) -> np.ndarray:
@@ -154,7 +249,27 @@ class NMPCConfig:
             "W_bl_max_kg_s": self.W_bl_max, "T_evap_set_min_K": self.T_evap_set_min,
             "T_evap_set_max_K": self.T_evap_set_max, "tol": self.tol,
             "max_iter": self.max_iter, "fallback_input": self.u_safe.tolist(),
+            "compiled": self.compiled, "max_solve_s": self.max_solve_s,
+            "offset_free": self.offset_free, "disturbance": self.disturbance,
+            "estimator": self.estimator.to_json_dict(),
+            "backoff": None if self.backoff is None else self.backoff.to_json_dict(),
         }
+
+
+def _check_kelvin(values, name: str) -> None:
+    """Refuse non-finite or implausible temperatures (K) with a one-line message."""
+    a = np.asarray(values, dtype=float)
+    if not np.all(np.isfinite(a)):
+        raise DataError(f"{name} is not finite ({a.tolist()}): the NMPC needs measured "
+                        "temperatures in K")
+    lo, hi = T_PLAUSIBLE_K
+    bad = (a < lo) | (a > hi)
+    if np.any(bad):
+        v = float(a[bad].flat[0])
+        hint = (f" (it looks like degC: {v:g} degC is {C2K(v):g} K)"
+                if -60.0 <= v <= 150.0 else "")
+        raise DataError(f"{name} = {v:g} K is not a plausible temperature in K "
+                        f"({lo:g}-{hi:g} K){hint}")
 
 
 @dataclass(frozen=True)
@@ -166,16 +281,19 @@ class MPCSolution:
     u : (2,) the input to apply over ``[t_k, t_k + Ts)`` -- [W_bl kg/s, T_evap_set K]. In
         ``"free"`` mode ``u(0|k)``; in ``"pinned"`` mode the pinned ``u(0|k)`` as well (the
         move the solve decided is ``W_bl[1], T_evap_set[1]``).
-    T_cab, T_evap : (N+1,) predicted states x(0|k) .. x(N|k), K.
+    T_cab, T_evap : (N+1,) predicted states x(0|k) .. x(N|k), K: the model (with the
+        disturbance estimate) simulated along the plan.
     T_ain : (N+1,) predicted inlet air (eq. 3), K, with ``u(N|k) = u(N-1|k)``.
     W_bl, T_evap_set : (N,) planned inputs u(0|k) .. u(N-1|k), kg/s and K.
     P_comp, P_bl : (N+1,) predicted powers (eqs. 4-5), W.
-    slack_cab, slack_evap : (N,) slacks v_sl(1|k) .. v_sl(N|k), K (clipped at 0).
-    objective : eq. 7 at the solution, W (powers summed over i = 0..N plus a_sl * slacks).
+    slack_cab, slack_evap : (N,) slacks v_sl(1|k) .. v_sl(N|k), K: the predicted
+        trajectory's actual bound violations.
+    objective : eq. 7 at the plan, W (powers summed over i = 0..N plus a_sl * slacks).
     status : solver return status (text).
     success : whether the solver reported convergence and the solution is finite.
-    iterations : solver iterations.
+    iterations : solver iterations (-1 where the generated solver does not report them).
     solve_time_s : wall time of the solver call, s.
+    disturbance : (2,) disturbance estimate [d_cab, d_evap] used in the prediction, K/step.
     """
 
     u: np.ndarray
@@ -193,6 +311,7 @@ class MPCSolution:
     success: bool
     iterations: int
     solve_time_s: float
+    disturbance: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
     @property
     def plan(self) -> np.ndarray:
@@ -207,15 +326,71 @@ class StepLog:
     Attributes
     ----------
     u : applied inputs, one (2,) array per step.
-    solutions : the MPC solutions (``None`` where the solver raised).
+    solutions : the MPC solutions (``None`` where the solver raised or was not called).
     fallback : whether each step used the fallback.
     step_time_s : wall time of each whole ``make_step`` call (Python overhead included), s.
+    disturbance : the disturbance estimate used at each step (see ``NMPCConfig``).
+    margin : the cabin-bound back-off (below the upper, above the lower bound) at each
+        step, K.
     """
 
     u: list = field(default_factory=list)
     solutions: list = field(default_factory=list)
     fallback: list = field(default_factory=list)
     step_time_s: list = field(default_factory=list)
+    disturbance: list = field(default_factory=list)
+    margin: list = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class SymbolicParams:
+    """Model parameters as CasADi symbols, for :mod:`acid.model`'s functions (duck-types
+    :class:`acid.params.ModelParams`): gamma (7), tau (3), beta (3), c_p, eta_cop."""
+
+    gamma: tuple
+    tau: tuple
+    beta: tuple
+    c_p: object
+    eta_cop: object
+
+    @classmethod
+    def from_vector(cls, theta: ca.SX, eta_cop=None) -> SymbolicParams:
+        """From ``theta = [gamma1..7, tau1..3, beta1..3, c_p]`` (14 entries)."""
+        e = [theta[i] for i in range(14)]
+        return cls(gamma=tuple(e[:7]), tau=tuple(e[7:10]), beta=tuple(e[10:13]), c_p=e[13],
+                   eta_cop=eta_cop)
+
+
+def theta_vector(p: ModelParams) -> np.ndarray:
+    """``[gamma1..7, tau1..3, beta1..3, c_p]`` of a parameter set (the NLP's ``theta``)."""
+    return np.r_[p.gamma, p.tau, p.beta, p.c_p]
+
+
+def predict(T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell, d, p, disturbance="state"):
+    """One step of the NMPC's prediction model: eqs. 1-3 with the disturbances ``d``.
+
+    ``disturbance="state"``: ``d = [d_cab, d_evap]`` added to eqs. 1-2 (K per step).
+    ``disturbance="inlet"``: ``d[0]`` added to eq. 3's inlet air (K), so that it acts on
+    the cabin through the air flow as the inlet air does; ``d[1]`` added to eq. 2.
+    Floats, numpy arrays and CasADi symbols alike. Returns (T_cab+, T_evap+, T_ain), K.
+    """
+    if disturbance == "state":
+        T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_evap_set, T_int,
+                                              T_shell, p)
+        return T_cab_n + d[0], T_evap_n + d[1], T_ain
+    T_ain = model.inlet_air(T_evap, W_bl, p) + d[0]
+    return (model.cabin_step(T_cab, T_int, T_shell, T_ain, W_bl, p),
+            model.evap_step(T_evap, T_evap_set, p) + d[1], T_ain)
+
+
+def model_function(p, disturbance: str = "state", name: str = "acid_model") -> ca.Function:
+    """The prediction model as a CasADi function ``(x, u, v, d) -> x_next`` with
+    ``x = [T_cab, T_evap]``, ``u = [W_bl, T_evap_set]``, ``v = [T_int, T_shell]`` (K, kg/s)
+    and the disturbances ``d`` of :func:`predict` (for the estimator)."""
+    x, u, v, d = (ca.SX.sym(n, 2) for n in ("x", "u", "v", "d"))
+    T_cab_n, T_evap_n, _ = predict(x[0], x[1], u[0], u[1], v[0], v[1], d, p, disturbance)
+    return ca.Function(name, [x, u, v, d], [ca.vertcat(T_cab_n, T_evap_n)],
+                       ["x", "u", "v", "d"], ["x_next"])
 
 
 class NMPC:
@@ -229,110 +404,139 @@ class NMPC:
     Notes
     -----
     ``solve`` is stateless apart from the warm start; ``make_step`` is the closed-loop
-    interface (do-mpc style ``u = mpc.make_step(x, ...)``), which handles the pinned first
-    move, the fallback and the log. Build once, call many times.
+    interface (do-mpc style ``u = mpc.make_step(x, ...)``), which handles the disturbance
+    estimate, the pinned first move, the fallback and the log. Build once, call many times.
+    ``backend`` tells whether the solver runs as compiled C or inside CasADi.
     """
 
     def __init__(self, params: ModelParams, config: NMPCConfig | None = None):
-        from acid.params import as_params
-
         self.params = as_params(params)  # ModelParams or a FitResult
         self.config = config or NMPCConfig()
         self.N = int(self.config.N)
+        self._theta = theta_vector(self.params)
         self._build()
+        self.estimator = (OffsetFreeEstimator(model_function(self.params,
+                                                             self.config.disturbance),
+                                              config=self.config.estimator,
+                                              compiled=self.config.compiled)
+                          if self.config.offset_free else None)
+        self.backoff = (ErrorBackoff(self.config.backoff) if self.config.backoff is not None
+                        else None)
         self.reset()
+
+    @property
+    def backend(self) -> str:
+        """``"compiled"`` (generated C) or ``"casadi"``."""
+        return self._nlp.backend
 
     # ----------------------------------------------------------------- build
     def _build(self) -> None:
         """Build the NLP once: symbols, cost (eq. 7) and constraints (eqs. 8-13)."""
-        cfg, p, N = self.config, self.params, self.N
-        x0 = ca.SX.sym("x0", _NX)
-        T_int = ca.SX.sym("T_int", N)
-        T_shell = ca.SX.sym("T_shell", N)
-        T_amb = ca.SX.sym("T_amb")
+        cfg, N = self.config, self.N
+        w, g, par = BlockVector("w"), BlockVector("g"), BlockVector("p")
+        x0 = par.sym("x0", 0, _NX)
+        theta = par.sym("theta", 0, 14)
+        T_amb = par.sym("T_amb", 0, 1)
+        d = par.sym("d", 0, _NX)  # offset-free disturbances on eqs. 1-2, K per step
+        T_int = [par.sym("T_int", i, 1) for i in range(N)]
+        T_shell = [par.sym("T_shell", i, 1) for i in range(N)]
         # per-stage eta_cop of eq. 4 (default p.eta_cop at every stage; a speed-aware
         # controller previews eta_cop(v(i|k)), see acid.mpc.speed_model)
-        eta = ca.SX.sym("eta_cop", N + 1)
-        X = [ca.SX.sym(f"x_{i}", _NX) for i in range(N + 1)]
-        U = [ca.SX.sym(f"u_{i}", _NU) for i in range(N)]
-        S = [ca.SX.sym(f"s_{i + 1}", _NS) for i in range(N)]
+        eta = [par.sym("eta_cop", i, 1) for i in range(N + 1)]
+        T_max = [par.sym("T_cab_max", i, 1) for i in range(1, N + 1)]
+        T_min = [par.sym("T_cab_min", i, 1) for i in range(1, N + 1)]
+        p = SymbolicParams.from_vector(theta)
+        u_ref = self._u_ref = np.array([cfg.W_bl_max, cfg.T_evap_set_min])  # max cooling
 
         def power(W_bl, T_ain, i):  # eqs. 4-5, W, with the stage-i eta_cop
-            return p.c_p / eta[i] * W_bl * (T_amb - T_ain) + model.blower_power(W_bl, p)
+            return (model.compressor_power(W_bl, T_ain, T_amb, p, eta_cop=eta[i])
+                    + model.blower_power(W_bl, p))
 
-        w, g, eq, cost = [], [], [], 0
+        cost = 0
+        X = w.sym("x", 0, _NX)
+        g.add("init", 0, X - x0)  # eq. 13: x(0|k) = x(k)
         for i in range(N):
-            T_cab, T_evap = X[i][0], X[i][1]
-            W_bl, T_set = U[i][0], U[i][1]
-            w += [X[i], U[i], S[i]]
-            if i == 0:  # eq. 13: x(0|k) = x(k)
-                g.append(X[0] - x0)
-                eq += [True] * _NX
-            T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_set, T_int[i],
-                                                  T_shell[i], p)  # eqs. 1-3
-            cost += power(W_bl, T_ain, i) + cfg.slack_penalty * (S[i][0] + S[i][1])
+            U = w.sym("u", i, _NU)  # scaled inputs, see _U_SCALE
+            W_bl = u_ref[0] + U[0] / _U_SCALE[0]
+            T_set = u_ref[1] + U[1] / _U_SCALE[1]
+            S = w.sym("s", i, _NS)  # slacks of x(i+1|k), K
+            T_cab_n, T_evap_n, T_ain = predict(X[0], X[1], W_bl, T_set, T_int[i],
+                                               T_shell[i], d, p, cfg.disturbance)  # eqs. 1-3
+            x_next = ca.vertcat(T_cab_n, T_evap_n)
+            cost += power(W_bl, T_ain, i) + cfg.slack_penalty * ca.sum1(S)
             if i == N - 1:  # stage i = N of eq. 7, with u(N|k) := u(N-1|k)
-                cost += power(W_bl, model.inlet_air(T_evap_n, W_bl, p), N)
-            # dynamics (eqs. 8-9) as gap constraints x(i+1) - f(x(i), u(i)) = 0
-            g.append(X[i + 1] - ca.vertcat(T_cab_n, T_evap_n))
-            eq += [True] * _NX
-            # eqs. 10-11 for x(i+1|k), written with stage-i variables (keeps the OCP structure):
-            # T - s <= T_max and T + s >= T_min, the bounds themselves go into ubg / lbg
-            g.append(ca.vertcat(T_cab_n - S[i][0], T_cab_n + S[i][0],
-                                T_evap_n - S[i][1], T_evap_n + S[i][1]))
-            eq += [False] * 4
-        w.append(X[N])
-        w = ca.vertcat(*w)
-        g = ca.vertcat(*g)
-        par = ca.vertcat(x0, T_int, T_shell, T_amb, eta)
-        nlp = {"x": w, "f": cost * cfg.cost_scale, "g": g, "p": par}
-        if cfg.solver == "fatrop":
-            opts = {"structure_detection": "auto", "equality": eq, "print_time": False,
-                    "fatrop": {"print_level": 0, "tol": cfg.tol, "max_iter": int(cfg.max_iter)}}
-        else:
-            opts = {"print_time": False,
-                    "ipopt": {"print_level": 0, "sb": "yes", "tol": cfg.tol,
-                              "max_iter": int(cfg.max_iter)}}
-        self._solver = ca.nlpsol("acid_nmpc", cfg.solver, nlp, opts)
-        self._n_w = int(w.shape[0])
-        self._n_g = int(g.shape[0])
+                T_ain_N = predict(x_next[0], x_next[1], W_bl, T_set, T_int[i], T_shell[i], d,
+                                  p, cfg.disturbance)[2]
+                cost += power(W_bl, T_ain_N, N)
+            X = ca.SX.sym(f"x_{i + 1}", _NX)
+            g.add("dyn", i, X - x_next)  # eqs. 8-9 as gap constraints
+            # eqs. 10-11 for x(i+1|k) with stage-i variables (keeps the OCP structure); the
+            # bounds are parameters, the limits exactly 0 (no relaxation of |T_max|)
+            g.add("cab_hi", i, x_next[0] - T_max[i] - S[0])
+            g.add("cab_lo", i, x_next[0] - T_min[i] + S[1])
+            g.add("evap_hi", i, x_next[1] - cfg.T_evap_max - S[2])
+            g.add("evap_lo", i, x_next[1] - cfg.T_evap_min + S[3])
+            w.add("x", i + 1, X)
+        nlp = {"x": w.vertcat(), "f": cost * cfg.cost_scale, "g": g.vertcat(),
+               "p": par.vertcat()}
+        self._w, self._g, self._p = w, g, par
+        self._nlp_dict = nlp
+        self._nlp = NLPSolver("acid_nmpc", nlp, *self._solver_options(g),
+                              compiled=cfg.compiled, timeout_s=cfg.max_solve_s)
 
-        # index maps into w and g
-        base = np.arange(N) * _NW
-        self._iT_cab = np.r_[base, N * _NW]
-        self._iT_evap = self._iT_cab + 1
-        self._iW = base + 2
-        self._iTset = base + 3
-        self._is_cab = base + 4
-        self._is_evap = base + 5
-        gbase = _NX + np.arange(N) * _NG
-        self._ig_cab_hi = gbase + 2
-        self._ig_cab_lo = gbase + 3
-        self._ig_evap_hi = gbase + 4
-        self._ig_evap_lo = gbase + 5
+        # index maps from the layout
+        self._iT_cab = w.index("x", 0)
+        self._iT_evap = w.index("x", 1)
+        self._iu = w.index("u")
+        self._ip = {b: par.index(b).ravel() for b in par.blocks}
 
-        # constant bound vectors, copied and filled per solve
+        # constant bound vectors
         inf = np.inf
-        lbx = np.full(self._n_w, -inf)
-        ubx = np.full(self._n_w, inf)
-        lbx[self._iW], ubx[self._iW] = cfg.W_bl_min, cfg.W_bl_max
-        lbx[self._iTset], ubx[self._iTset] = cfg.T_evap_set_min, cfg.T_evap_set_max
-        lbx[self._is_cab] = 0.0
-        lbx[self._is_evap] = 0.0
+        lbx = np.full(w.size, -inf)
+        ubx = np.full(w.size, inf)
+        lbx[self._iu], ubx[self._iu] = self._u_nlp(cfg.u_min), self._u_nlp(cfg.u_max)
+        lbx[w.index("s").ravel()] = 0.0
         self._lbx0, self._ubx0 = lbx, ubx
-        lbg = np.zeros(self._n_g)
-        ubg = np.zeros(self._n_g)
-        lbg[self._ig_cab_hi] = -inf
-        ubg[self._ig_cab_lo] = inf
-        lbg[self._ig_evap_hi] = -inf
-        ubg[self._ig_evap_lo] = inf
-        ubg[self._ig_evap_hi] = cfg.T_evap_max
-        lbg[self._ig_evap_lo] = cfg.T_evap_min
-        self._lbg0, self._ubg0 = lbg, ubg
+        lbg, ubg = np.zeros(g.size), np.zeros(g.size)
+        for b in ("cab_hi", "evap_hi"):
+            lbg[g.index(b).ravel()] = -inf
+        for b in ("cab_lo", "evap_lo"):
+            ubg[g.index(b).ravel()] = inf
+        self._lbg, self._ubg = lbg, ubg
+        self._pvec = np.zeros(par.size)
+        self._pvec[self._ip["theta"]] = self._theta
+        # warm start: the previous primal/dual solution shifted by one stage
+        self._shift_w = stage_shift(w)
+        self._shift_g = stage_shift(g)
+
+    def _solver_options(self, g: BlockVector) -> tuple[str, dict]:
+        """(plugin, options) of ``config.solver``: no bound relaxation anywhere."""
+        cfg = self.config
+        if cfg.solver == "fatrop":
+            eq = np.zeros(g.size, dtype=bool)
+            for b in ("init", "dyn"):
+                eq[g.index(b).ravel()] = True
+            return "fatrop", {
+                "structure_detection": "auto", "equality": eq.tolist(), "print_time": False,
+                "fatrop": {"print_level": 0, "tol": cfg.tol, "max_iter": int(cfg.max_iter)}}
+        if cfg.solver == "ipopt":
+            return "ipopt", {"print_time": False,
+                             "ipopt": {"print_level": 0, "sb": "yes", "tol": cfg.tol,
+                                       "max_iter": int(cfg.max_iter),
+                                       "bound_relax_factor": 0.0}}
+        return "sqpmethod", sqp_options(max_iter=int(cfg.max_iter))
+
+    def _u_nlp(self, u) -> np.ndarray:
+        """Inputs [W_bl kg/s, T_evap_set K] as the NLP's scaled variables."""
+        return (np.asarray(u, dtype=float) - self._u_ref) * _U_SCALE
+
+    def _u_plan(self, w: np.ndarray) -> np.ndarray:
+        """(N, 2) planned inputs [W_bl kg/s, T_evap_set K] from the NLP vector."""
+        return self._u_ref + w[self._iu] / _U_SCALE
 
     # ----------------------------------------------------------------- state
     def reset(self, u_initial=None) -> None:
-        """Forget the warm start, the plan, the log and the fallback count.
+        """Forget the warm start, the plan, the estimate, the log and the fallback count.
 
         ``u_initial`` (W_bl kg/s, T_evap_set K) is the input applied over the first period in
         ``"pinned"`` mode (default: the conservative input).
@@ -344,6 +548,12 @@ class NMPC:
         self._plan_age = 0
         self._committed = (np.array(u_initial, dtype=float) if u_initial is not None
                            else self.config.u_safe.copy())
+        self._applied = None  # (u, v) applied over the last period, for the estimator
+        self._predicted = None  # T_cab(k+1) the model predicted, for the back-off
+        if self.estimator is not None:
+            self.estimator.reset()
+        if self.backoff is not None:
+            self.backoff.reset()
         self.fallbacks = 0
         self.log = StepLog()
 
@@ -357,35 +567,26 @@ class NMPC:
         return a[:n]
 
     def _initial_guess(self, x: np.ndarray, T_int: np.ndarray, T_shell: np.ndarray,
-                       u_prev) -> np.ndarray:
+                       u_prev, d: np.ndarray) -> np.ndarray:
         """Shifted previous solution, else a forward simulation with a mid-range input."""
-        N = self.N
         if self._w_prev is not None:
-            w = np.empty(self._n_w)
-            w[: (N - 1) * _NW] = self._w_prev[_NW: N * _NW]
-            w[(N - 1) * _NW: N * _NW] = self._w_prev[(N - 1) * _NW: N * _NW]
-            w[(N - 1) * _NW: (N - 1) * _NW + _NX] = self._w_prev[N * _NW:]
-            w[N * _NW:] = self._w_prev[N * _NW:]
-            w[:_NX] = x
+            w = self._w_prev[self._shift_w]
+            w[: _NX] = x
             return w
         cfg = self.config
         u = (np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
              if u_prev is not None else 0.5 * (cfg.u_min + cfg.u_max))
-        T_cab, T_evap, _ = model.simulate(x, np.full(N, u[0]), np.full(N, u[1]), T_int,
-                                          T_shell, self.params)
-        w = np.zeros(self._n_w)
+        N = self.N
+        T_cab, T_evap, _ = simulate_with_disturbance(x, np.full(N, u[0]), np.full(N, u[1]),
+                                                     T_int, T_shell, d, self.params,
+                                                     cfg.disturbance)
+        w = np.zeros(self._w.size)
         w[self._iT_cab], w[self._iT_evap] = T_cab, T_evap
-        w[self._iW], w[self._iTset] = u[0], u[1]
+        w[self._iu] = self._u_nlp(u)
         return w
 
-    def _shift_duals(self, lam: np.ndarray, head: int, n_total: int, stride: int) -> np.ndarray:
-        out = lam.copy()
-        N = self.N
-        out[head: head + (N - 1) * stride] = lam[head + stride: head + N * stride]
-        return out[:n_total]
-
     def solve(self, x, T_cab_max, T_int, T_shell, u_prev=None, T_cab_min=None,
-              T_amb=None, eta_cop=None) -> MPCSolution:
+              T_amb=None, eta_cop=None, disturbance=None) -> MPCSolution:
         """Solve eqs. 7-13 once from the measured state.
 
         Parameters
@@ -402,11 +603,15 @@ class NMPC:
         T_amb : ambient temperature for eq. 4, K (default: config).
         eta_cop : efficiency of eq. 4 per stage i = 0 .. N, scalar or (N+1,) preview
             (default: ``params.eta_cop`` at every stage, the paper's model).
+        disturbance : (2,) additive disturbances [d_cab, d_evap] on eqs. 1-2, K per step,
+            held over the horizon (default: zero, the paper's model).
 
         Returns
         -------
-        MPCSolution (``success`` False when the solver failed; nothing is raised for a
-        solver failure, but a CasADi evaluation error propagates as ``RuntimeError``).
+        MPCSolution (``success`` False when the solver failed or timed out; nothing is
+        raised for that). Non-finite or implausible inputs raise DataError (one line),
+        malformed previews ConfigError; a CasADi evaluation error propagates as
+        RuntimeError.
         """
         cfg, N = self.config, self.N
         x = np.asarray(x, dtype=float).reshape(_NX)
@@ -418,86 +623,123 @@ class NMPC:
         amb = cfg.T_amb if T_amb is None else float(T_amb)
         eta = self._preview(self.params.eta_cop if eta_cop is None else eta_cop, N + 1,
                             "eta_cop")
-        if not np.all(eta > 0):
-            raise ConfigError(f"eta_cop preview must be positive, got {eta}")
+        d = np.zeros(_NX) if disturbance is None else np.asarray(disturbance, float)
+        self._check_inputs(x, ub, lb, Ti, Tsh, amb, eta, d)
         lbx, ubx = self._lbx0, self._ubx0
         if cfg.first_move == "pinned":
             lbx, ubx = lbx.copy(), ubx.copy()
             if u_prev is None:
                 raise ConfigError("first_move='pinned' needs u_prev, the input being applied")
             u0 = np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
-            lbx[[2, 3]] = u0
-            ubx[[2, 3]] = u0
-        lbg, ubg = self._lbg0.copy(), self._ubg0.copy()
-        ubg[self._ig_cab_hi] = ub[1:]
-        lbg[self._ig_cab_lo] = lb[1:]
-        w0 = self._initial_guess(x, Ti, Tsh, u_prev)
-        args = {"x0": w0, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg,
-                "p": np.concatenate((x, Ti, Tsh, [amb], eta))}
+            lbx[self._iu[0]] = self._u_nlp(u0)
+            ubx[self._iu[0]] = self._u_nlp(u0)
+        pv, ip = self._pvec, self._ip
+        pv[ip["x0"]] = x
+        pv[ip["T_amb"]] = amb
+        pv[ip["d"]] = d
+        pv[ip["T_int"]] = Ti
+        pv[ip["T_shell"]] = Tsh
+        pv[ip["eta_cop"]] = eta
+        pv[ip["T_cab_max"]] = ub[1:]
+        pv[ip["T_cab_min"]] = lb[1:]
+        w0 = self._initial_guess(x, Ti, Tsh, u_prev, d)
+        lam_x0 = lam_g0 = None
         if self._lam_g_prev is not None:
-            args["lam_g0"] = self._shift_duals(self._lam_g_prev, _NX, self._n_g, _NG)
-            args["lam_x0"] = self._shift_duals(self._lam_x_prev, 0, self._n_w, _NW)
-        t0 = time.perf_counter()
-        res = self._solver(**args)
-        dt = time.perf_counter() - t0
-        stats = self._solver.stats()
-        w = np.asarray(res["x"]).ravel()
-        finite = bool(np.all(np.isfinite(w)))
-        success = bool(stats.get("success", False)) and finite
-        if success:
-            self._w_prev = w
-            self._lam_g_prev = np.asarray(res["lam_g"]).ravel()
-            self._lam_x_prev = np.asarray(res["lam_x"]).ravel()
-        return self._solution(w, amb, str(stats.get("return_status", "")), success,
-                              int(stats.get("iter_count", -1)), dt, eta)
+            lam_g0 = self._lam_g_prev[self._shift_g]
+            lam_x0 = self._lam_x_prev[self._shift_w]
+        res = self._nlp.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0, lam_g0)
+        if res.success and cfg.solver != "sqp":  # the active-set SQP starts cold (see above)
+            self._w_prev = res.x
+            self._lam_g_prev = res.lam_g
+            self._lam_x_prev = res.lam_x
+        return self._solution(res.x, x, Ti, Tsh, amb, eta, ub, lb, d, res.status,
+                              res.success, res.iterations, res.solve_time_s)
 
-    def _solution(self, w, T_amb, status, success, iterations, dt, eta=None) -> MPCSolution:
-        """Unpack the NLP vector and evaluate the cost terms (eqs. 3-5, 7) in W."""
+    def _check_inputs(self, x, ub, lb, Ti, Tsh, amb, eta, d) -> None:
+        """Finite, plausible kelvin temperatures and positive efficiencies, or an error."""
+        temps = np.concatenate((x, ub[1:], lb[1:], Ti, Tsh, (amb,)))
+        lo, hi = T_PLAUSIBLE_K
+        if not (lo <= temps.min() and temps.max() <= hi):  # False for NaN too
+            for val, name in ((x, "state x = [T_cab, T_evap]"), (ub[1:], "T_cab_max"),
+                              (lb[1:], "T_cab_min"), (Ti, "T_int"), (Tsh, "T_shell"),
+                              (amb, "T_amb")):
+                _check_kelvin(val, name)
+        if not (eta.min() > 0 and np.isfinite(eta.max())):
+            raise ConfigError(f"eta_cop preview must be positive, got {eta}")
+        if d.shape != (_NX,) or not np.isfinite(d.sum()):
+            raise DataError(f"disturbance must be 2 finite values (K per step), got {d}")
+
+    def _solution(self, w, x, Ti, Tsh, T_amb, eta, ub, lb, d, status, success, iterations,
+                  dt) -> MPCSolution:
+        """Eq. 7 at the plan: the trajectory recomputed from the (clipped) plan with the
+        model functions, the slacks its actual violations (eqs. 3-5, 7 in W)."""
         cfg, p = self.config, self.params
-        W = np.clip(w[self._iW], cfg.W_bl_min, cfg.W_bl_max)
-        Tset = np.clip(w[self._iTset], cfg.T_evap_set_min, cfg.T_evap_set_max)
-        T_cab, T_evap = w[self._iT_cab], w[self._iT_evap]
+        plan = np.clip(self._u_plan(w), cfg.u_min, cfg.u_max)
+        W, Tset = plan[:, 0], plan[:, 1]
+        T_cab, T_evap, T_ain = simulate_with_disturbance(x, W, Tset, Ti, Tsh, d, p,
+                                                         cfg.disturbance)
         W_ext = np.append(W, W[-1])  # u(N|k) := u(N-1|k)
-        T_ain = model.inlet_air(T_evap, W_ext, p)
-        if eta is None:
-            P_comp = model.compressor_power(W_ext, T_ain, T_amb, p)
-        else:
-            P_comp = p.c_p / np.asarray(eta, dtype=float) * W_ext * (T_amb - T_ain)
+        P_comp = model.compressor_power(W_ext, T_ain, T_amb, p, eta_cop=eta)
         P_bl = model.blower_power(W_ext, p)
-        s_cab = np.maximum(w[self._is_cab], 0.0)
-        s_evap = np.maximum(w[self._is_evap], 0.0)
-        objective = float(np.sum(P_comp + P_bl) + cfg.slack_penalty * np.sum(s_cab + s_evap))
+        s_cab = np.maximum(np.maximum(T_cab[1:] - ub[1:], lb[1:] - T_cab[1:]), 0.0)
+        s_evap = np.maximum(np.maximum(T_evap[1:] - cfg.T_evap_max,
+                                       cfg.T_evap_min - T_evap[1:]), 0.0)
+        objective = float(P_comp.sum() + P_bl.sum()
+                          + cfg.slack_penalty * (s_cab.sum() + s_evap.sum()))
         return MPCSolution(u=np.array([W[0], Tset[0]]), T_cab=T_cab, T_evap=T_evap,
                            T_ain=T_ain, W_bl=W, T_evap_set=Tset, P_comp=P_comp, P_bl=P_bl,
                            slack_cab=s_cab, slack_evap=s_evap, objective=objective,
                            status=status, success=success, iterations=iterations,
-                           solve_time_s=dt)
+                           solve_time_s=dt, disturbance=d.copy())
 
     # ------------------------------------------------------------ closed loop
     def make_step(self, x, T_cab_max, T_int, T_shell, T_cab_min=None, T_amb=None,
                   eta_cop=None) -> np.ndarray:
         """One closed-loop update: measure ``x``, return the input for ``[t_k, t_k + Ts)``.
 
-        Never raises for a solver failure: the fallback (rest of the last successful plan,
-        else ``config.u_safe``) is applied and counted in ``self.fallbacks``.
+        Never raises for a solver failure, a timeout or a non-finite measurement: the
+        fallback (rest of the last successful plan, else ``config.u_safe``) is applied and
+        counted in ``self.fallbacks``, with a SolverWarning. A finite but implausible
+        temperature (e.g. degC where K is expected) raises DataError: that is a wiring
+        error, not a sensor drop-out.
 
         Parameters are those of :meth:`solve` (without ``u_prev``: the controller knows
-        the input it applies). Returns ``[W_bl kg/s, T_evap_set K]``.
+        the input it applies; without ``disturbance``: the controller estimates it when
+        ``config.offset_free``). Returns ``[W_bl kg/s, T_evap_set K]``.
         """
         t0 = time.perf_counter()
         cfg = self.config
         pinned = cfg.first_move == "pinned"
-        sol = None
-        try:
-            sol = self.solve(x, T_cab_max, T_int, T_shell,
-                             u_prev=self._committed if pinned else None,
-                             T_cab_min=T_cab_min, T_amb=T_amb, eta_cop=eta_cop)
-            ok = sol.success
-        except (RuntimeError, ValueError, FloatingPointError) as exc:  # CasADi eval errors
-            status = f"error: {str(exc).splitlines()[0][:120]}"
-            ok = False
+        x = np.asarray(x, dtype=float).reshape(_NX)
+        # T_int, T_shell over the first step (eq. 1's v), K
+        v = np.array([np.ravel(T_int)[0], np.ravel(T_shell)[0]], dtype=float)
+        sol, d, x_hat = None, np.zeros(_NX), x
+        margin = (0.0, 0.0)
+        measured = bool(np.all(np.isfinite(x)) and np.all(np.isfinite(v)))
+        if not measured:
+            status, ok = f"non-finite measurement (x = {x.tolist()}, v = {v.tolist()})", False
         else:
-            status = sol.status
+            _check_kelvin(x, "state x = [T_cab, T_evap]")
+            if self.estimator is not None:
+                u_v = self._applied if self._applied is not None else (None, None)
+                x_hat, d = self.estimator.update(x, *u_v)
+            ub, lb = T_cab_max, cfg.T_cab_min if T_cab_min is None else T_cab_min
+            if self.backoff is not None:
+                if self._predicted is not None:
+                    self.backoff.update(self._predicted, x[0])
+                margin = (self.backoff.upper, self.backoff.lower)
+                ub, lb = np.asarray(ub, float) - margin[0], np.asarray(lb, float) + margin[1]
+            try:
+                sol = self.solve(x_hat, ub, T_int, T_shell,
+                                 u_prev=self._committed if pinned else None,
+                                 T_cab_min=lb, T_amb=T_amb, eta_cop=eta_cop,
+                                 disturbance=d)
+                ok = sol.success
+                status = sol.status
+            except DataError as exc:  # a non-finite preview: no solve, fall back
+                status, ok = str(exc), False
+            except (RuntimeError, ValueError, FloatingPointError) as exc:  # CasADi errors
+                status, ok = f"error: {str(exc).splitlines()[0][:120]}", False
         if ok:
             self._plan, self._plan_age = sol.plan, 0
             if pinned:
@@ -505,23 +747,82 @@ class NMPC:
             else:
                 u = sol.u.copy()
         else:
-            self.fallbacks += 1
-            warnings.warn(f"NMPC solve failed ({status}); fallback applied", SolverWarning,
-                          stacklevel=2)
-            self._w_prev = self._lam_g_prev = self._lam_x_prev = None  # cold start next
-            nxt = self._plan_age + 1 + (1 if pinned else 0)
-            if self._plan is not None and nxt < self.N:
-                fallback_u = self._plan[nxt].copy()
-                self._plan_age += 1
-            else:
-                fallback_u = cfg.u_safe.copy()
-            if pinned:
-                u, self._committed = self._committed.copy(), fallback_u
-            else:
-                u = fallback_u
+            u = self._fallback(status, pinned)
         u = np.clip(u, cfg.u_min, cfg.u_max)
+        self._applied = (u, v) if measured else None
+        # the model's T_cab one step ahead under the applied input (for the back-off)
+        self._predicted = (predict(x_hat[0], x_hat[1], u[0], u[1], v[0], v[1], d, self.params,
+                                   cfg.disturbance)[0] if measured else None)
         self.log.u.append(u)
         self.log.solutions.append(sol)
         self.log.fallback.append(not ok)
+        self.log.disturbance.append(d)
+        self.log.margin.append(margin)
         self.log.step_time_s.append(time.perf_counter() - t0)
         return u
+
+    def _fallback(self, status: str, pinned: bool) -> np.ndarray:
+        """The input when the solve failed: the shifted last plan, else ``u_safe``."""
+        self.fallbacks += 1
+        warnings.warn(f"NMPC solve failed ({status}); fallback applied", SolverWarning,
+                      stacklevel=3)
+        self._w_prev = self._lam_g_prev = self._lam_x_prev = None  # cold start next
+        nxt = self._plan_age + 1 + (1 if pinned else 0)
+        if self._plan is not None and nxt < self.N:
+            fallback_u = self._plan[nxt].copy()
+            self._plan_age += 1
+        else:
+            fallback_u = self.config.u_safe.copy()
+        if pinned:
+            u, self._committed = self._committed.copy(), fallback_u
+            return u
+        return fallback_u
+
+
+# ------------------------------------------------------------------------- helpers
+def sqp_options(tol: float = SQP_TOL, max_iter: int = 100) -> dict:
+    """Options of the SQP method (sqpmethod with the active-set QP solver qrqp, exact
+    Hessian): the NMPC's ``solver="sqp"`` and the solver of ``acid export-c``.
+
+    The Hessian of eq. 7's Lagrangian is indefinite (paper: "C is symmetric and
+    indefinite"), but the reduced Hessian at the solutions is positive, and the exact
+    Hessian keeps the quadratic convergence (about 5 iterations from a cold start). On
+    nearly degenerate active sets qrqp can stall ("lbz violated with zero step"); ``min_lam``
+    and a cap of 50 QP iterations keep it from cycling for its default 1000 (the SQP step
+    that follows recovers). An active-set method meets active bounds exactly.
+    """
+    return {"qpsol": "qrqp", "print_time": False, "print_header": False,
+            "print_iteration": False, "print_status": False, "max_iter": max_iter,
+            "tol_pr": tol, "tol_du": tol,
+            "qpsol_options": {"print_iter": False, "print_header": False,
+                              "print_info": False, "error_on_fail": False,
+                              "min_lam": 1e-12, "max_iter": 50}}
+
+
+def stage_shift(vec: BlockVector) -> np.ndarray:
+    """Index permutation that shifts a stage-wise vector by one stage (``v[perm]``): each
+    block at stage ``i`` takes its value at stage ``i + 1``; each block's last stage keeps
+    its own value (the last input is repeated; the state of the last input stage takes the
+    old terminal state, which is kept)."""
+    perm = np.arange(vec.size)
+    for b in vec.blocks:
+        idx = vec.index(b)
+        perm[idx[:-1]] = idx[1:]
+    return perm
+
+
+def simulate_with_disturbance(x0, W_bl, T_evap_set, T_int, T_shell, d, p: ModelParams,
+                              disturbance: str = "state"):
+    """The NMPC's prediction model (:func:`predict`) along a plan. ``T_int``, ``T_shell``
+    are (H,) previews. Returns (T_cab, T_evap) of length H+1 and T_ain of length H+1 (K;
+    the last with the last input held, ``u(H) := u(H-1)``)."""
+    T_cab, T_evap, T_ain = [float(x0[0])], [float(x0[1])], []
+    d = [float(d[0]), float(d[1])]
+    W, Ts = W_bl.tolist(), T_evap_set.tolist()
+    for k, (Ti, Tsh) in enumerate(zip(T_int.tolist(), T_shell.tolist(), strict=True)):
+        c, e, a = predict(T_cab[k], T_evap[k], W[k], Ts[k], Ti, Tsh, d, p, disturbance)
+        T_cab.append(c)
+        T_evap.append(e)
+        T_ain.append(a)
+    T_ain.append(predict(T_cab[-1], T_evap[-1], W[-1], Ts[-1], Ti, Tsh, d, p, disturbance)[2])
+    return np.array(T_cab), np.array(T_evap), np.array(T_ain)

@@ -15,10 +15,18 @@ T_evap within [0, 12] degC). The state at t = 0 is given (``initial_violation_K`
 sample period cannot undo a hot start, so the violation at the end of the first step,
 t = Ts, is reported separately (``first_step_violation_K``, compared with the unavoidable
 one under maximum cooling); ``max_violation_K`` is over samples 2..n (t >= 2 Ts).
+
+No controller can cool faster than maximum cooling (full blower flow, lowest set-point)
+from t = 0, so the cabin temperature of that run, ``T_cab_floor``, is the lowest any
+controller can reach at each sample. A violation of the upper cabin bound up to
+``T_cab_floor - T_cab_max`` is therefore unavoidable (a hot start needs more than one step
+on the high-fidelity plant); ``max_avoidable_violation_K`` is the largest violation beyond
+it after the first step (t >= 2 Ts), and the plant scenario's verdict uses it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -26,6 +34,7 @@ import numpy as np
 
 from acid import model
 from acid.errors import ConfigError
+from acid.mpc.estimator import BackoffConfig
 from acid.mpc.icm import ICMConfig, icm_upper_bound
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.params import ModelParams
@@ -52,9 +61,16 @@ PLANT_SPEED = 15.0
 #: acceptance thresholds
 MODEL_TOL_K = 0.01       # (a): violation after the first step
 RIDE_TOL_K = 0.05        # (a): |T_cab - T_cab_max| over the last 20 s (minimum energy)
-PLANT_TOL_K = 0.5        # (b): "slight violations" of paper Fig. 8
-TIMING_MEDIAN_MS = 2.0   # whole make_step, median
-TIMING_P95_MS = 5.0      # whole make_step, 95th percentile
+PLANT_TOL_K = 0.05       # (b): avoidable violation (paper Fig. 8: "slight violations")
+#: (b): the NMPC tightens its cabin bounds by 3 standard deviations of its recent one-step
+#: T_cab prediction errors (acid.mpc.estimator.ErrorBackoff), starting from a prior of
+#: 0.1 K (a margin of 0.3 K that decays by sqrt(0.9) per step while the model predicts
+#: well). 3 sigma: the errors that matter come in transients the recent past does not
+#: show (a bound stepping down 2 K); 2 sigma leaves 0.3 K there with identified models.
+PLANT_BACKOFF_PRIOR_K = 0.1
+PLANT_BACKOFF = BackoffConfig(kappa=3.0, memory=0.9, sigma0=PLANT_BACKOFF_PRIOR_K)
+#: timing: the paper's criterion, average computation below Ts / 8 (0.625 s at Ts = 5 s)
+TIMING_FRACTION_OF_TS = 1.0 / 8.0
 
 #: CAV case (c): comparison window (paper: 10-85 s) and compressor shut-off (paper: 60-80 s)
 CAV_WINDOW_S = (10.0, 85.0)
@@ -104,6 +120,8 @@ class ClosedLoopRun:
     fallback : (n,) whether the step used the solver-failure fallback.
     iterations : (n,) solver iterations (-1 when the solver raised).
     predicted_T_cab : (n, N+1) the NMPC's predicted T_cab at each step, K (NaN on failure).
+    T_cab_floor : (n+1,) T_cab of the same plant under maximum cooling from the same start,
+        K: the lowest any controller can reach (None when not computed).
     """
 
     label: str
@@ -129,6 +147,7 @@ class ClosedLoopRun:
     fallback: np.ndarray
     iterations: np.ndarray
     predicted_T_cab: np.ndarray
+    T_cab_floor: np.ndarray | None = None
 
     @property
     def n_steps(self) -> int:
@@ -164,6 +183,31 @@ class ClosedLoopRun:
         v = self.violation[2:]
         return float(v.max()) if v.size else 0.0
 
+    @property
+    def unavoidable_violation(self) -> np.ndarray | None:
+        """(n+1,) violation of the upper cabin bound that maximum cooling from t = 0 could
+        not avoid, ``max(0, T_cab_floor - T_cab_max)``, K (None without a floor)."""
+        if self.T_cab_floor is None:
+            return None
+        return np.maximum(self.T_cab_floor - self.T_cab_max, 0.0)
+
+    @property
+    def avoidable_violation(self) -> np.ndarray | None:
+        """(n+1,) violation beyond the unavoidable one, K (None without a floor)."""
+        if self.T_cab_floor is None:
+            return None
+        above = self.T_cab - np.maximum(self.T_cab_max, self.T_cab_floor)
+        return np.maximum.reduce([np.zeros_like(self.T_cab), above,
+                                  self.T_cab_min - self.T_cab, self.T_evap - self.T_evap_max,
+                                  self.T_evap_min - self.T_evap])
+
+    @property
+    def max_avoidable_violation_K(self) -> float | None:
+        """Largest avoidable violation from sample 2 (t = 2 Ts) on, K (None without a
+        floor)."""
+        v = self.avoidable_violation
+        return None if v is None else float(np.max(v[2:], initial=0.0))
+
     def step_mask(self, window: tuple[float, float] | None = None) -> np.ndarray:
         """(n,) steps whose interval [t_k, t_k + Ts) lies in ``window`` (s); all if None."""
         t = self.time[:-1]
@@ -192,6 +236,10 @@ class ClosedLoopRun:
             "first_step_violation_K": self.first_step_violation_K,
             "initial_violation_K": self.initial_violation_K,
             "max_T_cab_violation_K": float(np.max(self.T_cab_violation[2:], initial=0.0)),
+            "max_avoidable_violation_K": self.max_avoidable_violation_K,
+            "unavoidable_violation_K": (None if self.T_cab_floor is None else
+                                        float(np.max(self.unavoidable_violation[2:],
+                                                     initial=0.0))),
             "fallbacks": int(np.sum(self.fallback)),
             "final_T_cab_K": float(self.T_cab[-1]),
             "final_T_cab_max_K": float(self.T_cab_max[-1]),
@@ -199,10 +247,15 @@ class ClosedLoopRun:
 
 
 def solve_stats_ms(runs) -> dict:
-    """{median, p95, max} of the whole ``make_step`` wall time over runs, ms."""
+    """{median, p95, max, mean} of the whole ``make_step`` wall time over runs, ms."""
     ms = np.concatenate([r.step_ms for r in runs]) if runs else np.array([np.nan])
     return {"median": float(np.median(ms)), "p95": float(np.percentile(ms, 95)),
-            "max": float(np.max(ms)), "n": int(ms.size)}
+            "max": float(np.max(ms)), "mean": float(np.mean(ms)), "n": int(ms.size)}
+
+
+def _max_or_none(values) -> float | None:
+    vals = [v for v in values if v is not None]
+    return max(vals) if vals else None
 
 
 @dataclass(frozen=True)
@@ -242,6 +295,8 @@ class ScenarioResult:
                 "max_T_cab_violation_K": max(float(np.max(r.T_cab_violation[2:], initial=0.0))
                                              for r in self.runs),
                 "first_step_violation_K": max(r.first_step_violation_K for r in self.runs),
+                "max_avoidable_violation_K": _max_or_none(r.max_avoidable_violation_K
+                                                          for r in self.runs),
                 "solve_ms": solve_stats_ms(self.runs),
                 "fallbacks": int(sum(int(np.sum(r.fallback)) for r in self.runs)),
                 "runs": [r.to_json_dict() for r in self.runs],
@@ -357,6 +412,20 @@ def closed_loop(plant: Plant, mpc: NMPC, initial: dict, T_cab_max: np.ndarray,
         predicted_T_cab=pred)
 
 
+def max_cooling_floor(plant: Plant, initial: dict, v_veh: np.ndarray, config: NMPCConfig,
+                      disturbance: dict | None = None) -> np.ndarray:
+    """(n+1,) T_cab of ``plant`` under maximum cooling (``W_bl_max``, ``T_evap_set_min``)
+    from ``initial`` over the speed profile ``v_veh``, K: the lowest cabin temperature any
+    controller can reach at each sample (the cabin cools monotonically in the flow of cold
+    air and in the time it flows), so violations above it are unavoidable."""
+    plant.reset(initial)
+    T = [float(plant.measure()["T_cab"])]
+    for v in np.asarray(v_veh, dtype=float):
+        plant.step(config.W_bl_max, config.T_evap_set_min, float(v), **(disturbance or {}))
+        T.append(float(plant.measure()["T_cab"]))
+    return np.array(T)
+
+
 def unavoidable_first_step_violation(params: ModelParams, config: NMPCConfig, T_cab0: float,
                                      T_evap0: float, T_int: float, T_shell: float,
                                      T_cab_max1: float) -> float:
@@ -395,8 +464,11 @@ def run_model_scenario(params: ModelParams, config: NMPCConfig | None = None,
     for label, T_cab0, T_evap0 in initial_conditions:
         plant = ModelPlant(params, T_amb=config.T_amb)
         dist = {"T_int": T_int, "T_shell": T_shell}
-        runs.append(closed_loop(plant, mpc, {"T_cab": T_cab0, "T_evap": T_evap0, **dist}, ub,
-                                np.zeros(n), label, disturbance=dist, progress=progress))
+        init = {"T_cab": T_cab0, "T_evap": T_evap0, **dist}
+        run = closed_loop(plant, mpc, init, ub, np.zeros(n), label, disturbance=dist,
+                          progress=progress)
+        floor = max_cooling_floor(plant, init, np.zeros(n), config, disturbance=dist)
+        runs.append(dataclasses.replace(run, T_cab_floor=floor))
         unavoidable.append(unavoidable_first_step_violation(
             params, config, T_cab0, T_evap0, T_int, T_shell, ub[1]))
     ok = all(r.max_violation_K <= MODEL_TOL_K
@@ -435,15 +507,22 @@ def run_plant_scenario(params: ModelParams, config: NMPCConfig | None = None,
                        bound_steps=BOUND_STEPS, speed: float = PLANT_SPEED,
                        T_int0: float = MODEL_T_INT, T_shell0: float = MODEL_T_SHELL,
                        plant_factory: Callable[[], Plant] | None = None,
+                       backoff: BackoffConfig | None = PLANT_BACKOFF,
                        progress: Callable[[], None] | None = None) -> ScenarioResult:
     """Scenario (b), paper Fig. 8: the same bound and initial conditions on the hifi plant.
 
     T_int and T_shell start at ``T_int0``/``T_shell0`` and then evolve in the plant; the
-    controller reads them at every step and holds them over its horizon. Pass when the
-    largest violation after the first step is at most 0.5 K (the paper's "slight
-    violations" from model mismatch) and no solver fallback occurred.
+    controller reads them at every step and holds them over its horizon. The NMPC tightens
+    its cabin bounds by its own recent one-step prediction errors (``backoff``, replacing
+    ``config.backoff``; None: the paper's NMPC, which rides its bound and violates it by the
+    model mismatch).
+
+    Pass when the largest avoidable violation after the first step (beyond what maximum
+    cooling from t = 0 leaves, see the module docstring) is at most 0.05 K and no solver
+    fallback occurred. ``max_violation_K`` (after the first step, avoidable or not) is
+    reported too.
     """
-    config = config or NMPCConfig()
+    config = dataclasses.replace(config or NMPCConfig(), backoff=backoff)
     title = "NMPC on the high-fidelity plant (paper Fig. 8)"
     if plant_factory is None:
         reason = hifi_available()
@@ -454,19 +533,27 @@ def run_plant_scenario(params: ModelParams, config: NMPCConfig | None = None,
     Ts = params.Ts
     n = _n_steps(duration_s, Ts)
     ub = step_bound(np.arange(n + mpc.N + 1) * Ts, bound_steps)
+    v = np.full(n, float(speed))
     runs = []
     for label, T_cab0, T_evap0 in initial_conditions:
         init = {"T_cab": T_cab0, "T_evap": T_evap0, "T_int": T_int0, "T_shell": T_shell0}
-        runs.append(closed_loop(plant_factory(), mpc, init, ub, np.full(n, float(speed)), label,
-                                progress=progress))
-    ok = all(r.max_violation_K <= PLANT_TOL_K and not np.any(r.fallback) for r in runs)
+        run = closed_loop(plant_factory(), mpc, init, ub, v, label, progress=progress)
+        floor = max_cooling_floor(plant_factory(), init, v, config)
+        runs.append(dataclasses.replace(run, T_cab_floor=floor))
+    ok = all(r.max_avoidable_violation_K <= PLANT_TOL_K and not np.any(r.fallback)
+             for r in runs)
     return ScenarioResult(
         name="plant", title=title, runs=tuple(runs), passed=bool(ok),
-        criterion=f"after the first step violation <= {PLANT_TOL_K} K; no fallback",
+        criterion=(f"after the first step violation beyond the unavoidable one (maximum "
+                   f"cooling from t = 0) <= {PLANT_TOL_K} K; no fallback"),
         metrics={"energy_MJ": float(sum(r.energy_J() for r in runs) / 1e6),
                  "energy_with_fan_MJ": float(sum(r.energy_J(include_fan=True)
                                                  for r in runs) / 1e6),
-                 "speed_m_s": float(speed)})
+                 "speed_m_s": float(speed),
+                 "unavoidable_violation_K": [r.to_json_dict()["unavoidable_violation_K"]
+                                             for r in runs],
+                 "backoff": None if config.backoff is None else config.backoff.to_json_dict(),
+                 "offset_free": config.offset_free})
 
 
 def _speed_blind_hifi() -> Plant:
@@ -615,14 +702,18 @@ def run_cav_scenario(params: ModelParams, config: NMPCConfig | None = None,
 
 def mpc_check(params: ModelParams, config: NMPCConfig | None = None, plant: bool = True,
               timing_repeats: int = 5, progress: Progress | None = None,
-              plant_factory: Callable[[], Plant] | None = None) -> CheckResult:
+              plant_factory: Callable[[], Plant] | None = None,
+              plant_backoff: BackoffConfig | None = PLANT_BACKOFF) -> CheckResult:
     """Run scenarios (a), (b), (c) and the timing check; see :class:`CheckResult`.
 
     ``plant=False`` skips (b) and (c) (they need the high-fidelity plant and take longer).
     ``plant_factory`` runs (b) and (c) on another plant (e.g. an FMU; default the
     high-fidelity plant); (c) then has no speed-blind twin.
+    ``plant_backoff`` is scenario (b)'s constraint back-off (see :func:`run_plant_scenario`).
     The timing statistics pool the whole ``make_step`` wall times of scenario (a) run
-    ``timing_repeats`` times (at least once), so that the p95 rests on a few hundred steps.
+    ``timing_repeats`` times (at least once); the verdict is the paper's criterion, an
+    average computation time below Ts / 8 (a busy machine does not fail it; how fast acid
+    is, ``benchmarks/bench_mpc.py`` measures).
     ``progress(done, total)`` is called after every closed-loop step.
     """
     config = config or NMPCConfig()
@@ -645,7 +736,7 @@ def mpc_check(params: ModelParams, config: NMPCConfig | None = None, plant: bool
         timed += list(run_model_scenario(params, config, progress=tick).runs)
     if plant:
         scen["plant"] = run_plant_scenario(params, config, plant_factory=plant_factory,
-                                           progress=tick)
+                                           backoff=plant_backoff, progress=tick)
         scen["cav"] = run_cav_scenario(params, config, plant_factory=plant_factory,
                                        progress=tick)
     else:
@@ -655,9 +746,10 @@ def mpc_check(params: ModelParams, config: NMPCConfig | None = None, plant: bool
         scen["cav"] = ScenarioResult(name="cav", title="CAV: ICM bound vs constant bound "
                                      "(paper Figs. 9-10)", skipped=why)
     st = solve_stats_ms(timed)
-    timing = dict(st, passed=bool(st["median"] < TIMING_MEDIAN_MS and st["p95"] < TIMING_P95_MS),
-                  criterion=f"whole make_step in scenario (a) x {repeats}: median < "
-                            f"{TIMING_MEDIAN_MS} ms and p95 < {TIMING_P95_MS} ms",
-                  solver=config.solver)
+    budget_ms = 1e3 * Ts * TIMING_FRACTION_OF_TS
+    timing = dict(st, passed=bool(st["mean"] < budget_ms), budget_ms=budget_ms,
+                  criterion=f"mean whole make_step in scenario (a) x {repeats} < Ts/8 = "
+                            f"{budget_ms:g} ms (paper)",
+                  solver=config.solver, backend=NMPC(params, config).backend)
     return CheckResult(scenarios=scen, timing=timing, config=config,
                        params_name=params.name)

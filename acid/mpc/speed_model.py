@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acid import model
 from acid.errors import ConfigError, DataError
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.params import ModelParams
@@ -142,7 +143,7 @@ def fit_speed_efficiency(P_comp, W_bl, T_ain, v_veh, T_amb, c_p: float = 1008.0,
         raise ConfigError(f"speed efficiency form must be one of {FORMS}, got {form!r}")
     P, W, Ta, v = (np.asarray(a, dtype=float).ravel() for a in (P_comp, W_bl, T_ain, v_veh))
     Tamb = np.broadcast_to(np.asarray(T_amb, dtype=float), P.shape)
-    q = c_p * W * (Tamb - Ta)  # eq. 4 numerator: c_p W_bl (T_amb - T_ain), W
+    q = model.air_heat_flow(W, Ta, Tamb, c_p)  # eq. 4 numerator, W
     m = np.isfinite(P) & np.isfinite(q) & np.isfinite(v) & (P > p_min) & (q > 0)
     if m.sum() < 10:
         raise DataError(f"speed efficiency fit: only {int(m.sum())} usable samples "

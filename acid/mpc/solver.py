@@ -1,0 +1,258 @@
+"""An NLP solver for closed-loop use: generated C when possible, a wall-clock cap always.
+
+:class:`NLPSolver` takes any CasADi NLP (``{"x", "f", "g", "p"}``), a solver plugin and its
+options, and gives one call, :meth:`NLPSolver.solve`, that
+
+* runs the solver as **generated, compiled C** (:mod:`acid.mpc.codegen`) when the plugin can
+  be generated (fatrop, sqpmethod, ...) and a C compiler is found, else **inside CasADi**
+  (the same algorithm: answers are bit-identical), with one :class:`CodegenWarning` notice
+  per process and reason when it has to fall back;
+* enforces a **wall-clock cap** per solve: the solve runs in a worker thread (CasADi and
+  the compiled library release the GIL) and a solve that has not returned after
+  ``timeout_s`` is abandoned and reported as failed (``status = "timeout"``); the solver is
+  rebuilt for the next call, so a runaway solve never hangs the caller;
+* returns a plain :class:`NLPResult`.
+
+The paper's NMPC (:class:`acid.mpc.nmpc.NMPC`) and any other NMPC built on CasADi use it the
+same way: build the NLP once, then ``solve`` every sample.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import warnings
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from acid.errors import CodegenWarning
+from acid.mpc.codegen import CodegenError, compile_function
+
+#: NLP solver function inputs and outputs, in CasADi's order
+NLP_INPUTS = ("x0", "p", "lbx", "ubx", "lbg", "ubg", "lam_x0", "lam_g0")
+NLP_OUTPUTS = ("x", "f", "g", "lam_x", "lam_g", "lam_p")
+
+#: plugins whose generated C compiles against what the casadi wheel ships (IPOPT's
+#: generated C would need the IPOPT headers, which the wheel does not carry)
+CODEGEN_PLUGINS = ("fatrop", "sqpmethod")
+
+_NOTICES: set[str] = set()
+
+
+def _notice_once(key: str, message: str) -> None:
+    """Emit ``message`` as a CodegenWarning once per process for ``key``."""
+    if key not in _NOTICES:
+        _NOTICES.add(key)
+        warnings.warn(message, CodegenWarning, stacklevel=3)
+
+
+@dataclass(frozen=True)
+class NLPResult:
+    """One NLP solve.
+
+    Attributes
+    ----------
+    x : primal solution (NaN where the solver produced none).
+    f : objective at ``x`` (as the NLP defines it, e.g. scaled).
+    lam_x, lam_g : multipliers of the bounds and constraints.
+    success : the solver converged and ``x`` is finite.
+    status : the solver's return status ("Solve_Succeeded", "timeout", ...).
+    iterations : solver iterations (-1 when the backend does not report them).
+    solve_time_s : wall time of the solve, s.
+    """
+
+    x: np.ndarray
+    f: float
+    lam_x: np.ndarray
+    lam_g: np.ndarray
+    success: bool
+    status: str
+    iterations: int
+    solve_time_s: float
+
+
+class _Worker:
+    """A daemon thread that runs one job at a time; the caller waits with a timeout.
+
+    The thread holds no reference to a job between jobs, so the solver that owns it can be
+    garbage-collected (and stop it) as usual.
+    """
+
+    def __init__(self, name: str):
+        self._go = threading.Lock()
+        self._go.acquire()
+        self._done = threading.Lock()
+        self._done.acquire()
+        self._job = None
+        self._out = None
+        self._stopped = False
+        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self.thread.start()
+
+    def _loop(self):
+        while True:
+            self._go.acquire()
+            if self._stopped:
+                return
+            job, self._job = self._job, None
+            try:
+                self._out = (job(), None)
+            except BaseException as exc:  # handed to the caller
+                self._out = (None, exc)
+            del job
+            self._done.release()
+
+    def run(self, job, timeout_s: float):
+        """(finished, result, exception) of ``job()`` run within ``timeout_s`` seconds."""
+        self._job = job
+        self._go.release()
+        if not self._done.acquire(timeout=timeout_s):
+            return False, None, None
+        out, exc = self._out
+        self._out = None
+        return True, out, exc
+
+    def stop(self):
+        """Let the thread end (after the job it may still be running)."""
+        self._stopped = True
+        self._go.release()
+
+
+class NLPSolver:
+    """A CasADi NLP solved by ``plugin``, as compiled C when possible, with a wall-clock cap.
+
+    Parameters
+    ----------
+    name : function name (also the compiled library's name and symbol).
+    nlp : ``{"x": w, "f": cost, "g": constraints, "p": parameters}`` of CasADi SX/MX.
+    plugin : CasADi ``nlpsol`` plugin (``"fatrop"``, ``"ipopt"``, ``"sqpmethod"``, ...).
+    options : the plugin's options (as for ``casadi.nlpsol``).
+    compiled : ``"auto"`` (generated C when the plugin supports code generation and a
+        compiler works, else CasADi with one notice), ``True`` (the same, and a notice
+        whenever it falls back) or ``False`` (always CasADi).
+    timeout_s : wall-clock cap per solve, s (None: no cap, the solve runs in the caller's
+        thread).
+
+    Attributes
+    ----------
+    backend : ``"compiled"`` or ``"casadi"``.
+    build_info : what the compiled path did (cache key, compile time, repairs) or why it
+        is not used.
+    """
+
+    def __init__(self, name: str, nlp: dict, plugin: str, options: dict,
+                 compiled: bool | str = "auto", timeout_s: float | None = 2.5):
+        self.name = name
+        self.plugin = plugin
+        self.timeout_s = timeout_s
+        self._nlp = nlp
+        self._options = dict(options)
+        self._want_compiled = compiled
+        self._worker: _Worker | None = None
+        self.timeouts = 0
+        self._build()
+
+    # ------------------------------------------------------------------ build
+    def _build(self) -> None:
+        self.backend = "casadi"
+        self.build_info: dict = {}
+        self._compiled = None
+        self._fn = ca.nlpsol(self.name, self.plugin, self._nlp, self._options)
+        self.n_x, self.n_g = self._fn.nnz_in(0), self._fn.nnz_in(4)
+        if self._want_compiled is False:
+            self.build_info = {"reason": "compiled=False"}
+            return
+        if self.plugin not in CODEGEN_PLUGINS:
+            self.build_info = {"reason": f"{self.plugin} is not generated as C by acid"}
+            return
+        try:
+            # the generated solver reports failure through its return code
+            gen = ca.nlpsol(self.name, self.plugin, self._nlp,
+                            dict(self._options, error_on_fail=True))
+            self._compiled, info = compile_function(gen)
+        except CodegenError as exc:
+            self.build_info = {"reason": str(exc)}
+            _notice_once(f"{self.plugin}:{exc}",
+                         f"{exc}; solving {self.name!r} with {self.plugin} inside CasADi "
+                         "(same answers, slower)")
+            return
+        self.backend = "compiled"
+        self.build_info = info
+        if info.get("repaired"):
+            warnings.warn(info["repaired"], CodegenWarning, stacklevel=3)
+
+    def close(self) -> None:
+        """Stop the worker thread and release the compiled memory slot."""
+        if self._worker is not None:
+            self._worker.stop()
+            self._worker = None
+        if self._compiled is not None:
+            self._compiled.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # noqa: S110 - interpreter shutdown
+            pass
+
+    # ------------------------------------------------------------------ solve
+    def _unpack_compiled(self, flag: int) -> tuple:
+        out = self._compiled.outputs
+        return (out[0].copy(), float(out[1][0]), out[3].copy(), out[4].copy(),
+                flag == 0, "Solve_Succeeded" if flag == 0 else f"failed (code {flag})", -1)
+
+    def _solve_casadi(self, args: list) -> tuple:
+        res = self._fn(*args)
+        st = self._fn.stats()
+        return (np.asarray(res[0]).ravel(), float(res[1]), np.asarray(res[3]).ravel(),
+                np.asarray(res[4]).ravel(), bool(st.get("success", False)),
+                str(st.get("return_status", "")), int(st.get("iter_count", -1)))
+
+    def solve(self, x0, p, lbx, ubx, lbg, ubg, lam_x0=None, lam_g0=None) -> NLPResult:
+        """Solve once (arguments as for a CasADi ``nlpsol`` function, numpy arrays).
+
+        Never raises for a solver failure or a timeout (``success`` is False); a CasADi
+        evaluation error propagates as RuntimeError.
+        """
+        args = [x0, p, lbx, ubx, lbg, ubg,
+                0.0 if lam_x0 is None else lam_x0, 0.0 if lam_g0 is None else lam_g0]
+        t0 = time.perf_counter()
+        cf = self._compiled
+        if cf is not None:  # the worker only makes the C call; buffers are filled here
+            for buf, a in zip(cf.inputs, args, strict=True):
+                buf[:] = a
+            job = cf.call
+        else:
+            def job():
+                return self._solve_casadi(args)
+        if self.timeout_s is None:
+            out = job()
+        else:
+            if self._worker is None:
+                self._worker = _Worker(f"{self.name}-solver")
+            finished, out, exc = self._worker.run(job, self.timeout_s)
+            if not finished:
+                return self._timed_out(time.perf_counter() - t0)
+            if exc is not None:
+                raise exc
+        if cf is not None:
+            out = self._unpack_compiled(out)
+        dt = time.perf_counter() - t0
+        x, f, lam_x, lam_g, success, status, iters = out
+        success = success and bool(np.all(np.isfinite(x)))
+        return NLPResult(x=x, f=f, lam_x=lam_x, lam_g=lam_g, success=success,
+                         status=status, iterations=iters, solve_time_s=dt)
+
+    def _timed_out(self, dt: float) -> NLPResult:
+        """Abandon the running solve (its thread and memory stay busy) and rebuild."""
+        self.timeouts += 1
+        self._worker.stop()  # the thread ends if the solve ever returns; it is a daemon
+        self._worker = None
+        if self._compiled is not None:
+            self._compiled.abandon()
+        self._build()
+        nan = np.full(self.n_x, np.nan)
+        return NLPResult(x=nan, f=float("nan"), lam_x=nan, lam_g=np.full(self.n_g, np.nan),
+                         success=False, status="timeout", iterations=-1, solve_time_s=dt)

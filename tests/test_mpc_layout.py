@@ -1,0 +1,60 @@
+"""Declared NLP layouts: indices come from the declaration, shifts move stages."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from acid.mpc.layout import BlockVector
+from acid.mpc.nmpc import NMPC, stage_shift
+from acid.params import paper
+
+
+def _ocp_vector(N=3):
+    w = BlockVector("w")
+    for i in range(N):
+        w.sym("x", i, 2)
+        w.sym("u", i, 2)
+    w.sym("x", N, 2)
+    return w
+
+
+def test_indices_follow_the_order_of_declaration():
+    w = _ocp_vector(3)
+    assert w.size == 14
+    np.testing.assert_array_equal(w.index("x"), [[0, 1], [4, 5], [8, 9], [12, 13]])
+    np.testing.assert_array_equal(w.index("u", 1), [3, 7, 11])
+    np.testing.assert_array_equal(w.at("u", 2), [10, 11])
+    assert w.blocks == ("x", "u") and w.stages("u") == [0, 1, 2]
+    v = w.vertcat()
+    assert v.shape == (14, 1) and str(v[w.at("u", 1)[0]]) == "u_1_0"
+
+
+def test_a_block_cannot_be_declared_twice_or_change_size():
+    w = BlockVector("w")
+    w.sym("x", 0, 2)
+    with pytest.raises(ValueError, match="twice"):
+        w.sym("x", 0, 2)
+    with pytest.raises(ValueError, match="changes size"):
+        w.add("x", 1, ca.SX.sym("z", 3))
+
+
+def test_stage_shift_moves_each_block_one_stage_and_keeps_the_last():
+    w = _ocp_vector(3)
+    values = np.arange(w.size, dtype=float)
+    shifted = values[stage_shift(w)]
+    np.testing.assert_array_equal(shifted[w.index("x")[:-1].ravel()],
+                                  values[w.index("x")[1:].ravel()])
+    np.testing.assert_array_equal(shifted[w.at("u", 2)], values[w.at("u", 2)])  # repeated
+    np.testing.assert_array_equal(shifted[w.at("x", 3)], values[w.at("x", 3)])  # terminal
+
+
+def test_the_nmpc_index_maps_come_from_its_layout():
+    mpc = NMPC(paper())
+    w, g = mpc._w, mpc._g
+    N = mpc.N
+    assert w.size == N * (2 + 2 + 4) + 2
+    assert g.size == 2 + N * (2 + 4)
+    np.testing.assert_array_equal(mpc._iT_cab, w.index("x", 0))
+    assert set(g.blocks) == {"init", "dyn", "cab_hi", "cab_lo", "evap_hi", "evap_lo"}
