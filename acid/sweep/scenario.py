@@ -181,7 +181,20 @@ def run_scenario(task: ScenarioTask, params: ModelParams | None = None,
                  tick=None) -> dict:
     """Run one scenario (worker side); see the module docstring. Returns its record:
     ``{"key", "index", "status" ("ok" | "error"), "error", "rows", "tracebacks",
-    "elapsed_s", "worker", "acid_version", "params"}``."""
+    "elapsed_s", "worker", "acid_version", "params"}``.
+
+    Solver fallbacks are counted in the rows (``fallbacks``), not printed as warnings.
+    """
+    import warnings
+
+    from acid.errors import SolverWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SolverWarning)
+        return _run_scenario(task, params, tick)
+
+
+def _run_scenario(task: ScenarioTask, params: ModelParams | None, tick) -> dict:
     t0 = time.perf_counter()
     s = task.scenario
     params = params if params is not None else task.params
