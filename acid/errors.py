@@ -6,10 +6,14 @@ from __future__ import annotations
 class AcidError(Exception):
     """A user-facing error: its message is printed as one line and the CLI exits non-zero.
 
-    The message should name the file, channel, key or option at fault.
+    The message should name the file, channel, key or option at fault. It is kept on one
+    line whatever it quotes (a multi-line repr of a bad value, a path with a newline).
     """
 
     exit_code = 2
+
+    def __init__(self, message: object = "", *args):
+        super().__init__(" ".join(str(message).split()), *args)
 
 
 class DataError(AcidError):

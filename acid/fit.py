@@ -30,7 +30,9 @@ Three methods, one result type (:class:`FitResult`):
     simulation error of T_cab, T_evap and T_ain (eqs. 1-3 simulated with ``acid.model.
     simulate``; T_int and T_shell measured along the way) over windows of ``oe_window``
     samples, each started from its own (estimated) initial state, with
-    ``scipy.optimize.least_squares`` and an analytic Jacobian (forward sensitivities).
+    ``scipy.optimize.least_squares`` and the exact Jacobian of the window simulations,
+    which CasADi differentiates from the same ``acid.model.step`` (no hand-derived
+    sensitivities).
     With measurement noise on the states and output, equation error is biased (errors in
     variables: the noisy T_cab, T_evap, T_ain appear among the regressors) while output error
     is consistent; the model is also judged on 300-step predictions, not one step.
@@ -53,6 +55,7 @@ refused with ``DataError``.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 import warnings
@@ -68,11 +71,12 @@ from acid._io import file_sha256, json_safe
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError, DataError, IdentifiabilityWarning, SolverWarning
 from acid.metrics import fit_percent
-from acid.params import PARAMETER_TABLE, ModelParams, paper
+from acid.params import BETA, DYNAMICS, GAMMA, PARAMETER_TABLE, TAU, ModelParams, paper
 
 #: Parameter names in ``PARAMETER_TABLE`` order (gamma1..7, tau1..3, beta1..3).
 PARAM_NAMES: tuple[str, ...] = tuple(row[0] for row in PARAMETER_TABLE)
 PARAM_UNITS: dict[str, str] = {row[0]: row[1] for row in PARAMETER_TABLE}
+N_PARAMS = len(PARAM_NAMES)
 _INDEX = {n: i for i, n in enumerate(PARAM_NAMES)}
 
 #: Parameters of each regression, intercept last (it is the column of ones).
@@ -84,8 +88,8 @@ EQUATIONS: dict[str, tuple[str, ...]] = {
 }
 #: What each regression predicts (the channel of its one-step fit).
 EQUATION_CHANNEL = {"eq1": "T_cab", "eq2": "T_evap", "eq3": "T_ain", "eq5": "P_bl"}
-#: The 10 parameters of the dynamics (eqs. 1-3), refined by output error.
-DYNAMIC_PARAMS: tuple[str, ...] = PARAM_NAMES[:10]
+#: The parameters of the dynamics (eqs. 1-3: gamma, tau), refined by output error.
+DYNAMIC_PARAMS: tuple[str, ...] = PARAM_NAMES[DYNAMICS]
 
 METHODS = ("ls", "cvx", "oe")
 LOSSES = ("squared", "huber")
@@ -186,15 +190,14 @@ class FitResult:
 
     def equations(self) -> list[str]:
         """The identified model as readable equations (kelvin, kg/s, W)."""
-        p = self.params
-        g, t, b = p.gamma, p.tau, p.beta
+        v = {n: f"{x:.6g}" for n, x in self.params.as_dict().items()}
         return [
-            f"T_cab(k+1) = T_cab + {g[0]:.6g} (T_int - T_cab) + {g[1]:.6g} (T_shell - T_cab)"
-            f" + {g[2]:.6g} (T_ain - T_cab) W_bl + {t[0]:.6g}   (eq. 1)",
-            f"T_evap(k+1) = {g[3]:.6g} T_evap + {g[4]:.6g} (T_evap - T_evap_set)"
-            f" + {t[1]:.6g}   (eq. 2)",
-            f"T_ain = {g[5]:.6g} T_evap + {g[6]:.6g} W_bl + {t[2]:.6g}   (eq. 3)",
-            f"P_bl = {b[0]:.6g} W_bl^2 + {b[1]:.6g} W_bl + {b[2]:.6g}   (eq. 5)",
+            f"T_cab(k+1) = T_cab + {v['gamma1']} (T_int - T_cab) + {v['gamma2']} "
+            f"(T_shell - T_cab) + {v['gamma3']} (T_ain - T_cab) W_bl + {v['tau1']}   (eq. 1)",
+            f"T_evap(k+1) = {v['gamma4']} T_evap + {v['gamma5']} (T_evap - T_evap_set)"
+            f" + {v['tau2']}   (eq. 2)",
+            f"T_ain = {v['gamma6']} T_evap + {v['gamma7']} W_bl + {v['tau3']}   (eq. 3)",
+            f"P_bl = {v['beta1']} W_bl^2 + {v['beta2']} W_bl + {v['beta3']}   (eq. 5)",
         ]
 
     def to_json_dict(self) -> dict:
@@ -349,8 +352,8 @@ class ModelFitter:
         theta = theta_ref.copy()
         for f in fits.values():
             theta[[_INDEX[n] for n in f.names]] = f.theta
-        status = ["reference"] * 13
-        stderr = np.full(13, np.nan)
+        status = ["reference"] * N_PARAMS
+        stderr = np.full(N_PARAMS, np.nan)
         for f in fits.values():
             for n, fixed, se in zip(f.names, f.fixed, f.stderr, strict=True):
                 status[_INDEX[n]] = "fixed" if fixed else "estimated"
@@ -388,7 +391,7 @@ class ModelFitter:
             notes.append("equation-error estimates are biased when the measured T_cab, T_evap, "
                          "T_ain are noisy (errors in variables); --method oe is consistent")
 
-        ci = np.full((13, 2), np.nan)
+        ci = np.full((N_PARAMS, 2), np.nan)
         for i, n in enumerate(PARAM_NAMES):
             if n in dof and math.isfinite(stderr[i]):
                 q = scipy.stats.t.ppf(0.975, max(dof[n], 1))
@@ -408,8 +411,8 @@ class ModelFitter:
             provenance["data_sha256"] = file_sha256(ds.source)
         if "seed" in ds.metadata:
             provenance["data_seed"] = ds.metadata["seed"]
-        params = ref.replace(
-            gamma=tuple(theta[:7]), tau=tuple(theta[7:10]), beta=tuple(theta[10:13]),
+        params = ref.with_theta(
+            theta,
             eta_cop=eta if (self.use_eta_cop and math.isfinite(eta) and eta > 0) else ref.eta_cop,
             name=f"fit-{self.method}", provenance=provenance)
 
@@ -605,10 +608,10 @@ class _EqFit:
 
 def _unit_params(values: dict[str, float]) -> ModelParams:
     """A parameter set with the given entries and zeros elsewhere (to read off regressors)."""
-    th = np.zeros(13)
+    th = np.zeros(N_PARAMS)
     for n, v in values.items():
         th[_INDEX[n]] = v
-    return ModelParams(gamma=th[:7], tau=th[7:10], beta=th[10:13])
+    return ModelParams(gamma=th[GAMMA], tau=th[TAU], beta=th[BETA])
 
 
 def _linear_in_params(fun, names: tuple[str, ...], n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -940,48 +943,60 @@ def _simulation_fit(d: _Signals, p: ModelParams, window: int) -> dict[str, float
             for ch, s, m in zip(("T_cab", "T_evap", "T_ain"), sim, meas, strict=True)}
 
 
-def _sensitivities(d: _Signals, w: _Windows, th: np.ndarray, cab, evap, ain):
-    """Forward sensitivities of the window simulations (analytic Jacobian of eqs. 1-3).
+@functools.lru_cache(maxsize=8)
+def _window_jacobian(L: int):
+    """CasADi function: the Jacobian of one window's simulation (eqs. 1-3 of ``acid.model``).
 
-    Returns (S_cab, S_evap, S_ain) of shape (nw, L, 10) with respect to gamma1..7, tau1..3
-    (``DYNAMIC_PARAMS`` order) and (P_cab, Q_cab, Q_evap, Q_ain) of shape (nw, L): the
-    sensitivities to the window's initial T_cab (P) and T_evap (Q).
+    ``J = window_jacobian(theta, x0, u)`` with ``theta`` the dynamic parameters
+    (``DYNAMIC_PARAMS`` order), ``x0`` the initial [T_cab, T_evap] (K) and ``u`` (4, L) the
+    rows W_bl, T_evap_set, T_int, T_shell; ``J`` (3 L, n + 2) holds the derivatives of
+    [T_cab(0..L-1), T_evap(0..L-1), T_ain(0..L-1)] with respect to [theta, x0]. The model is
+    traced symbolically from :func:`acid.model.step` (one source of truth; CasADi's
+    algorithmic differentiation, not hand-derived sensitivities).
     """
-    g1, g2, g3, g4, g5, g6, g7 = th[:7]
+    import casadi as ca
+
+    n = len(DYNAMIC_PARAMS)
+    th = ca.SX.sym("theta", n)
+    x = ca.SX.sym("x", 2)
+    u = ca.SX.sym("u", 4)
+    p = _SymbolicParams.of(th)
+    cab1, evap1, ain = model.step(x[0], x[1], u[0], u[1], u[2], u[3], p)
+    step = ca.Function("step", [x, u, th], [ca.vertcat(cab1, evap1),
+                                            ca.vertcat(x[0], x[1], ain)])
+    sim = step.mapaccum("window", L)
+    TH, X0, U = ca.MX.sym("theta", n), ca.MX.sym("x0", 2), ca.MX.sym("u", 4, L)
+    _, Y = sim(X0, U, ca.repmat(TH, 1, L))
+    J = ca.jacobian(ca.vec(Y.T), ca.vertcat(TH, X0))
+    return ca.Function("window_jacobian", [TH, X0, U], [J])
+
+
+@dataclass(frozen=True)
+class _SymbolicParams:
+    """gamma and tau as CasADi symbols, in the shape ``acid.model`` reads parameters."""
+
+    gamma: tuple
+    tau: tuple
+
+    @classmethod
+    def of(cls, theta_dynamic) -> _SymbolicParams:
+        idx = np.arange(N_PARAMS)[DYNAMICS]
+        pos = {int(i): k for k, i in enumerate(idx)}
+        return cls(gamma=tuple(theta_dynamic[pos[i]] for i in np.arange(N_PARAMS)[GAMMA]),
+                   tau=tuple(theta_dynamic[pos[i]] for i in np.arange(N_PARAMS)[TAU]))
+
+
+def _window_sensitivities(d: _Signals, w: _Windows, theta: np.ndarray,
+                          x0: np.ndarray) -> np.ndarray:
+    """(3, nw, L, n + 2) derivatives of the simulated T_cab, T_evap, T_ain of every window
+    with respect to the dynamic parameters (``DYNAMIC_PARAMS`` order) and the window's
+    initial [T_cab, T_evap] (CasADi, all windows in one call)."""
     i = w.idx
-    W, S, I, Sh = d.W_bl[i], d.T_evap_set[i], d.T_int[i], d.T_shell[i]
     nw, L = i.shape
-    Sc = np.zeros((nw, L, 10))
-    Se = np.zeros((nw, L, 10))
-    Sa = np.zeros((nw, L, 10))
-    P = np.ones((nw, L))
-    Qc = np.zeros((nw, L))
-    Qe = np.ones((nw, L))
-    pole_e = g4 + g5
-    for k in range(L):
-        # eq. 3: T_ain = g6 T_evap + g7 W_bl + tau3
-        Sa[:, k] = g6 * Se[:, k]
-        Sa[:, k, 5] += evap[:, k]
-        Sa[:, k, 6] += W[:, k]
-        Sa[:, k, 9] += 1.0
-        if k + 1 == L:
-            break
-        a_cab = 1.0 - g1 - g2 - g3 * W[:, k]
-        # eq. 1
-        Sc[:, k + 1] = a_cab[:, None] * Sc[:, k] + (g3 * W[:, k])[:, None] * Sa[:, k]
-        Sc[:, k + 1, 0] += I[:, k] - cab[:, k]
-        Sc[:, k + 1, 1] += Sh[:, k] - cab[:, k]
-        Sc[:, k + 1, 2] += (ain[:, k] - cab[:, k]) * W[:, k]
-        Sc[:, k + 1, 7] += 1.0
-        # eq. 2
-        Se[:, k + 1] = pole_e * Se[:, k]
-        Se[:, k + 1, 3] += evap[:, k]
-        Se[:, k + 1, 4] += evap[:, k] - S[:, k]
-        Se[:, k + 1, 8] += 1.0
-        P[:, k + 1] = a_cab * P[:, k]
-        Qe[:, k + 1] = pole_e * Qe[:, k]
-        Qc[:, k + 1] = a_cab * Qc[:, k] + g3 * W[:, k] * g6 * Qe[:, k]
-    return Sc, Se, Sa, P, Qc, Qe, g6 * Qe
+    fn = _window_jacobian(L).map(nw)
+    u = np.stack([d.W_bl[i], d.T_evap_set[i], d.T_int[i], d.T_shell[i]]).reshape(4, nw * L)
+    J = np.asarray(fn(theta[DYNAMICS], x0.T, u))          # (3 L, nw (n + 2))
+    return J.reshape(3, L, nw, -1).transpose(0, 2, 1, 3)
 
 
 @dataclass(frozen=True)
@@ -1046,7 +1061,7 @@ class _OEProblem:
         return theta, x0
 
     def _params(self, theta: np.ndarray) -> ModelParams:
-        return ModelParams(gamma=theta[:7], tau=theta[7:10], beta=theta[10:13])
+        return ModelParams(gamma=theta[GAMMA], tau=theta[TAU], beta=theta[BETA])
 
     def channel_errors(self, z: np.ndarray) -> np.ndarray:
         """(3, nw, L) simulation minus measurement, K (padding included)."""
@@ -1060,14 +1075,12 @@ class _OEProblem:
 
     def jacobian(self, z: np.ndarray) -> np.ndarray:
         theta, x0 = self.unpack(z)
-        cab, evap, ain = _simulate_windows(self.d, self.w, self._params(theta), x0)
-        Sc, Se, Sa, P, Qc, Qe, Qa = _sensitivities(self.d, self.w, theta, cab, evap, ain)
-        cols = self.fidx
-        blocks = []
+        S = _window_sensitivities(self.d, self.w, theta, x0)      # (3, nw, L, n + 2)
         m = self.w.mask
-        for ch, S in enumerate((Sc, Se, Sa)):
-            blocks.append(S[:, :, cols][m] @ self.A / self.weights[ch])
-        J_th = np.concatenate(blocks)
+        cols = self.fidx - DYNAMICS.start
+        nd = len(DYNAMIC_PARAMS)
+        J_th = np.concatenate([S[ch][m][:, cols] @ self.A / self.weights[ch]
+                               for ch in range(3)])
         if not self.estimate_x0:
             return J_th
         nw = self.nw
@@ -1075,11 +1088,9 @@ class _OEProblem:
         J_x = np.zeros((3 * n_obs, 2 * nw))
         win = np.broadcast_to(np.arange(nw)[:, None], m.shape)[m]
         rows = np.arange(n_obs)
-        # d T_cab / d T_cab0, d T_cab / d T_evap0, d T_evap / d T_evap0, d T_ain / d T_evap0
-        J_x[rows, 2 * win] = P[m] / self.weights[0]
-        J_x[rows, 2 * win + 1] = Qc[m] / self.weights[0]
-        J_x[n_obs + rows, 2 * win + 1] = Qe[m] / self.weights[1]
-        J_x[2 * n_obs + rows, 2 * win + 1] = Qa[m] / self.weights[2]
+        for ch in range(3):   # each observation depends on its own window's x0 only
+            J_x[ch * n_obs + rows, 2 * win] = S[ch][m][:, nd] / self.weights[ch]
+            J_x[ch * n_obs + rows, 2 * win + 1] = S[ch][m][:, nd + 1] / self.weights[ch]
         return np.hstack([J_th, J_x])
 
 

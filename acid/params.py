@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from acid._io import write_json
+from acid.claims import MODEL as _PAPER_MODEL
+from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import DataError
 
 UNITS_CONVENTION = (
@@ -41,12 +43,31 @@ PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
     ("beta3", "W", "blower power, constant (eq. 5)"),
 )
 
-PAPER_GAMMA = (0.2451, 0.0867, 1.2999, 1.0047, -0.5176, 0.4553, 34.9579)
-PAPER_TAU = (-0.1842, -1.3226, 154.4995)
-PAPER_BETA = (24156.0, -1974.2, 49.318)
+
+
+def _block(prefix: str) -> slice:
+    """The contiguous slice of ``PARAMETER_TABLE`` whose names start with ``prefix``."""
+    idx = [i for i, row in enumerate(PARAMETER_TABLE) if row[0].rstrip("0123456789") == prefix]
+    if idx != list(range(idx[0], idx[-1] + 1)):
+        raise AssertionError(f"parameters {prefix}* are not contiguous in PARAMETER_TABLE")
+    return slice(idx[0], idx[-1] + 1)
+
+
+#: Named slices of the 13-vector ``ModelParams.theta`` (``PARAMETER_TABLE`` order).
+GAMMA = _block("gamma")
+TAU = _block("tau")
+BETA = _block("beta")
+#: gamma and tau: the parameters of the dynamics, eqs. 1-3 (refined by output error).
+DYNAMICS = slice(GAMMA.start, TAU.stop)
+
+# The paper's values live in the claims registry (the one place the paper's numbers are
+# written); the names below are kept for the code and tests that import them.
+PAPER_GAMMA = _PAPER_MODEL.gamma
+PAPER_TAU = _PAPER_MODEL.tau
+PAPER_BETA = _PAPER_MODEL.beta
 
 #: Table II range of the blower flow W_bl (kg/s) over which the cabin pole is checked.
-W_BL_RANGE = (0.05, 0.15)
+W_BL_RANGE = (_TABLE_II.W_bl_min, _TABLE_II.W_bl_max)
 #: Operating point at which steady temperatures are checked for plausibility (K, kg/s).
 CHECK_T_EVAP_SET, CHECK_W_BL = 278.15, 0.1
 #: A steady temperature outside this range (K) means parameters in another convention.
@@ -75,9 +96,9 @@ class ModelParams:
     gamma: tuple[float, ...]
     tau: tuple[float, ...]
     beta: tuple[float, ...] = PAPER_BETA
-    c_p: float = 1008.0
-    eta_cop: float = 3.5
-    Ts: float = 5.0
+    c_p: float = _TABLE_II.c_p
+    eta_cop: float = _TABLE_II.eta_cop
+    Ts: float = _TABLE_II.Ts
     name: str = "custom"
     provenance: dict = field(default_factory=dict, compare=False)
 
@@ -100,6 +121,14 @@ class ModelParams:
     def theta(self) -> np.ndarray:
         """All 13 parameters as one vector, in ``PARAMETER_TABLE`` order."""
         return np.array(self.gamma + self.tau + self.beta)
+
+    def with_theta(self, theta, **changes) -> ModelParams:
+        """A copy with gamma, tau, beta from a 13-vector (``PARAMETER_TABLE`` order)."""
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape != (len(PARAMETER_TABLE),):
+            raise DataError(f"theta needs {len(PARAMETER_TABLE)} numbers, got {theta.shape}")
+        return self.replace(gamma=tuple(theta[GAMMA]), tau=tuple(theta[TAU]),
+                            beta=tuple(theta[BETA]), **changes)
 
     def as_dict(self) -> dict[str, float]:
         """{name: value} for the 13 parameters."""
@@ -198,7 +227,8 @@ class ModelParams:
                    for key, n, default in (("gamma", 7, None), ("tau", 3, None),
                                            ("beta", 3, PAPER_BETA))}
         scalars = {key: _number(d.get(key, default), key, source)
-                   for key, default in (("c_p", 1008.0), ("eta_cop", 3.5), ("Ts", 5.0))}
+                   for key, default in (("c_p", _TABLE_II.c_p), ("eta_cop", _TABLE_II.eta_cop),
+                                        ("Ts", _TABLE_II.Ts))}
         for key, (lo, hi) in (("c_p", C_P_RANGE), ("eta_cop", ETA_COP_RANGE)):
             if not lo <= scalars[key] <= hi:
                 raise DataError(f"{source}: {key} = {scalars[key]:g} is implausible "
@@ -237,11 +267,12 @@ def paper() -> ModelParams:
         gamma=PAPER_GAMMA,
         tau=PAPER_TAU,
         beta=PAPER_BETA,
-        c_p=1008.0,
-        eta_cop=3.5,
-        Ts=5.0,
+        c_p=_TABLE_II.c_p,
+        eta_cop=_TABLE_II.eta_cop,
+        Ts=_TABLE_II.Ts,
         name="paper",
-        provenance={"source": "Wang et al., ACC 2018, section II-B-2, eq. 5, Table II"},
+        provenance={"source": "Wang et al., ACC 2018, section II-B-2, eq. 5, Table II "
+                              "(acid.claims)"},
     )
 
 

@@ -31,6 +31,10 @@ from acid_cli import cav_study  # noqa: E402
 
 app.command(name="cav-study")(cav_study.cav_study)
 
+from acid_cli import claims  # noqa: E402
+
+app.command(name="claims")(claims.claims)
+
 from acid_cli import plant_check  # noqa: E402
 
 app.command(name="plant-check")(plant_check.plant_check)

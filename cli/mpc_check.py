@@ -11,6 +11,7 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure
+from acid.claims import STUDIES
 from acid.errors import ConfigError
 from acid.mpc.nmpc import SOLVERS, NMPCConfig
 from acid.mpc.scenarios import PLANT_BACKOFF
@@ -145,7 +146,8 @@ def mpc_check(
         m = cav.metrics
         line = (f"CAV over {m['window_s'][0]:g}-{m['window_s'][1]:g} s: Case 1 "
                 f"{m['case1_energy_MJ']:.4f} MJ, Case 2 {m['case2_energy_MJ']:.4f} MJ, saving "
-                f"{_fmt(m['saving_pct'], 1)} % (paper: 0.113 vs 0.124 MJ, 9 %)")
+                f"{_fmt(m['saving_pct'], 1)} % (paper: {STUDIES.cav_case1_MJ} vs "
+                f"{STUDIES.cav_case2_MJ} MJ, {STUDIES.cav_saving_pct:g} %)")
         if "saving_from_speed_pct" in m:
             line += (f"; speed-blind plant: {_fmt(m['speed_blind_plant']['saving_pct'], 1)} %, "
                      f"so {_fmt(m['saving_from_speed_pct'], 1)} points come from "

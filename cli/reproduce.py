@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from acid.claims import contradictions, counts, headline_rows, load_summary
 from acid.errors import ConfigError
 from acid.outdir import claim
 from acid.pipeline import run_pipeline
@@ -19,6 +20,7 @@ from acid_cli._common import (
     handle_errors,
     print_table,
     say,
+    warn,
     write_summary,
 )
 
@@ -79,14 +81,20 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
                                 scheduler=scheduler,
                                 notice=lambda msg: err_console.print(msg, highlight=False))
     elapsed = time.perf_counter() - t0
-    html, summary_path, rows = write_outputs(out, outcomes, opts, elapsed)
+    html, summary_path, verdicts = write_outputs(out, outcomes, opts, elapsed)
 
     print_table("Stages", ["stage", "time (s)", "cache"],
                 [[o.title, f"{o.seconds:.1f}", "reused" if o.cached else "computed"]
                  for o in outcomes.values()])
-    verdict = {True: "yes", False: "NO", None: "n/a"}
-    print_table("Paper vs acid", ["result", "quantity", "paper", "acid", "agrees"],
-                [[r.section, r.quantity, r.paper, r.acid, verdict[r.agrees]] for r in rows])
+    summary = load_summary(summary_path)
+    print_table("Paper vs acid (headline; every claim in the report)",
+                ["_result", "_paper", "_acid", "_verdict"],
+                [[r[0].replace("*", ""), *r[1:]] for r in headline_rows(summary)])
+    n = counts(verdicts)
+    say(", ".join(f"{c} {k}" for k, c in n.items()))
+    bad = contradictions(verdicts)
+    if bad:
+        warn("contradictory verdicts: " + "; ".join(bad))
     say(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
     if json_path is not None:
-        write_summary(json_path, __import__("json").loads(summary_path.read_text()))
+        write_summary(json_path, summary)

@@ -45,8 +45,8 @@ def speed_sweep(
 
     Energy is compressor + blower (as in the paper), in MJ and MJ/km.
     """
+    from acid.claims import TABLE_I
     from acid.plant.config import PlantConfig
-    from acid.plant.sweep import PAPER_TABLE_I
     from acid.plant.sweep import speed_sweep as run_sweep
     from acid.report.plant import sweep_figure
 
@@ -63,13 +63,13 @@ def speed_sweep(
         choice.check(mode="nominal")
         factory = choice.factory(mode="nominal")
     cfg = PlantConfig.from_toml(config) if config is not None else PlantConfig()
-    speeds = PAPER_TABLE_I["speeds_mps"]
+    speeds = TABLE_I.speeds_mps
     with progress_bar("speed sweep", total=len(speeds)) as update:
         result = run_sweep(cfg, speeds=speeds, duration=duration, progress=update,
                            plant_factory=factory)
 
-    paper_E = PAPER_TABLE_I["energy_MJ"]
-    paper_km = PAPER_TABLE_I["energy_MJ_per_km"]
+    paper_E = TABLE_I.energy_MJ
+    paper_km = [math.nan if e is None else e for e in TABLE_I.energy_MJ_per_km]
     rows = [[f"{v:g}", _fmt(e), _fmt(pe, 2), _fmt(ek), _fmt(pk)]
             for v, e, ek, pe, pk in zip(result.speeds_mps, result.energy_MJ,
                                         result.energy_MJ_per_km, paper_E, paper_km,
@@ -78,7 +78,8 @@ def speed_sweep(
                 ["speed (m/s)", "energy (MJ)", "paper (MJ)", "MJ/km", "paper MJ/km"], rows)
     say(f"E({speeds[-1]:g})/E({speeds[0]:g}) = {result.ratio_last_first:.3f} "
                   f"(paper {paper_E[-1] / paper_E[0]:.3f})"
-                  + ("" if duration == 600.0 else "  [paper values are for 600 s]"))
+                  + ("" if duration == TABLE_I.duration_s
+                     else f"  [paper values are for {TABLE_I.duration_s:g} s]"))
 
     summary = result.to_json_dict()
     summary.update(acid_version=__version__, **choice.to_json_dict(),

@@ -494,6 +494,16 @@ CASES: list[Case] = [
          ("--warmup",)),
     Case("cav-study-tail-1e12", "sizes", ("cav-study", "--tail", "1e12"), ("--tail",)),
     Case("cav-study-cycle", "options", ("cav-study", "--cycle", "moon"), ("--cycle",)),
+    # ------------------------------------------------------------------------- claims
+    Case("claims-summary-missing", "files", ("claims", "{w}/none.json"), ("SUMMARY",
+                                                                          "none.json")),
+    Case("claims-summary-is-params", "files", ("claims", "{w}/p.json"),
+         ("p.json", "'claims' block")),
+    Case("claims-summary-not-json", "files", ("claims", "{w}/afile"), ("afile", "JSON")),
+    Case("claims-json-is-summary", "collision", ("claims", "{w}/p.json", "--json", "{w}/p.json"),
+         ("--json", "p.json")),
+    Case("claims-json-under-a-file", "output", ("claims", "--json", "{w}/afile/c.json"),
+         ("--json", "afile")),
     # ------------------------------------- plant-check, export-fmu, --plant fmu:PATH
     Case("plant-check-json-is-config", "collision",
          ("plant-check", "--config", "{w}/plant.toml", "--json", "{w}/plant.toml"),

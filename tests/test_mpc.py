@@ -13,6 +13,7 @@ from acid.mpc.scenarios import (
     BOUND_STEPS,
     MODEL_T_INT,
     MODEL_T_SHELL,
+    cav_scenario,
     closed_loop,
     run_cav_scenario,
     run_model_scenario,
@@ -292,9 +293,13 @@ def test_plant_scenario_runs_short_on_the_hifi_plant():
 @pytest.mark.slow
 def test_cav_scenario_case1_saves_energy():
     pytest.importorskip("acid.plant.hifi")
-    res = run_cav_scenario(P)
+    ticks = []
+    res = run_cav_scenario(P, progress=lambda: ticks.append(1))
     m = res.metrics
     assert res.passed and m["case1_energy_MJ"] < m["case2_energy_MJ"]
+    # the progress total mpc-check announces is the number of closed-loop steps run
+    assert len(ticks) == cav_scenario(P).closed_loop_steps(plants=2)
+    assert m["periodic"]["cycles"] == 4 and m["periodic"]["window_s"] == [80.0, 320.0]
     assert "speed_blind_plant" in m and "saving_from_speed_pct" in m
     case1 = res.runs[0]
     assert not case1.compressor_on[12:16].any() and case1.compressor_on[:12].all()

@@ -106,6 +106,21 @@ def test_params_are_frozen_and_perturbation_is_seeded():
     assert p.gamma == PAPER_GAMMA and p.tau == PAPER_TAU
 
 
+def test_parameter_slices_are_derived_from_the_table():
+    from acid.params import BETA, DYNAMICS, GAMMA, PARAMETER_TABLE, TAU
+
+    names = [row[0] for row in PARAMETER_TABLE]
+    assert names[GAMMA] == [f"gamma{i}" for i in range(1, 8)]
+    assert names[TAU] == ["tau1", "tau2", "tau3"] and names[BETA][0] == "beta1"
+    assert names[DYNAMICS] == names[GAMMA] + names[TAU]
+    p = paper()
+    theta = p.theta * 2.0
+    q = p.with_theta(theta, name="doubled")
+    assert np.array_equal(q.theta, theta) and q.name == "doubled" and q.c_p == p.c_p
+    with pytest.raises(DataError, match="13 numbers"):
+        p.with_theta(theta[:5])
+
+
 # ----------------------------------------------------------------- plausibility
 def _with_gamma(i: int, value: float):
     g = list(paper().gamma)

@@ -1,14 +1,20 @@
-"""``acid reproduce --quick``: report, every figure, finite physical numbers, the cache."""
+"""``acid reproduce --quick``: report, every figure, verdicts from the registry, the cache."""
 
 from __future__ import annotations
 
 import json
 import math
 import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
+from acid.claims import evaluate, headline_markdown
+from acid.stage_results import StudyResults
 from acid_cli.main import app
 
 pytestmark = pytest.mark.slow
@@ -16,7 +22,9 @@ pytestmark = pytest.mark.slow
 FIGURES = ("stages/sweep/fig3_speed_sweep.png", "stages/validate/fig5_prediction.png",
            "stages/validate/fig6_errors.png", "stages/mpc/fig7_model.png",
            "stages/mpc/fig8_plant.png", "stages/mpc/fig9_cav_bound.png",
-           "stages/mpc/fig10_cav_comparison.png", "stages/cav/cav_study_nycc.png")
+           "stages/mpc/fig10_cav_comparison.png", "stages/cav/cav_study_nycc.png",
+           "stages/plant_check/plant_check_energy.png",
+           "stages/plant_check/plant_check_service.png")
 
 
 @pytest.fixture(scope="module")
@@ -46,26 +54,62 @@ def test_report_and_every_figure_exist(quick_run):
     # every figure is embedded, so the page stands alone
     assert len(re.findall(r'<img src="data:image/png;base64,', html)) >= len(FIGURES)
     assert "Table I" in html and "CAV case" in html
+    assert "-0.00" not in html
+
+
+def test_every_labelled_line_of_every_figure_is_visible(quick_run):
+    out, _ = quick_run
+    s = json.loads((out / "summary.json").read_text())
+    assert {Path(f).name for f in FIGURES} == {f["file"] for f in s["figures"]}
+    assert {f["file"]: f["hidden"] for f in s["figures"]} == {Path(f).name: []
+                                                             for f in FIGURES}
 
 
 def test_summary_numbers_are_finite_and_physical(quick_run):
     out, _ = quick_run
     s = json.loads((out / "summary.json").read_text())
-    assert all(math.isfinite(x) for x in _numbers(s))
     st = s["stages"]
+    assert all(math.isfinite(x) for x in _numbers(st))
     E = st["sweep"]["summary"]["energy_MJ"]
     assert all(0.2 < e < 3.0 for e in E) and all(b < a for a, b in zip(E, E[1:], strict=False))
-    p = st["fit"]["summary"]
-    g = p["gamma"]
+    g = st["fit"]["summary"]["gamma"]
     assert 0 < g[0] < 1 and 0 < g[1] < 1 and abs(g[3] + g[4]) < 1
     for ch in ("T_cab", "T_evap", "T_ain"):
         m = st["validate"]["summary"]["channels"][ch]
         assert 0 <= m["median_abs"] <= m["max_abs"] < 20.0
     mpc = st["mpc"]["summary"]
-    assert 0 <= mpc["scenarios"]["model"]["max_violation_K"] < 0.01
-    cav = mpc["scenarios"]["cav"]
+    assert 0 <= mpc["model"]["max_violation_K"] < 0.01
+    cav = mpc["cav_paper"]
     assert 0 < cav["case1_energy_MJ"] < 1 and 0 < cav["case2_energy_MJ"] < 1
-    assert s["agreement"]["agree"] > 0
+
+
+def test_verdicts_come_from_the_registry_and_do_not_contradict(quick_run):
+    out, _ = quick_run
+    s = json.loads((out / "summary.json").read_text())
+    c = s["claims"]
+    assert c["contradictions"] == []
+    assert c["counts"]["agrees"] > 0 and c["counts"]["not measured"] == 0
+    results = StudyResults.from_summaries({k: v["summary"] for k, v in s["stages"].items()})
+    assert [v.verdict.value for v in evaluate(results)] == [i["verdict"] for i in c["items"]]
+    items = {i["id"]: i for i in c["items"]}
+    # a quick run is not the paper's 600 s sweep: its energies are not compared
+    assert items["table1.energy.0mps"]["verdict"] == "not comparable"
+    assert items["cav.case1_below_case2"]["verdict"] == "agrees in direction"
+    assert items["identification.gamma1"]["acid"]["stderr"] > 0
+    md = headline_markdown(s)
+    assert md.count("\n|") >= 10 and "| CAV saving |" in md
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None and shutil.which("chromium-browser") is None,
+                    reason="Debian's chromium is not installed")
+def test_report_in_headless_chromium(quick_run):
+    out, _ = quick_run
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "render_report.py"
+    res = subprocess.run([sys.executable, str(script), str(out / "report.html")],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "0 contradictions" in res.stdout
+    assert f"0 of {len(FIGURES)} figures with a hidden line" in res.stdout
 
 
 def test_second_run_reuses_every_stage(quick_run):

@@ -100,6 +100,7 @@ import casadi as ca
 import numpy as np
 
 from acid import model
+from acid.claims import TABLE_II
 from acid.errors import ConfigError, DataError, SolverWarning
 from acid.mpc.estimator import (
     BackoffConfig,
@@ -176,18 +177,18 @@ class NMPCConfig:
         not, and the margin would grow for nothing.
     """
 
-    N: int = 6
+    N: int = TABLE_II.N
     first_move: str = "free"
     solver: str = "fatrop"
-    slack_penalty: float = 1e5
-    T_amb: float = C2K(30.0)
-    T_cab_min: float = C2K(20.0)
-    T_evap_min: float = C2K(0.0)
-    T_evap_max: float = C2K(12.0)
-    W_bl_min: float = 0.05
-    W_bl_max: float = 0.15
-    T_evap_set_min: float = C2K(3.0)
-    T_evap_set_max: float = C2K(10.0)
+    slack_penalty: float = TABLE_II.slack_penalty
+    T_amb: float = C2K(TABLE_II.T_amb_degC)
+    T_cab_min: float = C2K(TABLE_II.T_cab_min_degC)
+    T_evap_min: float = C2K(TABLE_II.T_evap_min_degC)
+    T_evap_max: float = C2K(TABLE_II.T_evap_max_degC)
+    W_bl_min: float = TABLE_II.W_bl_min
+    W_bl_max: float = TABLE_II.W_bl_max
+    T_evap_set_min: float = C2K(TABLE_II.T_evap_set_min_degC)
+    T_evap_set_max: float = C2K(TABLE_II.T_evap_set_max_degC)
     tol: float = 1e-10
     max_iter: int = 200
     cost_scale: float = 1e-3

@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acid import model
+from acid.claims import TABLE_II
 from acid.errors import ConfigError, DataError
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.params import ModelParams
@@ -115,7 +116,7 @@ def _shape(form: str, v: np.ndarray, v_sat: float) -> np.ndarray:
     return v if form == "linear" else v / (1.0 + v / v_sat)
 
 
-def fit_speed_efficiency(P_comp, W_bl, T_ain, v_veh, T_amb, c_p: float = 1008.0,
+def fit_speed_efficiency(P_comp, W_bl, T_ain, v_veh, T_amb, c_p: float = TABLE_II.c_p,
                          form: str = "linear", v_sat: float = 15.0, p_min: float = 50.0,
                          source: dict | None = None) -> SpeedEfficiency:
     """Least-squares fit of ``eta_cop(v)`` in eq. 4 from samples (SI units, K).
@@ -189,7 +190,7 @@ def fit_speed_efficiency(P_comp, W_bl, T_ain, v_veh, T_amb, c_p: float = 1008.0,
                            source=dict(source or {}))
 
 
-def fit_from_dataset(ds, c_p: float = 1008.0, form: str = "linear", v_sat: float = 15.0,
+def fit_from_dataset(ds, c_p: float = TABLE_II.c_p, form: str = "linear", v_sat: float = 15.0,
                      skip_s: float = 600.0, p_min: float = 50.0) -> SpeedEfficiency:
     """:func:`fit_speed_efficiency` on a dataset with P_comp, W_bl, T_ain, v_veh, T_amb.
 
@@ -208,7 +209,7 @@ def fit_from_dataset(ds, c_p: float = 1008.0, form: str = "linear", v_sat: float
 
 
 def identify_from_plant(plant=None, cycle: str = "udds", duration_s: float = 7200.0,
-                        seed: int = 0, c_p: float = 1008.0, form: str = "linear",
+                        seed: int = 0, c_p: float = TABLE_II.c_p, form: str = "linear",
                         skip_s: float = 600.0) -> SpeedEfficiency:
     """Excite the high-fidelity plant (APRBS inputs, drive-cycle speed) and fit eta_cop(v).
 

@@ -26,6 +26,8 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from acid.claims import MODEL as _PAPER_MODEL
+from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import ConfigError
 
 REFRIGERANTS = ("R134a", "R1234yf")
@@ -83,7 +85,7 @@ class PlantConfig:
 
     # ---------------------------------------------------------------- cabin
     C_cab: float = _p(3877.0, "J/K", "cabin",
-                      "[Wang2018] gamma3: c_p Ts / gamma3 = 1008*5/1.2999 (about 3.3 m^3 of air)")
+                      "[Wang2018] gamma3: c_p Ts / gamma3 (about 3.3 m^3 of air)")
     hA_int: float = _p(190.0, "W/K", "cabin", "[Wang2018] gamma1: gamma1 C_cab / Ts")
     hA_sh: float = _p(67.2, "W/K", "cabin", "[Wang2018] gamma2: gamma2 C_cab / Ts")
     C_int: float = _p(35.0e3, "J/K", "cabin",
@@ -115,13 +117,13 @@ class PlantConfig:
                       "closed and fan off; 5.7 ACH at 25 m/s here")
 
     # ---------------------------------------------------------------- HVAC air side
-    c_p_air: float = _p(1008.0, "J/(kg K)", "hvac", "[Wang2018] Table II")
+    c_p_air: float = _p(_TABLE_II.c_p, "J/(kg K)", "hvac", "[Wang2018] Table II")
     h_fg: float = _p(2.45e6, "J/kg", "hvac", "latent heat of water near 20 degC")
     W_bl_min: float = _p(0.05, "kg/s", "hvac", "[Wang2018] Table II")
     W_bl_max: float = _p(0.15, "kg/s", "hvac", "[Wang2018] Table II")
-    beta1: float = _p(24156.0, "W s^2/kg^2", "hvac", "[Wang2018] eq. 5")
-    beta2: float = _p(-1974.2, "W s/kg", "hvac", "[Wang2018] eq. 5")
-    beta3: float = _p(49.318, "W", "hvac", "[Wang2018] eq. 5")
+    beta1: float = _p(_PAPER_MODEL.beta[0], "W s^2/kg^2", "hvac", "[Wang2018] eq. 5")
+    beta2: float = _p(_PAPER_MODEL.beta[1], "W s/kg", "hvac", "[Wang2018] eq. 5")
+    beta3: float = _p(_PAPER_MODEL.beta[2], "W", "hvac", "[Wang2018] eq. 5")
     f_bl_heat: float = _p(1.0, "1", "hvac",
                           "assumption: share of the blower's electric power that ends as heat in "
                           "the air ahead of the evaporator (motor in the air stream)")

@@ -16,6 +16,7 @@ from acid.units import K2C
 _COLORS = {"A": "tab:blue", "B": "tab:orange", "C": "tab:green"}
 _STYLE = {"A": "-", "B": "-", "C": "--"}  # C dashed: it coincides with A where it never
 #                                           pre-cools
+_WIDTH = {"A": 2.6, "B": 1.4, "C": 1.2}   # A wide under C: both stay visible
 _BAND = {"color": "tab:red", "linestyle": ":", "linewidth": 1.4}
 
 
@@ -47,12 +48,13 @@ def cav_study_figure(result: CavStudyResult) -> Figure:
         run = c.run
         col = _COLORS[key]
         ls = _STYLE[key]
-        axs[1].plot(run.time, K2C(run.T_cab), color=col, linestyle=ls, label=c.label)
+        lw = _WIDTH[key]
+        axs[1].plot(run.time, K2C(run.T_cab), color=col, linestyle=ls, lw=lw, label=c.label)
         P = run.P_comp + run.P_bl
         axs[2].step(np.append(run.time[:-1], run.time[-1]), np.append(P, P[-1]), where="post",
-                    color=col, linestyle=ls, linewidth=1.0, label=c.label)
+                    color=col, linestyle=ls, linewidth=0.8 * lw, label=c.label)
         E = np.concatenate(([0.0], np.cumsum(P) * Ts)) / 1e3
-        axs[3].plot(run.time, E, color=col, linestyle=ls,
+        axs[3].plot(run.time, E, color=col, linestyle=ls, lw=lw,
                     label=f"{c.label}: {c.energy_J / 1e6:.4f} MJ "
                           f"(end-corrected {c.corrected_energy_J / 1e6:.4f} MJ)")
     b = study.cases["B"].run
@@ -60,7 +62,7 @@ def cav_study_figure(result: CavStudyResult) -> Figure:
                 label="ICM bound (B)")
     for T in (cfg.T_low, cfg.T_high):
         axs[1].axhline(K2C(T), **_BAND)
-    axs[1].axhline(K2C(study.target_mean_K), color="grey", linewidth=0.8,
+    axs[1].axhline(K2C(study.target_mean_K), color="black", linewidth=0.7, linestyle=(0, (1, 3)),
                    label=f"mean T_cab target {K2C(study.target_mean_K):.2f} °C")
     axs[1].set_ylabel("cabin temperature $T_{cab}$ (°C)")
     axs[2].set_ylabel("P_comp + P_bl (W)")

@@ -1,46 +1,78 @@
-"""A self-contained HTML report: comparison table (paper vs acid) and embedded figures.
+"""A self-contained HTML report: the paper's claims with acid's verdicts, sections, figures.
 
 The page needs no server and no network: figures are embedded as base64 PNG data URIs.
+Every verdict comes from :mod:`acid.claims` (the report does not judge anything itself);
+each claim row carries ``data-claim``, ``data-verdict`` and ``data-implies`` and each figure
+``data-lines`` / ``data-hidden``, so that a browser check (``benchmarks/render_report.py``)
+can re-check consistency and visibility on the rendered page.
 """
 
 from __future__ import annotations
 
 import base64
 import html
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from acid._io import write_text
+from acid.claims import ClaimVerdict, Verdict, contradictions, counts
+from acid.report.figures import FigureRecord
 
 
 @dataclass(frozen=True)
-class ComparisonRow:
-    """One paper result: what the paper reports, what acid measured, and whether they agree."""
+class ReportSection:
+    """An extra section of the report (e.g. a study beyond the paper): a title, paragraphs
+    of text and an optional table (``header`` and ``rows`` of strings)."""
 
-    section: str
-    quantity: str
-    paper: str
-    acid: str
-    agrees: bool | None
-    note: str = ""
+    title: str
+    paragraphs: tuple[str, ...] = ()
+    header: tuple[str, ...] = ()
+    rows: tuple[tuple[str, ...], ...] = ()
 
 
 @dataclass(frozen=True)
-class FigureRef:
-    """A PNG to embed, with a caption that names the paper figure it reproduces."""
+class ReportFigure:
+    """A PNG to embed with its record (caption, audit) from the stage's ``figures.json``."""
 
     path: Path
-    caption: str
+    record: FigureRecord
+
+
+@dataclass(frozen=True)
+class StageTime:
+    """One stage line of the report: title, wall time (s), whether it came from the cache."""
+
+    title: str
+    seconds: float
+    cached: bool
+
+
+@dataclass(frozen=True)
+class Report:
+    """Everything the page shows."""
+
+    title: str
+    verdicts: Sequence[ClaimVerdict]
+    figures: Sequence[ReportFigure] = ()
+    sections: Sequence[ReportSection] = ()
+    stages: Sequence[StageTime] = ()
+    meta: dict[str, str] = field(default_factory=dict)
 
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em auto;
-max-width:1100px;color:#1b1f23;line-height:1.45;padding:0 1em}
+max-width:1150px;color:#1b1f23;line-height:1.45;padding:0 1em}
 h1{font-size:1.6em;margin-bottom:.2em} h2{margin-top:1.6em;border-bottom:1px solid #ddd}
-table{border-collapse:collapse;width:100%;font-size:.92em;margin:.6em 0}
+table{border-collapse:collapse;width:100%;font-size:.9em;margin:.6em 0}
 th,td{border:1px solid #d0d7de;padding:.35em .55em;text-align:left;vertical-align:top}
 th{background:#f6f8fa} td.num{text-align:right;font-variant-numeric:tabular-nums}
-.ok{color:#116329;font-weight:600} .no{color:#a40e26;font-weight:600} .na{color:#6e7781}
+td.section{background:#f6f8fa;font-weight:600}
+.v-agrees{color:#116329;font-weight:600} .v-agrees-in-direction{color:#7d4e00;font-weight:600}
+.v-disagrees{color:#a40e26;font-weight:600} .v-not-comparable,.v-not-measured,
+.v-beyond-the-paper{color:#6e7781}
+.counts span{margin-right:1.2em} .alert{background:#ffebe9;border:1px solid #a40e26;
+padding:.6em;color:#a40e26} .small{font-size:.85em;color:#57606a}
 figure{margin:1.2em 0;text-align:center} figure img{max-width:100%;border:1px solid #eee}
 figcaption{font-size:.9em;color:#57606a;margin-top:.3em} .meta{color:#57606a;font-size:.88em}
 """
@@ -51,33 +83,89 @@ def _img_tag(path: Path) -> str:
     return f'<img src="data:image/png;base64,{data}" alt="{html.escape(Path(path).name)}">'
 
 
-def render_report(title: str, rows: list[ComparisonRow], figures: list[FigureRef],
-                  stage_times: list[tuple[str, float, bool]], meta: dict[str, str]) -> str:
-    """Build the HTML text of the report."""
+def _css_class(v: Verdict) -> str:
+    return "v-" + v.value.replace(" ", "-")
+
+
+def _claims_table(verdicts: Sequence[ClaimVerdict]) -> list[str]:
     e = html.escape
-    out = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>{e(title)}</title>"
-           f"<style>{_CSS}</style></head><body>", f"<h1>{e(title)}</h1>"]
-    out.append("<p class=meta>" + " &middot; ".join(f"{e(k)}: {e(str(v))}"
-                                                     for k, v in meta.items()) + "</p>")
-    out.append("<h2>Paper vs acid</h2><table><tr><th>result</th><th>quantity</th>"
-               "<th>paper</th><th>acid (measured)</th><th>agrees</th><th>note</th></tr>")
-    for r in rows:
-        cls, word = {True: ("ok", "yes"), False: ("no", "no"), None: ("na", "n/a")}[r.agrees]
-        out.append(f"<tr><td>{e(r.section)}</td><td>{e(r.quantity)}</td>"
-                   f"<td class=num>{e(r.paper)}</td><td class=num>{e(r.acid)}</td>"
-                   f"<td class={cls}>{word}</td><td>{e(r.note)}</td></tr>")
+    out = ["<table class=claims><tr><th>quantity</th><th>paper</th><th>acid (measured)</th>"
+           "<th>verdict</th><th>rule</th><th>why / note</th></tr>"]
+    section = None
+    for v in verdicts:
+        c = v.claim
+        if c.section != section:
+            section = c.section
+            out.append(f"<tr><td class=section colspan=6>{e(section)}</td></tr>")
+        src = f"<div class=small>{e(c.paper.source)}</div>" if c.paper is not None else ""
+        quote = (f"<div class=small>&ldquo;{e(c.paper.text)}&rdquo;</div>"
+                 if c.paper is not None and c.paper.text and c.paper.value is not None else "")
+        note = e(v.reason) + (f"<div class=small>{e(c.note)}</div>" if c.note else "")
+        where = f"<div class=small>{e(c.measured.where())}</div>" if c.measured else ""
+        out.append(
+            f'<tr data-claim="{e(c.id)}" data-verdict="{e(v.verdict.value)}" '
+            f'data-implies="{e(" ".join(c.implies))}"><td>{e(c.quantity)}{where}</td>'
+            f"<td class=num>{e(v.paper_text)}{quote}{src}</td>"
+            f"<td class=num>{e(v.acid_text)}</td>"
+            f"<td class={_css_class(v.verdict)}>{e(v.verdict.value)}</td>"
+            f"<td>{e(c.rule_text)}</td><td>{note}</td></tr>")
     out.append("</table>")
+    return out
+
+
+def render_report(report: Report) -> str:
+    """The HTML text of the report."""
+    e = html.escape
+    out = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>{e(report.title)}"
+           f"</title><style>{_CSS}</style></head><body>", f"<h1>{e(report.title)}</h1>"]
+    out.append("<p class=meta>" + " &middot; ".join(f"{e(k)}: {e(str(v))}"
+                                                     for k, v in report.meta.items()) + "</p>")
+    paper = [v for v in report.verdicts if v.verdict is not Verdict.BEYOND]
+    beyond = [v for v in report.verdicts if v.verdict is Verdict.BEYOND]
+    n = counts(report.verdicts)
+    out.append("<h2>Paper vs acid</h2><p class=counts id=counts>" + "".join(
+        f'<span data-verdict="{e(k)}" data-count="{c}"><b>{c}</b> {e(k)}</span>'
+        for k, c in n.items() if k != Verdict.BEYOND.value) + "</p>")
+    out.append("<p class=small>Every verdict below is computed from the claims registry "
+               "(<code>acid.claims</code>): the paper's value, where acid measures it, and the "
+               "rule named in each row.</p>")
+    bad = contradictions(report.verdicts)
+    if bad:
+        out.append("<p class=alert id=contradictions>Contradictory verdicts: "
+                   + "; ".join(e(b) for b in bad) + "</p>")
+    out += _claims_table(paper)
+    if beyond:
+        out.append("<h2>Beyond the paper</h2><table class=claims><tr><th>quantity</th>"
+                   "<th>acid (measured)</th><th>note</th></tr>")
+        for v in beyond:
+            c = v.claim
+            where = f"<div class=small>{e(c.measured.where())}</div>" if c.measured else ""
+            out.append(f'<tr data-claim="{e(c.id)}" data-verdict="{e(v.verdict.value)}" '
+                       f'data-implies=""><td>{e(c.quantity)}{where}</td>'
+                       f"<td class=num>{e(v.acid_text)}</td><td>{e(c.note)}</td></tr>")
+        out.append("</table>")
+    for s in report.sections:
+        out.append(f"<h2>{e(s.title)}</h2>")
+        out += [f"<p>{e(p)}</p>" for p in s.paragraphs]
+        if s.header:
+            out.append("<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in s.header) + "</tr>")
+            out += ["<tr>" + "".join(f"<td>{e(c)}</td>" for c in r) + "</tr>" for r in s.rows]
+            out.append("</table>")
     out.append("<h2>Figures</h2>")
-    for f in figures:
-        out.append(f"<figure>{_img_tag(f.path)}<figcaption>{e(f.caption)}</figcaption></figure>")
+    for f in report.figures:
+        r = f.record
+        warn = (f"<div class=alert>hidden lines: {e('; '.join(r.hidden))}</div>"
+                if r.hidden else "")
+        out.append(f'<figure data-lines="{r.labelled_lines}" data-hidden="{len(r.hidden)}">'
+                   f"{_img_tag(f.path)}<figcaption>{e(r.caption)}</figcaption>{warn}</figure>")
     out.append("<h2>Stages</h2><table><tr><th>stage</th><th>time (s)</th><th>cache</th></tr>")
-    for name, seconds, cached in stage_times:
-        out.append(f"<tr><td>{e(name)}</td><td class=num>{seconds:.1f}</td>"
-                   f"<td>{'reused' if cached else 'computed'}</td></tr>")
+    for s in report.stages:
+        out.append(f"<tr><td>{e(s.title)}</td><td class=num>{s.seconds:.1f}</td>"
+                   f"<td>{'reused' if s.cached else 'computed'}</td></tr>")
     out.append("</table></body></html>")
     return "\n".join(out)
 
 
-def write_report(path: Path, *args, **kwargs) -> Path:
+def write_report(path: Path, report: Report) -> Path:
     """Render and write the report atomically."""
-    return write_text(path, render_report(*args, **kwargs))
+    return write_text(path, render_report(report))

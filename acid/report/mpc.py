@@ -11,11 +11,31 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from acid.claims import STUDIES
 from acid.mpc.scenarios import ScenarioResult
+from acid.report.numbers import format_number
 from acid.units import K2C
 
 _BOUND = {"color": "tab:red", "linestyle": ":", "linewidth": 1.4}
-_RUN_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple")
+#: one style per run; runs often coincide (both at an input bound), so every later run is
+#: thinner and dashed and its markers differ: the earlier run stays visible around it
+#: (checked by ``acid.report.audit``)
+_RUN_STYLES = (
+    {"color": "tab:blue", "linestyle": "-", "linewidth": 2.6, "marker": "o"},
+    {"color": "tab:orange", "linestyle": (0, (4, 2)), "linewidth": 1.3, "marker": "x"},
+    {"color": "tab:green", "linestyle": (0, (1, 1.5)), "linewidth": 1.1, "marker": "+"},
+    {"color": "tab:purple", "linestyle": "-.", "linewidth": 0.9, "marker": "."},
+)
+
+
+def _run_style(j: int, markers: bool) -> dict:
+    """Line style of run ``j`` (with markers on sampled states, without on stairs)."""
+    st = dict(_RUN_STYLES[j % len(_RUN_STYLES)])
+    if markers:
+        st["ms"] = 4
+    else:
+        st.pop("marker")
+    return st
 
 
 def _check(result: ScenarioResult) -> None:
@@ -50,14 +70,14 @@ def closed_loop_figure(result: ScenarioResult, with_power: bool | None = None) -
     axes = fig.subplots(n_ax, 1, sharex=True)
     r0 = result.runs[0]
     for j, run in enumerate(result.runs):
-        c = _RUN_COLORS[j % len(_RUN_COLORS)]
-        axes[0].plot(run.time, K2C(run.T_cab), color=c, marker="o", ms=3, label=run.label)
-        axes[1].plot(run.time, K2C(run.T_evap), color=c, marker="o", ms=3, label=run.label)
-        _stairs(axes[2], run, run.W_bl, color=c, label=run.label)
-        _stairs(axes[3], run, K2C(run.T_evap_set), color=c, label=run.label)
+        pts, st = _run_style(j, True), _run_style(j, False)
+        axes[0].plot(run.time, K2C(run.T_cab), label=run.label, **pts)
+        axes[1].plot(run.time, K2C(run.T_evap), label=run.label, **pts)
+        _stairs(axes[2], run, run.W_bl, label=run.label, **st)
+        _stairs(axes[3], run, K2C(run.T_evap_set), label=run.label, **st)
         if with_power:
-            _stairs(axes[4], run, run.P_comp, color=c, label=run.label)
-            _stairs(axes[5], run, run.P_bl, color=c, label=run.label)
+            _stairs(axes[4], run, run.P_comp, label=run.label, **st)
+            _stairs(axes[5], run, run.P_bl, label=run.label, **st)
     axes[0].step(r0.time, K2C(r0.T_cab_max), where="post", label="bounds", **_BOUND)
     axes[0].plot(r0.time, K2C(r0.T_cab_min), **_BOUND)
     axes[1].axhline(K2C(r0.T_evap_max), label="bounds", **_BOUND)
@@ -68,8 +88,8 @@ def closed_loop_figure(result: ScenarioResult, with_power: bool | None = None) -
     for ax, lab in zip(axes, labels, strict=False):
         ax.set_ylabel(lab)
         ax.grid(True, alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize="small")
-    axes[1].legend(loc="upper right", fontsize="small")
+    for ax in axes:
+        ax.legend(loc="upper right", fontsize="small")
     axes[-1].set_xlabel("time (s)")
     fig.suptitle(result.title)
     return fig
@@ -121,15 +141,16 @@ def cav_comparison_figure(result: ScenarioResult) -> Figure:
     w = result.metrics.get("window_s", [case1.time[0], case1.time[-1]])
     fig = Figure(figsize=(8.0, 9.0), layout="constrained")
     axes = fig.subplots(4, 1, sharex=True)
-    for run, c in ((case1, "tab:blue"), (case2, "tab:orange")):
-        axes[0].plot(run.time, K2C(run.T_cab), color=c, marker="o", ms=3, label=run.label)
-        axes[0].step(run.time, K2C(run.T_cab_max), where="post", color=c, linestyle=":",
-                     linewidth=1.2)
-        axes[1].plot(run.time, K2C(run.T_evap), color=c, marker="o", ms=3, label=run.label)
-        _stairs(axes[2], run, run.P_comp + run.P_bl, color=c, label=run.label)
+    for j, run in enumerate((case1, case2)):
+        pts, st = _run_style(j, True), _run_style(j, False)
+        axes[0].plot(run.time, K2C(run.T_cab), label=run.label, **pts)
+        axes[0].step(run.time, K2C(run.T_cab_max), where="post", color=st["color"],
+                     linestyle=":", linewidth=1.2)
+        axes[1].plot(run.time, K2C(run.T_evap), label=run.label, **pts)
+        _stairs(axes[2], run, run.P_comp + run.P_bl, label=run.label, **st)
         m = run.step_mask(tuple(w))
         e = np.cumsum(np.where(m, (run.P_comp + run.P_bl) * run.Ts, 0.0)) / 1e3
-        axes[3].plot(run.time[1:], e, color=c, label=f"{run.label}: {e[-1]:.1f} kJ")
+        axes[3].plot(run.time[1:], e, label=f"{run.label}: {e[-1]:.1f} kJ", **st)
     axes[0].set_ylabel("cabin air $T_{cab}$ (°C)")
     axes[1].set_ylabel("evaporator wall $T_{evap}$ (°C)")
     axes[2].set_ylabel("A/C power $P_{comp} + P_{bl}$ (W)")
@@ -141,7 +162,8 @@ def cav_comparison_figure(result: ScenarioResult) -> Figure:
     axes[0].legend(loc="best", fontsize="small")
     axes[3].legend(loc="upper left", fontsize="small")
     saving = result.metrics.get("saving_pct")
-    txt = f", saving {saving:.1f} % (paper: 9 %)" if saving is not None else ""
+    txt = (f", saving {format_number(saving, '.1f')} % (paper: "
+           f"{format_number(STUDIES.cav_saving_pct, 'g')} %)" if saving is not None else "")
     fig.suptitle(f"Case 1 (ICM) vs Case 2 (constant bound){txt} (paper Fig. 10)")
     return fig
 

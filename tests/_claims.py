@@ -1,0 +1,103 @@
+"""Synthetic typed stage results for the claims tests (imported as ``from _claims import ...``).
+
+Plausible numbers for every stage of ``acid reproduce`` (no simulation), so that verdicts,
+``summary.json`` and the headline table can be checked in milliseconds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+from acid.claims import STUDIES, TABLE_I
+from acid.params import paper
+from acid.pipeline import StageOutcome
+from acid.reproduce import ReproduceOptions, write_outputs
+from acid.stage_results import (
+    CavComparisonSummary,
+    CavStudyStage,
+    ChannelErrors,
+    ClosedLoopSummary,
+    Estimate,
+    FitStage,
+    MpcStage,
+    Savings,
+    StudyResults,
+    SweepStage,
+    TimingSummary,
+    ValidationStage,
+)
+
+
+def sweep(duration_s=TABLE_I.duration_s, scale=1.01) -> SweepStage:
+    E = tuple(scale * e for e in TABLE_I.energy_MJ)
+    km = tuple(math.nan if v == 0 else e / (v * duration_s / 1000.0)
+               for v, e in zip(TABLE_I.speeds_mps, E, strict=True))
+    return SweepStage(speeds_mps=TABLE_I.speeds_mps, duration_s=duration_s, energy_MJ=E,
+                      energy_MJ_per_km=km, ratio_last_first=E[-1] / E[0],
+                      max_energy_step_MJ=max(b - a for a, b in zip(E, E[1:], strict=False)),
+                      efficiency_gain_pct=100 * (E[0] / E[-1] - 1))
+
+
+def fit() -> FitStage:
+    names = [f"gamma{i}" for i in range(1, 8)] + [f"tau{i}" for i in range(1, 4)] + \
+        [f"beta{i}" for i in range(1, 4)]
+    theta = paper().theta * 0.9
+    return FitStage(method="oe", covariance="hac", gamma=tuple(theta[:7]),
+                    tau=tuple(theta[7:10]), beta=tuple(theta[10:]),
+                    parameters={n: Estimate(v, 0.01, v - 0.02, v + 0.02)
+                                for n, v in zip(names, theta, strict=True)},
+                    ls_gamma=tuple(theta[:7]), ls_tau=tuple(theta[7:10]),
+                    fit_percent_one_step={"T_cab": 98.0}, fit_percent_simulation={"T_cab": 90.0})
+
+
+def validation(p90=1.0) -> ValidationStage:
+    ch = ChannelErrors(rmse=0.5, mean_abs=0.4, median_abs=0.3, p90_abs=p90, p95_abs=p90 + 0.1,
+                       max_abs=2.5, fit_percent=60.0)
+    return ValidationStage(starts=STUDIES.validation_starts, horizon=STUDIES.validation_horizon,
+                           horizon_s=1500.0, channels={c: ch for c in ("T_cab", "T_evap",
+                                                                       "T_ain")})
+
+
+def mpc(saving=20.0, difference=0.008) -> MpcStage:
+    loop = ClosedLoopSummary(passed=True, criterion="", energy_MJ=0.1, max_violation_K=0.0,
+                             ride_error_K=0.0)
+    cav = CavComparisonSummary(window_s=STUDIES.cav_window_s, case1_energy_MJ=0.026,
+                               case2_energy_MJ=0.034, energy_difference_MJ=difference,
+                               saving_pct=saving, speed_blind_saving_pct=saving - 1.0,
+                               saving_from_speed_pct=1.0, T_cab_end_difference_K=2.0)
+    return MpcStage(passed=True, model=loop, plant=dataclasses.replace(loop,
+                                                                       max_violation_K=0.3),
+                    cav=loop, cav_paper=cav, cav_periodic=dataclasses.replace(cav, saving_pct=-0.3),
+                    cycles=4, timing=TimingSummary(median_ms=1.0, p95_ms=1.5, max_ms=3.0,
+                                                   steps=50, passed=True, criterion="",
+                                                   mean_ms=1.2))
+
+
+def cav() -> CavStudyStage:
+    s = Savings(raw=-1e-10, corrected=0.0, tail_corrected=-1e-12)   # signed zeros
+    return CavStudyStage(cycle="udds", savings_pct={"B": Savings(5.0, 2.0, 1.0), "C": s},
+                         saving_from_speed_pct={"B": Savings(1.0, 1.0, 1.0), "C": s},
+                         eta_cop0=4.9, eta_cop1_per_mps=0.03, eta_cop_r2=0.5)
+
+
+def results(**over) -> StudyResults:
+    stages = {"sweep": sweep(), "fit": fit(), "validate": validation(), "mpc": mpc(),
+              "cav": cav()}
+    stages.update(over)
+    return StudyResults({k: v for k, v in stages.items() if v is not None})
+
+
+def outcomes(tmp_path, res: StudyResults) -> dict[str, StageOutcome]:
+    out = {}
+    for name, r in res.by_stage.items():
+        d = tmp_path / "stages" / name
+        d.mkdir(parents=True)
+        out[name] = StageOutcome(name, name, d, r.to_json_dict(), 0.1, False, "k")
+    return out
+
+
+def summary_of(tmp_path, res: StudyResults) -> dict:
+    _, path, _ = write_outputs(tmp_path, outcomes(tmp_path, res), ReproduceOptions(), 1.0)
+    return json.loads(path.read_text())
