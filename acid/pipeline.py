@@ -4,28 +4,33 @@ A stage is a module-level function ``func(workdir, inputs, config, progress) -> 
 that writes its files into ``workdir`` and returns a JSON-serialisable summary. Its cache key
 hashes the stage's name and configuration, the keys of the stages it depends on and a
 fingerprint of acid's source code and shipped data, so a second run redoes only what changed.
-A stage's outputs appear atomically: it runs in a temporary folder that is renamed into place
-only when it succeeded.
+A stage's outputs appear atomically: it runs in a hidden temporary folder
+(``stages/.NAME.XXXX.tmp``) that is renamed into place only when it succeeded.
+
+Stages run on :mod:`acid.executor` -- in this process (``jobs=1``) or on Dask (a local
+cluster of ``jobs`` worker processes, or an existing cluster): the same mechanism as
+``acid sweep``. The output folder is held for the whole run (:func:`acid.outdir.claim`: a
+second run into it stops with a one-line message) and temporaries of a killed run are
+removed when the next one starts.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import multiprocessing as mp
 import os
-import queue as queue_mod
 import shutil
 import tempfile
 import time
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from acid import __version__
 from acid._io import write_json
 from acid.errors import AcidError
+from acid.executor import Executor, ProgressReporter, open_executor
+from acid.outdir import TMP_DIR_SUFFIX, claim, clean_stale
 
 STAGE_RECORD = "stage.json"
 
@@ -95,15 +100,15 @@ def _cached(workdir: Path, key: str) -> dict | None:
 
 
 def _run_stage(stage: Stage, root: Path, inputs: dict[str, Path], key: str,
-               progress_queue) -> tuple[dict, float]:
-    """Run one stage into a temporary folder, then move it into place (worker side)."""
+               report: ProgressReporter) -> tuple[dict, float]:
+    """Run one stage into a temporary folder, then move it into place (task side)."""
     final = root / "stages" / stage.name
     final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{stage.name}.", dir=final.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=f".{stage.name}.", suffix=TMP_DIR_SUFFIX,
+                                dir=final.parent))
 
     def progress(done: int, total: int) -> None:
-        if progress_queue is not None:
-            progress_queue.put((stage.name, int(done), int(total)))
+        report(stage.name, int(done), int(total), final=done >= total)
 
     t0 = time.perf_counter()
     try:
@@ -114,8 +119,15 @@ def _run_stage(stage: Stage, root: Path, inputs: dict[str, Path], key: str,
                                         "seconds": seconds, "files": files,
                                         "acid_version": __version__})
         if final.exists():
-            shutil.rmtree(final)
-        os.replace(tmp, final)
+            # move the old result aside first: the swap leaves either the old or the new
+            # folder in place, never a mixture
+            old = Path(tempfile.mkdtemp(prefix=f".{stage.name}.old.", suffix=TMP_DIR_SUFFIX,
+                                        dir=final.parent))
+            os.replace(final, old / "x")
+            os.replace(tmp, final)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, final)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -126,11 +138,20 @@ def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
                  on_start: Callable[[str], None] | None = None,
                  on_progress: Callable[[str, int, int], None] | None = None,
                  on_done: Callable[[StageOutcome], None] | None = None,
-                 force: bool = False) -> dict[str, StageOutcome]:
-    """Run ``stages`` in dependency order, up to ``jobs`` at once in local processes.
+                 force: bool = False, scheduler: str | None = None,
+                 executor: Executor | None = None,
+                 notice: Callable[[str], None] | None = None) -> dict[str, StageOutcome]:
+    """Run ``stages`` in dependency order, up to ``jobs`` at once.
 
     Stages whose cache key matches the record in their folder are not run again (unless
     ``force``). Callbacks report start, progress and completion to the caller (the CLI).
+
+    Parameters
+    ----------
+    jobs : 1 runs in this process; more starts a local Dask cluster of that many worker
+        processes (in this process, with a ``notice``, when Dask is not installed).
+    scheduler : address of an existing Dask cluster instead (its workers must see ``root``).
+    executor : an open executor to use instead of starting one.
     """
     root = Path(root)
     by_name = {s.name: s for s in stages}
@@ -138,28 +159,23 @@ def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
         for d in s.depends:
             if d not in by_name:
                 raise AcidError(f"stage {s.name!r} depends on unknown stage {d!r}")
+    with claim(root, "acid reproduce"):
+        if executor is not None:
+            return _run(stages, root, executor, on_start, on_progress, on_done, force)
+        try:
+            with open_executor(jobs, scheduler, notice=notice) as ex:
+                return _run(stages, root, ex, on_start, on_progress, on_done, force)
+        finally:  # the workers are gone: a stage folder still under construction is stale
+            clean_stale(root / "stages")
+
+
+def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force):
     fingerprint = source_fingerprint()
     keys: dict[str, str] = {}
     outcomes: dict[str, StageOutcome] = {}
     pending = list(stages)
-    running: dict[Future, Stage] = {}
-    ctx = mp.get_context("spawn") if jobs > 1 else None
-    manager = ctx.Manager() if ctx is not None else None
-    pq = manager.Queue() if manager is not None else None
-    local_q: queue_mod.SimpleQueue = queue_mod.SimpleQueue()
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) if jobs > 1 else None
-
-    def drain() -> None:
-        for q in (pq, local_q):
-            if q is None:
-                continue
-            while True:
-                try:
-                    name, done, total = q.get_nowait()
-                except (queue_mod.Empty, EOFError):
-                    break
-                if on_progress:
-                    on_progress(name, done, total)
+    running: dict = {}
+    report = ex.reporter(on_progress or (lambda name, done, total: None), "stages")
 
     def finish(stage: Stage, summary: dict, seconds: float, cached: bool) -> None:
         out = StageOutcome(stage.name, stage.title, root / "stages" / stage.name, summary,
@@ -168,42 +184,29 @@ def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
         if on_done:
             on_done(out)
 
-    try:
-        while pending or running:
-            ready = [s for s in pending if all(d in outcomes for d in s.depends)]
-            for s in ready:
-                pending.remove(s)
-                keys[s.name] = _stage_key(s, {d: keys[d] for d in s.depends}, fingerprint)
-                workdir = root / "stages" / s.name
-                rec = None if force else _cached(workdir, keys[s.name])
-                if rec is not None:
-                    finish(s, rec["summary"], float(rec.get("seconds", 0.0)), True)
-                    continue
-                inputs = {d: outcomes[d].workdir for d in s.depends}
-                if on_start:
-                    on_start(s.name)
-                if pool is None:
-                    summary, seconds = _run_stage(s, root, inputs, keys[s.name], local_q)
-                    drain()
-                    finish(s, summary, seconds, False)
-                else:
-                    running[pool.submit(_run_stage, s, root, inputs, keys[s.name], pq)] = s
-            if ready and pool is None:
+    while pending or running:
+        ready = [s for s in pending if all(d in outcomes for d in s.depends)]
+        for s in ready:
+            pending.remove(s)
+            keys[s.name] = _stage_key(s, {d: keys[d] for d in s.depends}, fingerprint)
+            workdir = root / "stages" / s.name
+            rec = None if force else _cached(workdir, keys[s.name])
+            if rec is not None:
+                finish(s, rec["summary"], float(rec.get("seconds", 0.0)), True)
                 continue
-            if not running:
-                if pending and not ready:
-                    raise AcidError("pipeline has a dependency cycle: "
-                                    + ", ".join(s.name for s in pending))
-                continue
-            done, _ = wait(list(running), timeout=0.2, return_when=FIRST_COMPLETED)
-            drain()
-            for fut in done:
-                s = running.pop(fut)
-                summary, seconds = fut.result()
-                finish(s, summary, seconds, False)
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
-        if manager is not None:
-            manager.shutdown()
+            inputs = {d: outcomes[d].workdir for d in s.depends}
+            if on_start:
+                on_start(s.name)
+            running[ex.submit(_run_stage, s, root, inputs, keys[s.name], report)] = s
+        if not running:
+            if pending and not ready:
+                raise AcidError("pipeline has a dependency cycle: "
+                                + ", ".join(s.name for s in pending))
+            continue
+        done = ex.wait_any(running, timeout=0.2)
+        ex.pump()
+        for fut in done:
+            s = running.pop(fut)
+            summary, seconds = ex.result(fut)
+            finish(s, summary, seconds, False)
     return outcomes

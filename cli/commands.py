@@ -46,3 +46,7 @@ app.command(name="export-fmu")(export_fmu.export_fmu)
 from acid_cli import export_c  # noqa: E402
 
 app.command(name="export-c")(export_c.export_c_cmd)
+
+from acid_cli import sweep  # noqa: E402
+
+app.command(name="sweep")(sweep.sweep)

@@ -11,6 +11,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from acid.claims import contradictions, counts, headline_rows, load_summary
 from acid.errors import ConfigError
+from acid.outdir import claim
 from acid.pipeline import run_pipeline
 from acid.reproduce import ReproduceOptions, build_stages, write_outputs
 from acid_cli._common import (
@@ -32,7 +33,11 @@ def reproduce(
                                help="A smaller study (shorter records, 12 starts) for tests "
                                     "and first looks."),
     jobs: int = typer.Option(2, "--jobs", min=1,
-                             help="Independent stages run in this many local processes."),
+                             help="Independent stages run side by side in this many worker "
+                                  "processes (a local Dask cluster; 1: in this process)."),
+    scheduler: str | None = typer.Option(None, "--scheduler",
+                                         help="Run the stages on this existing Dask cluster "
+                                              "(scheduler address; its workers must see OUT)."),
     force: bool = typer.Option(False, "--force", help="Ignore the cache and redo every stage."),
     json_path: Path | None = typer.Option(None, "--json",
                                           help="Also write the summary here (it is always "
@@ -49,6 +54,11 @@ def reproduce(
         raise ConfigError(f"--jobs {jobs}: at most 8 local processes")
     opts = ReproduceOptions.quick() if quick else ReproduceOptions()
     stages = build_stages(opts)
+    with claim(out, "acid reproduce"):
+        _reproduce(out, opts, stages, jobs, scheduler, force, json_path)
+
+
+def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
     t0 = time.perf_counter()
     with Progress(TextColumn("[bold]{task.description:<48}"), BarColumn(),
                   TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
@@ -67,7 +77,9 @@ def reproduce(
                         description=f"{outcome.title} ({label})")
 
         outcomes = run_pipeline(stages, out, jobs=jobs, on_start=on_start,
-                                on_progress=on_progress, on_done=on_done, force=force)
+                                on_progress=on_progress, on_done=on_done, force=force,
+                                scheduler=scheduler,
+                                notice=lambda msg: err_console.print(msg, highlight=False))
     elapsed = time.perf_counter() - t0
     html, summary_path, verdicts = write_outputs(out, outcomes, opts, elapsed)
 

@@ -67,3 +67,42 @@ def test_parallel_jobs_give_the_same_result(tmp_path):
     out = run_pipeline(_stages(), tmp_path, jobs=2, on_progress=lambda n, d, t: seen.append(n))
     assert out["sum"].summary == {"sum": 3}
     assert {"a", "b"} <= set(seen)
+
+
+def test_next_run_removes_what_a_killed_run_left(tmp_path):
+    stale = tmp_path / "stages" / ".a.k1ll3d.tmp"
+    stale.mkdir(parents=True)
+    (stale / "number.json").write_text('{"value": 99}')
+    from _procs import dead_pid
+
+    (tmp_path / f".summary.json.{dead_pid()}.x9.part").write_text("{")
+    out = run_pipeline(_stages(), tmp_path)
+    assert out["sum"].summary == {"sum": 3}
+    assert not list(tmp_path.rglob(".*.tmp")) and not list(tmp_path.rglob(".*.part"))
+
+
+def test_a_second_run_into_a_held_folder_is_refused(tmp_path):
+    import subprocess
+    import sys
+
+    hold = ("import sys\nfrom acid.outdir import claim\nwith claim(sys.argv[1], 'acid reproduce'):"
+            "\n    print('held', flush=True)\n    sys.stdin.readline()\n")
+    p = subprocess.Popen([sys.executable, "-c", hold, str(tmp_path)], text=True,
+                         stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        assert p.stdout.readline().strip() == "held"
+        with pytest.raises(AcidError, match=f"in use by acid reproduce \\(pid {p.pid}"):
+            run_pipeline(_stages(), tmp_path)
+    finally:
+        p.communicate("\n", timeout=30)
+    assert not (tmp_path / "stages").exists()
+
+
+def test_without_dask_parallel_jobs_run_here_with_a_notice(tmp_path, monkeypatch):
+    import acid.executor
+
+    monkeypatch.setattr(acid.executor, "dask_available", lambda: False)
+    notes = []
+    out = run_pipeline(_stages(), tmp_path, jobs=2, notice=notes.append)
+    assert out["sum"].summary == {"sum": 3}
+    assert len(notes) == 1 and "pip install 'acid[distributed]'" in notes[0]

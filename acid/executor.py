@@ -1,0 +1,443 @@
+"""Where acid's parallel work runs: in this process, or on a Dask cluster.
+
+One abstraction serves ``acid reproduce`` (its stages) and ``acid sweep`` (its scenarios):
+
+* :class:`InlineExecutor` runs each task in this process, one at a time, when the caller
+  waits for it (``--jobs 1``; also what runs when Dask is not installed);
+* :class:`DaskExecutor` runs tasks on Dask distributed: a ``LocalCluster`` of worker
+  *processes* started here (one thread each, so CasADi, CoolProp and numpy never share an
+  interpreter), or an existing cluster given by its scheduler address.
+
+Both give the same small interface: ``submit(fn, *args)`` returns a handle (handles of
+earlier tasks may be passed as arguments: the task then waits for them and receives their
+results), ``wait_any(handles, timeout)`` returns the handles that finished, ``result(h)``
+their value or raises their exception, and ``reporter(on_event)`` a picklable callable that
+a task calls with progress messages, delivered to ``on_event`` in the waiting thread.
+
+Interrupts and process lifetime
+-------------------------------
+* **Ctrl-C.** CasADi's solvers swallow ``KeyboardInterrupt`` (the solve simply returns), so
+  a closed loop can run on through Ctrl-C. While an executor is open, SIGINT sets a flag as
+  well as raising; :func:`check_interrupt` (called by every progress report, so once per
+  closed-loop step) raises again where it is safe to. A second Ctrl-C ends the process at
+  once (exit 130); what it leaves is hidden and removed by the next run
+  (:mod:`acid.outdir`). Worker processes of a local cluster ignore SIGINT: the terminal
+  sends it to the whole process group, and the parent, not each worker, decides to stop.
+* **Workers end with their parent.** The cluster is closed in ``finally``; if the parent is
+  killed outright (SIGKILL), every Dask worker process exits within milliseconds (each
+  watches a pipe from its parent and calls ``os._exit`` when it closes, see
+  ``distributed.process.AsyncProcess``), so nothing keeps the caller's pipes open.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import queue
+import signal
+import threading
+import time
+import uuid
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+
+from acid.errors import AcidError
+
+#: how often a task may send a progress message to the client, s (the last one always goes)
+PROGRESS_INTERVAL_S = 0.25
+
+_interrupted = threading.Event()
+_guard_depth = [0]
+#: topic -> callback for reporters whose events stay in this process (inline tasks)
+_local_sinks: dict[str, Callable] = {}
+
+
+def dask_available() -> bool:
+    """True when ``dask.distributed`` can be imported (the ``distributed`` extra)."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def usable_cores() -> int:
+    """Cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+# ------------------------------------------------------------------------------ interrupts
+def check_interrupt() -> None:
+    """Raise ``KeyboardInterrupt`` if Ctrl-C was pressed (even if a C extension swallowed it)."""
+    if _interrupted.is_set():
+        raise KeyboardInterrupt
+
+
+def _chained(previous):
+    """A handler that remembers the interrupt, then does what ``previous`` did."""
+
+    def handler(signum, frame):
+        first = not _interrupted.is_set()
+        _interrupted.set()
+        if callable(previous) and previous is not signal.default_int_handler:
+            return previous(signum, frame)  # e.g. the CLI's guard (exit code, second signal)
+        if not first:  # the first interrupt was not honoured in time: stop now
+            with contextlib.suppress(OSError):
+                os.write(2, b"interrupted (forced)\n")
+            os._exit(128 + signum)
+        raise KeyboardInterrupt
+
+    return handler
+
+
+@contextlib.contextmanager
+def interrupt_guard() -> Iterator[None]:
+    """Interrupts that survive C extensions: see the module docstring (re-entrant).
+
+    SIGINT (and SIGTERM when a Python handler already catches it) additionally set the flag
+    that :func:`check_interrupt` reads; the handler found in place still runs (the CLI's
+    guard decides the exit code and what a second signal does). Nothing is installed outside
+    the main thread or for a signal that is ignored or at its default (``nohup``, a
+    background job of a non-interactive shell): that choice of the caller is kept.
+    """
+    saved = {}
+    if _guard_depth[0] == 0 and threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            current = signal.getsignal(sig)
+            if callable(current):
+                saved[sig] = signal.signal(sig, _chained(current))
+    _guard_depth[0] += 1
+    try:
+        yield
+    finally:
+        _guard_depth[0] -= 1
+        for sig, previous in saved.items():
+            signal.signal(sig, previous)
+        if saved:
+            _interrupted.clear()
+
+
+# ------------------------------------------------------------------------------ progress
+@dataclass
+class ProgressReporter:
+    """Picklable progress callback of a task: ``reporter(*message)``.
+
+    In this process it calls the executor's sink directly (and checks for Ctrl-C); on a Dask
+    worker it sends the message to the client as a worker event on ``topic``, at most every
+    ``PROGRESS_INTERVAL_S`` seconds unless ``final`` is True.
+    """
+
+    topic: str
+    _last: float = field(default=0.0, repr=False)
+
+    def __call__(self, *message, final: bool = False) -> None:
+        check_interrupt()
+        sink = _local_sinks.get(self.topic)
+        if sink is not None:
+            sink(message)
+            return
+        now = time.monotonic()
+        if not final and now - self._last < PROGRESS_INTERVAL_S:
+            return
+        self._last = now
+        try:
+            from distributed import get_worker
+
+            get_worker().log_event(self.topic, message)
+        except (ImportError, ValueError):  # not on a worker: nobody listens
+            pass
+
+
+# ------------------------------------------------------------------------------ executors
+class Executor:
+    """Interface shared by :class:`InlineExecutor` and :class:`DaskExecutor`.
+
+    Attributes
+    ----------
+    kind : ``"inline"``, ``"local"`` (a LocalCluster started here) or ``"cluster"``.
+    workers : number of worker processes (1 for inline).
+    address : scheduler address (None inline).
+    """
+
+    kind: str = "inline"
+    workers: int = 1
+    address: str | None = None
+
+    def __init__(self):
+        self._events: queue.SimpleQueue = queue.SimpleQueue()
+        self._topics: list[str] = []
+
+    def reporter(self, on_event: Callable[..., None], topic: str = "run") -> ProgressReporter:
+        """A progress callback for tasks: ``reporter(*message)`` on the task side ends up as
+        ``on_event(*message)`` in this process (at once inline; at the next :meth:`pump`
+        for Dask workers, so always in the thread that waits for the tasks)."""
+        topic = f"acid-progress-{topic}-{uuid.uuid4().hex[:8]}"
+        self._topics.append(topic)
+        self._listen(topic, on_event)
+        return ProgressReporter(topic)
+
+    def pump(self) -> None:
+        """Deliver the progress messages that arrived from workers (no-op inline)."""
+        while True:
+            try:
+                on_event, message = self._events.get_nowait()
+            except queue.Empty:
+                return
+            on_event(*message)
+
+    def describe(self) -> str:
+        """One line for the user: where the work runs."""
+        if self.kind == "inline":
+            return "in this process"
+        where = "local cluster" if self.kind == "local" else f"cluster {self.address}"
+        return f"{self.workers} worker process{'es' if self.workers != 1 else ''} ({where})"
+
+    # to implement
+    def _listen(self, topic: str, on_event: Callable) -> None:
+        raise NotImplementedError
+
+    def submit(self, fn: Callable, *args):
+        raise NotImplementedError
+
+    def wait_any(self, handles: Iterable, timeout: float = 0.2) -> list:
+        raise NotImplementedError
+
+    def result(self, handle):
+        raise NotImplementedError
+
+    def close(self, interrupted: bool = False) -> None:
+        """Release workers (an interrupted run does not wait for running tasks)."""
+
+    def __enter__(self) -> Executor:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close(interrupted=exc_type is KeyboardInterrupt)
+
+
+class _InlineTask:
+    __slots__ = ("fn", "args", "done", "value", "error")
+
+    def __init__(self, fn, args):
+        self.fn, self.args = fn, args
+        self.done, self.value, self.error = False, None, None
+
+
+class InlineExecutor(Executor):
+    """Runs tasks in this process, one at a time, in submission order, when waited for."""
+
+    def __init__(self):
+        super().__init__()
+        self._pending: list[_InlineTask] = []
+
+    def _listen(self, topic: str, on_event: Callable) -> None:
+        _local_sinks[topic] = lambda message: on_event(*message)
+
+    def submit(self, fn: Callable, *args) -> _InlineTask:
+        task = _InlineTask(fn, args)
+        self._pending.append(task)
+        return task
+
+    def _run(self, task: _InlineTask) -> None:
+        try:
+            args = []
+            for a in task.args:
+                if isinstance(a, _InlineTask):
+                    if not a.done:
+                        self._run(a)
+                    a = self.result(a)  # a failed dependency fails this task too
+                args.append(a)
+            task.value = task.fn(*args)
+        except Exception as exc:  # the caller decides (result re-raises)
+            task.error = exc
+        task.done = True
+        if task in self._pending:
+            self._pending.remove(task)
+
+    def wait_any(self, handles: Iterable, timeout: float = 0.2) -> list:
+        handles = list(handles)
+        done = [h for h in handles if h.done]
+        if done or not handles:
+            return done
+        self._run(handles[0])
+        return [handles[0]]
+
+    def result(self, handle: _InlineTask):
+        if handle.error is not None:
+            raise handle.error
+        return handle.value
+
+    def close(self, interrupted: bool = False) -> None:
+        self._pending.clear()
+        for t in self._topics:
+            _local_sinks.pop(t, None)
+
+
+def _ignore_sigint_plugin():
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    class IgnoreSigint(WorkerPlugin):
+        """Worker processes leave Ctrl-C to the client (see the module docstring)."""
+
+        name = "acid-ignore-sigint"
+
+        def setup(self, worker):
+            if threading.current_thread() is threading.main_thread():
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    return IgnoreSigint()
+
+
+def _worker_acid_version() -> str:
+    from acid import __version__
+
+    return __version__
+
+
+class DaskExecutor(Executor):
+    """Tasks on Dask distributed: a new ``LocalCluster`` of ``workers`` processes (one
+    thread each), or the existing cluster at ``address``.
+
+    Workers of an existing cluster must have the same acid version installed (checked when
+    connecting) and, for ``acid reproduce``, see the output folder (a shared filesystem).
+    """
+
+    def __init__(self, workers: int | None = None, address: str | None = None):
+        super().__init__()
+        try:
+            import dask
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise AcidError("parallel runs need Dask: pip install 'acid[distributed]'") from None
+        self.cluster = None
+        self._pids: set[int] = set()
+        if address:
+            self.kind, self.address = "cluster", address
+            try:
+                self.client = Client(address, timeout="10s")
+            except (OSError, TimeoutError) as exc:
+                raise AcidError(f"--scheduler {address}: cannot connect "
+                                f"({str(exc).splitlines()[0]})") from None
+            self._check_versions()
+        else:
+            n = int(workers or usable_cores())
+            if n < 1:
+                raise AcidError(f"workers must be at least 1, got {n}")
+            self.kind = "local"
+            # one task per worker at a time, the rest queued on the scheduler: a long task is
+            # never parked behind another on a busy worker while one idles
+            with dask.config.set({"distributed.scheduler.allowed-failures": 1,
+                                  "distributed.scheduler.worker-saturation": 1.0,
+                                  "distributed.worker.daemon": False}):
+                self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                            dashboard_address=None,
+                                            silence_logs=logging.CRITICAL)
+                self.client = Client(self.cluster)
+            self.address = self.cluster.scheduler_address
+            self.client.register_plugin(_ignore_sigint_plugin())
+            self._pids = set(self.client.run(os.getpid).values())
+        self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
+
+    def _check_versions(self) -> None:
+        from acid import __version__
+
+        try:
+            found = self.client.run(_worker_acid_version)
+        except Exception as exc:  # a worker without acid cannot even unpickle the call
+            raise AcidError(f"--scheduler {self.address}: workers cannot run acid "
+                            f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
+        if not found:
+            raise AcidError(f"--scheduler {self.address}: the cluster has no workers")
+        bad = {w: v for w, v in found.items() if v != __version__}
+        if bad:
+            w, v = next(iter(bad.items()))
+            raise AcidError(f"--scheduler {self.address}: worker {w} has acid {v}, this is "
+                            f"acid {__version__}")
+
+    def _listen(self, topic: str, on_event: Callable) -> None:
+        # the handler runs on the client's event-loop thread: queue for pump()
+        self.client.subscribe_topic(topic, lambda ev: self._events.put((on_event, ev[1])))
+
+    def submit(self, fn: Callable, *args):
+        return self.client.submit(fn, *args, pure=False)
+
+    def wait_any(self, handles: Iterable, timeout: float = 0.2) -> list:
+        from distributed import wait
+
+        handles = list(handles)
+        if not handles:
+            return []
+        try:
+            done, _ = wait(handles, timeout=timeout, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            return []
+        return [h for h in handles if h in done]
+
+    def result(self, handle):
+        return handle.result()
+
+    def close(self, interrupted: bool = False) -> None:
+        with contextlib.suppress(Exception):
+            for t in self._topics:
+                self.client.unsubscribe_topic(t)
+        if self.cluster is None:  # an existing cluster keeps running; it drops our tasks
+            with contextlib.suppress(Exception):
+                self.client.close(timeout=5)
+            return
+        if interrupted:  # do not wait for running tasks: end our worker processes now
+            self._kill_workers()
+        with contextlib.suppress(Exception):
+            self.client.close(timeout=2 if interrupted else 10)
+        with contextlib.suppress(Exception):
+            self.cluster.close(timeout=2 if interrupted else 10)
+        self._kill_workers()  # whatever a close that timed out left running
+
+    def _kill_workers(self) -> None:
+        """SIGKILL the local cluster's worker processes (only children of this process)."""
+        import multiprocessing
+
+        for child in multiprocessing.active_children():
+            if child.pid in self._pids:
+                with contextlib.suppress(Exception):
+                    child.kill()
+
+
+@contextlib.contextmanager
+def open_executor(workers: int | None = 1, scheduler: str | None = None,
+                  inline_when_single: bool = True,
+                  notice: Callable[[str], None] | None = None) -> Iterator[Executor]:
+    """An executor for the duration of a ``with`` block, closed however the block ends.
+
+    Parameters
+    ----------
+    workers : worker processes of a local cluster (None: one per usable core).
+    scheduler : address of an existing Dask scheduler (overrides ``workers``).
+    inline_when_single : ``workers == 1`` runs inline instead of on a one-worker cluster.
+    notice : called with a sentence when the request cannot be met as asked (Dask missing:
+        the work then runs inline).
+    """
+    with interrupt_guard():
+        if scheduler is None and (workers == 1 and inline_when_single):
+            ex: Executor = InlineExecutor()
+        elif scheduler is None and not dask_available() and inline_when_single:
+            if notice is not None:
+                notice("Dask is not installed (pip install 'acid[distributed]'): "
+                       "running one task at a time in this process")
+            ex = InlineExecutor()
+        else:
+            ex = DaskExecutor(workers, scheduler)
+        interrupted = False
+        try:
+            yield ex
+        except KeyboardInterrupt:
+            interrupted = True
+            raise
+        finally:
+            ex.close(interrupted=interrupted)
+
+
+__all__ = ["Executor", "InlineExecutor", "DaskExecutor", "open_executor", "check_interrupt",
+           "interrupt_guard", "ProgressReporter", "dask_available", "usable_cores"]

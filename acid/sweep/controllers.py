@@ -1,0 +1,356 @@
+"""Controllers a sweep can compare: a small registry, name -> constructor + dataclass config.
+
+A controller is registered with
+
+    register_controller(name, config_type, constructor, description)
+
+``config_type`` is a frozen dataclass whose fields (with defaults) are what a sweep spec may
+set in ``[controllers.<label>]`` (TOML types: str, int, float, bool, list of numbers; edge
+units, degC in names ending ``_C``); its ``__post_init__`` may raise ``ConfigError``.
+``constructor(config)`` returns an object with ``run(ctx: ScenarioContext) -> ControllerRun``
+(:mod:`acid.sweep.context`), called on the worker, once per scenario. The spec is checked
+against the registry before anything runs, and the constructor travels to the worker by
+reference (module + name), so it must be a module-level class or function.
+
+Built-in
+--------
+``nmpc``     the paper's NMPC (eqs. 7-13) on a constant upper cabin bound (the set-point, or
+             the band's upper edge); ``match = "<label>"`` tunes that constant bound until
+             the mean cabin temperature equals another controller's (the fair comparison of
+             ``acid cav-study``).
+``icm``      the paper's NMPC following the Intelligent Constraint Management bound (paper
+             Fig. 9) built from the previewed speed inside the comfort band.
+``nominal``  the plant's own PI controllers (blower on the cabin set-point, compressor on
+             the evaporator set-point): the conventional A/C.
+
+Further controllers register from their own module: add it to ``CONTROLLER_MODULES`` (in
+acid) or name it in the spec's ``plugins = ["my_package.my_controller"]``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import types
+import typing
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from acid.errors import ConfigError
+from acid.sweep.context import ControllerRun, ScenarioContext
+from acid.units import C2K
+
+#: acid modules that register controllers when imported (the built-ins are in this one)
+CONTROLLER_MODULES: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class ControllerType:
+    """A registry entry: how to build a controller from its dataclass configuration."""
+
+    name: str
+    config_type: type
+    constructor: Callable
+    description: str = ""
+
+
+_REGISTRY: dict[str, ControllerType] = {}
+_loaded = [False]
+
+
+def register_controller(name: str, config_type: type, constructor: Callable,
+                        description: str = "") -> ControllerType:
+    """Make a controller available to sweeps under ``name`` (see the module docstring)."""
+    if not dataclasses.is_dataclass(config_type):
+        raise TypeError(f"controller {name!r}: config_type must be a dataclass")
+    entry = ControllerType(name, config_type, constructor, description)
+    _REGISTRY[name] = entry
+    return entry
+
+
+def _load_modules(extra: tuple[str, ...] = ()) -> None:
+    if not _loaded[0]:
+        _loaded[0] = True
+        for mod in CONTROLLER_MODULES:
+            importlib.import_module(mod)
+    for mod in extra:
+        importlib.import_module(mod)
+
+
+def controller_types(plugins: tuple[str, ...] = ()) -> dict[str, ControllerType]:
+    """Every registered controller by name (importing ``plugins`` first)."""
+    _load_modules(tuple(plugins))
+    return dict(_REGISTRY)
+
+
+def _type_ok(value, hint) -> tuple[bool, object]:
+    """(accepted, converted) for a TOML value against a dataclass field annotation."""
+    origin = typing.get_origin(hint)
+    if origin in (typing.Union, types.UnionType):
+        for h in typing.get_args(hint):
+            if h is type(None):
+                if value is None:
+                    return True, None
+                continue
+            ok, v = _type_ok(value, h)
+            if ok:
+                return True, v
+        return False, value
+    if origin is tuple:
+        args = typing.get_args(hint)
+        if not isinstance(value, (list, tuple)):
+            return False, value
+        if len(args) == 2 and args[1] is Ellipsis:
+            args = (args[0],) * len(value)
+        if len(value) != len(args):
+            return False, value
+        out = []
+        for v, h in zip(value, args, strict=True):
+            ok, c = _type_ok(v, h)
+            if not ok:
+                return False, value
+            out.append(c)
+        return True, tuple(out)
+    if hint is bool:
+        return isinstance(value, bool), value
+    if hint is int:
+        return isinstance(value, int) and not isinstance(value, bool), value
+    if hint is float:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        return ok and np.isfinite(value), float(value) if ok else value
+    if hint is str:
+        return isinstance(value, str), value
+    return True, value
+
+
+def build_config(kind: str, table: dict, where: str, plugins: tuple[str, ...] = ()):
+    """The controller type ``kind`` and its configuration from a spec table, validated.
+
+    Raises ``ConfigError`` naming ``where`` and the key for an unknown controller, unknown
+    key, wrong type or a value the configuration refuses.
+    """
+    types_ = controller_types(plugins)
+    if kind not in types_:
+        raise ConfigError(f"{where}: unknown controller {kind!r} (known: "
+                          f"{', '.join(sorted(types_))})")
+    entry = types_[kind]
+    hints = typing.get_type_hints(entry.config_type)
+    names = [f.name for f in dataclasses.fields(entry.config_type) if f.init]
+    kwargs = {}
+    for key, value in table.items():
+        if key not in names:
+            raise ConfigError(f"{where}: unknown key {key!r} for controller {kind!r} (known: "
+                              f"{', '.join(names) or 'none'})")
+        ok, conv = _type_ok(value, hints.get(key, object))
+        if not ok:
+            raise ConfigError(f"{where}: {key} = {value!r} must be "
+                              f"{_hint_name(hints.get(key))}")
+        kwargs[key] = conv
+    try:
+        config = entry.config_type(**kwargs)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+    return entry, config
+
+
+def _hint_name(hint) -> str:
+    names = {float: "a number", int: "an integer", str: "a string", bool: "true or false"}
+    if hint in names:
+        return names[hint]
+    return str(hint).replace("typing.", "")
+
+
+# ------------------------------------------------------------------------- built-ins
+SOLVERS = ("fatrop", "ipopt")
+BOUNDS = ("setpoint", "band-high")
+
+
+def _check_nmpc_options(horizon: int, solver: str) -> None:
+    if not 2 <= int(horizon) <= 60:
+        raise ConfigError(f"horizon = {horizon} must lie in 2..60 steps")
+    if solver not in SOLVERS:
+        raise ConfigError(f"solver = {solver!r} unknown (choose {', '.join(SOLVERS)})")
+
+
+@dataclass(frozen=True)
+class PaperNMPCConfig:
+    """The paper's NMPC on a constant upper bound.
+
+    Attributes
+    ----------
+    horizon : N, steps of Ts (Table II: 6).
+    bound : ``"setpoint"`` (the scenario's cabin set-point) or ``"band-high"`` (the comfort
+        band's upper edge).
+    match : label of another controller of the spec; the constant bound is then tuned until
+        this controller's mean cabin temperature equals that one's (``bound`` is the start).
+    tol_K : tolerance of the match, K.
+    max_iter : closed-loop runs the match may take.
+    solver : ``"fatrop"`` or ``"ipopt"``.
+    """
+
+    horizon: int = 6
+    bound: str = "setpoint"
+    match: str = ""
+    tol_K: float = 0.02
+    max_iter: int = 8
+    solver: str = "fatrop"
+
+    def __post_init__(self):
+        _check_nmpc_options(self.horizon, self.solver)
+        if self.bound not in BOUNDS:
+            raise ConfigError(f"bound = {self.bound!r} unknown (choose {', '.join(BOUNDS)})")
+        if not (self.tol_K > 0 and 1 <= self.max_iter <= 30):
+            raise ConfigError("match needs tol_K > 0 and max_iter in 1..30")
+
+
+class PaperNMPC:
+    """The paper's NMPC (:class:`acid.mpc.nmpc.NMPC`) with a constant bound, optionally
+    tuned to another controller's mean cabin temperature."""
+
+    def __init__(self, config: PaperNMPCConfig):
+        self.config = config
+
+    def run(self, ctx: ScenarioContext) -> ControllerRun:
+        from acid.mpc.nmpc import NMPC
+
+        c = self.config
+        mpc = NMPC(ctx.params, ctx.nmpc_config(c.horizon, solver=c.solver))
+        cond = ctx.conditions
+        b0 = cond.T_set if c.bound == "setpoint" else cond.T_high
+        if not c.match:
+            return ctx.simulate(mpc, ctx.constant_bound(b0, mpc.N), "nmpc")
+        from acid.mpc.cav_study import tune_mean  # the secant tuning of acid cav-study
+
+        target = ctx.completed[c.match].mean_T_cab
+
+        def run_at(b: float):
+            r = ctx.simulate(mpc, ctx.constant_bound(b, mpc.N), "nmpc")
+            return r.mean_T_cab, r
+
+        b, r, hist = tune_mean(run_at, target, cond.T_low - 2.0, cond.T_high, c.tol_K,
+                               c.max_iter)
+        return ControllerRun(r.run, r.end_state,
+                             {"bound_K": b, "matched_to": c.match, "target_mean_K": target,
+                              "tuning_runs": len(hist)})
+
+
+@dataclass(frozen=True)
+class ICMControllerConfig:
+    """The paper's NMPC following the ICM bound (:class:`acid.mpc.icm.ICMConfig`; the band
+    is the scenario's comfort band).
+
+    Attributes
+    ----------
+    horizon : N, steps of Ts.
+    v_slow, v_fast : at or below ``v_slow`` the bound is the band's top, at or above
+        ``v_fast`` its bottom, m/s.
+    fall_rate, rise_rate : rate limits of the bound, K/s.
+    solver : ``"fatrop"`` or ``"ipopt"``.
+    """
+
+    horizon: int = 6
+    v_slow: float = 2.0
+    v_fast: float = 20.0
+    fall_rate: float = 0.1
+    rise_rate: float = 0.2
+    solver: str = "fatrop"
+
+    def __post_init__(self):
+        _check_nmpc_options(self.horizon, self.solver)
+        if not 0.0 <= self.v_slow < self.v_fast:
+            raise ConfigError(f"need 0 <= v_slow < v_fast, got {self.v_slow:g}, "
+                              f"{self.v_fast:g} m/s")
+        if not (self.fall_rate > 0 and self.rise_rate > 0):
+            raise ConfigError("fall_rate and rise_rate must be positive (K/s)")
+
+
+class ICMController:
+    """The paper's CAV controller: NMPC + speed-coordinated bound (paper section IV-C)."""
+
+    def __init__(self, config: ICMControllerConfig):
+        self.config = config
+
+    def run(self, ctx: ScenarioContext) -> ControllerRun:
+        from acid.mpc.icm import ICMConfig, icm_upper_bound
+        from acid.mpc.nmpc import NMPC
+
+        c, cond = self.config, ctx.conditions
+        mpc = NMPC(ctx.params, ctx.nmpc_config(c.horizon, solver=c.solver))
+        icm = ICMConfig(T_low=cond.T_low, T_high=cond.T_high, v_slow=c.v_slow,
+                        v_fast=c.v_fast, fall_rate=c.fall_rate, rise_rate=c.rise_rate)
+        m = ctx.n + mpc.N + 1
+        ub = icm_upper_bound(np.arange(m) * ctx.Ts, ctx.v_preview[:m], icm,
+                             initial=ctx.start_T_cab)
+        return ctx.simulate(mpc, ub, "icm")
+
+
+@dataclass(frozen=True)
+class NominalConfig:
+    """The plant's nominal PI controllers (paper section II-A).
+
+    Attributes
+    ----------
+    T_evap_set_C : evaporator wall set-point of the compressor loop, degC.
+    """
+
+    T_evap_set_C: float = 3.0
+
+    def __post_init__(self):
+        if not 0.0 <= self.T_evap_set_C <= 12.0:
+            raise ConfigError(f"T_evap_set_C = {self.T_evap_set_C:g} must lie in 0..12 degC")
+
+
+class NominalController:
+    """Blower PI on the cabin set-point, compressor PI on the evaporator set-point: the
+    conventional A/C, run inside the plant (``HifiPlant(mode="nominal")``)."""
+
+    def __init__(self, config: NominalConfig):
+        self.config = config
+
+    def run(self, ctx: ScenarioContext) -> ControllerRun:
+        from acid.mpc.scenarios import ClosedLoopRun
+        from acid.sweep.context import plant_state
+
+        T_ew_set = C2K(self.config.T_evap_set_C)
+        plant = ctx.make_plant(mode="nominal", T_ew_set=T_ew_set)
+        plant.reset(ctx.start)
+        T_set = ctx.conditions.T_set
+        rows = []
+        for v in ctx.v_step:
+            rows.append(plant.step(0.0, T_ew_set, float(v), T_cab_set=T_set))
+            if ctx.tick is not None:
+                ctx.tick()
+        end = plant.measure()
+
+        def col(name):
+            return np.array([float(r.get(name, 0.0)) for r in rows])
+
+        def states(name):
+            return np.append(col(name), float(end[name]))
+
+        n = len(rows)
+        return ControllerRun(ClosedLoopRun(
+            label="nominal", Ts=ctx.Ts, time=np.arange(n + 1) * ctx.Ts,
+            T_cab=states("T_cab"), T_evap=states("T_evap"), T_int=states("T_int"),
+            T_shell=states("T_shell"), T_cab_max=np.full(n + 1, T_set),
+            T_cab_min=np.full(n + 1, ctx.conditions.T_low), T_evap_min=C2K(0.0),
+            T_evap_max=C2K(12.0), W_bl=col("W_bl"), T_evap_set=col("T_evap_set"),
+            v_veh=np.asarray(ctx.v_step, dtype=float), T_ain=col("T_ain"),
+            P_comp=col("P_comp"), P_bl=col("P_bl"), P_fan=col("P_fan"),
+            compressor_on=np.ones(n, dtype=bool), step_ms=np.full(n, np.nan),
+            fallback=np.zeros(n, dtype=bool), iterations=np.full(n, -1),
+            predicted_T_cab=np.full((n, 1), np.nan)), plant_state(plant))
+
+
+register_controller("nmpc", PaperNMPCConfig, PaperNMPC,
+                    "the paper's NMPC on a constant cabin bound (set-point or band top)")
+register_controller("icm", ICMControllerConfig, ICMController,
+                    "the paper's NMPC on the speed-coordinated ICM bound (paper Fig. 9)")
+register_controller("nominal", NominalConfig, NominalController,
+                    "the plant's PI controllers (conventional A/C)")
+
+__all__ = ["register_controller", "controller_types", "build_config", "ControllerType",
+           "PaperNMPC", "PaperNMPCConfig", "ICMController", "ICMControllerConfig",
+           "NominalController", "NominalConfig"]

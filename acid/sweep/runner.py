@@ -1,0 +1,182 @@
+"""Run a validated sweep on an executor, streaming results to disk, resuming what is done.
+
+:func:`run_sweep` holds the output folder (:func:`acid.outdir.claim`), skips every scenario
+whose record is already ``"ok"`` (unless ``force``), sends the rest to the executor (a Dask
+cluster by default: one task per scenario, plus one identification task per plant
+configuration when ``params = "identify"``, which Dask runs once and hands to every scenario
+that needs it), saves each record the moment it arrives, then writes the table, the figures
+and ``summary.json``. An interrupted sweep keeps its finished records; the next run resumes.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from acid import __version__
+from acid._io import save_figure, write_json
+from acid.errors import AcidError
+from acid.executor import Executor, check_interrupt, open_executor
+from acid.outdir import claim
+from acid.sweep.results import (
+    ResultStore,
+    controller_summary,
+    failure_record,
+    results_table,
+    write_table,
+)
+from acid.sweep.scenario import identify_params, one_line, run_scenario
+from acid.sweep.spec import SweepSpec
+
+#: exceptions of a task that never reported (run the scenario again next time)
+LOST = ("KilledWorker", "CancelledError", "FutureCancelledError", "CommClosedError",
+        "TimeoutError", "OSError")
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """What a sweep produced.
+
+    Attributes
+    ----------
+    spec : the sweep.
+    out : output folder.
+    table : pandas DataFrame, one row per scenario x controller.
+    computed, reused, failed : scenarios run now, taken from earlier runs, failed now.
+    elapsed_s : wall time, s.
+    executor : where it ran (one line).
+    files : name -> path of what was written.
+    """
+
+    spec: SweepSpec
+    out: Path
+    table: object
+    computed: int
+    reused: int
+    failed: int
+    elapsed_s: float
+    executor: str
+    files: dict = field(default_factory=dict)
+
+    def failures(self) -> list[dict]:
+        """``{scenario, label, controller, error}`` of every failed row."""
+        df = self.table
+        bad = df[df["status"] != "ok"]
+        return [{"scenario": int(r.scenario), "label": r.label, "controller": r.controller,
+                 "error": r.error} for r in bad.itertuples()]
+
+    def to_json_dict(self) -> dict:
+        from acid._io import json_safe
+
+        return json_safe({
+            "command": "sweep", "acid_version": __version__, "title": self.spec.title,
+            "spec": str(self.spec.path) if self.spec.path else None, "out": str(self.out),
+            "scenarios": len(self.spec.scenarios),
+            "controllers": [c.label for c in self.spec.controllers],
+            "baseline": self.spec.baseline, "rows": int(len(self.table)),
+            "computed": self.computed, "reused": self.reused, "failed": self.failed,
+            "executor": self.executor, "elapsed_s": self.elapsed_s,
+            "per_controller": controller_summary(self.table, self.spec.baseline),
+            "failures": self.failures(), "files": {k: str(v) for k, v in self.files.items()}})
+
+
+def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
+              scheduler: str | None = None, executor: Executor | None = None,
+              force: bool = False, retry_failed: bool = False, figures: bool = True,
+              on_progress: Callable[[int, int], None] | None = None,
+              on_start: Callable[[int, int, str], None] | None = None) -> SweepResult:
+    """Run ``spec`` into ``out``; see the module docstring.
+
+    Parameters
+    ----------
+    workers : worker processes of a local Dask cluster (None: one per core).
+    scheduler : address of an existing Dask scheduler instead.
+    executor : an open executor to use instead (e.g. ``InlineExecutor()`` in tests).
+    force : run every scenario again, ignoring earlier records.
+    retry_failed : run scenarios again whose earlier record is an error.
+    figures : write the summary figures.
+    on_progress : ``on_progress(done, total)`` after each scenario that ran now.
+    on_start : ``on_start(to_run, reused, where)`` once the executor is up.
+    """
+    t0 = time.perf_counter()
+    out = Path(out)
+    try:
+        import pyarrow  # noqa: F401  (the Parquet table; checked before hours of work)
+    except ImportError:
+        raise AcidError("acid sweep writes Parquet with pyarrow: pip install "
+                        "'acid[distributed]'") from None
+    with claim(out, "acid sweep"):
+        store = ResultStore(out)
+        tasks = spec.tasks()
+        todo = [t for t in tasks if force or not store.finished(t.key, retry_failed)]
+        computed = failed = 0
+        where = "nothing to run"
+        if todo:
+            if executor is not None:
+                computed, failed, where = _execute(spec, todo, store, executor, on_progress,
+                                                   on_start, len(tasks) - len(todo))
+            else:
+                with open_executor(workers, scheduler, inline_when_single=False) as ex:
+                    computed, failed, where = _execute(spec, todo, store, ex, on_progress,
+                                                       on_start, len(tasks) - len(todo))
+        elif on_start is not None:
+            on_start(0, len(tasks), where)
+        records = [store.load(t.key) for t in tasks]
+        table = results_table([r for r in records if r is not None])
+        files = write_table(table, out)
+        if figures:
+            from acid.report.sweep import energy_figure, saving_figure
+
+            files["saving_figure"] = save_figure(saving_figure(table, spec.baseline),
+                                                 out / "saving_vs_ambient.png")
+            files["energy_figure"] = save_figure(energy_figure(table),
+                                                 out / "energy_per_cycle.png")
+        if spec.path is not None and spec.path.is_file():
+            from acid._io import write_text
+
+            files["spec"] = write_text(out / "spec.toml", spec.path.read_text())
+        files["summary"] = out / "summary.json"
+        result = SweepResult(spec=spec, out=out, table=table, computed=computed,
+                             reused=len(tasks) - len(todo), failed=failed,
+                             elapsed_s=time.perf_counter() - t0, executor=where, files=files)
+        write_json(files["summary"], result.to_json_dict())
+    return result
+
+
+def _execute(spec, todo, store, ex: Executor, on_progress, on_start,
+             reused) -> tuple[int, int, str]:
+    """Submit ``todo``, save each record as it arrives; returns (computed, failed, where)."""
+    if on_start is not None:
+        on_start(len(todo), reused, ex.describe())
+    ident = {}
+    running = {}
+    for t in todo:
+        params = None
+        if t.params_kind == "identify":
+            k = repr(t.plant_config)
+            if k not in ident:
+                ident[k] = ex.submit(identify_params, t.plant_config, spec.identify)
+            params = ident[k]
+        running[ex.submit(run_scenario, t, params, check_interrupt)] = t
+    done = failed = 0
+    while running:
+        for fut in ex.wait_any(running, timeout=0.5):
+            t = running.pop(fut)
+            try:
+                record = ex.result(fut)
+            except Exception as exc:  # the task did not report: lost, or identification
+                lost = type(exc).__name__ in LOST
+                record = failure_record(t.key, t.index, t.scenario.label, t.controllers,
+                                        t.baseline, one_line(exc), "lost" if lost else "error")
+            store.save(record)
+            done += 1
+            failed += record["status"] != "ok"
+            if on_progress is not None:
+                on_progress(done, len(todo))
+        ex.pump()
+    return done, failed, ex.describe()
+
+
+__all__ = ["run_sweep", "SweepResult"]

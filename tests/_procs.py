@@ -1,0 +1,75 @@
+"""Helpers for tests that interrupt or kill acid commands (imported as ``from _procs ...``).
+
+Commands start in their own session (as a terminal's foreground job would), with SIGINT at
+its default (the test runner may have inherited it ignored), so that ``interrupt`` sends
+SIGINT to the whole process group, as Ctrl-C does.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import psutil
+
+
+def start(*args: str) -> subprocess.Popen:
+    """``acid ARGS`` in a new session, stdout and stderr piped together."""
+    exe = shutil.which("acid") or os.path.join(os.path.dirname(sys.executable), "acid")
+    return subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+
+
+def wait_for(condition, timeout: float = 120.0) -> bool:
+    """Poll ``condition()`` every 50 ms until it is true (True) or ``timeout`` s (False)."""
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if condition():
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def descendants(proc: subprocess.Popen) -> list[psutil.Process]:
+    """Every process below ``proc`` now."""
+    try:
+        return psutil.Process(proc.pid).children(recursive=True)
+    except psutil.NoSuchProcess:
+        return []
+
+
+def alive(procs) -> list[int]:
+    """Pids of ``procs`` still running (zombies count as ended)."""
+    out = []
+    for p in procs:
+        try:
+            if p.is_running() and p.status() != psutil.STATUS_ZOMBIE:
+                out.append(p.pid)
+        except psutil.NoSuchProcess:
+            pass
+    return out
+
+
+def dead_pid() -> int:
+    """The process id of a process that has ended (for stale temporary-file names)."""
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+def interrupt(proc: subprocess.Popen) -> None:
+    """Ctrl-C: SIGINT to the command's whole process group."""
+    os.killpg(proc.pid, signal.SIGINT)
+
+
+def hidden(folder) -> list[str]:
+    """Hidden temporaries (``.*.part`` files, ``.*.tmp`` folders) left below ``folder``."""
+    from pathlib import Path
+
+    return sorted(str(p) for p in Path(folder).rglob(".*")
+                  if p.name.endswith((".part", ".tmp")))

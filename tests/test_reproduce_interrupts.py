@@ -1,0 +1,56 @@
+"""``acid reproduce`` under Ctrl-C, SIGKILL and a concurrent second run (issue 11).
+
+Ctrl-C stops with exit 130, no report and no temporaries; after SIGKILL its worker
+processes end with it (the caller's pipes close) and the next run removes what was left;
+a second run into the same folder is refused with one line.
+"""
+
+from __future__ import annotations
+
+import pytest
+from _procs import alive, descendants, hidden, interrupt, start, wait_for
+
+pytestmark = pytest.mark.slow
+
+
+def _stage_started(out, stage="*"):
+    return lambda: bool(list((out / "stages").glob(f".{stage}.*.tmp"))) \
+        if (out / "stages").is_dir() else False
+
+
+@pytest.mark.parametrize("jobs, stage", [("1", "mpc"), ("2", "*")])
+def test_ctrl_c_exits_130_with_nothing_half_written(tmp_path, jobs, stage):
+    """jobs 1 is interrupted inside the NMPC checks, where CasADi swallows Ctrl-C."""
+    out = tmp_path / "paper"
+    p = start("reproduce", "--quick", "--jobs", jobs, "--out", str(out))
+    assert wait_for(_stage_started(out, stage)), p.communicate()[0]
+    kids = descendants(p)
+    interrupt(p)
+    text, _ = p.communicate(timeout=120)
+    assert p.returncode == 130, text
+    assert "interrupted" in text and "Traceback" not in text
+    assert not (out / "report.html").exists() and not (out / "summary.json").exists()
+    assert hidden(out) == []
+    assert wait_for(lambda: not alive(kids), 30), alive(kids)
+
+
+def test_killed_run_takes_its_workers_along_and_the_next_run_cleans_up(tmp_path):
+    from acid.outdir import claim
+
+    out = tmp_path / "paper"
+    p = start("reproduce", "--quick", "--jobs", "2", "--out", str(out))
+    assert wait_for(_stage_started(out)), p.communicate()[0]
+    assert wait_for(lambda: len(descendants(p)) >= 2, 60)
+    # a second run into the same folder is refused while the first holds it
+    q = start("reproduce", "--quick", "--jobs", "1", "--out", str(out))
+    text, _ = q.communicate(timeout=120)
+    assert q.returncode == 2, text
+    assert text.strip().startswith("error: ") and len(text.strip().splitlines()) == 1
+    assert f"in use by acid reproduce (pid {p.pid}" in text
+    kids = descendants(p)
+    p.kill()
+    p.communicate(timeout=60)  # returns: no worker holds the pipes open
+    assert wait_for(lambda: not alive(kids), 30), alive(kids)
+    assert hidden(out)  # the killed run's stage folders ...
+    with claim(out, "acid reproduce"):  # ... are removed when the next run takes the folder
+        assert hidden(out) == []
