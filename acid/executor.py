@@ -388,6 +388,7 @@ class DaskExecutor(Executor):
                 self.client.close(timeout=5)
             return
         if interrupted:  # do not wait for running tasks: end our worker processes now
+            _silence_dask_logs()  # the comms we break would log tracebacks on stderr
             self._kill_workers()
         with contextlib.suppress(Exception):
             self.client.close(timeout=2 if interrupted else 10)
@@ -403,6 +404,12 @@ class DaskExecutor(Executor):
             if child.pid in self._pids:
                 with contextlib.suppress(Exception):
                     child.kill()
+
+
+def _silence_dask_logs() -> None:
+    """Mute Dask's and Tornado's loggers in this process (closing comms on purpose)."""
+    for name in ("distributed", "tornado"):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 @contextlib.contextmanager
