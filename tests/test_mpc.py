@@ -402,7 +402,7 @@ def test_plant_scenario_keeps_avoidable_violations_within_0_05_K(which):
     d = res.to_json_dict()
     assert res.passed, d
     assert d["max_avoidable_violation_K"] <= 0.05
-    hot = res.runs[0]
-    # what remains is the hot start's second sample, which maximum cooling cannot avoid
-    assert hot.max_violation_K == pytest.approx(hot.to_json_dict()["unavoidable_violation_K"],
-                                                abs=1e-6)
+    # issue 13: after the first step no violation above 0.05 K at all (the 31 degC hot start
+    # is one that maximum cooling brings under the bound by t = 2 Ts)
+    assert d["max_violation_K"] <= 0.05
+    assert all(r.to_json_dict()["unavoidable_violation_K"] <= 1e-9 for r in res.runs)
