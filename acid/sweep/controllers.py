@@ -22,6 +22,8 @@ Built-in
              Fig. 9) built from the previewed speed inside the comfort band.
 ``nominal``  the plant's own PI controllers (blower on the cabin set-point, compressor on
              the evaporator set-point): the conventional A/C.
+``econ``     the economic NMPC on the identified power map (``acid cav-study``'s D and E;
+             :mod:`acid.sweep.econ`).
 
 Further controllers register from their own module: add it to ``CONTROLLER_MODULES`` (in
 acid) or name it in the spec's ``plugins = ["my_package.my_controller"]``.
@@ -43,7 +45,7 @@ from acid.sweep.context import ControllerRun, ScenarioContext
 from acid.units import C2K
 
 #: acid modules that register controllers when imported (the built-ins are in this one)
-CONTROLLER_MODULES: tuple[str, ...] = ()
+CONTROLLER_MODULES: tuple[str, ...] = ("acid.sweep.econ",)
 
 
 @dataclass(frozen=True)
