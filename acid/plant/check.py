@@ -11,7 +11,9 @@ Checks (issue 9), each a row ``CheckRow(name, value, reference, unit, passed)``:
     max blower, windows open, in the shade, 60 % RH, at 25/30/35/40 degC, inside the bands of
     a published performance chart [NissanGTR];
 (e) pull-down: cabin air 10 min after a 55 degC soak against the JAF user test [JAF2016], and
-    the time from a 43 degC sun-soaked cabin to 25 degC;
+    the time from a 60 degC soak at 43 degC ambient and 1000 W/m^2 to 25 degC against the
+    20-30 min that PLANT.md gives for real cars (the project's design target: no published
+    test with its conditions was found);
 (f) steady COP over compressor speed, vehicle speed and ambient (directions of PLANT.md
     behaviours 2-4) and the steady COP at 30 degC, standstill, 1.8 kW of cooling;
 (g) steady COP at 25 m/s against standstill at equal cooling load (1.8 kW, 30 degC).
@@ -51,6 +53,17 @@ SERVICE_CHART_SOURCE = ("[NissanGTR] Nissan GT-R (R35) 2010 ESM, HAC 'Performanc
 #: recirculation 27.5 degC, fresh air 29.5 degC.
 JAF_SOAK_C, JAF_FRESH_10MIN_C, JAF_RECIRC_10MIN_C = 55.0, 29.5, 27.5
 JAF_TOL_K = 3.0
+
+#: PLANT.md ("what real cars show"): at 43 degC ambient with 1000 W/m^2 of sun, breath-level
+#: air reaches 25-30 degC after 20-30 min: acid's design target for the time from a 60 degC
+#: soak to 25 degC (a reviewer's typical value, not a citation).
+HOT_AMBIENT_C, HOT_SUN_W_M2, HOT_SOAK_C = 43.0, 1000.0, 60.0
+HOT_PULLDOWN_MIN = (20.0, 30.0)
+
+#: A sun-soaked cabin relative to its air (K): interior surfaces (dash, seat covers) 13 K
+#: above, the interior cores (``T_int_slow``) at the air, the shell 3 K below (assumption;
+#: the JAF start of (e): 55 degC air, 68 / 55 / 52 degC).
+SOAK_OFFSETS_K = {"T_cab": 0.0, "T_int": 13.0, "T_int_slow": 0.0, "T_shell": -3.0}
 
 NA = "not available on this plant"
 
@@ -299,23 +312,30 @@ def check_service_chart(plant: Plant, progress=None) -> tuple[list[CheckRow], di
 
 
 def check_pulldown(plant: Plant) -> tuple[list[CheckRow], dict]:
-    """(e) pull-down: JAF's 55 degC soak (10 min) and the 43 degC soak to 25 degC."""
+    """(e) pull-down: JAF's 55 degC soak (10 min) and a 60 degC soak at 43 degC, 1000 W/m^2."""
     h = _hifi(plant)
     data: dict = {}
     rows = []
-    n = int(round(1800.0 / plant.Ts))
-    # JAF: cabin air 55 degC; interior and shell soaked hotter / near it; 30 degC, 850 W/m^2
-    # (assumed: the test's ambient is not published); A/C at full cooling (set-point 18 degC).
-    # Interior surfaces (dash, seat covers) of a sun-soaked car run 10-15 K above the air, the
-    # cores (T_int_slow, where the plant has it) near the air (assumption).
-    for label, T0, T_int0, T_is0, T_sh0 in (("jaf", 55.0, 68.0, 55.0, 52.0),
-                                            ("soak43", 43.0, 55.0, 45.0, 41.0)):
-        init = {"T_cab": C2K(T0), "T_int": C2K(T_int0), "T_shell": C2K(T_sh0)}
+    n = int(round(2700.0 / plant.Ts))
+    # JAF: cabin air 55 degC; 30 degC, 850 W/m^2 (assumed: the test's ambient is not
+    # published); A/C at full cooling (set-point 18 degC). Hot: 43 degC, 1000 W/m^2, cabin
+    # air 60 degC; set-point 22 degC. Surfaces from SOAK_OFFSETS_K in both.
+    rise = SOAK_OFFSETS_K
+    for label, T_set, T_amb, G in (("jaf", 18.0, None, None),
+                                   ("hot43", 22.0, HOT_AMBIENT_C, HOT_SUN_W_M2)):
+        soak = C2K(JAF_SOAK_C if label == "jaf" else HOT_SOAK_C)
+        init = {k: soak + d for k, d in rise.items()}
         if h is not None:
-            init["T_int_slow"] = C2K(T_is0)
-            p = _variant(plant, "nominal", T_cab_set=C2K(18.0 if label == "jaf" else 22.0))
+            changes = {"T_cab_set": C2K(T_set)}
+            if T_amb is not None:
+                changes.update(T_amb=C2K(T_amb), G_solar=G, T_ew0=C2K(T_amb), T_cw0=C2K(T_amb))
+            p = _variant(plant, "nominal", **changes)
+        elif T_amb is not None:  # the sun cannot be set on this plant
+            data[label] = None
+            continue
         else:
-            p = ExternalNominal(plant, T_cab_set=C2K(18.0 if label == "jaf" else 22.0))
+            init.pop("T_int_slow")
+            p = ExternalNominal(plant, T_cab_set=C2K(T_set))
         p.reset(init)
         recs = [p.step(0.0, C2K(3.0), 0.0) for _ in range(n)]
         T = K2C(np.array([r["T_cab"] for r in recs]))
@@ -329,13 +349,23 @@ def check_pulldown(plant: Plant) -> tuple[list[CheckRow], dict]:
                          "JAF: 27.5 recirculation, 29.5 fresh air (the plant starts on fresh air "
                          "and recirculates once below ambient); +-3 K for the unpublished "
                          "ambient (30 degC, 850 W/m^2 assumed) and the car"))
-    T43 = np.asarray(data["soak43"]["T_cab_C"])
+    name = (f"pull-down: {HOT_SOAK_C:g} degC soak at {HOT_AMBIENT_C:g} degC, "
+            f"{HOT_SUN_W_M2:g} W/m2, to 25 degC")
+    ref = f"{HOT_PULLDOWN_MIN[0]:g}-{HOT_PULLDOWN_MIN[1]:g} min (PLANT.md, design target)"
+    if data["hot43"] is None:
+        rows.append(CheckRow(name, None, ref, "min", None, "e",
+                             NA + " (ambient and sun cannot be set)"))
+        return rows, data
+    T43 = np.asarray(data["hot43"]["T_cab_C"])
     below = np.nonzero(T43 <= 25.0)[0]
     t25 = float(below[0] * plant.Ts / 60.0) if below.size else math.inf
     data["t25_min"] = t25
-    rows.append(CheckRow("pull-down: 43 degC sun-soaked cabin to 25 degC", t25,
-                         "2-20 min (JAF2016: 55 to 27.5-29.5 degC in 10 min)", "min",
-                         2.0 <= t25 <= 20.0, "e"))
+    rows.append(CheckRow(name, t25, ref, "min",
+                         HOT_PULLDOWN_MIN[0] <= t25 <= HOT_PULLDOWN_MIN[1], "e",
+                         f"cabin air {T43[int(round(1800.0 / plant.Ts))]:.1f} degC after 30 "
+                         f"min, {T43[-1]:.1f} degC after 45 min; real cars: breath-level air "
+                         "25-30 degC after 20-30 min (PLANT.md; no published test with these "
+                         "conditions was found)"))
     return rows, data
 
 

@@ -139,13 +139,20 @@ def plant_check_figures(result) -> dict[str, Figure]:
     ax1.grid(True, alpha=0.3)
     p = result.pulldown
     if p:
-        for label, name in (("jaf", "55 °C soak (JAF conditions)"), ("soak43", "43 °C soak")):
-            d = p[label]
+        for label, name in (("jaf", "55 °C soak (JAF conditions)"),
+                            ("hot43", "60 °C soak, 43 °C, 1000 W/m²")):
+            d = p.get(label)
+            if not d:
+                continue
             tt = np.asarray(d["time_s"]) / 60.0
             ax2.plot(tt, d["T_cab_C"], label=f"T_cab, {name}")
         ax2.errorbar([10.0], [28.5], yerr=[[1.0], [1.0]], fmt="s", color="k", capsize=4,
                      label="JAF 2016: 27.5-29.5 °C at 10 min")
         ax2.axhline(25.0, color="0.5", ls=":", lw=1)
+        from acid.plant.check import HOT_PULLDOWN_MIN as lo_hi
+
+        ax2.axvspan(*lo_hi, color="0.85", alpha=0.5,
+                    label=f"PLANT.md: 25 °C after {lo_hi[0]:g}-{lo_hi[1]:g} min")
         ax2.legend(fontsize=8)
     ax2.set_xlabel("time (min)")
     ax2.set_ylabel("cabin air temperature (°C)")
