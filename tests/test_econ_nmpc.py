@@ -79,7 +79,7 @@ def test_non_uniform_grid_and_stage_means(econ_truth):
 
 
 def test_terminal_prices(econ_truth):
-    """'steady': the optimal steady state's multipliers at the last interval's speed;
+    """'steady': the optimal steady state's multipliers at the horizon's mean speed;
     'heat': the heat content's gradient at the marginal compressor price; 'none': zero."""
     ramp = np.linspace(0.0, 30.0, len(SHORT))
     sol = {t: EconNMPC(econ_truth, _cfg(terminal=t)).solve(X, ramp, C2K(30.0))
@@ -87,7 +87,7 @@ def test_terminal_prices(econ_truth):
     assert all(s.success for s in sol.values())
     mpc = EconNMPC(econ_truth, _cfg())
     lam = SteadyStatePrice(econ_truth, mpc.config.u_min, mpc.config.u_max)(
-        30.0, C2K(30.0), C2K(22.0), C2K(24.0))
+        15.0, C2K(30.0), C2K(22.0), C2K(24.0))
     np.testing.assert_allclose(sol["steady"].terminal_prices, lam, rtol=1e-6)
     p = econ_truth
     w_sh = p.hA_sh / (p.hA_sh + p.hA_ext0 + p.hA_ext_v * 30.0 ** 0.8)

@@ -29,10 +29,11 @@ of several minutes), so what the plan leaves in the states at its end is priced 
 * ``"heat"``: ``lam = pi dH/dx``, ``H`` the model's heat content
   (:func:`acid.econ.model.heat_content`) and ``pi`` the marginal electric energy per joule of
   cooling, ``dP_comp/dQ_e`` of the power map at the current operating point;
-* ``"steady"`` (default): the multipliers of the model's optimal steady state at the last interval's
-  speed and ambient (the economic-MPC terminal cost of the rotated-cost literature,
+* ``"steady"`` (default): the multipliers of the model's optimal steady state at the horizon's
+  mean speed and ambient (the economic-MPC terminal cost of the rotated-cost literature,
   :mod:`acid.mpc.econ_terminal`): each state priced at what the best steady operation pays
-  for one unit more of it (D holds the current speed; E uses the previewed one);
+  for one unit more of it (D: the current speed, held; E: the previewed speeds' mean, a
+  steadier estimate of the speeds after the horizon than its last interval's);
 * ``"none"``: no terminal cost.
 
 **Solver.** The NLP is built once through :func:`_make_solver`, which hands it to
@@ -478,8 +479,8 @@ class EconNMPC:
         """(5,) prices of the terminal cost ``lam^T (x_N - x_0)``, J per unit state.
 
         ``"heat"``: ``pi dH/dx`` (the heat content's gradient at the last interval's speed);
-        ``"steady"``: the multipliers of the optimal steady state at the last interval's
-        speed and ambient and the horizon's last band (:mod:`acid.mpc.econ_terminal`);
+        ``"steady"``: the multipliers of the optimal steady state at the horizon's mean
+        speed and ambient and its last band (:mod:`acid.mpc.econ_terminal`);
         ``"none"``: zeros.
         """
         term = self.config.terminal
@@ -487,8 +488,9 @@ class EconNMPC:
             pi = self.price(x0, u, v[0], Ta[0], dist)
             return pi * np.asarray(self._dH(x0, v[-1])).ravel()
         if term == "steady":
-            return self._steady(float(v[-1]), float(Ta[-1]), float(T_cab_min),
-                                float(T_cab_max))
+            iv = np.asarray(self.config.intervals)
+            return self._steady(float(iv @ v) / iv.sum(), float(iv @ Ta) / iv.sum(),
+                                float(T_cab_min), float(T_cab_max))
         return np.zeros(_NX)
 
     def price(self, x0, u, v0: float, Ta0: float, dist) -> float:
