@@ -72,11 +72,9 @@ from acid.psychro import humidity_ratio
 from acid.units import C2K
 
 _NX, _NU = model.NX, model.NU
-#: state offsets and scales of the NLP variables (z = (x - offset) / scale): K and kg/kg
-_X_OFF = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
-_X_SCL = np.array([1.0, 1.0, 1.0, 1.0, 1e-3])
-_U_OFF = np.array([0.1, 278.15])
-_U_SCL = np.array([0.01, 1.0])
+#: NLP variable scaling (acid.econ.model: one source for the NMPC, steady state and bound)
+_X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
+_U_OFF, _U_SCL = model.U_OFFSET, model.U_SCALE
 #: terminal costs of the horizon's end state (module docstring)
 TERMINALS = ("heat", "steady", "none")
 

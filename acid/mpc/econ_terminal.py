@@ -34,10 +34,8 @@ from acid.econ import model
 from acid.econ.params import EconParams
 from acid.errors import SolverWarning
 
-_X_OFF = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
-_X_SCL = np.array([1.0, 1.0, 1.0, 1.0, 1e-3])
-_U_OFF = np.array([0.1, 278.15])
-_U_SCL = np.array([0.01, 1.0])
+_X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
+_U_OFF, _U_SCL = model.U_OFFSET, model.U_SCALE
 #: objective scale inside the NLP (kJ instead of J)
 _COST_SCALE = 1e-3
 #: speed spacing of the grid, m/s
