@@ -10,7 +10,7 @@ import pytest
 from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
-from acid import fit as fitmod
+import acid.fit as fitmod
 from acid import hac
 from acid.data import Dataset
 from acid.errors import ConfigError
