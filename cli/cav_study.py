@@ -70,6 +70,10 @@ def cav_study(
     econ_horizon: float = typer.Option(120.0, "--econ-horizon",
                                        help="Economic NMPC horizon, s (5 s steps)."),
     econ_solver: str = typer.Option("fatrop", "--econ-solver", help="'fatrop' or 'ipopt'."),
+    econ_terminal: str = typer.Option(
+        "steady", "--econ-terminal",
+        help="Terminal cost of D and E: 'steady' (multipliers of the model's optimal steady "
+             "state), 'heat' (heat content at the marginal compressor price) or 'none'."),
     offset_free: bool = typer.Option(
         False, "--offset-free/--no-offset-free",
         help="D and E estimate model disturbances with an offset-free Kalman filter."),
@@ -122,7 +126,7 @@ def cav_study(
         make_scenario,
     )
     from acid.mpc.cav_study import cav_study as run_study
-    from acid.mpc.econ_nmpc import EconNMPCConfig
+    from acid.mpc.econ_nmpc import TERMINALS, EconNMPCConfig
     from acid.plant import make_plant
 
     names = available_cycles()
@@ -148,6 +152,8 @@ def cav_study(
     require_range(econ_horizon, "--econ-horizon", 10.0, 3600.0, "s")
     require(econ_solver in ("fatrop", "ipopt"), "--econ-solver",
             f"must be 'fatrop' or 'ipopt', got {econ_solver!r}")
+    require(econ_terminal in TERMINALS, "--econ-terminal",
+            f"must be one of {', '.join(TERMINALS)}, got {econ_terminal!r}")
     if rh_max is not None:
         require_range(rh_max, "--rh-max", 0.0, 100.0, "%", lo_open=True)
     if t_amb is not None:
@@ -157,7 +163,8 @@ def cav_study(
             "applies to --plant hifi only")
     p = load_params(params, allow_unstable=allow_unstable)
     econ_cfg = EconNMPCConfig(intervals=_econ_intervals(econ_horizon, p.Ts),
-                              solver=econ_solver, compiled="auto" if compiled else False,
+                              solver=econ_solver, terminal=econ_terminal,
+                              compiled="auto" if compiled else False,
                               offset_free=offset_free,
                               T_cab_min=C2K(T_low), T_cab_max=C2K(T_high),
                               RH_max=None if rh_max is None else rh_max / 100.0)

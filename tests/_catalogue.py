@@ -494,6 +494,8 @@ CASES: list[Case] = [
          ("--warmup",)),
     Case("cav-study-tail-1e12", "sizes", ("cav-study", "--tail", "1e12"), ("--tail",)),
     Case("cav-study-cycle", "options", ("cav-study", "--cycle", "moon"), ("--cycle",)),
+    Case("cav-study-econ-terminal", "options", ("cav-study", "--econ-terminal", "zero"),
+         ("--econ-terminal",)),
     # ------------------------------------------------------------------------- claims
     Case("claims-summary-missing", "files", ("claims", "{w}/none.json"), ("SUMMARY",
                                                                           "none.json")),

@@ -10,6 +10,7 @@ import pytest
 from acid.econ.plant import EconPlant
 from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
 from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
+from acid.mpc.econ_terminal import SteadyStatePrice
 from acid.units import C2K
 
 X = np.array([C2K(24.5), C2K(27.0), C2K(35.0), C2K(8.0), 0.008])
@@ -39,7 +40,7 @@ def test_closed_loop_on_its_own_model_keeps_the_band(econ_truth):
     assert min(T[3:]) >= C2K(22.0) - 0.05
     assert T[-1] == pytest.approx(C2K(24.0), abs=0.1)   # rides the upper edge: least energy
     sol = mpc.log.solutions[-1]
-    assert sol.success and sol.price > 0 and sol.x.shape == (9, 5)
+    assert sol.success and sol.terminal_prices[0] > 0 and sol.x.shape == (9, 5)
 
 
 def test_more_cooling_costs_more(econ_truth):
@@ -77,6 +78,30 @@ def test_non_uniform_grid_and_stage_means(econ_truth):
     np.testing.assert_allclose(stage_means(prof, 8, (5.0, 10.0), 5.0), [8, 9])  # last holds
 
 
+def test_terminal_prices(econ_truth):
+    """'steady': the optimal steady state's multipliers at the horizon's mean speed;
+    'heat': the heat content's gradient at the marginal compressor price; 'none': zero."""
+    ramp = np.linspace(0.0, 30.0, len(SHORT))
+    sol = {t: EconNMPC(econ_truth, _cfg(terminal=t)).solve(X, ramp, C2K(30.0))
+           for t in ("steady", "heat", "none")}
+    assert all(s.success for s in sol.values())
+    mpc = EconNMPC(econ_truth, _cfg())
+    lam = SteadyStatePrice(econ_truth, mpc.config.u_min, mpc.config.u_max)(
+        15.0, C2K(30.0), C2K(22.0), C2K(24.0))
+    np.testing.assert_allclose(sol["steady"].terminal_prices, lam, rtol=1e-6)
+    p = econ_truth
+    w_sh = p.hA_sh / (p.hA_sh + p.hA_ext0 + p.hA_ext_v * 30.0 ** 0.8)
+    pi = sol["heat"].terminal_prices[0] / p.C_cab
+    np.testing.assert_allclose(sol["heat"].terminal_prices,
+                               pi * np.array([p.C_cab, p.C_int, w_sh * p.C_sh, p.C_ew,
+                                              p.M_cab * p.h_fg]), rtol=1e-7)
+    assert 0.05 <= pi < 1.0
+    np.testing.assert_array_equal(sol["none"].terminal_prices, 0.0)
+    s = sol["none"]   # objective = energy + slack penalty, nothing at the end
+    assert s.objective == pytest.approx(
+        s.energy_J + s.slack.sum() * 5.0 * _cfg().slack_penalty, rel=1e-5)
+
+
 def test_extrapolation_is_an_explicit_warning(econ_truth):
     mpc = EconNMPC(econ_truth, _cfg())
     with pytest.warns(ExtrapolationWarning, match="v_veh up to 50"):
@@ -102,6 +127,7 @@ def test_solver_failure_falls_back_to_the_plan(econ_truth):
     ({"T_cab_min": C2K(24.0), "T_cab_max": C2K(22.0)}, "comfort band is empty"),
     ({"intervals": (5.0,)}, "at least 2"),
     ({"RH_max": 1.5}, "RH_max"),
+    ({"terminal": "zero"}, "terminal must be one of"),
 ])
 def test_bad_configuration(kw, match):
     with pytest.raises(ConfigError, match=match):

@@ -10,7 +10,8 @@ import pytest
 from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
-from acid import fit as fitmod
+import acid.fit as fitmod
+from acid import hac
 from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.excite import ExcitationSpec, excite
@@ -40,9 +41,9 @@ def test_hac_meat_is_the_bartlett_sum_within_experiments_only(rng):
         for s in range(60):
             if g[t] == g[s] and abs(t - s) <= L:
                 S += (1 - abs(t - s) / (L + 1)) * np.outer(h[t], h[s])
-    assert np.allclose(fitmod._hac_meat(h, g, L), S)
-    assert np.allclose(fitmod._hac_meat(h, g, 0), h.T @ h)  # bandwidth 0: White's HC0
-    assert np.linalg.eigvalsh(fitmod._hac_meat(h, g, 20)).min() > -1e-12  # PSD
+    assert np.allclose(hac.hac_meat(h, g, L), S)
+    assert np.allclose(hac.hac_meat(h, g, 0), h.T @ h)  # bandwidth 0: White's HC0
+    assert np.linalg.eigvalsh(hac.hac_meat(h, g, 20)).min() > -1e-12  # PSD
 
 
 def test_automatic_bandwidth_grows_with_autocorrelation(rng):
@@ -52,11 +53,11 @@ def test_automatic_bandwidth_grows_with_autocorrelation(rng):
     ar = np.zeros((n, 2))
     for t in range(1, n):
         ar[t] = 0.9 * ar[t - 1] + white[t]
-    b_white = fitmod._nw_bandwidth(white, g)
-    b_ar = fitmod._nw_bandwidth(ar, g)
+    b_white = hac.nw_bandwidth(white, g)
+    b_ar = hac.nw_bandwidth(ar, g)
     # the NW94 rule is noisy on white scores (~n^(1/3)) but clearly larger under AR(0.9)
     assert b_white <= 15 and b_ar > 20 and b_ar > 2 * b_white, (b_white, b_ar)
-    assert fitmod._resolve_bandwidth("nw", white, g) == int(4 * (n / 100) ** (2 / 9))
+    assert hac.resolve_bandwidth("nw", white, g) == int(4 * (n / 100) ** (2 / 9))
 
 
 def test_bandwidth_zero_is_the_hc0_sandwich_exactly():

@@ -56,7 +56,8 @@ from acid.econ.params import (
     PowerMap,
 )
 from acid.errors import ConfigError, DataError, IdentifiabilityWarning, SolverWarning
-from acid.fit import COVARIANCES, DEFAULT_COVARIANCE, _hac_meat, _resolve_bandwidth, _segment_ids
+from acid.fit import COVARIANCES, DEFAULT_COVARIANCE
+from acid.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.metrics import fit_percent
 from acid.psychro import H_FG
 
@@ -363,9 +364,9 @@ def _sandwich(J: np.ndarray, r: np.ndarray, n_ch: int, sample: np.ndarray, segme
     if kind == "white":
         return float(r @ r) / dof * bread, None
     h = (J * r[:, None]).reshape(n_ch, n, p).sum(axis=0)
-    groups = _segment_ids(sample, segments)
-    lag = _resolve_bandwidth(bandwidth_spec, h, groups)
-    return m / dof * (bread @ _hac_meat(h, groups, lag) @ bread), lag
+    groups = segment_ids(sample, segments)
+    lag = resolve_bandwidth(bandwidth_spec, h, groups)
+    return m / dof * (bread @ hac_meat(h, groups, lag) @ bread), lag
 
 
 # ------------------------------------------------------------------------ estimator

@@ -57,6 +57,12 @@ STATE_UNITS = ("K", "K", "K", "K", "kg/kg")
 INPUTS = ("W_bl", "T_evap_set")
 EXOGENOUS = ("v_veh", "T_amb")
 NX, NU, ND = len(STATES), len(INPUTS), len(EXOGENOUS)
+#: Scaling of the NLPs' variables on this model (economic NMPC, steady state, bound):
+#: z = (x - X_OFFSET) / X_SCALE, w = (u - U_OFFSET) / U_SCALE (K, kg/kg, kg/s)
+X_OFFSET = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
+X_SCALE = np.array([1.0, 1.0, 1.0, 1.0, 1e-3])
+U_OFFSET = np.array([0.1, 278.15])
+U_SCALE = np.array([0.01, 1.0])
 
 #: Width of the smooth max of the condensation switch, kg/kg (0.05 g/kg: at most ~6 W of
 #: spurious latent load at W_bl = 0.1 kg/s where the coil is exactly at its dew point).

@@ -38,8 +38,7 @@ from acid.errors import ConfigError, ExtrapolationWarning
 from acid.psychro import humidity_ratio
 from acid.units import C2K, K2C
 
-_X_OFF = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
-_X_SCL = np.array([1.0, 1.0, 1.0, 1.0, 1e-3])
+_X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
 
 
 @dataclass(frozen=True)

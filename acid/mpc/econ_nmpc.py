@@ -5,7 +5,7 @@ fit used), over a horizon of intervals ``dt_0 .. dt_{N-1}`` (default 24 x 5 s = 
 non-uniform grid such as 6 x 5 s + 3 x 10 s + 4 x 15 s is allowed, the model being
 continuous-time)::
 
-    min  sum_i dt_i (P_comp(i) + P_bl(i) + a_sl |s_i|_1)  +  pi (H(x_N) - H(x_0))
+    min  sum_i dt_i (P_comp(i) + P_bl(i) + a_sl |s_i|_1)  +  lam^T (x_N - x_0)
     s.t. x_{i+1} = F_dt_i(x_i, u_i, d_i, dist)           RK4 interval map of the model
          T_cab_min(i) - s_lo <= T_cab(i+1) <= T_cab_max(i) + s_hi       comfort band
          Q_e(i) >= -s_q                                  no negative refrigerant heat
@@ -22,11 +22,19 @@ is not cut to it.
 ``preview=False`` both are held at their current values: controller D of the study), ``dist``
 additive disturbances on the state equations (zero unless an estimator feeds them).
 
-**Terminal price.** A 120 s horizon is short against the interior and shell (time constants
-of several minutes), so heat left in them at the end is priced: ``H`` is the model's heat
-content (:func:`acid.econ.model.heat_content`) and ``pi`` the marginal electric energy per
-joule of cooling, ``dP_comp/dQ_e`` of the power map at the current operating point (CasADi
-derivative), recomputed every update. ``terminal="none"`` drops it.
+**Terminal cost.** A 120 s horizon is short against the interior and shell (time constants
+of several minutes), so what the plan leaves in the states at its end is priced linearly,
+``lam`` J per unit state (K, kg/kg), recomputed every update (``terminal``):
+
+* ``"heat"``: ``lam = pi dH/dx``, ``H`` the model's heat content
+  (:func:`acid.econ.model.heat_content`) and ``pi`` the marginal electric energy per joule of
+  cooling, ``dP_comp/dQ_e`` of the power map at the current operating point;
+* ``"steady"`` (default): the multipliers of the model's optimal steady state at the horizon's
+  mean speed and ambient (the economic-MPC terminal cost of the rotated-cost literature,
+  :mod:`acid.mpc.econ_terminal`): each state priced at what the best steady operation pays
+  for one unit more of it (D: the current speed, held; E: the previewed speeds' mean, a
+  steadier estimate of the speeds after the horizon than its last interval's);
+* ``"none"``: no terminal cost.
 
 **Solver.** The NLP is built once through :func:`_make_solver`, which hands it to
 :class:`acid.mpc.solver.NLPSolver` (issue 13): generated C compiled at first use and cached
@@ -57,17 +65,18 @@ import numpy as np
 from acid.econ import model
 from acid.econ.params import EconParams
 from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
+from acid.mpc.econ_terminal import SteadyStatePrice
 from acid.mpc.estimator import EstimatorConfig, OffsetFreeEstimator
 from acid.mpc.solver import NLPSolver
 from acid.psychro import humidity_ratio
 from acid.units import C2K
 
 _NX, _NU = model.NX, model.NU
-#: state offsets and scales of the NLP variables (z = (x - offset) / scale): K and kg/kg
-_X_OFF = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
-_X_SCL = np.array([1.0, 1.0, 1.0, 1.0, 1e-3])
-_U_OFF = np.array([0.1, 278.15])
-_U_SCL = np.array([0.01, 1.0])
+#: NLP variable scaling (acid.econ.model: one source for the NMPC, steady state and bound)
+_X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
+_U_OFF, _U_SCL = model.U_OFFSET, model.U_SCALE
+#: terminal costs of the horizon's end state (module docstring)
+TERMINALS = ("heat", "steady", "none")
 
 
 #: Kalman-filter tuning for the econ model's five states (K, K, K, K, kg/kg) and the
@@ -101,7 +110,9 @@ class EconNMPCConfig:
     T_evap_set_min, T_evap_set_max : set-point bounds, K (paper Table II: 3-10 degC).
     slack_penalty : a_sl, W per unit of violation (K, kW of Q_e, g/kg) and per second.
     preview : use the previewed speed and ambient (False: hold their current values).
-    terminal : ``"heat"`` (price the heat content at the horizon's end) or ``"none"``.
+    terminal : terminal cost of the horizon's end state, ``"heat"`` (the heat content at the
+        marginal compressor price), ``"steady"`` (the optimal steady state's multipliers) or
+        ``"none"`` (module docstring).
     solver : ``"fatrop"`` (default, structure-exploiting) or ``"ipopt"``.
     tol, max_iter : solver tolerance and iteration limit.
     cost_scale : objective factor inside the NLP (kJ instead of J).
@@ -129,7 +140,7 @@ class EconNMPCConfig:
     T_evap_set_max: float = C2K(10.0)
     slack_penalty: float = 1e5
     preview: bool = True
-    terminal: str = "heat"
+    terminal: str = "steady"
     solver: str = "fatrop"
     tol: float = 1e-6
     max_iter: int = 200
@@ -152,8 +163,9 @@ class EconNMPCConfig:
             raise ConfigError(f"RH_max must lie in (0, 1], got {self.RH_max}")
         if not (self.W_bl_min < self.W_bl_max and self.T_evap_set_min < self.T_evap_set_max):
             raise ConfigError("econ NMPC: input bounds must satisfy min < max")
-        if self.terminal not in ("heat", "none"):
-            raise ConfigError(f"terminal must be 'heat' or 'none', got {self.terminal!r}")
+        if self.terminal not in TERMINALS:
+            raise ConfigError(f"terminal must be one of {', '.join(TERMINALS)}, got "
+                              f"{self.terminal!r}")
         if self.solver not in ("fatrop", "ipopt"):
             raise ConfigError(f"solver must be 'fatrop' or 'ipopt', got {self.solver!r}")
         if self.compiled not in ("auto", True, False):
@@ -213,7 +225,7 @@ class EconSolution:
     W_bl, T_evap_set : (N,) planned inputs.
     Q_e, P_comp, P_bl : (N,) interval means, W.
     slack : (N, ns) slacks (>= 0).
-    price : terminal price pi, W/W.
+    terminal_prices : (5,) the terminal cost's prices, J per unit state (K, kg/kg).
     energy_J : sum dt (P_comp + P_bl) over the horizon, J.
     objective : the NLP objective (unscaled, J).
     status, success, iterations, solve_time_s : solver report.
@@ -228,7 +240,7 @@ class EconSolution:
     P_comp: np.ndarray
     P_bl: np.ndarray
     slack: np.ndarray
-    price: float
+    terminal_prices: np.ndarray
     energy_J: float
     objective: float
     status: str
@@ -319,7 +331,7 @@ class EconNMPC:
         x0 = ca.SX.sym("x0", _NX)
         v = ca.SX.sym("v", N)
         Ta = ca.SX.sym("T_amb", N)
-        price = ca.SX.sym("price")
+        lam_f = ca.SX.sym("lam_f", _NX)   # terminal prices, J per unit state
         xoff, xscl = ca.DM(_X_OFF), ca.DM(_X_SCL)
         uoff, uscl = ca.DM(_U_OFF), ca.DM(_U_SCL)
         Z = [ca.SX.sym(f"z_{i}", _NX) for i in range(N + 1)]
@@ -359,13 +371,11 @@ class EconNMPC:
             energy += stage_E
             cost += stage_E + cfg.slack_penalty * dt * ca.sum1(s)
         w_list.append(Z[N])
-        if cfg.terminal == "heat":
-            H = model.heat_content
-            cost += price * (H(ca.vertsplit(X[N]), v[N - 1], ps)
-                             - H(ca.vertsplit(x0), v[N - 1], ps))
+        if cfg.terminal != "none":
+            cost += ca.dot(lam_f, X[N] - x0)
         w = ca.vertcat(*w_list)
         g = ca.vertcat(*g)
-        par = ca.vertcat(x0, v, Ta, dist, price, theta)
+        par = ca.vertcat(x0, v, Ta, dist, lam_f, theta)
         self._theta = model.parameter_vector(p)
         nlp = {"x": w, "f": cost * cfg.cost_scale, "g": g, "p": par}
         if cfg.solver == "fatrop":
@@ -399,6 +409,11 @@ class EconNMPC:
         q, te, vv, ta = (ca.SX.sym(n) for n in ("Q_e", "T_evap", "v", "T_amb"))
         P = model.compressor_power(q, te, vv, ta, p.power_map)
         self._dPdQ = ca.Function("dPdQ", [q, te, vv, ta], [ca.jacobian(P, q)])
+        xs = ca.SX.sym("x", _NX)
+        self._dH = ca.Function("dH", [xs, vv], [ca.gradient(
+            model.heat_content(ca.vertsplit(xs), vv, p), xs)])
+        self._steady = (SteadyStatePrice(p, cfg.u_min, cfg.u_max)
+                        if cfg.terminal == "steady" else None)
         self._steps = {dt: model.casadi_step(p, dt) for dt in sorted(set(cfg.intervals))}
         self._step0 = self._steps[cfg.intervals[0]]
         self.estimator = None
@@ -457,6 +472,25 @@ class EconNMPC:
             w[self._ix[i + 1]] = (x - _X_OFF) / _X_SCL
         return w
 
+    def terminal_prices(self, x0, u, v, Ta, T_cab_min: float, T_cab_max: float, dist
+                        ) -> np.ndarray:
+        """(5,) prices of the terminal cost ``lam^T (x_N - x_0)``, J per unit state.
+
+        ``"heat"``: ``pi dH/dx`` (the heat content's gradient at the last interval's speed);
+        ``"steady"``: the multipliers of the optimal steady state at the horizon's mean
+        speed and ambient and its last band (:mod:`acid.mpc.econ_terminal`);
+        ``"none"``: zeros.
+        """
+        term = self.config.terminal
+        if term == "heat":
+            pi = self.price(x0, u, v[0], Ta[0], dist)
+            return pi * np.asarray(self._dH(x0, v[-1])).ravel()
+        if term == "steady":
+            iv = np.asarray(self.config.intervals)
+            return self._steady(float(iv @ v) / iv.sum(), float(iv @ Ta) / iv.sum(),
+                                float(T_cab_min), float(T_cab_max))
+        return np.zeros(_NX)
+
     def price(self, x0, u, v0: float, Ta0: float, dist) -> float:
         """Terminal price pi = dP_comp/dQ_e at the current operating point, W/W (>= 0.05)."""
         out = self._step0(x0, u, [v0, Ta0], dist)
@@ -496,11 +530,11 @@ class EconNMPC:
         if u_guess is None:  # a cold start: full cooling when the cabin is above its band
             u_guess = cfg.u_safe if x[0] > ub[0] else 0.5 * (cfg.u_min + cfg.u_max)
         u0 = self._plan[0] if self._plan is not None else u_guess
-        pi = self.price(x, u0, v[0], Ta[0], dist) if cfg.terminal == "heat" else 0.0
+        lam = self.terminal_prices(x, u0, v, Ta, lb[-1], ub[-1], dist)
         lbg, ubg = self._lbg0.copy(), self._ubg0.copy()
         ubg[self._ig_hi] = ub
         lbg[self._ig_lo] = lb
-        par = np.concatenate((x, v, Ta, dist, [pi], self._theta))
+        par = np.concatenate((x, v, Ta, dist, lam, self._theta))
         lam_g0 = lam_x0 = None
         if self._lam_prev is not None and len(set(cfg.intervals)) == 1:
             lam_g0, lam_x0 = self._lam_prev
@@ -524,7 +558,7 @@ class EconNMPC:
             self._warn_outside(Q_e=Q_e, T_evap=T_ev)
         return EconSolution(
             u=Uc[0].copy(), x=X, t=self._t.copy(), W_bl=Uc[:, 0], T_evap_set=Uc[:, 1], Q_e=Q_e,
-            P_comp=P_c, P_bl=P_bl, slack=np.maximum(w[self._is], 0.0), price=pi,
+            P_comp=P_c, P_bl=P_bl, slack=np.maximum(w[self._is], 0.0), terminal_prices=lam,
             energy_J=float(energy), objective=float(res.f) / cfg.cost_scale,
             status=res.status, success=ok, iterations=res.iterations,
             solve_time_s=res.solve_time_s)
