@@ -1,7 +1,7 @@
 """Interrupts (Ctrl-C, SIGTERM) in the CLI: stop promptly, exit 130, keep nothing partial.
 
-* During start-up (imports, before a command runs) an interrupt exits at once and quietly
-  with 130: nothing has been written yet.
+* During start-up (imports, before a command runs) SIGINT or SIGTERM exits at once and
+  quietly with 130 / 143: nothing has been written yet.
 * While a command runs, the first SIGINT or SIGTERM raises ``KeyboardInterrupt`` in the main
   thread, so every ``acid._io.atomic_path`` removes its temporary file and the command ends
   with 128 + the signal number (130 for Ctrl-C); a second signal leaves at once (a temporary
@@ -44,23 +44,28 @@ def _exit_now(signum: int, frame=None) -> None:
 
 
 def begin_startup() -> None:
-    """Exit quietly (130) on SIGINT while the CLI is importing its modules."""
+    """Exit quietly (128 + signal: 130, 143) on SIGINT or SIGTERM while the CLI is importing
+    its modules (seconds on a busy machine)."""
     if not _in_main_thread():
         return
-    try:
-        _startup_saved[signal.SIGINT] = signal.signal(signal.SIGINT, _exit_now)
-    except (ValueError, OSError):
-        pass
+    for sig in HANDLED:
+        try:
+            _startup_saved[sig] = signal.signal(sig, _exit_now)
+        except (ValueError, OSError):
+            pass
 
 
 def end_startup() -> None:
-    """Restore the previous SIGINT handler, taking SIGINT back if it was ignored."""
-    if signal.SIGINT not in _startup_saved:
-        return
-    previous = _startup_saved.pop(signal.SIGINT)
-    if previous in (signal.SIG_IGN, None):
-        previous = signal.default_int_handler
-    signal.signal(signal.SIGINT, previous)
+    """Restore the previous handlers, taking SIGINT back if it was ignored."""
+    for sig in HANDLED:
+        if sig not in _startup_saved:
+            continue
+        previous = _startup_saved.pop(sig)
+        if sig == signal.SIGINT and previous in (signal.SIG_IGN, None):
+            previous = signal.default_int_handler
+        elif previous is None:
+            previous = signal.SIG_DFL
+        signal.signal(sig, previous)
 
 
 class InterruptGuard:

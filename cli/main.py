@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from acid_cli import _signals
 
-_signals.begin_startup()  # Ctrl-C while the modules below import: exit 130 quietly
+_signals.begin_startup()  # Ctrl-C or SIGTERM while the modules below import: exit quietly
 
 import sys  # noqa: E402
 
