@@ -111,6 +111,25 @@ class EconController:
         self.config = config
 
     def run(self, ctx: ScenarioContext) -> ControllerRun:
+        """The closed loop (tuned to ``match`` if set). Power-map extrapolation warnings are
+        counted in the row's ``info`` (``extrapolation``: how many, and the first), not
+        printed from the workers."""
+        import warnings
+
+        from acid.errors import ExtrapolationWarning
+
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always", ExtrapolationWarning)
+            r = self._run(ctx)
+        extra = [str(w.message) for w in seen if issubclass(w.category, ExtrapolationWarning)]
+        for w in seen:
+            if not issubclass(w.category, ExtrapolationWarning):
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        if extra:
+            r.info["extrapolation"] = {"count": len(extra), "first": extra[0]}
+        return r
+
+    def _run(self, ctx: ScenarioContext) -> ControllerRun:
         from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig
 
         c, cond = self.config, ctx.conditions
