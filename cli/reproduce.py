@@ -8,6 +8,7 @@ from pathlib import Path
 
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.text import Text
 
 from acid.claims import contradictions, counts, headline_rows, load_summary
 from acid.errors import ConfigError
@@ -79,7 +80,7 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
         outcomes = run_pipeline(stages, out, jobs=jobs, on_start=on_start,
                                 on_progress=on_progress, on_done=on_done, force=force,
                                 scheduler=scheduler,
-                                notice=lambda msg: err_console.print(msg, highlight=False))
+                                notice=lambda msg: err_console.print(Text(msg), highlight=False))
     elapsed = time.perf_counter() - t0
     html, summary_path, verdicts = write_outputs(out, outcomes, opts, elapsed)
 
