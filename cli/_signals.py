@@ -56,15 +56,20 @@ def begin_startup() -> None:
 
 
 def end_startup() -> None:
-    """Restore the previous handlers, taking SIGINT back if it was ignored."""
+    """Restore the previous SIGINT handler, taking SIGINT back if it was ignored.
+
+    SIGTERM keeps the quiet exit (143) when its previous action was the default one (which
+    would kill the process silently with -15): the short gap between start-up and a
+    command's ``InterruptGuard`` then also exits cleanly, and the guard restores it after."""
     for sig in HANDLED:
         if sig not in _startup_saved:
             continue
         previous = _startup_saved.pop(sig)
-        if sig == signal.SIGINT and previous in (signal.SIG_IGN, None):
-            previous = signal.default_int_handler
-        elif previous is None:
-            previous = signal.SIG_DFL
+        if sig == signal.SIGINT:
+            if previous in (signal.SIG_IGN, None):
+                previous = signal.default_int_handler
+        elif previous in (signal.SIG_DFL, None):
+            continue
         signal.signal(sig, previous)
 
 

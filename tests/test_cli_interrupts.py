@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import psutil
 import pytest
 from typer.testing import CliRunner
 
@@ -36,7 +37,15 @@ def _start(out, ignore_sigint: bool = False) -> subprocess.Popen:
 def test_a_signal_stops_excite_without_output(tmp_path, sig, ignore, code):
     out = tmp_path / "x.h5"
     p = _start(out, ignore)
-    time.sleep(2.0)  # start-up or simulation: either way nothing may be written
+    # past the interpreter's own start-up (before any Python code runs, no handler can be
+    # installed): then in acid's imports or in the simulation, either way nothing may be
+    # written. Waiting on the child's CPU time, not the wall clock, holds on a busy machine.
+    child = psutil.Process(p.pid)
+    deadline = time.monotonic() + 120.0
+    while p.poll() is None and time.monotonic() < deadline:
+        if sum(child.cpu_times()[:2]) >= 1.0:
+            break
+        time.sleep(0.05)
     p.send_signal(sig)
     _, err = p.communicate(timeout=120)
     assert p.returncode == code, err
