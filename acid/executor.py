@@ -31,6 +31,7 @@ Interrupts and process lifetime
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import logging
 import os
@@ -152,7 +153,7 @@ class ProgressReporter:
 
 
 # ------------------------------------------------------------------------------ executors
-class Executor:
+class Executor(abc.ABC):
     """Interface shared by :class:`InlineExecutor` and :class:`DaskExecutor`.
 
     Attributes
@@ -195,20 +196,24 @@ class Executor:
         where = "local cluster" if self.kind == "local" else f"cluster {self.address}"
         return f"{self.workers} worker process{'es' if self.workers != 1 else ''} ({where})"
 
-    # to implement
+    # what each executor provides
+    @abc.abstractmethod
     def _listen(self, topic: str, on_event: Callable) -> None:
-        raise NotImplementedError
+        """Call ``on_event(payload)`` for every event a task publishes on ``topic``."""
 
+    @abc.abstractmethod
     def submit(self, fn: Callable, *args):
-        raise NotImplementedError
+        """Start ``fn(*args)``; returns a handle."""
 
+    @abc.abstractmethod
     def wait_any(self, handles: Iterable, timeout: float = 0.2) -> list:
-        raise NotImplementedError
+        """The handles of ``handles`` that finished, waiting at most ``timeout`` s."""
 
+    @abc.abstractmethod
     def result(self, handle):
-        raise NotImplementedError
+        """The return value of a finished task (its exception is raised)."""
 
-    def close(self, interrupted: bool = False) -> None:
+    def close(self, interrupted: bool = False) -> None:  # noqa: B027 - nothing to release by default
         """Release workers (an interrupted run does not wait for running tasks)."""
 
     def __enter__(self) -> Executor:

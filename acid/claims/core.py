@@ -10,6 +10,7 @@ its verdict (:class:`Within`, :class:`AtMost`, :class:`SameSign`, :class:`NotCom
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import math
 import re
@@ -89,16 +90,16 @@ class Measured:
         return f"{self.stage.STAGE}: {self.stage.__name__}.{self.path}"
 
 
-class Rule:
+class Rule(abc.ABC):
     """Base of the verdict rules: ``judge(paper, acid) -> (Verdict, reason)``."""
 
+    @abc.abstractmethod
     def judge(self, paper: float | None, acid: float, unit: str = "") -> tuple[Verdict, str]:
         """(verdict, reason) for acid's value against the paper's (both in ``unit``)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def describe(self, unit: str, paper: float | None = None) -> str:
         """The rule in words (``paper``: the paper's value, when the rule refers to it)."""
-        raise NotImplementedError
 
     def to_json_dict(self) -> dict:
         return {"kind": type(self).__name__, **dataclasses.asdict(self)}
