@@ -385,11 +385,11 @@ class HeatingPlant(Plant):
             # ---------------------------------------------------------- heat pump cycle
             Q_def = P_def = 0.0
             if N > 0.0:
-                T_e, T_c, _m, Q_e, Q_c, P_c, W_sh, _ps, p_c, _it = self._solve(N, T_ow, T_icw,
+                T_e, T_c, _m, Q_e, Q_c, P_c, _w, _ps, p_c, _it = self._solve(N, T_ow, T_icw,
                                                                              T_e, T_c)
                 G_oa0, P_fan = G_oa_on, P_fan_on
             else:
-                Q_e = Q_c = P_c = W_sh = 0.0
+                Q_e = Q_c = P_c = 0.0
                 p_c = math.nan
                 G_oa0, P_fan = G_oa_off, 0.0
                 if defrost:
