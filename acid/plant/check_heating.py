@@ -3,8 +3,8 @@
 Rows have the structure of ``acid.plant.check`` (``CheckRow``; groups):
 
 (h) heat-pump COP against ambient at 40 degC supply air, fresh air 0.108 kg/s (388 kg/h,
-    the test of [Torregrosa2019]), frost-free: -10 degC against [Qin2014] (above 1.7 at -20)
-    and [Lee2016] (3.26 at -10 degC), 0 degC against [Torregrosa2019] (1.9 at -1 degC) and
+    the test of [AME2019]), frost-free: -10 degC against [Qin2014] (above 1.7 at -20)
+    and [ASHP-EV-startup] (3.26 at -10 degC), 0 degC against [AME2019] (1.9 at -1 degC) and
     [Tang2020] (3.2 at -5 degC), +10 degC and the fall with ambient (direction only: no
     published EV measurement at +10 degC was found);
 (i) frost: at 0 degC, 90 % RH the capacity loss at defrost initiation against [Zhang2025]'s
@@ -38,14 +38,14 @@ from acid.plant.heating import HeatingPlant
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
 from acid.units import C2K
 
-#: [Torregrosa2019]'s heating test: fresh air through the HVAC unit, 388 kg/h, supply 41.5 degC.
+#: [AME2019]'s heating test: fresh air through the HVAC unit, 388 kg/h, supply 41.5 degC.
 COP_W_BL = 388.0 / 3600.0
 COP_T_SUP_C = 40.0
 #: (ambient degC) -> (low, high, reference) for the steady heat-pump COP at 40 degC supply air.
 COP_BANDS = {
     -10.0: (1.7, 3.3, "1.7 [Qin2014] (above 1.7 at -20 degC, full capacity) to "
-                      "3.26 [Lee2016] (3.1 kW at -10 degC)"),
-    0.0: (1.9, 3.6, "1.9 [Torregrosa2019] (-1 degC, 4.2 kW, secondary loop) to "
+                      "3.26 [ASHP-EV-startup] (3.1 kW at -10 degC)"),
+    0.0: (1.9, 3.6, "1.9 [AME2019] (-1 degC, 4.2 kW, secondary loop) to "
                     "3.2 [Tang2020] (-5 degC, 3.6 kW) raised to 0 degC"),
 }
 COP_AMBIENTS_C = (-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 15.0)
@@ -140,7 +140,7 @@ def check_cop() -> tuple[list[CheckRow], dict]:
     dec = float(np.min(np.diff(cops))) if len(cops) > 1 else math.nan
     rows.append(CheckRow(f"heat-pump COP rises with ambient, {reached[0]:g}..{reached[-1]:g} "
                          "degC (smallest step)", dec,
-                         "> 0 [Qin2014], [Torregrosa2019], [Tang2020], [Lee2016]", "1",
+                         "> 0 [Qin2014], [AME2019], [Tang2020], [ASHP-EV-startup]", "1",
                          len(cops) > 2 and dec > 0.0, "h",
                          f"short of 40 degC supply at full speed: {', '.join(short)} degC"
                          if short else ""))

@@ -67,8 +67,8 @@ UNITS = {"T_glass": "K", "T_cool": "K", "T_icw": "K", "T_ow": "K", "M_frost": "k
          "N_comp_state": "rpm", "defrost": "1", "t_defrost": "s", "sup_integrator": "K",
          "heater_integrator": "W", "hp_integrator": "rpm", "T_a1_last": "K",
          "T_sup_target": "K", "T_hp_out": "K", "T_dew": "K", "fog_margin": "K", "fog": "1",
-         "defrosting": "1", "P_heater": "W", "Q_heater": "W", "Q_hc": "W", "Q_cond": "W",
-         "Q_evap": "W", "Q_sup": "W", "COP_hp": "1", "f_def": "1", "m_frost": "kg/s",
+         "defrosting": "1", "P_heater": "W", "Q_heater": "W", "Q_cool_loss": "W", "Q_hc": "W",
+         "Q_cond": "W", "Q_evap": "W", "Q_sup": "W", "COP_hp": "1", "f_def": "1", "m_frost": "kg/s",
          "P_total": "W", "recirc": "1"}
 
 _STEP_KEYWORDS = ("T_cab_set", "P_heater", "N_hp", "recirc", "f_def", "T_amb", "T_int",
@@ -242,9 +242,9 @@ class HeatingPlant(Plant):
         air into the cabin), T_hp_out (after the inner condenser), T_sup_target, T_dew,
         fog_margin (glass minus dew point, K), fog (fraction of the step fogged), W_bl,
         recirc, f_def, N_comp, P_heater, P_comp, P_bl, P_fan, P_total (W), Q_heater (to the
-        coolant), Q_hc (coolant to air), Q_cond, Q_evap (heat pump), Q_sup (supply air to the
-        cabin, W c_p (T_sup - T_cab)), COP_hp (Q_cond / P_comp, 0 when off), m_frost (kg/s),
-        defrosting (fraction).
+        coolant), Q_cool_loss (coolant to the under-hood air), Q_hc (coolant to air), Q_cond,
+        Q_evap (heat pump), Q_sup (supply air to the cabin, W c_p (T_sup - T_cab)), COP_hp
+        (Q_cond / P_comp, 0 when off), m_frost (kg/s), defrosting (fraction).
         """
         for key in kw:
             if key not in _STEP_KEYWORDS:
@@ -311,7 +311,8 @@ class HeatingPlant(Plant):
         k_der = (c.N_max - c.N_min) / (c.p_cut - c.p_derate)
         S = dict.fromkeys(("T_ain", "T_hp_out", "T_sup_target", "T_dew", "fog_margin", "fog",
                            "W_bl", "recirc", "f_def", "N_comp", "P_heater", "P_comp", "P_bl",
-                           "P_fan", "Q_heater", "Q_hc", "Q_cond", "Q_evap", "Q_sup", "m_frost",
+                           "P_fan", "Q_heater", "Q_cool_loss", "Q_hc", "Q_cond", "Q_evap",
+                           "Q_sup", "m_frost",
                            "defrosting"), 0.0)
         B = [0.0] * 8
 
@@ -482,6 +483,7 @@ class HeatingPlant(Plant):
             S["P_fan"] += P_fan
             S["Q_heater"] += Q_h
             S["Q_hc"] += Q_hc
+            S["Q_cool_loss"] += Q_loss
             S["Q_cond"] += Q_c
             S["Q_evap"] += Q_e
             S["Q_sup"] += Q_sup
