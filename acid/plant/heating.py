@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 
 from acid.errors import ConfigError
-from acid.plant.base import Measurement, Plant
+from acid.plant.base import Measurement, Plant, checked_ambient, validated_initial
 from acid.plant.config import PlantConfig
 from acid.plant.cycle import make_solver
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
@@ -139,17 +139,7 @@ class HeatingPlant(Plant):
         T = c.T_amb
         init = {"T_cab": T, "T_int": T, "T_int_slow": T, "T_shell": T, "T_glass": T,
                 "T_cool": T, "T_icw": T, "T_ow": T}
-        for key, value in (initial or {}).items():
-            if key not in INITIAL_KEYS:
-                raise ConfigError(f"initial condition {key!r} unknown "
-                                  f"(known: {', '.join(INITIAL_KEYS)})")
-            value = float(value)
-            if not math.isfinite(value):
-                raise ConfigError(f"initial {key} = {value} is not finite")
-            if key.startswith("T_") and not 200.0 < value < 400.0:
-                raise ConfigError(f"initial {key} = {value} K is implausible "
-                                  "(temperatures are in kelvin)")
-            init[key] = value
+        init.update(validated_initial(initial, INITIAL_KEYS))
         self.T_amb = T
         self.w_amb = humidity_ratio(T, c.RH_amb, c.p_atm)
         self.T_cab, self.T_int, self.T_is = init["T_cab"], init["T_int"], init["T_int_slow"]
@@ -255,10 +245,7 @@ class HeatingPlant(Plant):
         if not (math.isfinite(v) and v >= 0.0):
             raise ConfigError(f"vehicle speed must be a finite non-negative number, got {v_veh}")
         if "T_amb" in kw:
-            T_amb_k = float(kw["T_amb"])
-            if not 230.0 < T_amb_k < 330.0:
-                raise ConfigError(f"ambient temperature T_amb = {kw['T_amb']} K is implausible "
-                                  "(kelvin, -43 to 57 degC)")
+            T_amb_k = checked_ambient(kw["T_amb"])
             if T_amb_k != self.T_amb:
                 self.T_amb = T_amb_k
                 self.w_amb = humidity_ratio(T_amb_k, c.RH_amb, c.p_atm)

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.errors import ConfigError
-from acid.plant.base import Measurement, Plant
+from acid.plant.base import Measurement, Plant, checked_ambient, validated_initial
 from acid.plant.config import PlantConfig
 from acid.plant.controller import BlowerLoop, CompressorLoop
 from acid.plant.cycle import make_solver
@@ -327,17 +327,7 @@ class HifiPlant(Plant):
         c = self.cfg
         init = {"T_cab": c.T_cab0, "T_int": c.T_int0, "T_shell": c.T_shell0,
                 "T_evap": c.T_ew0, "T_cw": c.T_cw0}
-        for key, value in (initial or {}).items():
-            if key not in INITIAL_KEYS:
-                raise ConfigError(f"initial condition {key!r} unknown "
-                                  f"(known: {', '.join(INITIAL_KEYS)})")
-            value = float(value)
-            if not math.isfinite(value):
-                raise ConfigError(f"initial {key} = {value} is not finite")
-            if key.startswith("T_") and not 200.0 < value < 400.0:
-                raise ConfigError(f"initial {key} = {value} K is implausible "
-                                  "(temperatures are in kelvin)")
-            init[key] = value
+        init.update(validated_initial(initial, INITIAL_KEYS))
         self.T_amb = c.T_amb
         self.w_amb = humidity_ratio(c.T_amb, c.RH_amb, c.p_atm)
         self.T_cab, self.T_int, self.T_shell = init["T_cab"], init["T_int"], init["T_shell"]
@@ -467,10 +457,7 @@ class HifiPlant(Plant):
         T_set_in = c.T_ew_set if nominal else float(T_evap_set)
         v = float(v_veh)
         if "T_amb" in kw:
-            T_amb_k = float(kw["T_amb"])
-            if not 230.0 < T_amb_k < 330.0:
-                raise ConfigError(f"ambient temperature T_amb = {kw['T_amb']} K is implausible "
-                                  "(kelvin, -43 to 57 degC)")
+            T_amb_k = checked_ambient(kw["T_amb"])
             if T_amb_k != self.T_amb:
                 self.T_amb = T_amb_k
                 self.w_amb = humidity_ratio(T_amb_k, c.RH_amb, c.p_atm)
