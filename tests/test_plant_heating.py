@@ -85,6 +85,26 @@ def test_defrost_penalty_below_the_frost_limit_only():
     assert max(r["M_frost"] for r in warm) == 0.0 and max(r["defrosting"] for r in warm) == 0
 
 
+def test_outdoor_coil_balance_closes_through_frost_and_defrost():
+    p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(0.0), RH_amb=0.9), mode="direct")
+    rows = [p.step(0.108, 0.0, 0.0, N_hp=4100.0, recirc=0.0) for _ in range(12 * 90)]
+    assert max(r["M_frost"] for r in rows) > 0.5 and max(r["defrosting"] for r in rows) > 0
+    b = p.balance()["outdoor_coil"]
+    assert b["relative"] < 1e-4, b
+
+
+def test_coolant_heater_covers_the_defrost_in_nominal_mode():
+    p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(0.0), RH_amb=0.9))
+    rows = _run(p, 12 * 120, v=0.0)
+    d = np.array([r["defrosting"] for r in rows])
+    P = np.array([r["P_heater"] for r in rows])
+    assert (d > 0).any()
+    assert P[d > 0].mean() > 1000.0  # the heater takes over while the heat pump defrosts
+    assert P[240:][d[240:] == 0].mean() < 100.0  # and stays off while the heat pump suffices
+    T = np.array([r["T_cab"] for r in rows[360:]]) - 273.15
+    assert T.min() > 19.0
+
+
 def test_heat_pump_off_below_its_lowest_ambient_heater_takes_over():
     h = HeatingConfig()
     p = HeatingPlant(h, winter_plant_config(h.T_hp_min - 5.0))

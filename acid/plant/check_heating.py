@@ -11,7 +11,8 @@ Rows have the structure of ``acid.plant.check`` (``CheckRow``; groups):
     ~30 % (calibrated: ``a_frost``), the defrost penalty on the mean heating over 2 h against
     the same run in dry air (must show), no frost at +10 degC, the heat pump off below
     ``T_hp_min`` with the coolant heater heating ([Qin2014]);
-(j) energy balances of the coolant loop, inner condenser, air path and cabin over a warm-up;
+(j) energy balances of the coolant loop, inner condenser, air path, cabin and outdoor coil
+    (with its frost) over a warm-up;
 (k) warm-up against the real BMW i3 winter logs [Steinstraeter2020]: for every cold-soak trip
     (cabin sensor at most 13 degC at the start), the plant (coolant heater only, as the logged
     car; production controller; the trip's speed and ambient; every node at the soak

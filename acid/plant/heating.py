@@ -157,7 +157,7 @@ class HeatingPlant(Plant):
         self.T_e, self.T_c = self.T_ow - 5.0, self.T_icw + 5.0
         self.p_c, self.cut = math.nan, False  # last head pressure (NaN: stood still)
         self.t = 0.0
-        self._bal = [0.0] * 8
+        self._bal = [0.0] * 10
         self._U0 = self._stored()
         return self.measure()
 
@@ -174,13 +174,15 @@ class HeatingPlant(Plant):
                 "T_a1_last": self.T_a1}
 
     # ------------------------------------------------------------------ balances
-    def _stored(self) -> tuple[float, float, float]:
-        """(U_coolant, U_inner_condenser_wall, U_cabin) in J from 0 K."""
+    def _stored(self) -> tuple[float, float, float, float]:
+        """(U_coolant, U_inner_condenser_wall, U_cabin, U_outdoor_coil) in J from 0 K; the
+        coil's ice counts -h_sf per kg (liquid water at 0 degC is the reference)."""
         c, h = self.cfg, self.hc
         f_ws = h.A_ws / c.A_shell
         return (h.C_cool * self.T_cool, h.C_icw * self.T_icw,
                 c.C_cab * self.T_cab + c.C_int * self.T_int + c.C_int_slow * self.T_is
-                + (c.C_sh * (1.0 - f_ws)) * self.T_sh + h.C_ws * self.T_gl)
+                + (c.C_sh * (1.0 - f_ws)) * self.T_sh + h.C_ws * self.T_gl,
+                h.C_ow * self.T_ow - h.h_sf * self.M_fr)
 
     def balance(self) -> dict:
         """Energy balances since ``reset``: stored change against the integrated flows.
@@ -188,7 +190,9 @@ class HeatingPlant(Plant):
         ``coolant``: eta P_heater - Q_hc - loss; ``inner_condenser``: Q_c - Q to the air;
         ``air_path``: heat picked up by the supply air (blower, inner condenser, heater core)
         against W c_p (T_sup - T_mix) (stored 0, quasi-static); ``cabin``: air + interior +
-        shell + glass against the supply air, infiltration, envelope, passengers and sun.
+        shell + glass against the supply air, infiltration, envelope, passengers and sun;
+        ``outdoor_coil``: wall + frost against the ambient air, the vapour frozen on it
+        (h_sg - h_sf per kg), the refrigerant's uptake and the defrost heat.
         Returns ``{name: {stored, inflow, residual, scale, relative}}`` (J).
         """
         U1 = self._stored()
@@ -196,7 +200,8 @@ class HeatingPlant(Plant):
         out = {"coolant": (U1[0] - self._U0[0], b[0], b[1]),
                "inner_condenser": (U1[1] - self._U0[1], b[2], b[3]),
                "air_path": (0.0, b[4], b[5]),
-               "cabin": (U1[2] - self._U0[2], b[6], b[7])}
+               "cabin": (U1[2] - self._U0[2], b[6], b[7]),
+               "outdoor_coil": (U1[3] - self._U0[3], b[8], b[9])}
         res = {}
         for k, (stored, inflow, scale) in out.items():
             r = stored - inflow
@@ -301,7 +306,7 @@ class HeatingPlant(Plant):
                            "P_fan", "Q_heater", "Q_cool_loss", "Q_hc", "Q_cond", "Q_evap",
                            "Q_sup", "m_frost",
                            "defrosting"), 0.0)
-        B = [0.0] * 8
+        B = [0.0] * 10
 
         for _ in range(n):
             T_dp = dew_point(w_cab, p_atm)
@@ -406,6 +411,7 @@ class HeatingPlant(Plant):
                     m_fr = G_oa / cp * (w_amb - w_si)
             Tinf = T_amb + (m_fr * h.h_sg - Q_e + Q_def) / G_oa
             T_ow_n = Tinf + (T_ow - Tinf) * exp(-G_oa * dt / h.C_ow)
+            Q_oa = G_oa * (T_amb - 0.5 * (T_ow + T_ow_n))
             M_fr += m_fr * dt
             if M_fr > 0.0 and T_ow_n > T0C:  # the coil above 0 degC melts its frost first
                 E = h.C_ow * (T_ow_n - (T_ow if T_ow > T0C else T0C))
@@ -443,6 +449,8 @@ class HeatingPlant(Plant):
             B[6] += ext
             B[7] += (abs(Q_sup) + abs(Ginf * (T_amb - Tc_m)) + Q_pass + Q_si + Q_ss
                      + abs(Q_sh_out) + abs(Q_gl_out))
+            B[8] += Q_oa + m_fr * (h.h_sg - h.h_sf) - Q_e + Q_def
+            B[9] += abs(Q_oa) + m_fr * h.h_sg + Q_e + Q_def
             # ---------------------------------------------------------- defrost logic
             if defrost:
                 t_def += dt
@@ -484,7 +492,7 @@ class HeatingPlant(Plant):
         self.defrost, self.t_def = defrost, t_def
         self.p_c, self.cut = p_c, cut
         self.t += n * dt
-        for i in range(8):
+        for i in range(10):
             self._bal[i] += B[i] * dt
 
         inv = 1.0 / n
