@@ -49,10 +49,12 @@ class HeatingConfig:
                        "50 K in the first 2-3 min at 5.6 kW while the air takes 1-2 kW, so "
                        "8-13 kJ/K (about 2 l of coolant plus heater and core metal)")
     UA_hc0: float = _p(120.0, "W/K", "heater",
-                       "from the logs [Steinstraeter2020]: holding, the coolant at the heater "
-                       "core is about 50 degC and the 14 outlets average 31-37 degC "
-                       "(effectiveness about 0.6-0.7 at a low blower); air-side conductance at "
-                       "W_hc0")
+                       "assumption: heater-core air-side conductance at W_hc0 (effectiveness "
+                       "0.76 at 0.07 kg/s); the logs [Steinstraeter2020] bound it loosely: "
+                       "holding, coolant about 50 degC and the 14 outlets' mean 31-37 degC give "
+                       "0.4 (full recirculation) to 0.65 (fresh air), recirculation and duct "
+                       "losses unlogged; 80 W/K (0.61) slows the logged warm-ups 1.7x "
+                       "(heating-check k: time-to-20-degC ratio 1.31 against 0.76)")
     W_hc0: float = _p(0.1, "kg/s", "heater", "reference air flow of UA_hc0")
     n_hc: float = _p(0.51, "1", "heater",
                      "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ W^0.51")
