@@ -40,14 +40,15 @@ class HeatingConfig:
                            "high-voltage electronics' losses, lost to the under-hood air")
     m_cool: float = _p(0.174, "kg/s", "heater",
                        "[Steinstraeter2020] from the logs: heater power / (c_cool x (outlet - "
-                       "inlet)), median over 20 trips 0.174 kg/s (the flow channel is empty)")
+                       "inlet)), median over 20 trips 0.174 kg/s (the logged flow channel reads "
+                       "about -0.2, unusable)")
     c_cool: float = _p(3500.0, "J/(kg K)", "heater",
                        "[ASHRAE-F] 50 % ethylene glycol-water, about 3.3-3.6 kJ/(kg K) at "
                        "20-60 degC")
     C_cool: float = _p(10.0e3, "J/K", "heater",
                        "from the logs [Steinstraeter2020]: the heater-core coolant rises about "
-                       "50 K in the first 2-3 min at 5.6 kW while the air takes 1-2 kW, so "
-                       "8-13 kJ/K (about 2 l of coolant plus heater and core metal)")
+                       "51 K in 2 min at 5.6 kW (trip B27) while the air takes 1-2 kW, so "
+                       "8.5-11 kJ/K (about 2 l of coolant plus heater and core metal)")
     UA_hc0: float = _p(120.0, "W/K", "heater",
                        "assumption: heater-core air-side conductance at W_hc0 (effectiveness "
                        "0.76 at 0.07 kg/s); the logs [Steinstraeter2020] bound it loosely: "
