@@ -50,6 +50,8 @@ _API = {
     "HifiPlant": ("acid.plant.hifi", "HifiPlant"), "PlantConfig": ("acid.plant.config",
                                                                    "PlantConfig"),
     "ModelPlant": ("acid.plant.model_plant", "ModelPlant"),
+    "HeatingPlant": ("acid.plant.heating", "HeatingPlant"),
+    "HeatingConfig": ("acid.plant.heating_config", "HeatingConfig"),
     "FmuPlant": ("acid.plant.fmu", "FmuPlant"), "FmuMap": ("acid.plant.fmu", "FmuMap"),
     "export_fmu": ("acid.plant.fmu_export", "export_fmu"),
     "speed_sweep": ("acid.plant.sweep", "speed_sweep"),
