@@ -92,6 +92,18 @@ def validated_initial(initial: dict[str, float] | None, keys: tuple[str, ...]
     return out
 
 
+def balance_table(flows: dict[str, tuple[float, float, float]]) -> dict:
+    """``{name: (stored, inflow, scale)}`` -> ``{name: {stored, inflow, residual, scale,
+    relative}}``: residual = stored - inflow, relative = |residual| / scale (0 when scale is
+    0). The form of every plant's ``balance()``."""
+    res = {}
+    for k, (stored, inflow, scale) in flows.items():
+        r = stored - inflow
+        res[k] = {"stored": stored, "inflow": inflow, "residual": r, "scale": scale,
+                  "relative": abs(r) / scale if scale > 0 else 0.0}
+    return res
+
+
 def checked_ambient(value) -> float:
     """A per-step ambient temperature (K) as a float; ``ConfigError`` when implausible."""
     T = float(value)

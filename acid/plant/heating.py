@@ -48,7 +48,13 @@ from __future__ import annotations
 import math
 
 from acid.errors import ConfigError
-from acid.plant.base import Measurement, Plant, checked_ambient, validated_initial
+from acid.plant.base import (
+    Measurement,
+    Plant,
+    balance_table,
+    checked_ambient,
+    validated_initial,
+)
 from acid.plant.config import PlantConfig
 from acid.plant.cycle import make_solver
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
@@ -202,12 +208,7 @@ class HeatingPlant(Plant):
                "air_path": (0.0, b[4], b[5]),
                "cabin": (U1[2] - self._U0[2], b[6], b[7]),
                "outdoor_coil": (U1[3] - self._U0[3], b[8], b[9])}
-        res = {}
-        for k, (stored, inflow, scale) in out.items():
-            r = stored - inflow
-            res[k] = {"stored": stored, "inflow": inflow, "residual": r, "scale": scale,
-                      "relative": abs(r) / scale if scale > 0 else 0.0}
-        return res
+        return balance_table(out)
 
     def _front(self, v: float):
         key = (v, self.T_amb)

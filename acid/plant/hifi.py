@@ -48,7 +48,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.errors import ConfigError
-from acid.plant.base import Measurement, Plant, checked_ambient, validated_initial
+from acid.plant.base import (
+    Measurement,
+    Plant,
+    balance_table,
+    checked_ambient,
+    validated_initial,
+)
 from acid.plant.config import PlantConfig
 from acid.plant.controller import BlowerLoop, CompressorLoop
 from acid.plant.cycle import make_solver
@@ -411,12 +417,7 @@ class HifiPlant(Plant):
                "condenser_wall": (U1[1] - self._U0[1], b[4], b[5]),
                "cabin": (U1[2] - self._U0[2], b[6], b[7]),
                "water": (U1[3] - self._U0[3], b[8], b[9])}
-        res = {}
-        for k, (stored, inflow, scale) in out.items():
-            r = stored - inflow
-            res[k] = {"stored": stored, "inflow": inflow, "residual": r, "scale": scale,
-                      "relative": abs(r) / scale if scale > 0 else 0.0}
-        return res
+        return balance_table(out)
 
     def step(self, W_bl: float, T_evap_set: float, v_veh: float = 0.0, **kw) -> Measurement:
         """Advance one sample period Ts (see the module docstring for the model).
