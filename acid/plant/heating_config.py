@@ -167,9 +167,10 @@ class HeatingConfig:
     def __post_init__(self):
         self._validate()
 
-    @classmethod
-    def field_names(cls) -> tuple[str, ...]:
-        return tuple(f.name for f in dataclasses.fields(cls))
+    # the cooling configuration's accessors, shared (they read only the dataclass fields)
+    field_names = classmethod(PlantConfig.field_names.__func__)
+    to_dict = PlantConfig.to_dict
+    parameter_table = classmethod(PlantConfig.parameter_table.__func__)
 
     def replace(self, **changes) -> HeatingConfig:
         """A copy with some parameters changed (validated; unknown names refused)."""
@@ -178,15 +179,6 @@ class HeatingConfig:
             if key not in names:
                 raise ConfigError(f"HeatingConfig: unknown parameter {key!r}")
         return dataclasses.replace(self, **changes)
-
-    def to_dict(self) -> dict:
-        return {name: getattr(self, name) for name in self.field_names()}
-
-    @classmethod
-    def parameter_table(cls) -> list[tuple[str, str, str, str]]:
-        """(name, unit, section, source) of every parameter."""
-        return [(f.name, f.metadata["unit"], f.metadata["section"], f.metadata["source"])
-                for f in dataclasses.fields(cls)]
 
     def _validate(self) -> None:
         def bad(msg: str):
