@@ -436,15 +436,16 @@ def resid(data: Dataset, params, max_lag: int = 25, k: int = 1) -> ResidualResul
     ee0 = np.sum(e * e, axis=0)
     uu0 = np.sum(u * u, axis=0)
     acf = np.empty((M + 1, 3))
-    for lag in range(M + 1):
-        s0, s1, m = pairs(lag)
-        acf[lag] = np.sum(e[s0][m] * e[s1][m], axis=0) / ee0
     cross_lags = np.arange(-M, M + 1)
     ccf = np.empty((cross_lags.size, 2, 3))
     norm = np.sqrt(uu0[:, None] * ee0[None, :])
-    for i, lag in enumerate(cross_lags):
-        s0, s1, m = pairs(int(lag))
-        ccf[i] = np.einsum("tj,tc->jc", u[s0][m], e[s1][m]) / norm
+    with np.errstate(divide="ignore", invalid="ignore"):  # zero residuals: NaN, "no test"
+        for lag in range(M + 1):
+            s0, s1, m = pairs(lag)
+            acf[lag] = np.sum(e[s0][m] * e[s1][m], axis=0) / ee0
+        for i, lag in enumerate(cross_lags):
+            s0, s1, m = pairs(int(lag))
+            ccf[i] = np.einsum("tj,tc->jc", u[s0][m], e[s1][m]) / norm
     lags = np.arange(M + 1)
     q = nv * (nv + 2) * np.sum(acf[1:] ** 2 / (nv - lags[1:, None]), axis=0)
     ljung = {c: {"Q": float(q[i]), "p_value": float(chi2.sf(q[i], M)), "lags": M}

@@ -204,7 +204,8 @@ def window_design_line(d: dict) -> str:
                f"starts {sp['min']:g}..{sp['max']:g} s apart (median {sp['median']:g} s)")
     return (f"window design: {d['starts']} starts, {spacing}, horizon {d['horizon_s']:g} s; "
             f"consecutive windows share {100 * d['overlap_fraction']:.0f} % of their samples, "
-            f"a sample lies in up to {d['max_windows_per_sample']} windows"
+            + ("no sample lies in two windows" if d["max_windows_per_sample"] <= 1 else
+               f"a sample lies in up to {d['max_windows_per_sample']} windows") +
             f"{' (--non-overlapping)' if d['non_overlapping'] else ''}; "
             f"{d['held_disturbances']}")
 
