@@ -114,13 +114,14 @@ def test_arx_order_rule_finds_an_arx_system_and_its_coefficients():
     y = np.zeros((n, 1))
     for k in range(2, n):  # na = 2, nb = 1 (lag 0 only)
         y[k] = 1.5 * y[k - 1] - 0.7 * y[k - 2] + 0.5 * u[k] + 0.05 * rng.normal()
-    m = fit_arx(y, u, [(0, n)])
+    m, aic = fit_arx(y, u, [(0, n)])  # without estimation windows: least AIC
     assert m.na >= 2 and m.stable  # AIC may add a lag, never drop one the data need
+    assert m.aic == min(aic.values())
     np.testing.assert_allclose(m.A[:2, 0, 0], [1.5, -0.7], atol=0.05)
     np.testing.assert_allclose(m.A[2:, 0, 0], 0.0, atol=0.05)
     np.testing.assert_allclose(m.B[0, 0, 0], 0.5, atol=0.02)
     np.testing.assert_allclose(m.B[1:, 0, 0], 0.0, atol=0.05)
-    low = fit_arx(y, u, [(0, n)], orders=(1,))
+    low, _ = fit_arx(y, u, [(0, n)], orders=(1,))
     assert m.aic < low.aic
 
 
@@ -167,3 +168,17 @@ def test_on_plant_data_persistence_is_exact_at_step_zero(model_dataset):
     # fitted on the first half, the part before the validated samples
     assert r.settings["yardsticks_fitted_on"] == [0, len(model_dataset) // 2]
     assert r.settings["yardsticks_in_sample"] is False
+
+
+
+def test_the_order_rule_is_the_least_open_loop_error_on_estimation_windows():
+    y, u = linear_data(noise=0.01, seed=2)
+    k0 = np.arange(1100, 1900, 40)
+    held = np.array([False, True])
+    out = evaluate(y, u, np.zeros(len(y), dtype=int), k0, 60, held, (0, 1000))
+    arx, sub = out["arx"].settings, out["subspace"].settings
+    assert len(arx["order_scores"]) == 16 and len(sub["order_scores"]) == 8
+    best = min(arx["order_scores"], key=arx["order_scores"].get)
+    assert best == f"{arx['na']},{arx['nb']}"
+    assert min(sub["order_scores"], key=sub["order_scores"].get) == str(sub["order"])
+    assert "inputs held as in the validation" in arx["rule"]
