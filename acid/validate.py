@@ -467,6 +467,21 @@ def held_meaning(family: str, exogenous: str) -> str:
             f"them); W_bl and T_evap_set are the measured inputs{pred}")
 
 
+def window_design_text(d: dict) -> str:
+    """``ValidationResult.window_design`` in one line: starts, spacing, horizon, overlap,
+    what is held (the CLI and the report print it)."""
+    sp = d["start_spacing_s"]
+    spacing = ("one start" if sp is None else
+               f"starts {sp['median']:g} s apart" if sp["min"] == sp["max"] else
+               f"starts {sp['min']:g}..{sp['max']:g} s apart (median {sp['median']:g} s)")
+    return (f"window design: {d['starts']} starts, {spacing}, horizon {d['horizon_s']:g} s; "
+            f"consecutive windows share {100 * d['overlap_fraction']:.0f} % of their samples, "
+            + ("no sample lies in two windows" if d["max_windows_per_sample"] <= 1 else
+               f"a sample lies in up to {d['max_windows_per_sample']} windows") +
+            f"{' (--non-overlapping)' if d['non_overlapping'] else ''}; "
+            f"{d['held_disturbances']}")
+
+
 #: Inputs the yardsticks are given, per model family (the model's own inputs and
 #: disturbances), and the outputs they predict (the validated channels first).
 YARDSTICK_SIGNALS = {

@@ -14,7 +14,7 @@ from acid import __version__
 from acid._io import file_sha256, save_figure
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.econ.params import load_any_params, model_family
-from acid.validate import EXOGENOUS_MODES, PLACEMENTS, held_out_part
+from acid.validate import EXOGENOUS_MODES, PLACEMENTS, held_out_part, window_design_text
 from acid.validate import validate as run_validation
 from acid_cli._common import (
     check_paths,
@@ -128,7 +128,7 @@ def validate(
     say(f"{data}: {result.n_starts} starts x {result.horizon} steps "
                   f"({result.horizon_s[-1]:g} s), samples {lo}..{hi - 1} ({fraction_source}), "
                   f"T_int/T_shell {exogenous}, parameters {p.name!r} ({elapsed * 1e3:.0f} ms)")
-    say(window_design_line(result.window_design))
+    say(window_design_text(result.window_design))
     rows = []
     for name, m in result.metrics.items():
         rows.append([name, _fmt(m["rmse"]), _fmt(m["mean_abs"]), _fmt(m["median_abs"]),
@@ -194,20 +194,6 @@ def validate(
     if other is not None:
         summary["beside"] = {"params": beside, "channels": other.to_json_dict()["channels"]}
     write_summary(json_path, summary)
-
-
-def window_design_line(d: dict) -> str:
-    """The window design in one line: starts, spacing, horizon, overlap, what is held."""
-    sp = d["start_spacing_s"]
-    spacing = ("one start" if sp is None else
-               f"starts {sp['median']:g} s apart" if sp["min"] == sp["max"] else
-               f"starts {sp['min']:g}..{sp['max']:g} s apart (median {sp['median']:g} s)")
-    return (f"window design: {d['starts']} starts, {spacing}, horizon {d['horizon_s']:g} s; "
-            f"consecutive windows share {100 * d['overlap_fraction']:.0f} % of their samples, "
-            + ("no sample lies in two windows" if d["max_windows_per_sample"] <= 1 else
-               f"a sample lies in up to {d['max_windows_per_sample']} windows") +
-            f"{' (--non-overlapping)' if d['non_overlapping'] else ''}; "
-            f"{d['held_disturbances']}")
 
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.

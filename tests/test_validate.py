@@ -326,3 +326,27 @@ def test_non_overlapping_starts_respect_experiment_boundaries(varying):
         assert exp[k] == exp[k + 100]
     assert np.all(np.diff(r.start_index) >= 101)
     assert r.n_starts == 600 // 101 + 1 + 700 // 101 + 1
+
+
+def test_reproduce_stage_result_and_report_section_carry_design_and_yardsticks(varying):
+    from acid.report.sections import SECTION_BUILDERS
+    from acid.stage_results import ValidationStage
+
+    r = validate(varying, paper(), starts=12, horizon=300, held_out_fraction=0.5,
+                 yardsticks=True)
+    stage = ValidationStage.from_json_dict(
+        json.loads(json.dumps(ValidationStage.of(r).to_json_dict())))
+    assert stage.channels["T_cab"].p90_abs == r.metrics["T_cab"]["p90_abs"]
+    assert stage.window_design.startswith("window design: 12 starts")
+    assert stage.overlap_fraction == r.window_design["overlap_fraction"]
+    assert set(stage.by_horizon) == {"model", "persistence", "arx", "subspace"}
+    assert stage.yardsticks_fitted_on == (0, len(varying) // 2)
+    sec = SECTION_BUILDERS[ValidationStage](stage)
+    assert "12 starts" in sec.paragraphs[0] and "never used for control" in sec.paragraphs[1]
+    assert len(sec.rows) == 3 * 4 and sec.header[2].startswith("60 s")
+    assert sec.rows[1][:2] == ("T_cab", "persistence (yardstick)")
+    # a stage record written before the yardsticks still reads (no design, no table)
+    old = ValidationStage.from_json_dict({k: v for k, v in stage.to_json_dict().items()
+                                          if k in ("starts", "horizon", "horizon_s",
+                                                   "channels")})
+    assert SECTION_BUILDERS[ValidationStage](old).rows == ()
