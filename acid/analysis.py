@@ -264,8 +264,10 @@ class ResidualResult:
                     text += (f" Correlated with earlier {u} (up to {pos:.2f}): the model "
                              f"misses part of {u}'s effect.")
                 elif neg > self.band99:
-                    text += (f" Correlated with later {u} only (up to {neg:.2f}): feedback "
-                             f"from {c} to {u} in the data, not a model error.")
+                    text += (f" Correlated with later {u} only (up to {neg:.2f}): the "
+                             f"residual leads {u}, which points to feedback from {c} to {u} "
+                             "in the data (or chance, for a slowly switching input), not to "
+                             "a model error.")
             out[c] = text
         return out
 
