@@ -66,8 +66,9 @@ def validate(
         help="Also predict the same windows with persistence, ARX and a subspace model "
              "fitted on the estimation part (yardsticks, never used for control)."),
     seed: int = typer.Option(0, "--seed", help="Seed of --placement random."),
-    out: Path = typer.Option(Path("reports/validate"), "--out",
-                             help="Folder for the figures (fig5/fig6 PNG)."),
+    out: Path = typer.Option(
+        Path("reports/validate"), "--out",
+        help="Folder for the figures (fig5/fig6 PNG, fig6b with the yardsticks)."),
     allow_unstable: bool = typer.Option(
         False, "--allow-unstable",
         help="Validate parameters even if eqs. 1-3 are unstable or not in kelvin."),
