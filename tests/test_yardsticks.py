@@ -182,3 +182,17 @@ def test_the_order_rule_is_the_least_open_loop_error_on_estimation_windows():
     assert best == f"{arx['na']},{arx['nb']}"
     assert min(sub["order_scores"], key=sub["order_scores"].get) == str(sub["order"])
     assert "inputs held as in the validation" in arx["rule"]
+
+
+def test_econ_model_yardsticks_get_its_inputs_and_predict_interior_and_shell(
+        econ_model_dataset, econ_truth):
+    r = validate(econ_model_dataset, econ_truth, starts=8, horizon=120,
+                 held_out_fraction=0.5, yardsticks=True)
+    s = r.yardsticks["arx"].settings
+    assert s["inputs"][:2] == ["W_bl", "T_evap_set"] and "T_int" not in s["inputs"]
+    assert s["held_inputs"] == [n for n in ("v_veh", "T_amb") if n in s["inputs"]]
+    for y in r.yardsticks.values():  # the validated channels only, T_int/T_shell alongside
+        assert y.predicted.shape == r.predicted.shape
+        assert np.all(np.isfinite(y.predicted))
+    assert "v_veh and T_amb are held" in r.window_design["held_disturbances"]
+    assert "T_int and T_shell are predicted" in r.window_design["held_disturbances"]
