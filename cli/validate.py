@@ -155,6 +155,8 @@ def validate(
     residuals = None
     if model_family(params) == "paper":
         residuals = residual_section(ds, p, lo, hi)
+    else:
+        note("residual tests (acid.analysis.resid) exist for the paper's model only")
     other = None
     if beside:
         q = load_any_params(beside, allow_unstable=allow_unstable)
