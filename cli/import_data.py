@@ -1,13 +1,17 @@
-"""``acid import``: bring a CSV or MATLAB .mat export into the acid HDF5 layout."""
+"""``acid import``: bring CSV (also ``.csv.gz``) or MATLAB .mat logs into the acid HDF5 layout,
+one experiment per file."""
 
 from __future__ import annotations
 
+import os
+import warnings
+from collections import defaultdict
 from pathlib import Path
 
 import typer
 
 from acid._io import file_sha256
-from acid.data import ChannelMap, from_csv, from_mat
+from acid.data import ChannelMap, PlausibilityWarning, import_logs, log_kind
 from acid.errors import DataError
 from acid_cli._common import (
     check_paths,
@@ -15,45 +19,109 @@ from acid_cli._common import (
     note,
     print_table,
     require_range,
+    warn,
     write_summary,
 )
-
-CSV_SUFFIXES = (".csv", ".txt")
-MAT_SUFFIXES = (".mat",)
 
 
 @handle_errors
 def import_data(
-    src: Path = typer.Argument(..., help="CSV (header row) or MATLAB .mat file to import."),
+    srcs: list[Path] = typer.Argument(..., metavar="SRC...",
+                                      help="CSV (header row; .csv.gz read as is) or MATLAB "
+                                           ".mat files to import: one experiment per file."),
     map_path: Path = typer.Option(..., "--map", "-m",
-                                  help="Channel map (TOML or JSON): time column, Ts, resample "
-                                       "and {channel: column, unit}; see datasets/FORMAT.md."),
+                                  help="Channel map (TOML or JSON): time column, Ts, resample, "
+                                       "sep/encoding/decimal and {channel: column, unit}; see "
+                                       "datasets/FORMAT.md."),
     out: Path = typer.Option(..., "--out", "-o", help="HDF5 dataset to write (atomically)."),
     min_samples: int = typer.Option(2, "--min-samples",
                                     help="Refuse records shorter than this many samples."),
     json_out: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
-    """Import SRC through an explicit channel map, validate it and write an acid dataset."""
-    check_paths(inputs={"SRC": src, "--map": map_path},
+    """Import SRC... through an explicit channel map, check and write one acid dataset.
+
+    Units are converted (km/h, kW, kg/h, degF, ...); values that contradict their declared
+    unit get a warning; clipped and quantised sensors are reported; channels the map
+    declares as a constant or an expression are recorded as assumed.
+    """
+    labels = {"SRC" if len(srcs) == 1 else f"SRC {i + 1}": p for i, p in enumerate(srcs)}
+    check_paths(inputs={**labels, "--map": map_path},
                 outputs={"--out": out, "--json": json_out})
+    seen: dict[str, Path] = {}
+    for p in srcs:
+        key = os.path.realpath(p)
+        if key in seen:
+            raise DataError(f"SRC {p}: given twice (also as {seen[key]}); each file is one "
+                            "experiment")
+        seen[key] = p
     require_range(min_samples, "--min-samples", 2, None)
-    suffix = src.suffix.lower()
-    if suffix not in CSV_SUFFIXES + MAT_SUFFIXES:
-        raise DataError(f"{src}: unknown file type {suffix or '(none)'!r} "
-                        f"(expected {', '.join(CSV_SUFFIXES + MAT_SUFFIXES)})")
+    for p in srcs:
+        log_kind(p)
     cmap = ChannelMap.from_file(map_path)
-    ds = from_csv(src, cmap) if suffix in CSV_SUFFIXES else from_mat(src, cmap)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlausibilityWarning)
+        ds = import_logs(srcs, cmap)
     ds.validate(min_samples=min_samples)
-    ds.metadata.update({"source_sha256": file_sha256(src), "channel_map_file": str(map_path),
+    for rec, p in zip(ds.metadata["experiments"], srcs, strict=True):
+        rec["source_sha256"] = file_sha256(p)
+    ds.metadata.update({"channel_map_file": str(map_path),
                         "channel_map_sha256": file_sha256(map_path)})
     ds.to_hdf5(out)
-    resample = ds.metadata.get("resample") or {}
-    if resample.get("note"):
-        note(f"{src}: {resample['note']}")
-    rows = [[n, ds.units[n], f"{v.min():.3g}", f"{v.mean():.3g}", f"{v.max():.3g}"]
+
+    for w in caught:
+        if issubclass(w.category, PlausibilityWarning):
+            warn(w.message)
+    _report(ds, srcs)
+    rows = [[n, ds.units[n], f"{v.min():.3g}", f"{v.mean():.3g}", f"{v.max():.3g}",
+             "assumed" if n in ds.assumed else ("mask" if n.endswith("_censored")
+                                                else "measured")]
             for n, v in ds.channels.items()]
-    print_table(f"{out}: {len(ds)} samples, {ds.duration:g} s at Ts = {ds.Ts:g} s, from {src}",
-                ["channel", "unit", "min", "mean", "max"], rows)
-    write_summary(json_out, {"command": "import", "src": str(src), "out": str(out),
-                             "samples": len(ds), "Ts_s": ds.Ts, "channels": list(ds.channels),
-                             "resample": resample or None})
+    source = srcs[0] if len(srcs) == 1 else f"{len(srcs)} files"
+    print_table(f"{out}: {len(ds)} samples, {ds.duration:g} s at Ts = {ds.Ts:g} s, "
+                f"{len(srcs)} experiment{'s' if len(srcs) > 1 else ''}, from {source}",
+                ["channel", "unit", "min", "mean", "max", "_what"], rows)
+    resample = ds.metadata.get("resample") or {}
+    write_summary(json_out, {
+        "command": "import", "src": [str(p) for p in srcs], "out": str(out),
+        "samples": len(ds), "duration_s": ds.duration, "Ts_s": ds.Ts,
+        "channels": list(ds.channels), "assumed": ds.assumed,
+        "experiments": [{k: r[k] for k in ("name", "source", "samples", "duration_s",
+                                           "checks", "censored")}
+                        for r in ds.metadata["experiments"]],
+        "censoring": ds.metadata.get("censoring", []),
+        "warnings": [str(w.message) for w in caught
+                     if issubclass(w.category, PlausibilityWarning)],
+        "resample": resample or None})
+
+
+def _report(ds, srcs: list[Path]) -> None:
+    """Notes on what the files hold: resampling, assumed channels, sensors that clip or hold
+    a few levels, masked samples."""
+    experiments = ds.metadata["experiments"]
+    notes = {r["resample"]["note"] for r in experiments
+             if (r.get("resample") or {}).get("note")}
+    for text in sorted(notes):
+        note(text if len(srcs) == 1 else f"{len(srcs)} files: {text}")
+    for name, how in ds.assumed.items():
+        note(f"{name} is assumed, not measured ({how})")
+    for name in ds.metadata.get("censored") or {}:
+        total = sum((r.get("censored") or {}).get(name, {}).get("samples", 0)
+                    for r in experiments)
+        note(f"{name}: {total} raw samples at the declared clipping level are masked in "
+             f"{name}_censored (1 = censored; the value kept is the sensor's limit)")
+    if len(srcs) == 1:
+        for f in experiments[0]["checks"]:
+            if f["kind"] in ("quantised", "held"):
+                note(f"{srcs[0]}: {f['message']}")
+        return
+    quant = defaultdict(list)
+    for r in experiments:
+        for f in r["checks"]:
+            if f["kind"] == "quantised":
+                quant[f["channel"]].append(f["step"])
+    for ch, steps in quant.items():
+        note(f"channel {ch!r}: quantised sensor in {len(steps)} of {len(experiments)} files "
+             f"(step about {min(steps):.3g}-{max(steps):.3g} {ds.units[ch]})")
+    for f in ds.metadata.get("censoring", []):
+        if f["channel"] not in (ds.metadata.get("censored") or {}):
+            warn(f["message"])

@@ -308,7 +308,8 @@ def test_channel_map_from_toml_and_errors(tmp_path):
 
     cmap = ChannelMap.from_file(datasets_dir() / "examples" / "coolsim_map.toml")
     assert cmap.time == "sim.time" and cmap.Ts == 5.0
-    assert cmap.channels["T_cab"] == ("sim.T_cabin_air", "K")
+    assert (cmap.channels["T_cab"].column, cmap.channels["T_cab"].unit) == ("sim.T_cabin_air",
+                                                                            "K")
     bad = tmp_path / "bad.toml"
     bad.write_text('time = "t"\n[channels]\nT_cab = { column = "x", unit = "furlong" }\n')
     with pytest.raises(DataError) as e:
