@@ -202,6 +202,7 @@ def censored_across(experiments: list[dict]) -> list[dict]:
                         "message": f"channel {ch!r}: sits at {_fmt(overall)} {unit}, its "
                                    f"{'maximum' if side == 'max' else 'minimum'} over all "
                                    f"{len(experiments)} files, for long runs in {len(names)} "
-                                   f"of them ({shown}): a sensor or controller limit; "
-                                   f"{key} = {_fmt(overall)} in the map masks it"})
+                                   f"of them ({shown}): a sensor or controller limit; if the "
+                                   f"sensor clips there, {key} = {_fmt(overall)} in the "
+                                   "map masks it"})
     return out
