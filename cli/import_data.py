@@ -109,19 +109,24 @@ def _report(ds, srcs: list[Path]) -> None:
                     for r in experiments)
         note(f"{name}: {total} raw samples at the declared clipping level are masked in "
              f"{name}_censored (1 = censored; the value kept is the sensor's limit)")
-    if len(srcs) == 1:
-        for f in experiments[0]["checks"]:
-            if f["kind"] in ("quantised", "held"):
-                note(f"{srcs[0]}: {f['message']}")
-        return
-    quant = defaultdict(list)
+    quant, held = defaultdict(list), []
     for r in experiments:
         for f in r["checks"]:
             if f["kind"] == "quantised":
                 quant[f["channel"]].append(f["step"])
-    for ch, steps in quant.items():
-        note(f"channel {ch!r}: quantised sensor in {len(steps)} of {len(experiments)} files "
-             f"(step about {min(steps):.3g}-{max(steps):.3g} {ds.units[ch]})")
+            elif f["kind"] == "held" and len(srcs) == 1:
+                held.append(f"{f['channel']} {f['side']} {f['level']:.4g} {f['unit']} "
+                            f"({f['fraction']:.0%}, longest {f['longest_s']:.0f} s)")
+    if quant:
+        of = "" if len(srcs) == 1 else " in {} of " + f"{len(experiments)} files"
+        note("quantised sensors (few levels, held): " + ", ".join(
+            f"{ch} step {min(st):.3g}"
+            + (f"-{max(st):.3g}" if max(st) > min(st) * 1.01 else "")
+            + f" {ds.units[ch]}" + of.format(len(st)) for ch, st in quant.items()))
+    if held:
+        note("at an extreme for long runs (a clipped sensor, a controlled limit or a steady "
+             "value; censored_above/censored_below in the map masks a clipped one): "
+             + ", ".join(held))
     for f in ds.metadata.get("censoring", []):
         if f["channel"] not in (ds.metadata.get("censored") or {}):
             warn(f["message"])
