@@ -60,17 +60,18 @@ def import_data(
     cmap = ChannelMap.from_file(map_path)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlausibilityWarning)
-        ds = import_logs(srcs, cmap)
+        try:
+            ds = import_logs(srcs, cmap)
+        finally:  # a unit that looks wrong may explain the error that follows
+            for w in caught:
+                if issubclass(w.category, PlausibilityWarning):
+                    warn(w.message)
     ds.validate(min_samples=min_samples)
     for rec, p in zip(ds.metadata["experiments"], srcs, strict=True):
         rec["source_sha256"] = file_sha256(p)
     ds.metadata.update({"channel_map_file": str(map_path),
                         "channel_map_sha256": file_sha256(map_path)})
     ds.to_hdf5(out)
-
-    for w in caught:
-        if issubclass(w.category, PlausibilityWarning):
-            warn(w.message)
     _report(ds, srcs)
     rows = [[n, ds.units[n], f"{v.min():.3g}", f"{v.mean():.3g}", f"{v.max():.3g}",
              "assumed" if n in ds.assumed else ("mask" if n.endswith("_censored")
