@@ -1051,7 +1051,6 @@ def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
             hits = np.concatenate(([0.0], np.cumsum(v)))
             idx = np.searchsorted(time, edges, side="left")
             out[name] = (np.diff(hits[idx]) > 0).astype(float)
-            out[name][-1] = max(out[name][-1], float(v[idx[-1]:].sum() > 0))
         elif mean and _is_interval_mean(name):
             integral = np.interp(edges, time, cumulative_trapezoid(v, time, initial=0.0))
             out[name] = np.diff(integral) / Ts
