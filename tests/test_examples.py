@@ -5,7 +5,6 @@ every one of them."""
 from __future__ import annotations
 
 import fnmatch
-import tomllib
 from pathlib import Path
 
 import pytest
@@ -17,6 +16,11 @@ from acid.data import Dataset
 from acid.errors import ConfigError
 from acid_cli._common import resolve_examples
 from acid_cli.main import app
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
 runner = CliRunner()
