@@ -73,7 +73,8 @@ def plausibility(name: str, raw: np.ndarray, unit: str, time: np.ndarray) -> lis
                 if likely else "")
         out.append({"channel": name, "kind": "unit", "declared": unit, "likely": likely,
                     "message": f"channel {name!r}: maximum {_fmt(peak)} {unit} "
-                               f"({_fmt(peak_base)} {stored}) is implausible for {what} "
+                               + (f"({_fmt(peak_base)} {stored}) " if stored != unit else "")
+                               + f"is implausible for {what} "
                                f"({_fmt(from_base(lo, unit))}-{_fmt(from_base(hi, unit))} "
                                f"{unit}){hint}"})
     elif base == "m/s" and time.size > 2:
