@@ -574,7 +574,7 @@ def _fmt_bound(v: float | None, unbounded: str) -> str:
 
 # ------------------------------------------------------------------ importers
 #: How a channel map brings a record onto its ``Ts`` grid (``ChannelMap.resample``).
-RESAMPLE_MODES = ("mean", "sample", "none")
+RESAMPLE_MODES = ("mean", "centered", "sample", "none")
 
 #: Keys a channel map may have.
 MAP_KEYS = ("time", "Ts", "resample", "channels", "description", "sep", "encoding", "decimal")
@@ -635,6 +635,9 @@ class ChannelMap:
 
     * ``"mean"``: the sample convention: states, inputs and exogenous channels sampled at
       t_k, outputs and powers averaged over [t_k, t_k + Ts) (energy kept);
+    * ``"centered"``: as ``"mean"``, but states, inputs and exogenous channels are their mean
+      over [t_k - Ts/2, t_k + Ts/2) (a quantised or noisy sensor's steps averaged out, still
+      aligned with t_k);
     * ``"sample"``: every channel sampled at t_k (linear interpolation);
     * ``"none"``: no resampling; the file must already be uniform at ``Ts``;
     * not given: ``"mean"``, unless the file is already sampled every ``Ts``: then it is
@@ -961,7 +964,8 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
         if note:
             resample_record["note"] = note
         if mode != "none":
-            chans = _resample(time, chans, cmap.Ts, source, mean=mode == "mean")
+            chans = _resample(time, chans, cmap.Ts, source, mean=mode in ("mean", "centered"),
+                              centered=mode == "centered")
             time = np.arange(len(next(iter(chans.values())))) * cmap.Ts + time[0]
         Ts = cmap.Ts
     else:
@@ -1007,8 +1011,9 @@ def _resample_mode(time: np.ndarray, cmap: ChannelMap, source: str) -> tuple[str
     if cmap.resample == "none":
         return "none", None
     if at_Ts:
-        if cmap.resample == "mean":
-            raise DataError(f"{source}: resample = 'mean' in {cmap.source} on data already "
+        if cmap.resample in ("mean", "centered"):
+            raise DataError(f"{source}: resample = {cmap.resample!r} in {cmap.source} on data "
+                            f"already "
                             f"sampled every Ts = {Ts:g} s would average outputs and powers a "
                             "second time; set resample = 'none'")
         if cmap.resample is None:
@@ -1030,14 +1035,17 @@ def _is_interval_mean(name: str) -> bool:
 
 
 def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
-              source: str, mean: bool = True) -> dict[str, np.ndarray]:
+              source: str, mean: bool = True, centered: bool = False
+              ) -> dict[str, np.ndarray]:
     """Resample a finely sampled record onto a Ts grid following the sample convention.
 
     States, inputs and exogenous signals are sampled at t_k (linear interpolation); with
     ``mean``, outputs and powers become their mean over [t_k, t_k + Ts), from the cumulative
     trapezoidal integral, so energies are preserved (a CoolSim export at 0.01 s keeps its
-    P * dt); without it they are sampled at t_k too. A censoring mask is 1 on every interval
-    that holds a censored sample.
+    P * dt); without it they are sampled at t_k too. With ``centered``, states, inputs and
+    exogenous signals are their mean over [t_k - Ts/2, t_k + Ts/2) instead (clipped to the
+    record at its ends): still aligned with t_k, with a quantised or noisy sensor's steps
+    averaged out. A censoring mask is 1 on every interval that holds a censored sample.
     """
     from scipy.integrate import cumulative_trapezoid
 
@@ -1054,6 +1062,11 @@ def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
         elif mean and _is_interval_mean(name):
             integral = np.interp(edges, time, cumulative_trapezoid(v, time, initial=0.0))
             out[name] = np.diff(integral) / Ts
+        elif centered:
+            lo = np.maximum(edges[:-1] - Ts / 2, time[0])
+            hi = np.minimum(edges[:-1] + Ts / 2, time[-1])
+            integral = cumulative_trapezoid(v, time, initial=0.0)
+            out[name] = (np.interp(hi, time, integral) - np.interp(lo, time, integral)) / (hi - lo)
         else:
             out[name] = np.interp(edges[:-1], time, v)
     return out

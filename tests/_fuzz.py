@@ -303,7 +303,7 @@ csv_maps = st.builds(
         "channels": {"T_cab": {"column": "Tcab", "unit": tunit},
                      "W_bl": {"column": "Wbl", "unit": "kg/s"}, "T_evap": "Tevap", **extra}},
     st.sampled_from([None, 5.0, 1.0, 0.5, 100.0, 1e-3]),
-    st.sampled_from([None, "mean", "sample", "none"]),
+    st.sampled_from([None, "mean", "centered", "sample", "none"]),
     st.sampled_from(["degC", "degC", "K", "degF"]),
     st.sampled_from([{}, {}, {"sep": ";", "decimal": ",", "encoding": "latin-1"},
                      {"sep": ";", "encoding": "utf-8"}, {"decimal": ","}]),
