@@ -33,7 +33,7 @@ from acid import __version__
 from acid._io import atomic_path
 from acid.errors import DataError
 from acid.expr import Expression
-from acid.logcheck import censored_across, held_extremes, plausibility, quantisation
+from acid.logcheck import censored_across, gaps, held_extremes, plausibility, quantisation
 from acid.units import (
     KNOWN_UNITS,
     UNIT_SCALES,
@@ -941,6 +941,9 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
             values = s.expr.evaluate(chans, time.size)
             chans[name] = convert(values, s.unit, stored) if stored != s.unit else values
         units[name] = stored
+    jump = gaps(time, cmap.Ts)
+    if jump is not None:
+        checks.append(jump)
     extremes = {}
     for name, s in cmap.channels.items():
         if s.column is None:
@@ -1190,6 +1193,9 @@ def import_logs(paths: Iterable[str | os.PathLike], cmap: ChannelMap,
     names = list(names) if names is not None else [experiment_name(p) for p in paths]
     if len(names) != len(paths):
         raise DataError(f"{len(names)} names for {len(paths)} files")
+    for i, n in enumerate(names):  # the same file name in two folders: keep both apart
+        if n in names[:i]:
+            names[i] = f"{n}-{names[:i + 1].count(n)}"
     parts, records = [], []
     for name, path in zip(names, paths, strict=True):
         ds = from_csv(path, cmap) if log_kind(path) == "csv" else from_mat(path, cmap)

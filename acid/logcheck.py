@@ -207,3 +207,25 @@ def censored_across(experiments: list[dict]) -> list[dict]:
                                    f"sensor clips there, {key} = {_fmt(overall)} in the "
                                    "map masks it"})
     return out
+
+
+def gaps(time: np.ndarray, Ts: float | None) -> dict | None:
+    """A finding when the record's time jumps: steps longer than 5 times its median step
+    (and than ``Ts``), where a logger paused. Resampling interpolates across them."""
+    if time.size < 3 or not np.isfinite(time).all():
+        return None
+    dt = np.diff(time)
+    step = float(np.median(dt))
+    if not step > 0:
+        return None
+    limit = max(5 * step, Ts or 0.0)
+    where = np.flatnonzero(dt > limit)
+    if where.size == 0:
+        return None
+    longest = float(dt[where].max())
+    first = float(time[where[0]])
+    return {"channel": "time", "kind": "gap", "count": int(where.size), "longest_s": longest,
+            "first_at_s": first,
+            "message": f"time jumps {where.size} time(s) by more than {limit:.3g} s (longest "
+                       f"{longest:.3g} s, first at t = {first:.6g} s): the logger paused; "
+                       "resampling interpolates across a jump"}

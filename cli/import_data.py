@@ -115,6 +115,8 @@ def _report(ds, srcs: list[Path]) -> None:
         for f in r["checks"]:
             if f["kind"] == "quantised":
                 quant[f["channel"]].append(f["step"])
+            elif f["kind"] == "gap":
+                note(f"{r['source']}: {f['message']}")
             elif f["kind"] == "held" and len(srcs) == 1:
                 held.append(f"{f['channel']} {f['side']} {f['level']:.4g} {f['unit']} "
                             f"({f['fraction']:.0%}, longest {f['longest_s']:.0f} s)")

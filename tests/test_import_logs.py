@@ -275,6 +275,25 @@ def test_quantised_sensor_is_detected_with_its_step():
     assert quantisation("T_amb", np.full_like(t, 20.0), "degC", t) is None
 
 
+def test_a_paused_logger_is_reported(tmp_path):
+    t = np.concatenate((np.arange(0, 100, 0.1), np.arange(160, 260, 0.1)))
+    (tmp_path / "gap.csv").write_text("t,T\n" + "\n".join(f"{a:.1f},20" for a in t))
+    ds = from_csv(tmp_path / "gap.csv", ChannelMap.from_dict(
+        {"time": "t", "Ts": 1.0, "channels": {"T_cab": "T"}}))
+    found = [f for f in ds.metadata["checks"] if f["kind"] == "gap"]
+    assert len(found) == 1 and found[0]["count"] == 1
+    assert found[0]["longest_s"] == pytest.approx(60.1) and found[0]["first_at_s"] == 99.9
+
+
+def test_same_file_name_in_two_folders_gives_two_experiment_names(tmp_path):
+    for d in ("a", "b"):
+        (tmp_path / d).mkdir()
+        car_log(tmp_path / d / "Trip.csv.gz", n=400)
+    ds = import_logs([tmp_path / "a" / "Trip.csv.gz", tmp_path / "b" / "Trip.csv.gz"],
+                     car_map())
+    assert ds.experiment_names() == ["Trip", "Trip-2"]
+
+
 # ------------------------------------------------------------ assumed channels
 def test_constant_and_derived_channels_are_recorded_as_assumed(tmp_path):
     truth = car_log(tmp_path / "trip.csv.gz")
