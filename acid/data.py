@@ -941,20 +941,7 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
             values = s.expr.evaluate(chans, time.size)
             chans[name] = convert(values, s.unit, stored) if stored != s.unit else values
         units[name] = stored
-    jump = gaps(time, cmap.Ts)
-    if jump is not None:
-        checks.append(jump)
-    extremes = {}
-    for name, s in cmap.channels.items():
-        if s.column is None:
-            continue
-        v = chans[name]
-        if v.size and np.isfinite(v).all():
-            extremes[name] = (float(v.min()), float(v.max()))
-        q = quantisation(name, v, units[name], time)
-        if q is not None:
-            checks.append(q)
-        checks.extend(held_extremes(name, v, units[name], time))
+    extremes = _sensor_checks(cmap, chans, units, time, checks)
     chans.update(masks)
     units.update({m: "1" for m in masks})
     resample_record = None
@@ -989,6 +976,29 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
         meta["resample"] = resample_record
     meta.update(metadata)
     return Dataset(time=time, channels=chans, units=units, Ts=Ts, metadata=meta, source=source)
+
+
+def _sensor_checks(cmap: ChannelMap, chans: Mapping[str, np.ndarray],
+                   units: Mapping[str, str], time: np.ndarray, checks: list[dict]
+                   ) -> dict[str, tuple[float, float]]:
+    """Gaps in time, quantised sensors and channels held at an extreme (measured channels,
+    in the dataset's units, at the file's own rate) appended to ``checks``; returns each
+    measured channel's (min, max) for the censoring check across files."""
+    jump = gaps(time, cmap.Ts)
+    if jump is not None:
+        checks.append(jump)
+    extremes = {}
+    for name, s in cmap.channels.items():
+        if s.column is None:
+            continue
+        v = chans[name]
+        if v.size and np.isfinite(v).all():
+            extremes[name] = (float(v.min()), float(v.max()))
+        q = quantisation(name, v, units[name], time)
+        if q is not None:
+            checks.append(q)
+        checks.extend(held_extremes(name, v, units[name], time))
+    return extremes
 
 
 def _censor_mask(v: np.ndarray, s: ChannelSource) -> np.ndarray | None:
