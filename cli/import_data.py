@@ -132,4 +132,4 @@ def _report(ds, srcs: list[Path]) -> None:
              + ", ".join(held))
     for f in ds.metadata.get("censoring", []):
         if f["channel"] not in (ds.metadata.get("censored") or {}):
-            warn(f["message"])
+            note(f["message"])
