@@ -11,13 +11,14 @@ from pathlib import Path
 import typer
 
 from acid._io import file_sha256
-from acid.data import ChannelMap, PlausibilityWarning, import_logs, log_kind
+from acid.data import CHANNEL_NAME, ChannelMap, PlausibilityWarning, import_logs, log_kind
 from acid.errors import DataError
 from acid_cli._common import (
     check_paths,
     handle_errors,
     note,
     print_table,
+    require,
     require_range,
     warn,
     write_summary,
@@ -37,6 +38,11 @@ def import_data(
     min_samples: int = typer.Option(2, "--min-samples",
                                     help="Refuse records shorter than this many samples."),
     json_out: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    required_spec: str | None = typer.Option(
+        None, "--require",
+        help="Channels the dataset must have, checked before it is written: 'model' (what "
+             "`acid fit` needs), 'econ' (`acid fit --model econ`) or names separated by "
+             "commas; every missing one is named in one error."),
 ) -> None:
     """Import SRC... through an explicit channel map, check and write one acid dataset.
 
@@ -55,9 +61,16 @@ def import_data(
                             "experiment")
         seen[key] = p
     require_range(min_samples, "--min-samples", 2, None)
+    required = _required(required_spec)
     for p in srcs:
         log_kind(p)
     cmap = ChannelMap.from_file(map_path)
+    missing = [n for n in required if n not in cmap.channels]
+    if missing:  # before any file is read: one line naming every one
+        raise DataError(f"--map {map_path}: has no channel {', '.join(map(repr, missing))} "
+                        f"({len(missing)} of the {len(required)} that --require "
+                        f"{required_spec} needs; a log that does not measure one can declare "
+                        "it in the map as a constant or an expression, recorded as assumed)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlausibilityWarning)
         try:
@@ -66,7 +79,7 @@ def import_data(
             for w in caught:
                 if issubclass(w.category, PlausibilityWarning):
                     warn(w.message)
-    ds.validate(min_samples=min_samples)
+    ds.validate(require=required, min_samples=min_samples)
     for rec, p in zip(ds.metadata["experiments"], srcs, strict=True):
         rec["source_sha256"] = file_sha256(p)
     ds.metadata.update({"channel_map_file": str(map_path),
@@ -93,6 +106,25 @@ def import_data(
         "warnings": [str(w.message) for w in caught
                      if issubclass(w.category, PlausibilityWarning)],
         "resample": resample or None})
+
+
+def _required(spec: str | None) -> tuple[str, ...]:
+    """The channels ``--require`` names: a preset (model, econ) or a comma-separated list."""
+    if spec is None:
+        return ()
+    if spec == "model":
+        from acid.data import MODEL_CHANNELS
+
+        return MODEL_CHANNELS
+    if spec == "econ":
+        from acid.econ.fit import REQUIRED
+
+        return REQUIRED
+    names = tuple(n.strip() for n in spec.split(",") if n.strip())
+    bad = [n for n in names if not CHANNEL_NAME.fullmatch(n)]
+    require(bool(names) and not bad, "--require",
+            f"must be 'model', 'econ' or channel names separated by commas, got {spec!r}")
+    return names
 
 
 def _report(ds, srcs: list[Path]) -> None:

@@ -363,6 +363,23 @@ def test_every_missing_channel_in_one_error_from_dataset_and_fit(tmp_path):
                           "'T_int'", "'T_shell'")
 
 
+def test_import_require_names_every_channel_the_map_lacks_before_reading(tmp_path):
+    car_log(tmp_path / "trip.csv.gz")
+    (tmp_path / "m.toml").write_text(
+        'time = "Time [s]"\nsep = ";"\nencoding = "latin-1"\n[channels]\n'
+        'T_cab = { column = "Cabin Temperature [°C]", unit = "degC" }\n'
+        'W_bl = { constant = 0.1, unit = "kg/s" }\n', encoding="utf-8")
+    args = ["import", str(tmp_path / "trip.csv.gz"), "--map", str(tmp_path / "m.toml"),
+            "--out", str(tmp_path / "o.h5")]
+    r = runner.invoke(app, [*args, "--require", "model"])
+    assert_one_line_error(r, "m.toml", "'T_evap'", "'T_ain'", "'T_evap_set'", "'T_int'",
+                          "'T_shell'", "5 of the 7")
+    assert not (tmp_path / "o.h5").exists()
+    r = runner.invoke(app, [*args, "--require", "T_cab, W_bl"])
+    assert r.exit_code == 0, r.output
+    assert "W_bl is assumed" in r.output
+
+
 # ------------------------------------------------------------- the sample log
 def test_shipped_sample_log_imports_with_its_map(tmp_path):
     ds = from_csv(resolve("example:sample_log.csv.gz"),
