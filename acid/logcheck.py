@@ -39,8 +39,6 @@ def _rule(name: str, base: str):
     for names, b, lo, hi, what in PLAUSIBLE_MAX:
         if b == base and (name in names or name.startswith(tuple(n + "_" for n in names))):
             return lo, hi, what
-    if base == "m/s" and name.startswith("v_"):
-        return PLAUSIBLE_MAX[0][2:]
     return None
 
 
