@@ -1,16 +1,23 @@
-"""The NLP solver wrapper: a wall-clock cap per solve, never a hang."""
+"""The NLP solver wrapper: no cap by default; a wall-clock cap on request, never a hang."""
 
 from __future__ import annotations
+
+import dataclasses
+import threading
 
 import casadi as ca
 import numpy as np
 import pytest
 
 from acid.errors import SolverWarning
+from acid.mpc import solver as solver_mod
+from acid.mpc.econ_nmpc import EconNMPCConfig
 from acid.mpc.nmpc import NMPC, NMPCConfig
-from acid.mpc.solver import NLPSolver
+from acid.mpc.solver import NLPSolver, _Worker
 from acid.params import paper
 from acid.units import C2K
+
+IPOPT = {"print_time": False, "ipopt": {"print_level": 0, "sb": "yes"}}
 
 
 def _nlp():
@@ -18,30 +25,96 @@ def _nlp():
     return {"x": x, "f": (x[0] - 1) ** 2 + (x[1] + 2) ** 2, "g": x[0] + x[1]}
 
 
-def test_a_solve_past_its_cap_is_abandoned_and_reported_then_the_next_one_works():
-    s = NLPSolver("acid_cap", _nlp(), "ipopt", {"print_time": False,
-                                                "ipopt": {"print_level": 0, "sb": "yes"}},
-                  timeout_s=1e-9)
-    res = s.solve(np.zeros(2), [], -np.inf, np.inf, -10.0, 10.0)
+def _solve(s):
+    return s.solve(np.zeros(2), [], -np.inf, np.inf, -10.0, 10.0)
+
+
+class _HeldWorker(_Worker):
+    """A worker whose thread waits on ``gate`` before it takes its first job: a solve that
+    times out then does so before the thread has started, deterministically."""
+
+    gate = threading.Event()
+
+    def _loop(self):
+        self.gate.wait()
+        super()._loop()
+
+
+def test_no_cap_by_default_anywhere():
+    assert NMPCConfig().max_solve_s is None and EconNMPCConfig().max_solve_s is None
+    s = NLPSolver("acid_nocap", _nlp(), "ipopt", IPOPT)
+    assert s.timeout_s is None
+    res = _solve(s)
+    assert res.success and s._worker is None  # solved in the caller's thread
+
+
+def test_a_solve_that_times_out_before_the_worker_starts_is_a_clean_timeout(monkeypatch):
+    """The race of issue 22: the cap expires before the worker thread takes the job. It used
+    to raise ``RuntimeError: release unlocked lock`` from the stop path."""
+    gate = threading.Event()
+    monkeypatch.setattr(_HeldWorker, "gate", gate)
+    monkeypatch.setattr(solver_mod, "_Worker", _HeldWorker)
+    s = NLPSolver("acid_race", _nlp(), "ipopt", IPOPT, timeout_s=1e-3)
+    res = _solve(s)  # the thread is held: this times out before the job starts
     assert not res.success and res.status == "timeout" and s.timeouts == 1
     assert np.all(np.isnan(res.x))
-    s.timeout_s = 30.0
-    res = s.solve(np.zeros(2), [], -np.inf, np.inf, -10.0, 10.0)
-    assert res.success
-    np.testing.assert_allclose(res.x, [1.0, -2.0], atol=1e-6)
+    worker = s._worker
+    assert worker is not None  # a cancelled job leaves the worker usable
+    s.timeout_s = 1e-3
+    res = _solve(s)  # again, while the thread is still held
+    assert res.status == "timeout" and s.timeouts == 2
+    s.close()  # stopping a worker whose thread never ran must not raise either
+    gate.set()
+    worker.thread.join(30)
+    assert not worker.thread.is_alive()
 
 
-def test_nmpc_falls_back_when_its_solve_times_out():
-    mpc = NMPC(paper(), NMPCConfig(max_solve_s=1e-9))
+def test_a_cancelled_job_never_runs_and_the_next_one_does():
+    gate = threading.Event()
+    w = _HeldWorker.__new__(_HeldWorker)
+    w.gate = gate
+    _Worker.__init__(w, "held")
+    ran = []
+    finished, started, _, _ = w.run(lambda: ran.append("first"), 1e-3)
+    assert (finished, started) == (False, False)
+    gate.set()
+    finished, started, out, exc = w.run(lambda: ran.append("second") or 7, None)
+    assert (finished, started, out, exc) == (True, True, 7, None)
+    assert ran == ["second"]
+    w.stop()
+    w.stop()  # twice is harmless
+    w.thread.join(30)
+    assert not w.thread.is_alive()
+
+
+def test_a_running_solve_past_its_cap_is_abandoned_then_the_solver_is_rebuilt():
+    release = threading.Event()
+    w = _Worker("busy")
+    finished, started, _, _ = w.run(release.wait, 1e-3)  # blocks until released
+    assert not finished and started
+    release.set()
+    w.stop()
+    w.thread.join(30)
+    assert not w.thread.is_alive()
+
+
+def test_an_exception_in_the_job_reaches_the_caller():
+    w = _Worker("raises")
+    finished, started, out, exc = w.run(lambda: 1 / 0, None)
+    assert finished and started and isinstance(exc, ZeroDivisionError)
+    w.stop()
+
+
+def test_nmpc_falls_back_when_its_solve_times_out(monkeypatch):
+    gate = threading.Event()
+    monkeypatch.setattr(_HeldWorker, "gate", gate)
+    monkeypatch.setattr(solver_mod, "_Worker", _HeldWorker)
+    mpc = NMPC(paper(), NMPCConfig(max_solve_s=1e-3, compiled=False))
     with pytest.warns(SolverWarning, match="timeout"):
         u = mpc.make_step([C2K(27.0), C2K(6.0)], C2K(25.0), C2K(30.0), C2K(33.0))
     np.testing.assert_array_equal(u, mpc.config.u_safe)
     assert mpc.fallbacks == 1 and mpc._nlp.timeouts == 1
-
-
-def test_solver_without_a_cap_runs_in_the_callers_thread():
-    s = NLPSolver("acid_nocap", _nlp(), "ipopt", {"print_time": False,
-                                                  "ipopt": {"print_level": 0, "sb": "yes"}},
-                  timeout_s=None)
-    res = s.solve(np.zeros(2), [], -np.inf, np.inf, -10.0, 10.0)
-    assert res.success and s._worker is None
+    gate.set()
+    # a cap is only a run's choice: the same controller uncapped solves the same state
+    plain = NMPC(paper(), dataclasses.replace(mpc.config, max_solve_s=None))
+    assert plain.solve([C2K(27.0), C2K(6.0)], C2K(25.0), C2K(30.0), C2K(33.0)).success

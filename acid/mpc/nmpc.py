@@ -76,9 +76,10 @@ active-set method meets degenerate active sets and can fail or stall). Exact
 derivatives (CasADi AD) in all. :class:`acid.mpc.solver.NLPSolver` runs fatrop and SQP as
 **generated C**, compiled at first use into a per-user cache (``NMPCConfig.compiled``;
 without a C compiler, inside CasADi with one notice: the same answers), with a wall-clock
-cap per solve (``NMPCConfig.max_solve_s``). Each solve is warm-started from the previous
-solution shifted by one stage. Time-varying bounds, the initial state, the disturbances and
-their estimates enter as NLP parameters, so nothing is rebuilt between solves.
+cap per solve only when asked for (``NMPCConfig.max_solve_s``, an ECU-like run). Each
+solve is warm-started from the previous solution shifted by one stage. Time-varying bounds,
+the initial state, the disturbances and their estimates enter as NLP parameters, so
+nothing is rebuilt between solves.
 
 Inputs are checked before the solver: non-finite values are refused, and temperatures must
 be plausible in kelvin (a state given in degC is refused with a message saying so).
@@ -160,11 +161,13 @@ class NMPCConfig:
     compiled : run the solver as generated C (``"auto"``: when a C compiler works, else
         inside CasADi with one notice; ``False``: always inside CasADi). IPOPT cannot be
         generated and always runs inside CasADi.
-    max_solve_s : wall-clock cap per solve, s; a solve still running then is abandoned and
-        the fallback applied (the paper's budget is an *average* of Ts/8 = 0.625 s). The
-        solve then runs in a worker thread (about 15-30 us per step on an idle machine, more
-        when the other cores are busy); None runs it in the caller's thread, without a cap
-        (the inputs are still checked, so no NaN reaches the solver).
+    max_solve_s : wall-clock cap per solve, s, for an ECU-like real-time run only; a solve
+        still running then is abandoned and the fallback applied (the paper's budget is an
+        *average* of Ts/8 = 0.625 s). The solve then runs in a worker thread (about 0.3 ms
+        per step on an idle machine, far more when the other cores are busy) and the
+        closed loop depends on the machine's load. Default None: no cap, the solve runs in
+        the caller's thread (offline studies, tests, sweeps; the inputs are still checked,
+        so no NaN reaches the solver).
     offset_free : estimate disturbances in ``make_step`` with a Kalman filter and predict
         with them (:class:`acid.mpc.estimator.OffsetFreeEstimator`).
     disturbance : where the disturbances enter, ``"state"`` (added to eqs. 1-2) or
@@ -194,7 +197,7 @@ class NMPCConfig:
     cost_scale: float = 1e-3
     fallback_input: tuple[float, float] | None = None
     compiled: bool | str = "auto"
-    max_solve_s: float | None = 2.5
+    max_solve_s: float | None = None
     offset_free: bool = False
     disturbance: str = "state"
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
