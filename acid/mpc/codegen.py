@@ -431,26 +431,29 @@ def run_compiler(cmd: list[str], wall_s: float = COMPILE_WALL_S) -> tuple[int, s
     import resource
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    try:
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, text=True, errors="replace",
-                                start_new_session=True, preexec_fn=_limit_cpu)
-    except (OSError, subprocess.SubprocessError) as exc:
-        raise CodegenError(f"C compiler {cmd[0]!r} failed to run ({exc})") from None
-    try:
-        out, _ = proc.communicate(timeout=wall_s)
-    except subprocess.TimeoutExpired:
-        _kill_group(proc)
-        proc.communicate()
-        raise CodegenError(f"C compiler {cmd[0]!r} did not finish in {wall_s:g} s; "
-                           "stopped") from None
-    finally:
-        _kill_group(proc)  # whatever it left behind (also on an interrupt)
-        if proc.returncode is None:
-            proc.wait()
+    # output to a file, not a pipe: a process the compiler leaves behind could hold a pipe
+    # open (and the reader waiting) long after the compiler itself has exited
+    with tempfile.TemporaryFile(mode="w+", errors="replace") as log:
+        try:
+            proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                    stdin=subprocess.DEVNULL, start_new_session=True,
+                                    preexec_fn=_limit_cpu)
+        except (OSError, subprocess.SubprocessError) as exc:
+            raise CodegenError(f"C compiler {cmd[0]!r} failed to run ({exc})") from None
+        try:
+            proc.wait(timeout=wall_s)
+        except subprocess.TimeoutExpired:
+            raise CodegenError(f"C compiler {cmd[0]!r} did not finish in {wall_s:g} s; "
+                               "stopped") from None
+        finally:
+            _kill_group(proc)  # whatever it left behind (also on a timeout or interrupt)
+            if proc.returncode is None:
+                proc.wait()
+        log.seek(0)
+        out = log.read()
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return proc.returncode, out or "", cpu
+    return proc.returncode, out, cpu
 
 
 def _compile(source: str, cc: list[str], flags: list[str], lib: Path) -> float:

@@ -67,19 +67,23 @@ Solver
 ------
 The NLP is built once from a declared layout (:class:`acid.mpc.layout.BlockVector`: named
 blocks per stage ``[x_0, u_0, s_1, x_1, u_1, s_2, ..., x_N]``; every index map is derived
-from it) so that CasADi's structure-exploiting interior-point solver **fatrop** (shipped in
-the casadi wheel) detects the optimal-control structure (``structure_detection='auto'``);
-IPOPT solves the identical NLP (``solver="ipopt"``), and so does an SQP method with the
-active-set QP solver qrqp (``solver="sqp"``, the algorithm of ``acid export-c``; it starts
-from the cold guess at every solve, because warm-started from the shifted plan the
-active-set method meets degenerate active sets and can fail or stall). Exact
-derivatives (CasADi AD) in all. :class:`acid.mpc.solver.NLPSolver` runs fatrop and SQP as
-**generated C**, compiled at first use into a per-user cache (``NMPCConfig.compiled``;
-without a C compiler, inside CasADi with one notice: the same answers), with a wall-clock
-cap per solve only when asked for (``NMPCConfig.max_solve_s``, an ECU-like run). Each
-solve is warm-started from the previous solution shifted by one stage. Time-varying bounds,
-the initial state, the disturbances and their estimates enter as NLP parameters, so
-nothing is rebuilt between solves.
+from it). By default (``solver="sqp"``) an SQP method with exact Hessian and the active-set
+QP solver qrqp (the algorithm of ``acid export-c``) solves it to ``SQP_TOL``, warm-started
+from the previous primal and dual solution shifted by one stage; an active-set method meets
+active bounds exactly. When it fails (a degenerate active set can stall qrqp), the same
+problem is solved from the same guess by CasADi's structure-exploiting interior-point
+solver **fatrop** (``fallback_solver``; shipped in the casadi wheel, it detects the
+optimal-control structure, ``structure_detection='auto'``), counted in
+``NMPC.solver_fallbacks``. Both converge to the same optimum (measured on the 50 states of
+``benchmarks/bench_mpc.py``: first moves within 7.7e-9 relative); SQP is about twice as
+fast there. fatrop or IPOPT alone: ``solver="fatrop"`` / ``"ipopt"``. Exact derivatives
+(CasADi AD) in all. :class:`acid.mpc.solver.NLPSolver` runs SQP and fatrop as **generated
+C**, compiled at first use into a per-user cache (``NMPCConfig.compiled``; without a C
+compiler, inside CasADi with one notice: the same answers), with a wall-clock cap per
+solve only when asked for (``NMPCConfig.max_solve_s``, an ECU-like run; a solve that
+timed out is not retried by the fallback solver). Time-varying bounds, the initial state,
+the disturbances and their estimates enter as NLP parameters, so nothing is rebuilt
+between solves.
 
 Inputs are checked before the solver: non-finite values are refused, and temperatures must
 be plausible in kelvin (a state given in degC is refused with a message saying so).
@@ -92,6 +96,7 @@ conservative input (maximum cooling) -- counts it in ``NMPC.fallbacks``, emits a
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
@@ -142,8 +147,12 @@ class NMPCConfig:
     ----------
     N : prediction = constraint = control horizon ``Np = Nc = Nu`` (Table II: 6 steps).
     first_move : ``"free"`` (default) or ``"pinned"``, the two readings of eq. 13.
-    solver : ``"fatrop"`` (default, structure-exploiting interior point), ``"ipopt"`` or
-        ``"sqp"`` (SQP with the active-set QP solver qrqp; the algorithm of the C export).
+    solver : ``"sqp"`` (default: SQP with the active-set QP solver qrqp, warm-started from
+        the shifted previous solution; the algorithm of the C export), ``"fatrop"``
+        (structure-exploiting interior point) or ``"ipopt"``.
+    fallback_solver : solves the same problem, from the same guess, when ``solver`` fails
+        (default ``"fatrop"``; None, or the same as ``solver``: the controller's fallback
+        input at once). Both converge to the same optimum (first move within about 1e-8).
     slack_penalty : ``a_sl``, W per K of violation, per state (paper: 1e5).
     T_amb : ambient temperature in eq. 4, K (Table II: 30 degC).
     T_cab_min : lower cabin bound, K (Table II: 20 degC); the upper bound is previewed.
@@ -182,7 +191,8 @@ class NMPCConfig:
 
     N: int = TABLE_II.N
     first_move: str = "free"
-    solver: str = "fatrop"
+    solver: str = "sqp"
+    fallback_solver: str | None = "fatrop"
     slack_penalty: float = TABLE_II.slack_penalty
     T_amb: float = C2K(TABLE_II.T_amb_degC)
     T_cab_min: float = C2K(TABLE_II.T_cab_min_degC)
@@ -209,6 +219,9 @@ class NMPCConfig:
         if self.solver not in SOLVERS:
             raise ConfigError(f"solver must be one of {', '.join(SOLVERS)}, got "
                               f"{self.solver!r}")
+        if self.fallback_solver is not None and self.fallback_solver not in SOLVERS:
+            raise ConfigError(f"fallback_solver must be None or one of {', '.join(SOLVERS)}, "
+                              f"got {self.fallback_solver!r}")
         if int(self.N) < 2:
             raise ConfigError(f"horizon N must be at least 2, got {self.N}")
         if not (self.W_bl_min < self.W_bl_max and self.T_evap_set_min < self.T_evap_set_max):
@@ -247,6 +260,7 @@ class NMPCConfig:
         """The options, JSON-serialisable (temperatures in K)."""
         return {
             "N": self.N, "first_move": self.first_move, "solver": self.solver,
+            "fallback_solver": self.fallback_solver,
             "slack_penalty_W_per_K": self.slack_penalty, "T_amb_K": self.T_amb,
             "T_cab_min_K": self.T_cab_min, "T_evap_min_K": self.T_evap_min,
             "T_evap_max_K": self.T_evap_max, "W_bl_min_kg_s": self.W_bl_min,
@@ -485,8 +499,11 @@ class NMPC:
                "p": par.vertcat()}
         self._w, self._g, self._p = w, g, par
         self._nlp_dict = nlp
-        self._nlp = NLPSolver("acid_nmpc", nlp, *self._solver_options(g),
+        self._nlp = NLPSolver("acid_nmpc", nlp, *self._solver_options(g, cfg.solver),
                               compiled=cfg.compiled, timeout_s=cfg.max_solve_s)
+        self._fallback_nlp: NLPSolver | None = None
+        if cfg.max_solve_s is not None:  # a real-time run builds it now, not mid-run
+            self._fallback_solver()
 
         # index maps from the layout
         self._iT_cab = w.index("x", 0)
@@ -513,17 +530,30 @@ class NMPC:
         self._shift_w = stage_shift(w)
         self._shift_g = stage_shift(g)
 
-    def _solver_options(self, g: BlockVector) -> tuple[str, dict]:
-        """(plugin, options) of ``config.solver``: no bound relaxation anywhere."""
+    def _fallback_solver(self) -> NLPSolver | None:
+        """The solver of ``config.fallback_solver`` (None when there is none), built at its
+        first use (most closed loops never need it)."""
         cfg = self.config
-        if cfg.solver == "fatrop":
+        if cfg.fallback_solver in (None, cfg.solver):
+            return None
+        if self._fallback_nlp is None:
+            self._fallback_nlp = NLPSolver(
+                f"acid_nmpc_{cfg.fallback_solver}", self._nlp_dict,
+                *self._solver_options(self._g, cfg.fallback_solver), compiled=cfg.compiled,
+                timeout_s=cfg.max_solve_s)
+        return self._fallback_nlp
+
+    def _solver_options(self, g: BlockVector, solver: str) -> tuple[str, dict]:
+        """(plugin, options) of ``solver``: no bound relaxation anywhere."""
+        cfg = self.config
+        if solver == "fatrop":
             eq = np.zeros(g.size, dtype=bool)
             for b in ("init", "dyn"):
                 eq[g.index(b).ravel()] = True
             return "fatrop", {
                 "structure_detection": "auto", "equality": eq.tolist(), "print_time": False,
                 "fatrop": {"print_level": 0, "tol": cfg.tol, "max_iter": int(cfg.max_iter)}}
-        if cfg.solver == "ipopt":
+        if solver == "ipopt":
             return "ipopt", {"print_time": False,
                              "ipopt": {"print_level": 0, "sb": "yes", "tol": cfg.tol,
                                        "max_iter": int(cfg.max_iter),
@@ -559,6 +589,7 @@ class NMPC:
         if self.backoff is not None:
             self.backoff.reset()
         self.fallbacks = 0
+        self.solver_fallbacks = 0
         self.log = StepLog()
 
     # ----------------------------------------------------------------- solve
@@ -652,7 +683,18 @@ class NMPC:
             lam_g0 = self._lam_g_prev[self._shift_g]
             lam_x0 = self._lam_x_prev[self._shift_w]
         res = self._nlp.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0, lam_g0)
-        if res.success and cfg.solver != "sqp":  # the active-set SQP starts cold (see above)
+        fallback = (self._fallback_solver() if not res.success and res.status != "timeout"
+                    else None)
+        if fallback is not None:
+            first = res
+            res = fallback.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0,
+                                           lam_g0)
+            self.solver_fallbacks += 1
+            res = dataclasses.replace(
+                res, status=f"{res.status} ({cfg.fallback_solver} after {cfg.solver}: "
+                            f"{first.status})",
+                solve_time_s=first.solve_time_s + res.solve_time_s)
+        if res.success:
             self._w_prev = res.x
             self._lam_g_prev = res.lam_g
             self._lam_x_prev = res.lam_x
