@@ -54,7 +54,7 @@ def main(argv=None) -> dict:
     steps = record(econ, args.cycle, cfg.replace(compiled=False))[: args.steps]
     builds, ctrls = {}, {}
     for level in args.levels:
-        codegen.OPT_FLAG = level
+        codegen.OPT_FLAG, codegen.LARGE_OPT_FLAG = level, None
         with tempfile.TemporaryDirectory(prefix="acid-bench-cc-") as tmp:
             os.environ["ACID_CACHE_DIR"] = tmp
             t0 = time.perf_counter()

@@ -172,6 +172,12 @@ def test_the_cache_key_holds_no_install_path(tmp_path, monkeypatch):
     assert codegen.build_key(source, cc, libs) != key
 
 
+def test_large_sources_are_compiled_at_the_large_level(monkeypatch):
+    monkeypatch.setattr(codegen, "LARGE_SOURCE", 100)
+    assert codegen.cflags("x" * 99)[0] == codegen.OPT_FLAG
+    assert codegen.cflags("x" * 100)[0] == codegen.LARGE_OPT_FLAG == "-O1"
+
+
 def test_a_fatrop_solver_library_names_no_install_path():
     mpc = NMPC(paper(), NMPCConfig(solver="fatrop"))
     assert mpc.backend == "compiled"

@@ -18,6 +18,9 @@ from acid.params import paper
 from acid.units import C2K
 
 IPOPT = {"print_time": False, "ipopt": {"print_level": 0, "sb": "yes"}}
+SQP = {"qpsol": "qrqp", "print_time": False, "print_header": False, "print_iteration": False,
+       "print_status": False, "qpsol_options": {"print_iter": False, "print_header": False,
+                                                "print_info": False, "error_on_fail": False}}
 
 
 def _nlp():
@@ -174,3 +177,26 @@ def test_without_a_fallback_solver_a_failed_solve_applies_the_safe_input():
     with pytest.warns(SolverWarning, match="fallback applied"):
         u = mpc.make_step([C2K(27.0), C2K(6.0)], C2K(25.0), C2K(30.0), C2K(33.0))
     np.testing.assert_array_equal(u, mpc.config.u_safe)
+
+
+def _rosenbrock():
+    x = ca.SX.sym("x", 2)
+    return {"x": x, "f": (1 - x[0]) ** 2 + 100 * (x[1] - x[0] ** 2) ** 2, "g": x[0] + x[1]}
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_an_sqp_stopped_at_its_iteration_limit_is_not_a_success(compiled):
+    """CasADi's generated sqpmethod returns 0 when it stops at max_iter: the residual check
+    catches it, in both backends alike."""
+    opts = dict(SQP, max_iter=1, tol_pr=1e-10, tol_du=1e-10)
+    s = NLPSolver("acid_sqp_limit", _rosenbrock(), "sqpmethod", opts, compiled=compiled,
+                  verify=(1e-8, 1e-8))
+    res = s.solve(np.array([-1.2, 1.0]), [], -np.inf, np.inf, -10.0, 10.0)
+    assert not res.success
+    if s.backend == "compiled":  # the generated code said 0; the check said no
+        assert res.status.startswith("not converged")
+    s = NLPSolver("acid_sqp_limit", _rosenbrock(), "sqpmethod", dict(opts, max_iter=100),
+                  compiled=compiled, verify=(1e-8, 1e-8))
+    res = s.solve(np.array([-1.2, 1.0]), [], -np.inf, np.inf, -10.0, 10.0)
+    assert res.success
+    np.testing.assert_allclose(res.x, [1.0, 1.0], atol=1e-8)

@@ -70,9 +70,16 @@ import numpy as np
 from acid._io import atomic_path
 from acid.errors import AcidError
 
-#: optimisation level of every build (measured on the economic NMPC's solver, see
-#: ``benchmarks/bench_compile.py``)
+#: optimisation level of sources of at least LARGE_SOURCE characters (None: OPT_FLAG for
+#: all). Measured on the economic NMPC's solver (6.8 MB of C, ``benchmarks/bench_compile.py``,
+#: both levels in one run on a loaded 2-core machine): -O1 compiles in 0.56x the CPU seconds
+#: of -O2 (56 against 100) for steps 2.1 % slower and identical moves, so -O1 is better
+#: end to end below about 10^5 steps per build
+LARGE_OPT_FLAG: str | None = "-O1"
+#: optimisation level of the other (small, seconds to compile) sources
 OPT_FLAG = "-O2"
+#: characters of C from which a source counts as large
+LARGE_SOURCE = 1_000_000
 #: the other compiler flags (position independent, room for 64 concurrent memory slots of a
 #: stateful generated function such as an NLP solver)
 BASE_CFLAGS = ("-fPIC", "-shared", "-DCASADI_MAX_NUM_THREADS=64")
@@ -93,9 +100,10 @@ LOCK_WAIT_S = 1800.0
 VERIFY_WALL_S = 300.0
 
 
-def cflags() -> tuple[str, ...]:
-    """The compiler flags of every build."""
-    return (OPT_FLAG, *BASE_CFLAGS)
+def cflags(source: str = "") -> tuple[str, ...]:
+    """The compiler flags of a build of ``source`` (see :data:`LARGE_OPT_FLAG`)."""
+    large = LARGE_OPT_FLAG is not None and len(source) >= LARGE_SOURCE
+    return (LARGE_OPT_FLAG if large else OPT_FLAG, *BASE_CFLAGS)
 
 
 class CodegenError(AcidError):
@@ -231,7 +239,7 @@ def build_key(source: str, cc: list[str], libs: list[str]) -> str:
     """Cache key: SHA-256 of the source, the CasADi version, the compiler's identity, the
     flags and the linked solver libraries (by name: no install path enters it)."""
     h = hashlib.sha256()
-    for part in (source, ca.__version__, _compiler_identity(tuple(cc)), " ".join(cflags()),
+    for part in (source, ca.__version__, _compiler_identity(tuple(cc)), " ".join(cflags(source)),
                  " ".join(libs)):
         h.update(part.encode())
         h.update(b"\0")
@@ -463,7 +471,7 @@ def _compile(source: str, cc: list[str], flags: list[str], lib: Path) -> float:
         src = Path(tmp) / f"{lib.stem}.c"
         src.write_text(source)
         with atomic_path(lib) as out:
-            cmd = [*cc, *cflags(), str(src), "-o", str(out), *flags, "-lm"]
+            cmd = [*cc, *cflags(source), str(src), "-o", str(out), *flags, "-lm"]
             code, text, cpu = run_compiler(cmd)
             if code != 0 or not out.is_file() or out.stat().st_size == 0:
                 msg = text.strip().splitlines()
@@ -537,7 +545,7 @@ def _cached_build(fn, name, source, cc, libs, key, folder: Path) -> tuple[Path, 
             raise CodegenError(f"the freshly compiled {lib.name} is not usable ({bad})")
         meta = {"name": name, "sha256": _sha256(data), "verified": _sha256(data),
                 "casadi": ca.__version__, "compiler": info["compiler"],
-                "flags": [*cflags(), *(f"-l{n}" for n in libs)],
+                "flags": [*cflags(source), *(f"-l{n}" for n in libs)],
                 "created": time.strftime("%Y-%m-%dT%H:%M:%S")}
         with atomic_path(manifest) as tmp:
             tmp.write_text(json.dumps(meta, indent=2) + "\n")

@@ -137,6 +137,15 @@ T_PLAUSIBLE_K = (213.15, 423.15)
 #: SQP tolerance on the constraint violation (K) and the scaled dual infeasibility: SQP
 #: converges quadratically, so a tight tolerance costs about one iteration
 SQP_TOL = 1e-10
+#: what an SQP result must meet to count as converged (primal infeasibility in K, largest
+#: entry of the scaled Lagrangian's gradient): the generated SQP also stops, reporting
+#: success, at its iteration limit or on a step shorter than SQP_TOL
+SQP_ACCEPT = (1e-8, 1e-8)
+
+
+def _verify(solver: str) -> tuple[float, float] | None:
+    """The convergence check ``NLPSolver`` applies to ``solver``'s results."""
+    return SQP_ACCEPT if solver == "sqp" else None
 
 
 @dataclass(frozen=True)
@@ -500,7 +509,8 @@ class NMPC:
         self._w, self._g, self._p = w, g, par
         self._nlp_dict = nlp
         self._nlp = NLPSolver("acid_nmpc", nlp, *self._solver_options(g, cfg.solver),
-                              compiled=cfg.compiled, timeout_s=cfg.max_solve_s)
+                              compiled=cfg.compiled, verify=_verify(cfg.solver),
+                              timeout_s=cfg.max_solve_s)
         self._fallback_nlp: NLPSolver | None = None
         if cfg.max_solve_s is not None:  # a real-time run builds it now, not mid-run
             self._fallback_solver()
@@ -540,7 +550,7 @@ class NMPC:
             self._fallback_nlp = NLPSolver(
                 f"acid_nmpc_{cfg.fallback_solver}", self._nlp_dict,
                 *self._solver_options(self._g, cfg.fallback_solver), compiled=cfg.compiled,
-                timeout_s=cfg.max_solve_s)
+                verify=_verify(cfg.fallback_solver), timeout_s=cfg.max_solve_s)
         return self._fallback_nlp
 
     def _solver_options(self, g: BlockVector, solver: str) -> tuple[str, dict]:

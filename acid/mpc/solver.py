@@ -76,6 +76,27 @@ class NLPResult:
     solve_time_s: float
 
 
+def kkt_function(name: str, nlp: dict) -> ca.Function:
+    """``(x, p, lam_x, lam_g, lbx, ubx, lbg, ubg) -> (pr_inf, du_inf)`` of an NLP: the
+    largest violation of its bounds and constraints, and the largest entry of the gradient
+    of its Lagrangian ``f + lam_g' g + lam_x' x`` (CasADi's sign convention for the
+    multipliers)."""
+    x = nlp["x"]
+    sym = type(x).sym
+    p = nlp.get("p", sym("p", 0, 1))
+    g = nlp.get("g", sym("g", 0, 1))
+    lam_x, lbx, ubx = (sym(n, x.numel()) for n in ("lam_x", "lbx", "ubx"))
+    lam_g, lbg, ubg = (sym(n, g.numel()) for n in ("lam_g", "lbg", "ubg"))
+    grad = ca.gradient(nlp["f"], x) + lam_x
+    if g.numel():
+        grad += ca.jtimes(g, x, lam_g, True)
+    viol = ca.vertcat(ca.fmax(lbx - x, x - ubx), ca.fmax(lbg - g, g - ubg), 0)
+    return ca.Function(name, [x, p, lam_x, lam_g, lbx, ubx, lbg, ubg],
+                       [ca.mmax(viol), ca.mmax(ca.fabs(grad))],
+                       ["x", "p", "lam_x", "lam_g", "lbx", "ubx", "lbg", "ubg"],
+                       ["pr_inf", "du_inf"])
+
+
 class _Call:
     """One job handed to a :class:`_Worker`: the worker either starts it or finds it
     cancelled (never both), decided under ``lock``."""
@@ -159,6 +180,12 @@ class NLPSolver:
     compiled : ``"auto"`` (generated C when the plugin supports code generation and a
         compiler works, else CasADi with one notice), ``True`` (the same, and a notice
         whenever it falls back) or ``False`` (always CasADi).
+    verify : ``(tol_pr, tol_du)``: accept a solve only when its primal infeasibility (bounds
+        and constraints) and the largest entry of the gradient of its Lagrangian are at
+        most these (checked by a generated function of the NLP, compiled alongside). For
+        solvers whose own success flag cannot be trusted: CasADi's generated ``sqpmethod``
+        returns 0 when it stops at its iteration limit or on a short step. None: trust the
+        solver.
     timeout_s : wall-clock cap per solve, s (default None: no cap, the solve runs in the
         caller's thread). Only for a run that must keep a real-time budget (an ECU-like
         run): a cap makes results depend on the machine's load, so offline studies, tests
@@ -172,8 +199,10 @@ class NLPSolver:
     """
 
     def __init__(self, name: str, nlp: dict, plugin: str, options: dict,
-                 compiled: bool | str = "auto", timeout_s: float | None = None):
+                 compiled: bool | str = "auto", verify: tuple[float, float] | None = None,
+                 timeout_s: float | None = None):
         self.name = name
+        self.verify = verify
         self.plugin = plugin
         self.timeout_s = timeout_s
         self._nlp = nlp
@@ -190,6 +219,8 @@ class NLPSolver:
         self._compiled = None
         self._fn = ca.nlpsol(self.name, self.plugin, self._nlp, self._options)
         self.n_x, self.n_g = self._fn.nnz_in(0), self._fn.nnz_in(4)
+        self._kkt = kkt_function(f"{self.name}_kkt", self._nlp) if self.verify else None
+        self._kkt_c = None
         if self._want_compiled is False:
             self.build_info = {"reason": "compiled=False"}
             return
@@ -211,6 +242,11 @@ class NLPSolver:
         self.build_info = info
         if info.get("repaired"):
             warnings.warn(info["repaired"], CodegenWarning, stacklevel=3)
+        if self._kkt is not None:
+            try:
+                self._kkt_c, _ = compile_function(self._kkt)
+            except CodegenError:  # the check runs inside CasADi (same numbers)
+                self._kkt_c = None
 
     def close(self) -> None:
         """Stop the worker thread and release the compiled memory slot."""
@@ -268,11 +304,25 @@ class NLPSolver:
                 raise exc
         if cf is not None:
             out = self._unpack_compiled(out)
-        dt = time.perf_counter() - t0
         x, f, lam_x, lam_g, success, status, iters = out
         success = success and bool(np.all(np.isfinite(x)))
+        if success and self.verify:
+            pr, du = self._residuals(x, p, lam_x, lam_g, lbx, ubx, lbg, ubg)
+            if not (pr <= self.verify[0] and du <= self.verify[1]):  # False for NaN too
+                success = False
+                status = f"not converged (primal {pr:.1e}, dual {du:.1e}; {status})"
+        dt = time.perf_counter() - t0
         return NLPResult(x=x, f=f, lam_x=lam_x, lam_g=lam_g, success=success,
                          status=status, iterations=iters, solve_time_s=dt)
+
+    def _residuals(self, x, p, lam_x, lam_g, lbx, ubx, lbg, ubg) -> tuple[float, float]:
+        """(primal infeasibility, largest entry of the Lagrangian's gradient) at a result."""
+        args = (x, p, lam_x, lam_g, lbx, ubx, lbg, ubg)
+        if self._kkt_c is not None:
+            out = self._kkt_c(*args)
+            return float(out[0][0]), float(out[1][0])
+        pr, du = self._kkt(*args)
+        return float(pr), float(du)
 
     def _timed_out(self, dt: float, started: bool) -> NLPResult:
         """A solve past its cap. One that never started was cancelled (nothing to undo);
