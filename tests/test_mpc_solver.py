@@ -90,7 +90,28 @@ def test_a_cancelled_job_never_runs_and_the_next_one_does():
     assert not w.thread.is_alive()
 
 
-def test_a_running_solve_past_its_cap_is_abandoned_then_the_solver_is_rebuilt():
+class _LateCall(solver_mod._Call):
+    """A job whose caller gives up only once the worker has started it: the timeout of a
+    running solve, deterministically (the wait returns "not done" as soon as it started)."""
+
+    def __init__(self, job):
+        super().__init__(job)
+        call, done = self, self.done
+
+        class _Late(threading.Event):
+            def wait(self, timeout=None):
+                while True:  # until the worker has taken the job (no verdict on time)
+                    with call.lock:
+                        if call.started:
+                            return done.is_set()
+                    threading.Event().wait(0.001)
+
+        self.done = _Late()
+        self.done.set, self.done.is_set = done.set, done.is_set
+
+
+def test_a_running_job_past_its_cap_is_abandoned(monkeypatch):
+    monkeypatch.setattr(solver_mod, "_Call", _LateCall)
     release = threading.Event()
     w = _Worker("busy")
     finished, started, _, _ = w.run(release.wait, 1e-3)  # blocks until released
@@ -99,6 +120,20 @@ def test_a_running_solve_past_its_cap_is_abandoned_then_the_solver_is_rebuilt():
     w.stop()
     w.thread.join(30)
     assert not w.thread.is_alive()
+
+
+def test_a_running_solve_past_its_cap_is_abandoned_and_the_solver_rebuilt(monkeypatch):
+    s = NLPSolver("acid_late", _nlp(), "ipopt", IPOPT, timeout_s=1e-3)
+    first = s._fn
+    with monkeypatch.context() as m:
+        m.setattr(solver_mod, "_Call", _LateCall)
+        res = _solve(s)
+    assert not res.success and res.status == "timeout" and s.timeouts == 1
+    assert s._worker is None and s._fn is not first  # abandoned, rebuilt
+    s.timeout_s = None
+    res = _solve(s)
+    assert res.success
+    np.testing.assert_allclose(res.x, [1.0, -2.0], atol=1e-6)
 
 
 def test_an_exception_in_the_job_reaches_the_caller():
