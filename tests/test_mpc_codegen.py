@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import fcntl
 import hashlib
@@ -9,6 +10,7 @@ import json
 import multiprocessing as mp
 import os
 import signal
+import subprocess
 import sys
 import warnings
 from pathlib import Path
@@ -231,6 +233,29 @@ def test_a_compiler_past_its_wall_backstop_is_stopped_with_its_whole_group(tmp_p
     # nothing left to kill; the test above checks the group kill without a race)
     if pidfile.exists() and pidfile.read_text().strip():
         assert _wait_gone(int(pidfile.read_text()))
+
+
+def test_an_interrupt_during_a_compile_kills_the_whole_group(tmp_path, monkeypatch):
+    pidfile = tmp_path / "pid"
+    cc = _script(tmp_path, f"sleep 600 &\necho $! > {pidfile}\nwait\n")
+    real_wait = subprocess.Popen.wait
+
+    def interrupted(self, timeout=None):
+        if timeout is None:  # the reaping wait after the kill
+            return real_wait(self)
+        while not (pidfile.exists() and pidfile.read_text().strip()):
+            real_wait_or_none(self)
+        raise KeyboardInterrupt  # Ctrl-C while the compiler runs
+
+    def real_wait_or_none(proc):
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            real_wait(proc, timeout=0.05)
+
+    monkeypatch.setattr(subprocess.Popen, "wait", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        codegen.run_compiler([str(cc)])
+    monkeypatch.undo()
+    assert _wait_gone(int(pidfile.read_text()))
 
 
 def test_the_compiler_is_bounded_by_cpu_time(tmp_path, monkeypatch):
