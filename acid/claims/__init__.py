@@ -70,6 +70,7 @@ from acid.claims.registry import (
     HeadlineRow,
     claim,
     evaluate,
+    judge_value,
     summary_claims,
     validate_registry,
 )
@@ -78,5 +79,5 @@ __all__ = ["CLAIMS", "HEADLINE", "MODEL", "PAPER_CITATION", "STUDIES", "TABLE_I"
            "AtMost", "BeyondThePaper", "Claim", "ClaimVerdict", "HeadlineRow", "Measured",
            "NotComparable", "PaperValue", "Requires", "Rule", "SameSign", "Verdict", "Within",
            "check_path", "claim", "contradictions", "counts", "evaluate", "headline_markdown",
-           "headline_rows", "judge", "load_summary", "main", "registry_rows", "resolve",
-           "summary_claims", "validate_registry"]
+           "headline_rows", "judge", "judge_value", "load_summary", "main", "registry_rows",
+           "resolve", "summary_claims", "validate_registry"]
