@@ -29,6 +29,7 @@ import platform
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from acid import __version__
 from acid._io import write_json
@@ -36,8 +37,6 @@ from acid.claims import ClaimVerdict, evaluate, summary_claims
 from acid.claims.registry import ENERGY_CYCLES
 from acid.pipeline import Stage, StageOutcome
 from acid.plant.vehicles import DEFAULT_VEHICLE, PAPER_VEHICLE
-from acid.report.figures import read_figure_index, save_report_figure, write_figure_index
-from acid.report.html import Report, ReportFigure, StageTime, write_report
 from acid.stage_results import (
     CavStudyStage,
     EconStage,
@@ -49,6 +48,9 @@ from acid.stage_results import (
     SweepStage,
     ValidationStage,
 )
+
+if TYPE_CHECKING:
+    from acid.report.html import ReportFigure
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,36 @@ class ReproduceOptions:
                    horizon=120, timing_repeats=1, cav_warmup_s=300.0,
                    cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0,
                    econ_compiled=False)
+
+
+# matplotlib and the report load when a stage or the report needs them, not on import: `acid
+# claims` reads the study's options (``run_mode``) from here
+def save_report_figure(*args, **kwargs):
+    """``acid.report.figures.save_report_figure`` (imported on first use)."""
+    from acid.report.figures import save_report_figure as save
+
+    return save(*args, **kwargs)
+
+
+def write_figure_index(*args, **kwargs):
+    """``acid.report.figures.write_figure_index`` (imported on first use)."""
+    from acid.report.figures import write_figure_index as write
+
+    return write(*args, **kwargs)
+
+
+def run_mode(opts: ReproduceOptions | dict) -> str:
+    """"full" for the study's sizes (``ReproduceOptions()``), else "quick": a run whose
+    sizes differ from the study's (``--quick``) cannot judge the claims of the stages it
+    shortens (``acid.claims.registry.QUICK_RUN_JUDGES``)."""
+    d = opts if isinstance(opts, dict) else dataclasses.asdict(opts)
+    full = json.loads(json.dumps(dataclasses.asdict(ReproduceOptions())))
+    return "full" if json.loads(json.dumps(d)) == full else "quick"
+
+
+def is_quick(opts: ReproduceOptions | dict) -> bool:
+    """True unless ``opts`` are the full study's (see :func:`run_mode`)."""
+    return run_mode(opts) != "full"
 
 
 # --------------------------------------------------------------------- stage bodies
@@ -314,6 +346,9 @@ def study_results(outcomes: dict[str, StageOutcome]) -> StudyResults:
 def report_figures(outcomes: dict[str, StageOutcome],
                    order: list[str] | None = None) -> list[ReportFigure]:
     """Every figure the stages listed, in stage ``order`` (default: as given)."""
+    from acid.report.figures import read_figure_index
+    from acid.report.html import ReportFigure
+
     names = [n for n in (order or []) if n in outcomes]
     names += [n for n in outcomes if n not in names]
     return [ReportFigure(outcomes[n].workdir / r.file, r) for n in names
@@ -327,6 +362,7 @@ def summary_dict(outcomes: dict[str, StageOutcome], verdicts: list[ClaimVerdict]
     """``summary.json``: every stage's typed summary, every claim's verdict, the settings."""
     return {
         "acid_version": __version__,
+        "mode": run_mode(opts),
         "options": dataclasses.asdict(opts),
         "elapsed_s": elapsed_s,
         "stages": {k: {"title": o.title, "seconds": o.seconds, "cached": o.cached,
@@ -339,18 +375,20 @@ def summary_dict(outcomes: dict[str, StageOutcome], verdicts: list[ClaimVerdict]
 def write_outputs(out: Path, outcomes: dict[str, StageOutcome], opts: ReproduceOptions,
                   elapsed_s: float) -> tuple[Path, Path, list[ClaimVerdict]]:
     """Write ``report.html`` and ``summary.json`` into ``out``; the verdicts behind them."""
+    from acid.report.html import Report, StageTime, write_report
     from acid.report.sections import sections_for
 
     results = study_results(outcomes)
-    verdicts = evaluate(results)
+    quick = is_quick(opts)
+    verdicts = evaluate(results, quick=quick)
     figs = report_figures(outcomes, [s.name for s in build_stages(opts)])
     meta = {"acid": __version__, "python": platform.python_version(),
             "machine": f"{platform.machine()}, {_cpu_count()} cores",
             "generated": datetime.now(timezone.utc).replace(microsecond=0).isoformat(),
-            "mode": "quick" if opts == ReproduceOptions.quick() else "full"}
+            "mode": run_mode(opts)}
     html = write_report(out / "report.html", Report(
         title="acid: Model Predictive Climate Control of CAVs, reproduced",
-        verdicts=verdicts, figures=figs, sections=sections_for(results),
+        verdicts=verdicts, figures=figs, sections=sections_for(results, quick=quick),
         stages=[StageTime(o.title, o.seconds, o.cached) for o in outcomes.values()],
         meta=meta))
     summary = write_json(out / "summary.json",
@@ -369,4 +407,5 @@ def load_summary(path: Path) -> dict:
     return json.loads(Path(path).read_text())
 
 
-__all__ = ["ReproduceOptions", "build_stages", "study_results", "write_outputs"]
+__all__ = ["ReproduceOptions", "build_stages", "is_quick", "run_mode", "study_results",
+           "write_outputs"]

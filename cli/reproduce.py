@@ -10,11 +10,11 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.text import Text
 
-from acid.claims import contradictions, counts, headline_rows, load_summary
+from acid.claims import Verdict, contradictions, counts, headline_rows, load_summary
 from acid.errors import ConfigError
 from acid.outdir import claim
 from acid.pipeline import run_pipeline
-from acid.reproduce import ReproduceOptions, build_stages, write_outputs
+from acid.reproduce import ReproduceOptions, build_stages, is_quick, write_outputs
 from acid_cli._common import (
     check_paths,
     err_console,
@@ -93,6 +93,9 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
                 [[r[0].replace("*", ""), *r[1:]] for r in headline_rows(summary)])
     n = counts(verdicts)
     say(", ".join(f"{c} {k}" for k, c in n.items()))
+    if is_quick(opts):
+        say(f"quick run: {n[Verdict.NOT_JUDGED.value]} claims not judged (the stages it "
+            "shortens); only the NMPC checks are judged. Run without --quick for the study.")
     bad = contradictions(verdicts)
     if bad:
         warn("contradictory verdicts: " + "; ".join(bad))

@@ -31,6 +31,7 @@ from acid.claims.core import (
     contradictions,
     counts,
     judge,
+    not_judged,
 )
 from acid.claims.paper import MODEL, PAPER_CITATION, STUDIES, TABLE_I, TABLE_II
 from acid.stage_results import (
@@ -38,6 +39,7 @@ from acid.stage_results import (
     EconStage,
     FitStage,
     MpcStage,
+    PlantCheckStage,
     StudyResults,
     SweepStage,
     ValidationStage,
@@ -146,6 +148,12 @@ def _validation_claims() -> list[Claim]:
         for ch in ("T_cab", "T_evap", "T_ain")]
 
 
+#: the largest avoidable violation of the state bounds on the plant (K) that acid reads as
+#: the paper's "slight violations" (Fig. 8): the claim nmpc.plant.violation and acid
+#: mpc-check's scenario (b) verdict both use it (one criterion per quantity, issue 21)
+PLANT_VIOLATION_TOL_K = 0.05
+
+
 def _nmpc_claims() -> list[Claim]:
     Ts_ms = 1000.0 * TABLE_II.Ts
     return [
@@ -163,12 +171,15 @@ def _nmpc_claims() -> list[Claim]:
               Measured(MpcStage, "model.ride_error_K", spec=".4f"),
               AtMost(limit=0.05, reading="'approaches'")),
         Claim("nmpc.plant.violation", "NMPC on the plant (Fig. 8)",
-              "largest state-bound violation after the first step",
+              "largest avoidable state-bound violation after the first step (beyond what "
+              "maximum cooling from t = 0 leaves)",
               PaperValue(None, "K", "section IV-B, Fig. 8",
                          "satisfied during most of the simulation period, with slight "
                          "violations at some time instants"),
-              Measured(MpcStage, "plant.max_violation_K", spec=".3f"),
-              AtMost(limit=0.5, reading="'slight violations'")),
+              Measured(MpcStage, "plant.max_avoidable_violation_K", spec=".3f"),
+              AtMost(limit=PLANT_VIOLATION_TOL_K, reading="'slight violations'"),
+              note="the one criterion of this quantity: acid mpc-check's scenario (b) "
+                   "verdict uses the same limit (acid.mpc.scenarios.PLANT_TOL_K)"),
         Claim("nmpc.computation", "Computation",
               "NMPC time per step, mean over the timed steps (the paper's average)",
               PaperValue(Ts_ms * STUDIES.computation_fraction_of_Ts, "ms", "section IV-B",
@@ -311,7 +322,7 @@ HEADLINE: tuple[HeadlineRow, ...] = (
                 _ids("validation.")),
     HeadlineRow("NMPC on the model (Fig. 7): largest violation after the first step",
                 ("nmpc.model.violation",)),
-    HeadlineRow("NMPC on the plant (Fig. 8): largest violation after the first step",
+    HeadlineRow("NMPC on the plant (Fig. 8): largest avoidable violation after the first step",
                 ("nmpc.plant.violation",)),
     HeadlineRow("CAV case, energy over 10-85 s, Case 1 (ICM) / Case 2 (constant bound)",
                 ("cav.case1_energy", "cav.case2_energy")),
@@ -377,10 +388,28 @@ def validate_registry(claims: Sequence[Claim] = CLAIMS,
 validate_registry()
 
 
-def evaluate(results: StudyResults, claims: Sequence[Claim] | None = None
-             ) -> list[ClaimVerdict]:
-    """Verdicts on every claim of ``claims`` (default: the registry ``CLAIMS``, in order)."""
-    return [judge(c, results) for c in (CLAIMS if claims is None else claims)]
+#: The stages whose claims a ``--quick`` run judges: the NMPC checks run the same scenarios,
+#: horizons and criteria as in the full study (only their timing is repeated less), and the
+#: plant check is not shortened at all. Every other stage is shortened (a 300 s sweep, 12
+#: starts x 120 steps, shorter records, warm-ups, tails and horizons), so its claims are
+#: "not judged (quick run)".
+QUICK_RUN_JUDGES: tuple[type, ...] = (MpcStage, PlantCheckStage)
+QUICK_RUN_REASON = ("a --quick run shortens this stage (the study's sizes are in "
+                    "acid.reproduce.ReproduceOptions): run without --quick to judge it")
+
+
+def evaluate(results: StudyResults, claims: Sequence[Claim] | None = None,
+             quick: bool = False) -> list[ClaimVerdict]:
+    """Verdicts on every claim of ``claims`` (default: the registry ``CLAIMS``, in order).
+
+    ``quick``: the results are of a ``--quick`` run; claims measured outside
+    ``QUICK_RUN_JUDGES`` are "not judged (quick run)", their values kept.
+    """
+    out = [judge(c, results) for c in (CLAIMS if claims is None else claims)]
+    if quick:
+        out = [v if v.claim.measured is None or v.claim.measured.stage in QUICK_RUN_JUDGES
+               else not_judged(v, QUICK_RUN_REASON) for v in out]
+    return out
 
 
 def summary_claims(verdicts: Sequence[ClaimVerdict]) -> dict:

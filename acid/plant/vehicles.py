@@ -11,7 +11,7 @@ config_path="paper")``).
     acid's default vehicle, ``PlantConfig()`` (a 33 cc, 8000 rpm scroll from a 40 degC soak):
     the plant of every other study, shown beside the paper vehicle.
 
-Why two: Table I's level (E(0) = 1.33 MJ) and flatness (E(25)/E(0) = 0.80) together need a
+Why two: Table I's level (its E(0)) and flatness (its E(25)/E(0)) together need a
 compressor that is capacity-limited through the 600 s, so that the energy is its maximum
 power and only the head pressure moves it with speed. The default compressor never
 saturates in the test (at most 78 % of N_max); its energy follows load / COP, and its COP

@@ -35,13 +35,33 @@ def report_section(kind: type[StageResult]):
     return register
 
 
-def sections_for(results: StudyResults) -> list[ReportSection]:
-    """The sections of the stages that ran, in registration order."""
+#: the first words of a paragraph that draws a conclusion from a stage's numbers
+CONCLUSION = "Conclusion (from the numbers):"
+
+
+def sections_for(results: StudyResults, quick: bool = False) -> list[ReportSection]:
+    """The sections of the stages that ran, in registration order.
+
+    ``quick``: the results are of a ``--quick`` run. A section of a stage the quick run
+    shortens (outside ``acid.claims.registry.QUICK_RUN_JUDGES``) then says so first, and
+    draws no conclusion.
+    """
+    import dataclasses
+
+    from acid.claims.registry import QUICK_RUN_JUDGES, QUICK_RUN_REASON
+
     out = []
     for kind, builder in SECTION_BUILDERS.items():
         r = results.get(kind)
-        if r is not None:
-            out.append(builder(r))
+        if r is None:
+            continue
+        sec = builder(r)
+        if quick and kind not in QUICK_RUN_JUDGES:
+            paras = tuple(p for p in sec.paragraphs if not p.startswith(CONCLUSION))
+            sec = dataclasses.replace(sec, paragraphs=(
+                f"Not judged (quick run): {QUICK_RUN_REASON}. The numbers below are those of "
+                "the smaller study and support no conclusion.",) + paras)
+        out.append(sec)
     return out
 
 
@@ -132,7 +152,7 @@ def _where_the_energy_is(r: CavStudyStage) -> ReportSection:
             "back by a common continuation (acid cav-study). Savings are against A, gaps "
             "against the bound's replay, both on the charged-back energies. PMV: ISO 7730, "
             "1.2 met, 0.5 clo, 0.2 m/s.",
-            "Conclusion (from the numbers): " + energy_conclusion(r)),
+            f"{CONCLUSION} " + energy_conclusion(r)),
         header=("cycle", "controller", "energy (MJ)", "charged back (MJ)", "saving vs A (%)",
                 "gap to bound (%)", "mean T_cab (°C)", "mean T_evap_set (°C)", "PMV",
                 "w_cab (g/kg)"),
