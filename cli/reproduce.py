@@ -19,6 +19,7 @@ from acid_cli._common import (
     check_paths,
     err_console,
     handle_errors,
+    note,
     print_table,
     say,
     warn,
@@ -47,7 +48,9 @@ def reproduce(
     """Sweep (Table I), excite, fit, validate (Figs. 5-6) and NMPC checks (Figs. 7-10).
 
     Stages are cached by their inputs under OUT/stages, so a second run redoes only what
-    changed. Writes OUT/report.html (self-contained) and OUT/summary.json.
+    changed (one line names what it reused; a cached record that fails its integrity check
+    is recomputed, with one line). Writes OUT/report.html (self-contained) and
+    OUT/summary.json. A run into a folder another run is using stops with one line.
     """
     check_paths(outputs={"--json": json_path},
                 folders={"--out": (out, ("report.html", "summary.json"))})
@@ -80,8 +83,14 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
         outcomes = run_pipeline(stages, out, jobs=jobs, on_start=on_start,
                                 on_progress=on_progress, on_done=on_done, force=force,
                                 scheduler=scheduler,
-                                notice=lambda msg: err_console.print(Text(msg), highlight=False))
+                                notice=lambda msg: err_console.print(Text(msg), highlight=False,
+                                                                    soft_wrap=True))
     elapsed = time.perf_counter() - t0
+    reused = [o.name for o in outcomes.values() if o.cached]
+    if reused:
+        note(f"reused {len(reused)} of {len(outcomes)} stages cached in {out / 'stages'} "
+            f"({', '.join(reused)}: same settings, inputs and code); the report is written "
+            "again from them; --force recomputes every stage")
     html, summary_path, verdicts = write_outputs(out, outcomes, opts, elapsed)
 
     print_table("Stages", ["stage", "time (s)", "cache"],
