@@ -143,3 +143,19 @@ def test_a_plant_without_pressures_degrades_gracefully():
 def test_ambient_outside_the_property_tables_is_refused():
     with pytest.raises(ConfigError, match="outside the refrigerant property tables"):
         build_plant("hifi", T_amb=400.0)
+
+
+def test_the_paper_vehicle_is_a_name_wherever_a_plant_configuration_is_accepted(tmp_path):
+    from acid.plant.config import PlantConfig
+    from acid.plant.vehicles import resolve_config, vehicle_config, vehicle_file
+
+    paper_file = vehicle_file("paper")
+    assert paper_file.name == "table_i_20cc.toml" and paper_file.is_file()
+    assert make_plant("hifi", config_path="paper").cfg == PlantConfig.from_toml(paper_file)
+    assert make_plant("hifi", config_path="default").cfg == PlantConfig()
+    assert vehicle_config(None) == PlantConfig() and resolve_config("default") is None
+    own = tmp_path / "mine.toml"
+    own.write_text('refrigerant = "R1234yf"\n')
+    assert resolve_config(own) == own and vehicle_config(own).refrigerant == "R1234yf"
+    with pytest.raises(ConfigError, match="unknown vehicle"):
+        vehicle_file("sedan")
