@@ -317,8 +317,8 @@ def coolprop_cycle(fluid: str, p_e: float, p_s: float, p_c: float, superheat: fl
 
 #: the quantities of the independent cycle check; the condensing temperature's deviation is
 #: in K, the others' in %
-CYCLE_CHECKS = ("COP (refrigerant side, Q_e / W)", "condensing temperature",
-                "refrigerant mass flow Q_e / (h1 - h4)", "condenser heat m_r (h2 - h3)")
+CYCLE_CHECKS = ("COP Q_e / W (refrigerant side)", "condensing temperature",
+                "mass flow Q_e / (h1 - h4)", "condenser heat m_r (h2 - h3)")
 
 
 def cycle_deviations(cfg, r) -> tuple[dict[str, float], dict]:
@@ -389,10 +389,11 @@ def check_refrigerant_cycle(plant: Plant, plant0: Plant) -> tuple[list[CheckRow]
         is_T = n == names[1]
         lim = CYCLE_TOL_TC_K if is_T else tol
         rows.append(CheckRow(
-            f"cycle vs CoolProp: {n}, largest deviation", d,
-            f"|plant - CoolProp| <= {lim:g} {'K' if is_T else '%'} (CoolProp PropsSI at the "
-            "plant's pressures, SH, SC, eta_is)", "K" if is_T else "%", abs(d) <= lim, "b",
-            f"worst of {len(points)} operating points: {label}"))
+            f"cycle vs CoolProp: {n}", d,
+            f"|plant - CoolProp| <= {lim:g} {'K' if is_T else '%'}", "K" if is_T else "%",
+            abs(d) <= lim, "b",
+            f"largest deviation of {len(points)} operating points ({label}); CoolProp PropsSI "
+            "at the plant's pressures, superheat, subcooling and isentropic efficiency"))
     return rows, data
 
 
