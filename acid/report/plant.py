@@ -41,15 +41,16 @@ def sweep_figure(result: SweepResult, beside: SweepResult | None = None,
               ("T_c", "condensing temperature $T_c$ (°C)", True),
               ("P_bl", "blower power $P_{bl}$ (W)", False))
     for ax, (name, label, is_temp) in zip(axes, panels, strict=True):
-        for s in range(S):
+        for s, same in _distinct_traces(result.traces[name]):
             y = result.traces[name][s]
+            speeds = ", ".join(f"{result.speeds_mps[k]:g}" for k in same)
             ax.plot(t, K2C(y) if is_temp else y, color=colors[s], lw=1.0 + 0.2 * (S - 1 - s),
-                    ls=_LINESTYLES[s % len(_LINESTYLES)],
-                    label=f"{result.speeds_mps[s]:g} m/s")
+                    ls=_LINESTYLES[s % len(_LINESTYLES)], label=f"{speeds} m/s")
         ax.set_ylabel(label)
         ax.set_xlabel("time (s)")
         ax.grid(True, alpha=0.3)
-    axes[0].legend(title=f"vehicle speed ({labels[0]})", fontsize=8, ncols=2)
+    axes[0].legend(title="vehicle speed", fontsize=8, ncols=2)
+    axes[0].set_title(f"traces: {labels[0]}", fontsize=9, loc="left")
 
     x = np.arange(S)
     series = [(result.energy_MJ, f"{labels[0]} (compressor + blower)", "tab:blue")]
@@ -82,6 +83,22 @@ def sweep_figure(result: SweepResult, beside: SweepResult | None = None,
     fig.suptitle(f"Speed sensitivity, nominal controller: {ratio}; paper "
                  f"{TABLE_I.energy_MJ[-1] / TABLE_I.energy_MJ[0]:.2f}")
     return fig
+
+
+def _distinct_traces(traces) -> list[tuple[int, list[int]]]:
+    """[(row, rows with the same trace)] for the rows of ``traces``: speeds whose traces are
+    equal (a blower at its maximum at every speed) are drawn once, labelled with all of them,
+    instead of as lines hidden under each other."""
+    out: list[tuple[int, list[int]]] = []
+    for s, y in enumerate(traces):
+        for first, same in out:
+            ref = traces[first]
+            if np.allclose(y, ref, rtol=1e-9, atol=1e-9 * max(1.0, float(np.nanmax(np.abs(ref))))):
+                same.append(s)
+                break
+        else:
+            out.append((s, [s]))
+    return out
 
 
 #: one dash pattern per speed as well as a colour, and earlier (lower) lines wider: close or
