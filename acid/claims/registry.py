@@ -394,8 +394,7 @@ validate_registry()
 #: starts x 120 steps, shorter records, warm-ups, tails and horizons), so its claims are
 #: "not judged (quick run)".
 QUICK_RUN_JUDGES: tuple[type, ...] = (MpcStage, PlantCheckStage)
-QUICK_RUN_REASON = ("a --quick run shortens this stage (the study's sizes are in "
-                    "acid.reproduce.ReproduceOptions): run without --quick to judge it")
+QUICK_RUN_REASON = "--quick shortens this stage; run without --quick to judge it"
 
 
 def evaluate(results: StudyResults, claims: Sequence[Claim] | None = None,
