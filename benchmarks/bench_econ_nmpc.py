@@ -42,11 +42,11 @@ from acid.units import C2K
 TARGET_MS = 20.0
 
 
-def record(econ, cycle: str):
+def record(econ, cycle: str, config: EconNMPCConfig | None = None):
     """Closed loop of controller E on the plant; returns the (x, v preview, T_amb) per step."""
     factory = default_plant_factory()
     plant = factory()
-    mpc = EconNMPC(econ, EconNMPCConfig(T_cab_max=C2K(24.0)))
+    mpc = EconNMPC(econ, config or EconNMPCConfig(T_cab_max=C2K(24.0)))
     v, _ = drive_cycle(cycle, Ts=5.0)
     plant.reset({"T_cab": C2K(24.0), "T_int": C2K(26.0), "T_shell": C2K(33.0),
                  "T_evap": C2K(9.0), "w_cab": 0.0078})

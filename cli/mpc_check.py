@@ -56,9 +56,10 @@ def mpc_check(
         help="Reading of eq. 13 u(0|k) = u(k): 'free' (u(0|k) is decided and applied now, "
              "default) or 'pinned' (u(0|k) is the input already applied; one-period delay)."),
     solver: str = typer.Option(
-        "fatrop", "--solver",
-        help="NLP solver: 'fatrop' (structure-exploiting interior point, default), 'ipopt', or "
-             "'sqp' (SQP with the active-set QP solver qrqp, the algorithm of acid export-c)."),
+        "sqp", "--solver",
+        help="NLP solver: 'sqp' (SQP with the active-set QP solver qrqp, warm-started, the "
+             "algorithm of acid export-c; fatrop when it fails; default), 'fatrop' "
+             "(structure-exploiting interior point) or 'ipopt'."),
     compiled: bool = typer.Option(
         True, "--compiled/--no-compiled",
         help="Run fatrop/SQP as generated C compiled at first use (cached per user); "

@@ -8,36 +8,47 @@ solver run inside CasADi (the same algorithm on the same expressions).
 :func:`compile_function` does it for any ``casadi.Function``:
 
 1. **Generate** the C source (``casadi.CodeGenerator``).
-2. **Key** it: SHA-256 of the source + CasADi version + compiler identity (its path and
-   ``--version``) + flags. The source holds the problem's whole structure (horizon,
-   sparsity, solver options), so a different problem gets a different key and the same
-   problem the same key, in every process.
+2. **Key** it: SHA-256 of the source + CasADi version + compiler identity (its
+   ``--version`` line and target, never its path) + flags + the solver libraries it links.
+   No install path enters the key (nor the library: it carries no ``rpath``), so one build
+   serves every virtualenv and clone with the same source, CasADi version and compiler.
+   The source holds the problem's whole structure (horizon, sparsity, solver options), so a
+   different problem gets a different key and the same problem the same key.
 3. **Compile** it with the system C compiler (``$CC``, else ``cc``, ``gcc``, ``clang``) into
    the per-user cache (``$ACID_CACHE_DIR/nmpc``, else ``$XDG_CACHE_HOME/acid/nmpc`` or
    ``~/.cache/acid/nmpc``), atomically: the library is built under a temporary name and
-   renamed into place, and a manifest beside it records its SHA-256. Concurrent first uses
-   are serialised by a lock file (the second waits, then loads what the first built).
-4. **Verify and load** it: the library's SHA-256 must match its manifest (a truncated or
-   otherwise corrupted entry is rebuilt, never loaded), then ``ctypes`` loads it and
-   :class:`CompiledFunction` calls it on preallocated numpy buffers (a few microseconds of
-   overhead instead of CasADi's tens).
+   renamed into place, and a manifest beside it records its SHA-256. The compiler runs in a
+   session of its own, bounded by CPU time (:data:`COMPILE_CPU_S` per process, so a loaded
+   machine slows it but does not kill it); on any exit, timeout or interrupt the whole
+   process group (``cc1``, ``as``, ``ld``) is killed. Concurrent first uses are serialised
+   by a lock file: the second process waits for the first one's build (at most
+   :data:`LOCK_WAIT_S`, then it falls back) and loads it instead of compiling again.
+4. **Verify and load** it: the library's SHA-256 must match its manifest and its ELF
+   structure (headers, segments and sections) must lie within its size, at every load; once
+   per build it is also loaded and called in a child process (recorded in the manifest). A
+   corrupted entry is rebuilt, never loaded into this process (a truncated library would
+   kill it with SIGBUS). Then ``ctypes`` loads it and :class:`CompiledFunction` calls it on
+   preallocated numpy buffers (a few microseconds of overhead instead of CasADi's tens).
 
 Solvers whose generated code calls a solver library (fatrop, hpipm) are linked against the
-libraries shipped in the casadi wheel (``-L``/``-rpath`` to its folder, headers from its
-``include``), so the compiled solver needs the casadi installation it was generated from
-at run time (the cache key includes the CasADi version). For C that needs nothing but a C
-compiler and libm, generate a self-contained plugin (``sqpmethod`` with ``qrqp``): see
-:mod:`acid.mpc.export`.
+libraries shipped in the casadi wheel (headers from its ``include``); those libraries are
+loaded from the running casadi installation before the compiled library, so the compiled
+solver needs a casadi installation of the same version at run time (the cache key includes
+the version). For C that needs nothing but a C compiler and libm, generate a self-contained
+plugin (``sqpmethod`` with ``qrqp``): see :mod:`acid.mpc.export`.
 
-Anything that goes wrong (no compiler, a compiler error, an unloadable library) raises
-:class:`CodegenError` with a one-line reason; callers fall back to the CasADi function
-(see :class:`acid.mpc.solver.NLPSolver`, which emits one :class:`CodegenWarning` notice).
+Anything that goes wrong (no compiler, a compiler error, an unloadable library, a cache
+folder that cannot be used: read-only, a file in its place, a folder where the lock goes,
+another process's build that does not finish) raises :class:`CodegenError` with a one-line
+reason; callers fall back to the CasADi function (see :class:`acid.mpc.solver.NLPSolver`,
+which emits one :class:`CodegenWarning` notice).
 """
 
 from __future__ import annotations
 
 import contextlib
 import ctypes
+import errno
 import functools
 import hashlib
 import json
@@ -45,7 +56,10 @@ import os
 import re
 import shlex
 import shutil
+import signal
+import struct
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -56,14 +70,40 @@ import numpy as np
 from acid._io import atomic_path
 from acid.errors import AcidError
 
-#: compiler flags of every build (optimised, position independent, room for 64 concurrent
-#: memory slots of a stateful generated function such as an NLP solver)
-CFLAGS = ("-O2", "-fPIC", "-shared", "-DCASADI_MAX_NUM_THREADS=64")
-#: solver libraries that generated code may include, and what to link for them
-RUNTIME_LIBRARIES = {"fatrop/": ("fatrop", "blasfeo"), "hpipm_": ("hpipm", "blasfeo"),
+#: optimisation level of sources of at least LARGE_SOURCE characters (None: OPT_FLAG for
+#: all). Measured on the economic NMPC's solver (6.8 MB of C, ``benchmarks/bench_compile.py``,
+#: both levels in one run on a loaded 2-core machine): -O1 compiles in 0.56x the CPU seconds
+#: of -O2 (56 against 100) for steps 2.1 % slower and identical moves, so -O1 is better
+#: end to end below about 10^5 steps per build
+LARGE_OPT_FLAG: str | None = "-O1"
+#: optimisation level of the other (small, seconds to compile) sources
+OPT_FLAG = "-O2"
+#: characters of C from which a source counts as large
+LARGE_SOURCE = 1_000_000
+#: the other compiler flags (position independent, room for 64 concurrent memory slots of a
+#: stateful generated function such as an NLP solver)
+BASE_CFLAGS = ("-fPIC", "-shared", "-DCASADI_MAX_NUM_THREADS=64")
+#: solver libraries that generated code may include, and what to link for them (in load
+#: order: a library before the ones that need it)
+RUNTIME_LIBRARIES = {"fatrop/": ("blasfeo", "fatrop"), "hpipm_": ("blasfeo", "hpipm"),
                      "blasfeo": ("blasfeo",)}
-#: seconds a compilation may take before it counts as failed
-COMPILE_TIMEOUT_S = 300.0
+#: CPU seconds each compiler process may use (``RLIMIT_CPU``): generous (the economic
+#: NMPC's solver takes about 50 at -O2) and independent of the machine's load
+COMPILE_CPU_S = 900
+#: wall-clock backstop for a compiler that stops using CPU (blocked), s
+COMPILE_WALL_S = 7200.0
+#: wall seconds a process waits for another one's build of the same entry before it falls
+#: back (the build it waits on is itself bounded by COMPILE_CPU_S)
+LOCK_WAIT_S = 1800.0
+#: wall seconds the once-per-build child load of a library may take before it counts as
+#: failed (a Python start-up and one call)
+VERIFY_WALL_S = 300.0
+
+
+def cflags(source: str = "") -> tuple[str, ...]:
+    """The compiler flags of a build of ``source`` (see :data:`LARGE_OPT_FLAG`)."""
+    large = LARGE_OPT_FLAG is not None and len(source) >= LARGE_SOURCE
+    return (LARGE_OPT_FLAG if large else OPT_FLAG, *BASE_CFLAGS)
 
 
 class CodegenError(AcidError):
@@ -100,32 +140,65 @@ def find_compiler() -> list[str] | None:
     return None
 
 
-@functools.lru_cache(maxsize=8)
-def _compiler_identity(cc: tuple[str, ...]) -> str:
-    """``<resolved path>: <first line of --version>``; CodegenError if it does not run."""
-    exe = shutil.which(cc[0]) or cc[0]
+def _first_line(cc: tuple[str, ...], arg: str) -> str:
     try:
-        out = subprocess.run([*cc, "--version"], capture_output=True, text=True, timeout=30)
+        out = subprocess.run([*cc, arg], capture_output=True, text=True, timeout=60)
     except (OSError, subprocess.SubprocessError) as exc:
         raise CodegenError(f"C compiler {' '.join(cc)!r} does not run ({exc})") from None
     if out.returncode != 0:
         raise CodegenError(f"C compiler {' '.join(cc)!r} does not run "
-                           f"(--version exited {out.returncode})")
+                           f"({arg} exited {out.returncode})")
     first = (out.stdout or out.stderr).strip().splitlines()
-    return f"{exe}: {first[0] if first else 'unknown version'}"
+    return first[0] if first else "unknown"
 
 
-def link_flags(source: str) -> list[str]:
-    """Include and link flags for the solver libraries ``source`` includes (see
-    :data:`RUNTIME_LIBRARIES`), pointing at the casadi installation."""
+@functools.lru_cache(maxsize=8)
+def _compiler_identity(cc: tuple[str, ...]) -> str:
+    """``<first line of --version> (<target>)``, free of install paths; CodegenError if the
+    compiler does not run."""
+    version = _first_line(cc, "--version")
+    try:
+        target = _first_line(cc, "-dumpmachine")
+    except CodegenError:
+        target = "unknown target"
+    return f"{version} ({target})"
+
+
+def runtime_libraries(source: str) -> list[str]:
+    """The solver libraries ``source`` includes (see :data:`RUNTIME_LIBRARIES`), in load
+    order."""
     libs: list[str] = []
     for marker, names in RUNTIME_LIBRARIES.items():
         if re.search(r"#include\s*[<\"]" + re.escape(marker), source):
             libs += [n for n in names if n not in libs]
+    return libs
+
+
+def link_flags(libs: list[str]) -> list[str]:
+    """Include and link flags for the solver libraries ``libs``, pointing at the casadi
+    installation (no ``rpath``: they are loaded by path before the library, see
+    :func:`preload_libraries`)."""
     if not libs:
         return []
     d = casadi_dir()
-    return [f"-I{d / 'include'}", f"-L{d}", *(f"-l{n}" for n in libs), f"-Wl,-rpath,{d}"]
+    return [f"-I{d / 'include'}", f"-L{d}", *(f"-l{n}" for n in libs)]
+
+
+def library_paths(libs: list[str]) -> list[Path]:
+    """The casadi installation's files of the solver libraries ``libs``."""
+    d = casadi_dir()
+    return [d / f"lib{n}.so" for n in libs]
+
+
+def preload_libraries(libs: list[str]) -> None:
+    """Load the solver libraries ``libs`` of the running casadi installation (global
+    symbols), so that a compiled library that needs them finds them by their soname."""
+    for path in library_paths(libs):
+        try:
+            ctypes.CDLL(str(path), mode=ctypes.RTLD_GLOBAL)
+        except OSError as exc:
+            raise CodegenError(f"cannot load {path.name} of the casadi installation "
+                               f"({exc})") from None
 
 
 def generate_source(fn: ca.Function, name: str | None = None) -> str:
@@ -162,103 +235,317 @@ def reset_function(source: str, name: str) -> str:
             f"  {inner}_free_mem(mem);\n  return {inner}_init_mem(mem);\n}}\n")
 
 
-def build_key(source: str, cc: list[str], flags: list[str]) -> str:
-    """Cache key: SHA-256 of source, CasADi version, compiler identity and flags."""
+def build_key(source: str, cc: list[str], libs: list[str]) -> str:
+    """Cache key: SHA-256 of the source, the CasADi version, the compiler's identity, the
+    flags and the linked solver libraries (by name: no install path enters it)."""
     h = hashlib.sha256()
-    for part in (source, ca.__version__, _compiler_identity(tuple(cc)), " ".join(flags)):
+    for part in (source, ca.__version__, _compiler_identity(tuple(cc)), " ".join(cflags(source)),
+                 " ".join(libs)):
         h.update(part.encode())
         h.update(b"\0")
     return h.hexdigest()[:24]
 
 
+def _cache_fault(folder: Path, exc: BaseException) -> CodegenError:
+    """A cache folder that cannot be used, as a one-line CodegenError."""
+    if isinstance(exc, OSError):
+        why = exc.strerror or type(exc).__name__
+        where = exc.filename or folder
+        return CodegenError(f"solver cache {where} cannot be used ({why})")
+    return CodegenError(f"solver cache {folder} cannot be used ({exc})")
+
+
+def _open_lock(path: Path) -> int:
+    """File descriptor of the lock file ``path`` (created when missing)."""
+    return os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+
+
 @contextlib.contextmanager
-def _locked(path: Path):
-    """Exclusive advisory lock on ``path`` (serialises concurrent builds of one entry)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+def _locked(path: Path, wait_s: float):
+    """Exclusive advisory lock on ``path`` (serialises concurrent builds of one entry).
+
+    Yields True when held; False when the lock file cannot be created because the folder is
+    read-only (an intact entry can still be loaded, nothing can be built). Waits at most
+    ``wait_s`` for another holder, then raises CodegenError. A lock that is not a file
+    raises OSError.
+    """
     try:
         import fcntl
     except ImportError:  # pragma: no cover - no advisory locks: atomic renames still hold
-        yield
+        yield True
         return
-    with open(path, "a+") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
+    try:
+        fd = _open_lock(path)
+    except OSError as exc:
+        if exc.errno in (errno.EACCES, errno.EROFS, errno.EPERM):
+            yield False
+            return
+        raise
+    try:
+        deadline = time.monotonic() + wait_s
+        delay = 0.05
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() >= deadline:
+                    raise CodegenError(f"another process has been building {path.name[1:-5]}"
+                                       f" for over {wait_s:g} s (lock {path}); not waiting "
+                                       "longer") from None
+                time.sleep(delay)
+                delay = min(2 * delay, 1.0)
         try:
-            yield
+            yield True
         finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
+            fcntl.flock(fd, fcntl.LOCK_UN)
+    finally:
+        os.close(fd)
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
 
 
-def _entry_ok(lib: Path, manifest: Path) -> str | None:
-    """None when the cache entry is complete and intact, else what is wrong with it."""
-    if not lib.is_file() and not manifest.is_file():
-        return "missing"
+def elf_problem(data: bytes) -> str | None:
+    """None when ``data`` is an ELF shared object whose headers, segments and sections all
+    lie within its size, else what is wrong (a truncated library fails here)."""
+    size = len(data)
+    if size < 64 or data[:4] != b"\x7fELF":
+        return "not an ELF file"
+    cls, enc = data[4], data[5]
+    if cls not in (1, 2) or enc not in (1, 2):
+        return "unknown ELF class or byte order"
+    e = "<" if enc == 1 else ">"
+    if cls == 2:
+        e_type, = struct.unpack_from(e + "H", data, 16)
+        phoff, shoff = struct.unpack_from(e + "QQ", data, 32)
+        phentsize, phnum, shentsize, shnum = struct.unpack_from(e + "HHHH", data, 54)
+        ph_fmt, sh_fmt = e + "IIQQQQQQ", e + "IIQQQQIIQQ"
+    else:
+        e_type, = struct.unpack_from(e + "H", data, 16)
+        phoff, shoff = struct.unpack_from(e + "II", data, 28)
+        phentsize, phnum, shentsize, shnum = struct.unpack_from(e + "HHHH", data, 42)
+        ph_fmt, sh_fmt = e + "IIIIIIII", e + "IIIIIIIIII"
+    if e_type != 3:
+        return "not a shared object"
+    if phnum == 0 or phentsize < struct.calcsize(ph_fmt) or phoff + phnum * phentsize > size:
+        return "program headers beyond the end of the file"
+    if shnum and (shentsize < struct.calcsize(sh_fmt) or shoff + shnum * shentsize > size):
+        return "section headers beyond the end of the file"
+    for i in range(phnum):
+        f = struct.unpack_from(ph_fmt, data, phoff + i * phentsize)
+        offset, filesz = (f[2], f[5]) if cls == 2 else (f[1], f[4])
+        if offset + filesz > size:
+            return "a segment extends beyond the end of the file"
+    for i in range(shnum):
+        f = struct.unpack_from(sh_fmt, data, shoff + i * shentsize)
+        sh_type, offset, sh_size = f[1], f[4], f[5]
+        if sh_type != 8 and offset + sh_size > size:  # 8: SHT_NOBITS (.bss)
+            return "a section extends beyond the end of the file"
+    return None
+
+
+def _read_manifest(manifest: Path) -> dict | None:
     try:
         meta = json.loads(manifest.read_text())
-        want = meta["sha256"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return "its manifest is missing or unreadable"
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+    if not isinstance(meta, dict) or not isinstance(meta.get("sha256"), str):
+        return None
+    return meta
+
+
+def _entry_ok(lib: Path, manifest: Path) -> tuple[str | None, dict | None]:
+    """(None, manifest) when the cache entry is complete and intact, else (what is wrong
+    with it, None)."""
+    if not lib.exists() and not manifest.exists():
+        return "missing", None
+    meta = _read_manifest(manifest)
+    if meta is None:
+        return "its manifest is missing or unreadable", None
     try:
-        got = _sha256(lib)
+        data = lib.read_bytes()
     except OSError:
-        return "its library is missing or unreadable"
-    return None if got == want else "its library does not match its checksum"
+        return "its library is missing or unreadable", None
+    if _sha256(data) != meta["sha256"]:
+        return "its library does not match its checksum", None
+    bad = elf_problem(data)
+    if bad:
+        return f"its library is damaged: {bad}", None
+    return None, meta
 
 
-def _compile(source: str, cc: list[str], flags: list[str], lib: Path) -> None:
-    """Compile ``source`` into ``lib`` atomically (temporary name, then rename)."""
+#: what the child process does with a library: load it (solver libraries first), call
+#: ``<name>_n_in`` and print the result
+_CHILD_LOAD = """\
+import ctypes, sys
+lib, name, pre = sys.argv[1], sys.argv[2], sys.argv[3:]
+for p in pre:
+    ctypes.CDLL(p, mode=ctypes.RTLD_GLOBAL)
+f = getattr(ctypes.CDLL(lib), name + "_n_in")
+f.restype = ctypes.c_longlong
+print(f())
+"""
+
+
+def load_in_child(lib: Path, name: str, libs: list[str], n_in: int) -> str | None:
+    """Load ``lib`` and call ``<name>_n_in`` in a child Python process: None when it
+    answers ``n_in``, else what went wrong (a crash there cannot harm this process)."""
+    cmd = [sys.executable, "-I", "-S", "-c", _CHILD_LOAD, str(lib), name,
+           *(str(p) for p in library_paths(libs))]
+    try:
+        res = subprocess.run(cmd, capture_output=True, text=True, timeout=VERIFY_WALL_S,
+                             stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        return f"loading it in a child process did not finish in {VERIFY_WALL_S:g} s"
+    except OSError as exc:
+        return f"cannot start a child process to load it ({exc.strerror})"
+    if res.returncode < 0:
+        try:
+            sig = signal.Signals(-res.returncode).name
+        except ValueError:
+            sig = f"signal {-res.returncode}"
+        return f"loading it killed a child process ({sig})"
+    if res.returncode != 0:
+        last = (res.stderr or "").strip().splitlines()
+        return f"it does not load ({last[-1][:160] if last else res.returncode})"
+    if res.stdout.strip() != str(n_in):
+        return f"it does not match the function ({res.stdout.strip()[:40]!r} inputs)"
+    return None
+
+
+def _limit_cpu() -> None:  # pragma: no cover - runs in the child between fork and exec
+    """``preexec_fn`` of the compiler: at most COMPILE_CPU_S CPU seconds per process."""
+    import resource
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_CPU)
+    want = COMPILE_CPU_S if hard == resource.RLIM_INFINITY else min(COMPILE_CPU_S, hard)
+    with contextlib.suppress(ValueError, OSError):
+        resource.setrlimit(resource.RLIMIT_CPU, (want, hard))
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    """Kill the compiler's whole process group (``cc1``, ``as``, ``ld`` with it)."""
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(proc.pid, signal.SIGKILL)
+
+
+def run_compiler(cmd: list[str], wall_s: float = COMPILE_WALL_S) -> tuple[int, str, float]:
+    """Run a compiler command in a session of its own, bounded by COMPILE_CPU_S CPU
+    seconds per process; its whole process group is killed when it exits, times out
+    (``wall_s``, a backstop) or the caller is interrupted. Returns (exit code, its output,
+    CPU seconds it used). Raises CodegenError when it cannot start or times out."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    # output to a file, not a pipe: a process the compiler leaves behind could hold a pipe
+    # open (and the reader waiting) long after the compiler itself has exited
+    with tempfile.TemporaryFile(mode="w+", errors="replace") as log:
+        try:
+            proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                    stdin=subprocess.DEVNULL, start_new_session=True,
+                                    preexec_fn=_limit_cpu)
+        except (OSError, subprocess.SubprocessError) as exc:
+            raise CodegenError(f"C compiler {cmd[0]!r} failed to run ({exc})") from None
+        try:
+            proc.wait(timeout=wall_s)
+        except subprocess.TimeoutExpired:
+            raise CodegenError(f"C compiler {cmd[0]!r} did not finish in {wall_s:g} s; "
+                               "stopped") from None
+        finally:
+            _kill_group(proc)  # whatever it left behind (also on a timeout or interrupt)
+            if proc.returncode is None:
+                proc.wait()
+        log.seek(0)
+        out = log.read()
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return proc.returncode, out, cpu
+
+
+def _compile(source: str, cc: list[str], flags: list[str], lib: Path) -> float:
+    """Compile ``source`` into ``lib`` atomically (temporary name, then rename); returns
+    the compiler's CPU seconds."""
     with tempfile.TemporaryDirectory(prefix="acid-cg-") as tmp:
         src = Path(tmp) / f"{lib.stem}.c"
         src.write_text(source)
         with atomic_path(lib) as out:
-            cmd = [*cc, *CFLAGS, str(src), "-o", str(out), *flags, "-lm"]
-            try:
-                res = subprocess.run(cmd, capture_output=True, text=True,
-                                     timeout=COMPILE_TIMEOUT_S)
-            except (OSError, subprocess.SubprocessError) as exc:
-                raise CodegenError(f"C compiler {' '.join(cc)!r} failed to run ({exc})") from None
-            if res.returncode != 0 or not out.is_file() or out.stat().st_size == 0:
-                msg = (res.stderr or res.stdout).strip().splitlines()
-                why = msg[0][:160] if msg else f"exit code {res.returncode}"
+            cmd = [*cc, *cflags(source), str(src), "-o", str(out), *flags, "-lm"]
+            code, text, cpu = run_compiler(cmd)
+            if code != 0 or not out.is_file() or out.stat().st_size == 0:
+                msg = text.strip().splitlines()
+                if code in (-signal.SIGXCPU, -signal.SIGKILL) or "SIGXCPU" in text or \
+                        "signal 24" in text:
+                    why = f"stopped after {COMPILE_CPU_S} CPU seconds"
+                else:
+                    why = msg[0][:160] if msg else f"exit code {code}"
                 raise CodegenError(f"C compiler {' '.join(cc)!r} failed on {lib.stem}.c ({why})")
+    return cpu
 
 
 def compiled_library(fn: ca.Function, name: str | None = None, cc: list[str] | None = None,
                      directory: Path | None = None) -> tuple[Path, dict]:
     """The compiled shared library of ``fn`` from the cache, building it when needed.
 
-    Returns (library path, build info: key, compiler, seconds spent compiling or 0 when
-    cached, whether a corrupted entry was replaced). Raises CodegenError.
+    Returns (library path, build info: key, compiler, wall and CPU seconds spent compiling
+    or 0 when cached, whether a corrupted entry was replaced, the solver libraries to load
+    first). Raises CodegenError, also for a cache folder that cannot be used.
     """
     cc = cc or find_compiler()
     if cc is None:
         raise CodegenError("no C compiler found (set CC, or install cc/gcc/clang)")
     name = name or fn.name()
     source = generate_source(fn, name)
-    flags = link_flags(source)
-    key = build_key(source, cc, flags)
+    libs = runtime_libraries(source)
+    key = build_key(source, cc, libs)
     folder = Path(directory) if directory is not None else cache_dir()
+    try:
+        return _cached_build(fn, name, source, cc, libs, key, folder)
+    except CodegenError:
+        raise
+    except (OSError, AcidError) as exc:  # the folder, a file in its place, the lock ...
+        raise _cache_fault(folder, exc) from None
+
+
+def _cached_build(fn, name, source, cc, libs, key, folder: Path) -> tuple[Path, dict]:
     lib = folder / f"{name}-{key}.so"
     manifest = folder / f"{name}-{key}.json"
     info = {"key": key, "compiler": _compiler_identity(tuple(cc)), "compile_s": 0.0,
-            "repaired": None, "path": str(lib)}
-    with _locked(folder / f".{name}-{key}.lock"):
-        problem = _entry_ok(lib, manifest)
+            "compile_cpu_s": 0.0, "repaired": None, "path": str(lib), "libraries": libs}
+    folder.mkdir(parents=True, exist_ok=True)
+    with _locked(folder / f".{name}-{key}.lock", LOCK_WAIT_S) as writable:
+        problem, meta = _entry_ok(lib, manifest)
+        if problem is None and meta.get("verified") != meta["sha256"]:
+            problem = load_in_child(lib, name, libs, fn.n_in())
+            if problem is None and writable:  # once per build
+                meta["verified"] = meta["sha256"]
+                with atomic_path(manifest) as tmp:
+                    tmp.write_text(json.dumps(meta, indent=2) + "\n")
+            elif problem is not None:
+                problem = f"its library failed a trial load: {problem}"
         if problem is None:
             return lib, info
+        if not writable:
+            raise CodegenError(f"solver cache {folder} is read-only and holds no usable "
+                               f"{lib.name} ({problem})")
         if problem != "missing":
             info["repaired"] = f"cache entry {lib.name} was corrupted ({problem}); rebuilt"
             for f in (lib, manifest):
                 with contextlib.suppress(FileNotFoundError):
                     f.unlink()
         t0 = time.perf_counter()
-        _compile(source, cc, flags, lib)
+        info["compile_cpu_s"] = _compile(source, cc, link_flags(libs), lib)
         info["compile_s"] = time.perf_counter() - t0
-        meta = {"name": name, "sha256": _sha256(lib), "casadi": ca.__version__,
-                "compiler": info["compiler"], "flags": [*CFLAGS, *flags],
+        data = lib.read_bytes()
+        bad = elf_problem(data) or load_in_child(lib, name, libs, fn.n_in())
+        if bad:
+            with contextlib.suppress(FileNotFoundError):
+                lib.unlink()
+            raise CodegenError(f"the freshly compiled {lib.name} is not usable ({bad})")
+        meta = {"name": name, "sha256": _sha256(data), "verified": _sha256(data),
+                "casadi": ca.__version__, "compiler": info["compiler"],
+                "flags": [*cflags(source), *(f"-l{n}" for n in libs)],
                 "created": time.strftime("%Y-%m-%dT%H:%M:%S")}
         with atomic_path(manifest) as tmp:
             tmp.write_text(json.dumps(meta, indent=2) + "\n")
@@ -369,20 +656,25 @@ class CompiledFunction:
 
 def compile_function(fn: ca.Function, name: str | None = None, cc: list[str] | None = None,
                      directory: Path | None = None) -> tuple[CompiledFunction, dict]:
-    """``fn`` as generated, compiled (or cached) and loaded C; see the module docstring.
+    """``fn`` as generated, compiled (or cached), verified and loaded C; see the module
+    docstring.
 
     Returns (CompiledFunction, build info). Raises :class:`CodegenError` with a one-line
     reason when anything fails; a corrupted cache entry is rebuilt once (reported in
     ``info["repaired"]``), and a library that verifies but does not load is rebuilt once.
     """
     lib, info = compiled_library(fn, name, cc, directory)
+    preload_libraries(info["libraries"])
     try:
         return CompiledFunction(fn, lib, name), info
     except CodegenError as first:
-        # intact checksum but unloadable (e.g. built against another libc): rebuild once
-        for f in (lib, lib.with_suffix(".json")):
-            with contextlib.suppress(FileNotFoundError):
-                f.unlink()
+        # verified but unloadable here (e.g. another process replaced it): rebuild once
+        try:
+            for f in (lib, lib.with_suffix(".json")):
+                with contextlib.suppress(FileNotFoundError):
+                    f.unlink()
+        except OSError as exc:
+            raise _cache_fault(lib.parent, exc) from None
         lib, info2 = compiled_library(fn, name, cc, directory)
         info2["repaired"] = f"cache entry {lib.name} did not load ({first}); rebuilt"
         return CompiledFunction(fn, lib, name), info2

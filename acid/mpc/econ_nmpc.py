@@ -39,8 +39,9 @@ of several minutes), so what the plan leaves in the states at its end is priced 
 **Solver.** The NLP is built once through :func:`_make_solver`, which hands it to
 :class:`acid.mpc.solver.NLPSolver` (issue 13): generated C compiled at first use and cached
 per user when a C compiler works (``compiled="auto"``; CasADi otherwise, the same algorithm),
-with a wall-clock cap per solve. The identified parameters are NLP *parameters*
-(:func:`acid.econ.model.parameter_vector`), so one compiled solver serves every parameter set
+with a wall-clock cap per solve only when ``max_solve_s`` asks for one. The identified
+parameters are NLP *parameters* (:func:`acid.econ.model.parameter_vector`), so one compiled
+solver serves every parameter set
 of the same horizon and options. Variables are ordered stage by stage ``[x_0, u_0, s_0, x_1,
 ...., x_N]`` and constraints per stage so that **fatrop** detects the optimal-control
 structure; IPOPT solves the identical NLP. Warm start from the previous solution shifted by
@@ -92,7 +93,7 @@ ECON_ESTIMATOR = EstimatorConfig(sigma_x=(0.01, 0.01, 0.01, 0.05, 1e-5),
 def _make_solver(nlp: dict, opts: dict, config: EconNMPCConfig) -> NLPSolver:
     """The one place the NLP becomes a solver: :class:`acid.mpc.solver.NLPSolver` (generated,
     compiled C when ``config.compiled`` allows and a compiler works, else CasADi; a
-    wall-clock cap of ``config.max_solve_s`` per solve)."""
+    wall-clock cap per solve only when ``config.max_solve_s`` is set)."""
     return NLPSolver("acid_econ_nmpc", nlp, config.solver, opts, compiled=config.compiled,
                      timeout_s=config.max_solve_s)
 
@@ -122,8 +123,9 @@ class EconNMPCConfig:
         parameters are NLP parameters, so one compiled solver (cached per user) serves every
         identified parameter set of the same horizon and options; the first build compiles
         for a minute or two.
-    max_solve_s : wall-clock cap per solve, s (None: none); a solve still running then is
-        abandoned and the fallback applies.
+    max_solve_s : wall-clock cap per solve, s (default None: none); a solve still running
+        then is abandoned and the fallback applies. Only for an ECU-like real-time run:
+        with a cap the result depends on the machine's load.
     offset_free : estimate the additive disturbances ``dist`` in ``make_step`` with the
         offset-free Kalman filter of :mod:`acid.mpc.estimator` (the model's RK4 interval map,
         disturbances on the five state derivatives) and predict with them held.
@@ -147,7 +149,7 @@ class EconNMPCConfig:
     cost_scale: float = 1e-3
     fallback_input: tuple[float, float] | None = None
     compiled: bool | str = "auto"
-    max_solve_s: float | None = 2.5
+    max_solve_s: float | None = None
     offset_free: bool = False
     estimator: EstimatorConfig = ECON_ESTIMATOR
 

@@ -20,7 +20,7 @@ library at run time. It holds
 
 The exported step solves exactly :meth:`NMPC.solve` of ``NMPC(params,
 NMPCConfig(solver="sqp"))`` after ``reset()`` (cold start, the same guess, the same
-algorithm); that NMPC and the default fatrop NMPC agree to about 1e-8 relative on the first
+algorithm); that NMPC and the fatrop NMPC agree to about 1e-8 relative on the first
 move (fatrop's interior-point accuracy). Held T_int and T_shell and a constant eta_cop over
 the horizon, free first move (eq. 13's ``"free"`` reading).
 """
@@ -391,7 +391,7 @@ def check_export(package: str | Path, params: ModelParams, config: NMPCConfig | 
                  ) -> dict:
     """Build the exported package, run its example on ``n_states`` seeded problems and
     compare the first moves with acid's NMPC: the same algorithm (SQP, cold start) and the
-    default fatrop NMPC. Returns the largest relative differences and the C statuses."""
+    fatrop NMPC. Returns the largest relative differences and the C statuses."""
     import tempfile
 
     config = config or NMPCConfig()

@@ -67,18 +67,23 @@ Solver
 ------
 The NLP is built once from a declared layout (:class:`acid.mpc.layout.BlockVector`: named
 blocks per stage ``[x_0, u_0, s_1, x_1, u_1, s_2, ..., x_N]``; every index map is derived
-from it) so that CasADi's structure-exploiting interior-point solver **fatrop** (shipped in
-the casadi wheel) detects the optimal-control structure (``structure_detection='auto'``);
-IPOPT solves the identical NLP (``solver="ipopt"``), and so does an SQP method with the
-active-set QP solver qrqp (``solver="sqp"``, the algorithm of ``acid export-c``; it starts
-from the cold guess at every solve, because warm-started from the shifted plan the
-active-set method meets degenerate active sets and can fail or stall). Exact
-derivatives (CasADi AD) in all. :class:`acid.mpc.solver.NLPSolver` runs fatrop and SQP as
-**generated C**, compiled at first use into a per-user cache (``NMPCConfig.compiled``;
-without a C compiler, inside CasADi with one notice: the same answers), with a wall-clock
-cap per solve (``NMPCConfig.max_solve_s``). Each solve is warm-started from the previous
-solution shifted by one stage. Time-varying bounds, the initial state, the disturbances and
-their estimates enter as NLP parameters, so nothing is rebuilt between solves.
+from it). By default (``solver="sqp"``) an SQP method with exact Hessian and the active-set
+QP solver qrqp (the algorithm of ``acid export-c``) solves it to ``SQP_TOL``, warm-started
+from the previous primal and dual solution shifted by one stage; an active-set method meets
+active bounds exactly. When it fails (a degenerate active set can stall qrqp), the same
+problem is solved from the same guess by CasADi's structure-exploiting interior-point
+solver **fatrop** (``fallback_solver``; shipped in the casadi wheel, it detects the
+optimal-control structure, ``structure_detection='auto'``), counted in
+``NMPC.solver_fallbacks``. Both converge to the same optimum (measured on the 50 states of
+``benchmarks/bench_mpc.py``: first moves within 7.7e-9 relative); SQP is about twice as
+fast there. fatrop or IPOPT alone: ``solver="fatrop"`` / ``"ipopt"``. Exact derivatives
+(CasADi AD) in all. :class:`acid.mpc.solver.NLPSolver` runs SQP and fatrop as **generated
+C**, compiled at first use into a per-user cache (``NMPCConfig.compiled``; without a C
+compiler, inside CasADi with one notice: the same answers), with a wall-clock cap per
+solve only when asked for (``NMPCConfig.max_solve_s``, an ECU-like run; a solve that
+timed out is not retried by the fallback solver). Time-varying bounds, the initial state,
+the disturbances and their estimates enter as NLP parameters, so nothing is rebuilt
+between solves.
 
 Inputs are checked before the solver: non-finite values are refused, and temperatures must
 be plausible in kelvin (a state given in degC is refused with a message saying so).
@@ -91,6 +96,7 @@ conservative input (maximum cooling) -- counts it in ``NMPC.fallbacks``, emits a
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
@@ -131,6 +137,15 @@ T_PLAUSIBLE_K = (213.15, 423.15)
 #: SQP tolerance on the constraint violation (K) and the scaled dual infeasibility: SQP
 #: converges quadratically, so a tight tolerance costs about one iteration
 SQP_TOL = 1e-10
+#: what an SQP result must meet to count as converged (primal infeasibility in K, largest
+#: entry of the scaled Lagrangian's gradient): the generated SQP also stops, reporting
+#: success, at its iteration limit or on a step shorter than SQP_TOL
+SQP_ACCEPT = (1e-8, 1e-8)
+
+
+def _verify(solver: str) -> tuple[float, float] | None:
+    """The convergence check ``NLPSolver`` applies to ``solver``'s results."""
+    return SQP_ACCEPT if solver == "sqp" else None
 
 
 @dataclass(frozen=True)
@@ -141,8 +156,12 @@ class NMPCConfig:
     ----------
     N : prediction = constraint = control horizon ``Np = Nc = Nu`` (Table II: 6 steps).
     first_move : ``"free"`` (default) or ``"pinned"``, the two readings of eq. 13.
-    solver : ``"fatrop"`` (default, structure-exploiting interior point), ``"ipopt"`` or
-        ``"sqp"`` (SQP with the active-set QP solver qrqp; the algorithm of the C export).
+    solver : ``"sqp"`` (default: SQP with the active-set QP solver qrqp, warm-started from
+        the shifted previous solution; the algorithm of the C export), ``"fatrop"``
+        (structure-exploiting interior point) or ``"ipopt"``.
+    fallback_solver : solves the same problem, from the same guess, when ``solver`` fails
+        (default ``"fatrop"``; None, or the same as ``solver``: the controller's fallback
+        input at once). Both converge to the same optimum (first move within about 1e-8).
     slack_penalty : ``a_sl``, W per K of violation, per state (paper: 1e5).
     T_amb : ambient temperature in eq. 4, K (Table II: 30 degC).
     T_cab_min : lower cabin bound, K (Table II: 20 degC); the upper bound is previewed.
@@ -160,11 +179,13 @@ class NMPCConfig:
     compiled : run the solver as generated C (``"auto"``: when a C compiler works, else
         inside CasADi with one notice; ``False``: always inside CasADi). IPOPT cannot be
         generated and always runs inside CasADi.
-    max_solve_s : wall-clock cap per solve, s; a solve still running then is abandoned and
-        the fallback applied (the paper's budget is an *average* of Ts/8 = 0.625 s). The
-        solve then runs in a worker thread (about 15-30 us per step on an idle machine, more
-        when the other cores are busy); None runs it in the caller's thread, without a cap
-        (the inputs are still checked, so no NaN reaches the solver).
+    max_solve_s : wall-clock cap per solve, s, for an ECU-like real-time run only; a solve
+        still running then is abandoned and the fallback applied (the paper's budget is an
+        *average* of Ts/8 = 0.625 s). The solve then runs in a worker thread (about 0.3 ms
+        per step on an idle machine, far more when the other cores are busy) and the
+        closed loop depends on the machine's load. Default None: no cap, the solve runs in
+        the caller's thread (offline studies, tests, sweeps; the inputs are still checked,
+        so no NaN reaches the solver).
     offset_free : estimate disturbances in ``make_step`` with a Kalman filter and predict
         with them (:class:`acid.mpc.estimator.OffsetFreeEstimator`).
     disturbance : where the disturbances enter, ``"state"`` (added to eqs. 1-2) or
@@ -179,7 +200,8 @@ class NMPCConfig:
 
     N: int = TABLE_II.N
     first_move: str = "free"
-    solver: str = "fatrop"
+    solver: str = "sqp"
+    fallback_solver: str | None = "fatrop"
     slack_penalty: float = TABLE_II.slack_penalty
     T_amb: float = C2K(TABLE_II.T_amb_degC)
     T_cab_min: float = C2K(TABLE_II.T_cab_min_degC)
@@ -194,7 +216,7 @@ class NMPCConfig:
     cost_scale: float = 1e-3
     fallback_input: tuple[float, float] | None = None
     compiled: bool | str = "auto"
-    max_solve_s: float | None = 2.5
+    max_solve_s: float | None = None
     offset_free: bool = False
     disturbance: str = "state"
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
@@ -206,6 +228,9 @@ class NMPCConfig:
         if self.solver not in SOLVERS:
             raise ConfigError(f"solver must be one of {', '.join(SOLVERS)}, got "
                               f"{self.solver!r}")
+        if self.fallback_solver is not None and self.fallback_solver not in SOLVERS:
+            raise ConfigError(f"fallback_solver must be None or one of {', '.join(SOLVERS)}, "
+                              f"got {self.fallback_solver!r}")
         if int(self.N) < 2:
             raise ConfigError(f"horizon N must be at least 2, got {self.N}")
         if not (self.W_bl_min < self.W_bl_max and self.T_evap_set_min < self.T_evap_set_max):
@@ -244,6 +269,7 @@ class NMPCConfig:
         """The options, JSON-serialisable (temperatures in K)."""
         return {
             "N": self.N, "first_move": self.first_move, "solver": self.solver,
+            "fallback_solver": self.fallback_solver,
             "slack_penalty_W_per_K": self.slack_penalty, "T_amb_K": self.T_amb,
             "T_cab_min_K": self.T_cab_min, "T_evap_min_K": self.T_evap_min,
             "T_evap_max_K": self.T_evap_max, "W_bl_min_kg_s": self.W_bl_min,
@@ -482,8 +508,12 @@ class NMPC:
                "p": par.vertcat()}
         self._w, self._g, self._p = w, g, par
         self._nlp_dict = nlp
-        self._nlp = NLPSolver("acid_nmpc", nlp, *self._solver_options(g),
-                              compiled=cfg.compiled, timeout_s=cfg.max_solve_s)
+        self._nlp = NLPSolver("acid_nmpc", nlp, *self._solver_options(g, cfg.solver),
+                              compiled=cfg.compiled, verify=_verify(cfg.solver),
+                              timeout_s=cfg.max_solve_s)
+        self._fallback_nlp: NLPSolver | None = None
+        if cfg.max_solve_s is not None:  # a real-time run builds it now, not mid-run
+            self._fallback_solver()
 
         # index maps from the layout
         self._iT_cab = w.index("x", 0)
@@ -510,17 +540,30 @@ class NMPC:
         self._shift_w = stage_shift(w)
         self._shift_g = stage_shift(g)
 
-    def _solver_options(self, g: BlockVector) -> tuple[str, dict]:
-        """(plugin, options) of ``config.solver``: no bound relaxation anywhere."""
+    def _fallback_solver(self) -> NLPSolver | None:
+        """The solver of ``config.fallback_solver`` (None when there is none), built at its
+        first use (most closed loops never need it)."""
         cfg = self.config
-        if cfg.solver == "fatrop":
+        if cfg.fallback_solver in (None, cfg.solver):
+            return None
+        if self._fallback_nlp is None:
+            self._fallback_nlp = NLPSolver(
+                f"acid_nmpc_{cfg.fallback_solver}", self._nlp_dict,
+                *self._solver_options(self._g, cfg.fallback_solver), compiled=cfg.compiled,
+                verify=_verify(cfg.fallback_solver), timeout_s=cfg.max_solve_s)
+        return self._fallback_nlp
+
+    def _solver_options(self, g: BlockVector, solver: str) -> tuple[str, dict]:
+        """(plugin, options) of ``solver``: no bound relaxation anywhere."""
+        cfg = self.config
+        if solver == "fatrop":
             eq = np.zeros(g.size, dtype=bool)
             for b in ("init", "dyn"):
                 eq[g.index(b).ravel()] = True
             return "fatrop", {
                 "structure_detection": "auto", "equality": eq.tolist(), "print_time": False,
                 "fatrop": {"print_level": 0, "tol": cfg.tol, "max_iter": int(cfg.max_iter)}}
-        if cfg.solver == "ipopt":
+        if solver == "ipopt":
             return "ipopt", {"print_time": False,
                              "ipopt": {"print_level": 0, "sb": "yes", "tol": cfg.tol,
                                        "max_iter": int(cfg.max_iter),
@@ -556,6 +599,7 @@ class NMPC:
         if self.backoff is not None:
             self.backoff.reset()
         self.fallbacks = 0
+        self.solver_fallbacks = 0
         self.log = StepLog()
 
     # ----------------------------------------------------------------- solve
@@ -649,7 +693,18 @@ class NMPC:
             lam_g0 = self._lam_g_prev[self._shift_g]
             lam_x0 = self._lam_x_prev[self._shift_w]
         res = self._nlp.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0, lam_g0)
-        if res.success and cfg.solver != "sqp":  # the active-set SQP starts cold (see above)
+        fallback = (self._fallback_solver() if not res.success and res.status != "timeout"
+                    else None)
+        if fallback is not None:
+            first = res
+            res = fallback.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0,
+                                           lam_g0)
+            self.solver_fallbacks += 1
+            res = dataclasses.replace(
+                res, status=f"{res.status} ({cfg.fallback_solver} after {cfg.solver}: "
+                            f"{first.status})",
+                solve_time_s=first.solve_time_s + res.solve_time_s)
+        if res.success:
             self._w_prev = res.x
             self._lam_g_prev = res.lam_g
             self._lam_x_prev = res.lam_x
