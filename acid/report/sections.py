@@ -247,7 +247,8 @@ def _plant_check(r: PlantCheckStage) -> ReportSection:
     return ReportSection(
         "Plant credentials (acid plant-check)",
         paragraphs=(
-            "The high-fidelity plant against published references other than the paper "
+            "The high-fidelity plant (acid's default vehicle, the plant of every stage but "
+            "Table I's) against published references other than the paper "
             f"(verdicts are acid plant-check's own criteria): {n_pass} pass, {n_fail} fail, "
             f"{n_info} information without a verdict, "
             f"{len(r.checks) - n_pass - n_fail - n_info} not run.",)
