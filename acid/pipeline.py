@@ -7,11 +7,17 @@ fingerprint of acid's source code and shipped data, so a second run redoes only 
 A stage's outputs appear atomically: it runs in a hidden temporary folder
 (``stages/.NAME.XXXX.tmp``) that is renamed into place only when it succeeded.
 
+A cached record (``stages/NAME/stage.json``) is reused only if it matches its inputs: its
+cache key (the stage's configuration, its dependencies' keys, the code fingerprint) and acid's
+version, its own content hash and the SHA-256 of every file it lists. A record written for
+these inputs that fails the check (tampered or damaged) is recomputed, with one ``notice``
+line saying so. (An integrity check against accidents and casual edits, not a signature.)
+
 Stages run on :mod:`acid.executor` -- in this process (``jobs=1``) or on Dask (a local
 cluster of ``jobs`` worker processes, or an existing cluster): the same mechanism as
 ``acid sweep``. The output folder is held for the whole run (:func:`acid.outdir.claim`: a
-second run into it stops with a one-line message) and temporaries of a killed run are
-removed when the next one starts.
+concurrent second run into it stops with a one-line message; a later run reuses what is
+cached) and temporaries of a killed run are removed when the next one starts.
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from acid import __version__
-from acid._io import write_json
+from acid._io import file_sha256, json_safe, write_json
 from acid.errors import AcidError
 from acid.executor import Executor, ProgressReporter, open_executor
 from acid.outdir import TMP_DIR_SUFFIX, claim, clean_stale
@@ -84,19 +90,46 @@ def _stage_key(stage: Stage, dep_keys: dict[str, str], fingerprint: str) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 
-def _cached(workdir: Path, key: str) -> dict | None:
+def _content_hash(record: dict) -> str:
+    """SHA-256 of a stage record's content (every key but ``content_sha256``), canonical."""
+    body = {k: v for k, v in record.items() if k != "content_sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True, allow_nan=False,
+                                     default=str).encode()).hexdigest()
+
+
+def _check_record(workdir: Path, key: str) -> tuple[dict | None, str]:
+    """The cached record of a stage if it may be reused, else (None, why).
+
+    ``why`` is empty when there is simply nothing to reuse (no record, or one for other
+    inputs or another code version: the cache key differs); otherwise it says what is wrong
+    with a record written for exactly these inputs: unreadable, its content hash or a
+    file's hash does not match (tampered or damaged), a file is missing.
+    """
     rec = workdir / STAGE_RECORD
     if not rec.is_file():
-        return None
+        return None, ""
     try:
         d = json.loads(rec.read_text())
-    except json.JSONDecodeError:
-        return None
-    if d.get("key") != key:
-        return None
-    if not all((workdir / f).is_file() for f in d.get("files", [])):
-        return None
-    return d
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None, f"{STAGE_RECORD} is not readable JSON"
+    if not isinstance(d, dict) or d.get("key") != key or d.get("acid_version") != __version__:
+        return None, ""  # other inputs or code: recomputed as any change is
+    try:
+        ok = d.get("content_sha256") == _content_hash(d)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok or not isinstance(d.get("summary"), dict):
+        return None, f"{STAGE_RECORD} does not match its content hash"
+    files = d.get("file_sha256")
+    if not isinstance(files, dict):
+        return None, f"{STAGE_RECORD} lists no file hashes"
+    for name, digest in files.items():
+        f = workdir / str(name)
+        if not f.is_file():
+            return None, f"its file {name} is missing"
+        if file_sha256(f) != digest:
+            return None, f"its file {name} does not match its hash"
+    return d, ""
 
 
 def _run_stage(stage: Stage, root: Path, inputs: dict[str, Path], key: str,
@@ -115,9 +148,12 @@ def _run_stage(stage: Stage, root: Path, inputs: dict[str, Path], key: str,
         summary = stage.func(tmp, inputs, stage.config, progress)
         seconds = time.perf_counter() - t0
         files = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*") if p.is_file())
-        write_json(tmp / STAGE_RECORD, {"stage": stage.name, "key": key, "summary": summary,
-                                        "seconds": seconds, "files": files,
-                                        "acid_version": __version__})
+        record = {"stage": stage.name, "key": key, "summary": summary, "seconds": seconds,
+                  "files": files, "file_sha256": {f: file_sha256(tmp / f) for f in files},
+                  "acid_version": __version__}
+        record = json_safe(record)  # as write_json writes it, so that the hash reads back
+        record["content_sha256"] = _content_hash(record)
+        write_json(tmp / STAGE_RECORD, record)
         if final.exists():
             # move the old result aside first: the swap leaves either the old or the new
             # folder in place, never a mixture
@@ -143,8 +179,10 @@ def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
                  notice: Callable[[str], None] | None = None) -> dict[str, StageOutcome]:
     """Run ``stages`` in dependency order, up to ``jobs`` at once.
 
-    Stages whose cache key matches the record in their folder are not run again (unless
-    ``force``). Callbacks report start, progress and completion to the caller (the CLI).
+    Stages whose cache key matches the record in their folder, and whose record passes its
+    integrity check, are not run again (unless ``force``); a record that fails it is
+    recomputed with one ``notice`` line. Callbacks report start, progress and completion to
+    the caller (the CLI).
 
     Parameters
     ----------
@@ -161,15 +199,15 @@ def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
                 raise AcidError(f"stage {s.name!r} depends on unknown stage {d!r}")
     with claim(root, "acid reproduce"):
         if executor is not None:
-            return _run(stages, root, executor, on_start, on_progress, on_done, force)
+            return _run(stages, root, executor, on_start, on_progress, on_done, force, notice)
         try:
             with open_executor(jobs, scheduler, notice=notice) as ex:
-                return _run(stages, root, ex, on_start, on_progress, on_done, force)
+                return _run(stages, root, ex, on_start, on_progress, on_done, force, notice)
         finally:  # the workers are gone: a stage folder still under construction is stale
             clean_stale(root / "stages")
 
 
-def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force):
+def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, notice=None):
     fingerprint = source_fingerprint()
     keys: dict[str, str] = {}
     outcomes: dict[str, StageOutcome] = {}
@@ -190,10 +228,13 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force):
             pending.remove(s)
             keys[s.name] = _stage_key(s, {d: keys[d] for d in s.depends}, fingerprint)
             workdir = root / "stages" / s.name
-            rec = None if force else _cached(workdir, keys[s.name])
+            rec, why = (None, "") if force else _check_record(workdir, keys[s.name])
             if rec is not None:
                 finish(s, rec["summary"], float(rec.get("seconds", 0.0)), True)
                 continue
+            if why and notice is not None:
+                notice(f"stage {s.name}: the cached record in {workdir} was not reused ({why}: "
+                       "tampered or damaged); recomputing it")
             inputs = {d: outcomes[d].workdir for d in s.depends}
             if on_start:
                 on_start(s.name)

@@ -2,7 +2,8 @@
 
 Stages (cached by their inputs, see :mod:`acid.pipeline`):
 
-    sweep     Table I and Fig. 3: 600 s at 0..25 m/s with the nominal controller
+    sweep     Table I and Fig. 3: 600 s at 0..25 m/s with the nominal controller, on the
+              paper vehicle (the Table I calibration) with acid's default vehicle beside it
     excite    random excitation of the high-fidelity plant (estimation + held-out parts)
     fit       eqs. 1-3 and 5 identified from the estimation part (output error, from LS)
     validate  60 open-loop predictions of 300 steps on the held-out part (Figs. 5-6)
@@ -28,14 +29,14 @@ import platform
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from acid import __version__
 from acid._io import write_json
 from acid.claims import ClaimVerdict, evaluate, summary_claims
 from acid.claims.registry import ENERGY_CYCLES
 from acid.pipeline import Stage, StageOutcome
-from acid.report.figures import read_figure_index, save_report_figure, write_figure_index
-from acid.report.html import Report, ReportFigure, StageTime, write_report
+from acid.plant.vehicles import DEFAULT_VEHICLE, PAPER_VEHICLE
 from acid.stage_results import (
     CavStudyStage,
     EconStage,
@@ -47,6 +48,9 @@ from acid.stage_results import (
     SweepStage,
     ValidationStage,
 )
+
+if TYPE_CHECKING:
+    from acid.report.html import ReportFigure
 
 
 @dataclass(frozen=True)
@@ -76,20 +80,62 @@ class ReproduceOptions:
                    econ_compiled=False)
 
 
+# matplotlib and the report load when a stage or the report needs them, not on import: `acid
+# claims` reads the study's options (``run_mode``) from here
+def save_report_figure(*args, **kwargs):
+    """``acid.report.figures.save_report_figure`` (imported on first use)."""
+    from acid.report.figures import save_report_figure as save
+
+    return save(*args, **kwargs)
+
+
+def write_figure_index(*args, **kwargs):
+    """``acid.report.figures.write_figure_index`` (imported on first use)."""
+    from acid.report.figures import write_figure_index as write
+
+    return write(*args, **kwargs)
+
+
+def run_mode(opts: ReproduceOptions | dict) -> str:
+    """"full" for the study's sizes (``ReproduceOptions()``), else "quick": a run whose
+    sizes differ from the study's (``--quick``) cannot judge the claims of the stages it
+    shortens (``acid.claims.registry.QUICK_RUN_JUDGES``)."""
+    d = opts if isinstance(opts, dict) else dataclasses.asdict(opts)
+    full = json.loads(json.dumps(dataclasses.asdict(ReproduceOptions())))
+    return "full" if json.loads(json.dumps(d)) == full else "quick"
+
+
+def is_quick(opts: ReproduceOptions | dict) -> bool:
+    """True unless ``opts`` are the full study's (see :func:`run_mode`)."""
+    return run_mode(opts) != "full"
+
+
 # --------------------------------------------------------------------- stage bodies
 # Each stage returns the JSON form of its typed result (``acid.stage_results``) and lists
 # its figures, with captions and line-visibility audits, in ``figures.json``.
 def stage_sweep(workdir: Path, inputs: dict, config: dict, progress) -> dict:
-    """Table I / Fig. 3 on the high-fidelity plant."""
+    """Table I / Fig. 3 on the paper vehicle, acid's default vehicle beside it."""
     from acid.plant.sweep import speed_sweep
+    from acid.plant.vehicles import vehicle_config
     from acid.report.plant import sweep_figure
 
-    res = speed_sweep(duration=config["duration_s"], progress=progress)
+    vehicle, other = config["vehicle"], config["beside"]
+    res = speed_sweep(vehicle_config(vehicle), duration=config["duration_s"],
+                      progress=lambda i, n: progress(i, 2 * n))
+    beside = speed_sweep(vehicle_config(other), duration=config["duration_s"],
+                         progress=lambda i, n: progress(n + i, 2 * n))
     write_figure_index(workdir, [save_report_figure(
-        sweep_figure(res), workdir, "fig3_speed_sweep",
-        "Fig. 3: speed sensitivity with the nominal controller")])
-    write_json(workdir / "sweep.json", res.to_json_dict())
-    return SweepStage.of(res).to_json_dict()
+        sweep_figure(res, beside, (f"{vehicle} vehicle", f"{other} vehicle")), workdir,
+        "fig3_speed_sweep", f"Fig. 3 and Table I: speed sensitivity with the nominal "
+        f"controller on the {vehicle} vehicle (Table I calibration), energy of acid's "
+        f"{other} vehicle beside it")])
+    d = res.to_json_dict()
+    b = beside.to_json_dict()
+    d.update(vehicle=vehicle, beside={"vehicle": other, **{k: b[k] for k in (
+        "energy_MJ", "energy_MJ_per_km", "energy_with_fan_MJ", "ratio_last_first",
+        "ratio_last_first_with_fan", "plant_config")}})
+    write_json(workdir / "sweep.json", d)
+    return SweepStage.of(res, vehicle, beside, other).to_json_dict()
 
 
 def stage_excite(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -271,8 +317,9 @@ def stage_plant_check(workdir: Path, inputs: dict, config: dict, progress) -> di
 def build_stages(opts: ReproduceOptions) -> list[Stage]:
     """The stage graph of the reproduction."""
     return [
-        Stage("sweep", "speed sweep (Table I, Fig. 3)", stage_sweep,
-              {"duration_s": opts.sweep_duration_s}),
+        Stage("sweep", "speed sweep (Table I on the paper vehicle, Fig. 3)", stage_sweep,
+              {"duration_s": opts.sweep_duration_s, "vehicle": PAPER_VEHICLE,
+               "beside": DEFAULT_VEHICLE}),
         Stage("excite", "excitation of the high-fidelity plant", stage_excite,
               {"duration_s": opts.excite_duration_s, "seed": opts.excite_seed}),
         Stage("fit", "identification (eqs. 1-3, 5)", stage_fit,
@@ -305,6 +352,9 @@ def study_results(outcomes: dict[str, StageOutcome]) -> StudyResults:
 def report_figures(outcomes: dict[str, StageOutcome],
                    order: list[str] | None = None) -> list[ReportFigure]:
     """Every figure the stages listed, in stage ``order`` (default: as given)."""
+    from acid.report.figures import read_figure_index
+    from acid.report.html import ReportFigure
+
     names = [n for n in (order or []) if n in outcomes]
     names += [n for n in outcomes if n not in names]
     return [ReportFigure(outcomes[n].workdir / r.file, r) for n in names
@@ -318,6 +368,7 @@ def summary_dict(outcomes: dict[str, StageOutcome], verdicts: list[ClaimVerdict]
     """``summary.json``: every stage's typed summary, every claim's verdict, the settings."""
     return {
         "acid_version": __version__,
+        "mode": run_mode(opts),
         "options": dataclasses.asdict(opts),
         "elapsed_s": elapsed_s,
         "stages": {k: {"title": o.title, "seconds": o.seconds, "cached": o.cached,
@@ -330,18 +381,20 @@ def summary_dict(outcomes: dict[str, StageOutcome], verdicts: list[ClaimVerdict]
 def write_outputs(out: Path, outcomes: dict[str, StageOutcome], opts: ReproduceOptions,
                   elapsed_s: float) -> tuple[Path, Path, list[ClaimVerdict]]:
     """Write ``report.html`` and ``summary.json`` into ``out``; the verdicts behind them."""
+    from acid.report.html import Report, StageTime, write_report
     from acid.report.sections import sections_for
 
     results = study_results(outcomes)
-    verdicts = evaluate(results)
+    quick = is_quick(opts)
+    verdicts = evaluate(results, quick=quick)
     figs = report_figures(outcomes, [s.name for s in build_stages(opts)])
     meta = {"acid": __version__, "python": platform.python_version(),
             "machine": f"{platform.machine()}, {_cpu_count()} cores",
             "generated": datetime.now(timezone.utc).replace(microsecond=0).isoformat(),
-            "mode": "quick" if opts == ReproduceOptions.quick() else "full"}
+            "mode": run_mode(opts)}
     html = write_report(out / "report.html", Report(
         title="acid: Model Predictive Climate Control of CAVs, reproduced",
-        verdicts=verdicts, figures=figs, sections=sections_for(results),
+        verdicts=verdicts, figures=figs, sections=sections_for(results, quick=quick),
         stages=[StageTime(o.title, o.seconds, o.cached) for o in outcomes.values()],
         meta=meta))
     summary = write_json(out / "summary.json",
@@ -360,4 +413,5 @@ def load_summary(path: Path) -> dict:
     return json.loads(Path(path).read_text())
 
 
-__all__ = ["ReproduceOptions", "build_stages", "study_results", "write_outputs"]
+__all__ = ["ReproduceOptions", "build_stages", "is_quick", "run_mode", "study_results",
+           "write_outputs"]

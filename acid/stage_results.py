@@ -165,9 +165,12 @@ class Estimate(JsonDataclass):
 class SweepStage(StageResult):
     """Paper Table I / Fig. 3 on the high-fidelity plant (energies compressor + blower).
 
-    ``max_energy_step_MJ`` is the largest change of energy from one speed to the next
-    (negative when the energy falls with every speed step); ``efficiency_gain_pct`` is
-    ``100 (E(first) / E(last) - 1)``, the paper's "efficiency increases by ..." reading.
+    The energies are of ``vehicle`` (the paper vehicle, ``acid.plant.vehicles``: the Table I
+    calibration), the one the paper's Table I is judged on; ``beside_*`` are acid's default
+    vehicle at the same speeds, shown beside it. ``max_energy_step_MJ`` is the largest change
+    of energy from one speed to the next (negative when the energy falls with every speed
+    step); ``efficiency_gain_pct`` is ``100 (E(first) / E(last) - 1)``, the paper's
+    "efficiency increases by ..." reading.
     """
 
     speeds_mps: tuple[float, ...]
@@ -177,18 +180,27 @@ class SweepStage(StageResult):
     ratio_last_first: float
     max_energy_step_MJ: float
     efficiency_gain_pct: float
+    vehicle: str = ""
+    beside_vehicle: str = ""
+    beside_energy_MJ: tuple[float, ...] = ()
+    beside_ratio_last_first: float = math.nan
 
     @classmethod
-    def of(cls, result) -> SweepStage:
-        """From an :class:`acid.plant.sweep.SweepResult`."""
+    def of(cls, result, vehicle: str = "", beside=None, beside_vehicle: str = ""
+           ) -> SweepStage:
+        """From an :class:`acid.plant.sweep.SweepResult` (``beside``: another vehicle's)."""
         E = [float(e) for e in result.energy_MJ]
         steps = [b - a for a, b in zip(E, E[1:], strict=False)]
+        extra = {} if beside is None else {
+            "beside_vehicle": beside_vehicle,
+            "beside_energy_MJ": tuple(float(e) for e in beside.energy_MJ),
+            "beside_ratio_last_first": float(beside.ratio_last_first)}
         return cls(speeds_mps=tuple(float(v) for v in result.speeds_mps),
                    duration_s=float(result.duration_s), energy_MJ=tuple(E),
                    energy_MJ_per_km=tuple(float(e) for e in result.energy_MJ_per_km),
                    ratio_last_first=float(result.ratio_last_first),
                    max_energy_step_MJ=max(steps) if steps else math.nan,
-                   efficiency_gain_pct=100.0 * (E[0] / E[-1] - 1.0))
+                   efficiency_gain_pct=100.0 * (E[0] / E[-1] - 1.0), vehicle=vehicle, **extra)
 
 
 @stage_result("excite")
@@ -502,7 +514,8 @@ class PlantCredential(JsonDataclass):
     """One plant-check row: a plant quantity beside a published reference (not the paper's).
 
     ``value`` in ``unit`` (NaN when the check only computes, e.g. a figure); ``passed`` is
-    the plant check's own verdict (None when it could not run).
+    the plant check's own verdict (None when it could not run, and for ``info`` rows: a
+    design target shown without a verdict).
     """
 
     name: str
@@ -512,6 +525,7 @@ class PlantCredential(JsonDataclass):
     value: float = math.nan
     passed: bool | None = None
     note: str = ""
+    info: bool = False
 
 
 @stage_result("plant_check")
@@ -523,6 +537,7 @@ class PlantCheckStage(StageResult):
     checks: tuple[PlantCredential, ...]
     cop_steady_30C_standstill: float = math.nan
     cop_gain_25_vs_0_equal_load_pct: float = math.nan
+    search_note: str = ""
 
     @classmethod
     def of(cls, d: dict) -> PlantCheckStage:
@@ -530,11 +545,13 @@ class PlantCheckStage(StageResult):
         rows = tuple(PlantCredential(
             name=str(c["name"]), group=str(c.get("group", "")),
             reference=str(c.get("reference", "")), unit=str(c.get("unit", "")),
-            value=_f(c.get("value")), passed=c.get("passed"), note=str(c.get("note") or ""))
+            value=_f(c.get("value")), passed=c.get("passed"), note=str(c.get("note") or ""),
+            info=bool(c.get("info", False)))
             for c in d["checks"])
         return cls(passed=bool(d["passed"]), checks=rows,
                    cop_steady_30C_standstill=_f(d.get("cop_steady_30C_standstill")),
-                   cop_gain_25_vs_0_equal_load_pct=_f(d.get("cop_gain_25_vs_0_equal_load_pct")))
+                   cop_gain_25_vs_0_equal_load_pct=_f(d.get("cop_gain_25_vs_0_equal_load_pct")),
+                   search_note=str(d.get("search_note") or ""))
 
 
 # ------------------------------------------------------------------------- reading

@@ -84,6 +84,22 @@ class PlantChoice:
                 "fmu_map": None if self.fmu_map is None else str(self.fmu_map)}
 
 
+def config_option(flag: str = "--config"):
+    """The plant configuration option: a TOML file or a named vehicle (``acid.plant.vehicles``)."""
+    return typer.Option(None, flag,
+                        help="Plant configuration: a TOML file (SI units, K), or a named "
+                             "vehicle: 'paper' (the Table I calibration, "
+                             "datasets/plant/table_i_20cc.toml) or 'default'.")
+
+
+def config_input(spec) -> Path | None:
+    """The file behind a plant configuration option (for ``check_paths``): the shipped file
+    of a named vehicle, else the path given."""
+    from acid.plant.vehicles import resolve_config
+
+    return resolve_config(spec)
+
+
 def plant_choice(plant: str, fmu_map: Path | None,
                  allowed: tuple[str, ...] = ("hifi", "model")) -> PlantChoice:
     """Check ``--plant`` and ``--fmu-map`` (one-line ``ConfigError`` naming the option)."""

@@ -32,7 +32,7 @@ from acid_cli._common import (
     warn,
     write_summary,
 )
-from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+from acid_cli._plant import config_input, fmu_map_option, plant_choice, plant_option
 
 #: Longest paper-NMPC horizon (steps) and warm-up / tail / identification record accepted.
 MAX_HORIZON = 200
@@ -136,6 +136,7 @@ def cav_study(
     stem = "all" if cycle == "all" else cycle
     figure_names = [f"energy_{stem}.png"] + [f"cav_{n}.png"
                                              for n in (names if cycle == "all" else [cycle])]
+    plant_config = config_input(plant_config)  # a named vehicle ('paper') -> its file
     check_paths(inputs={"--params": params_input(params), "--econ-params": econ_params,
                         "--plant-config": plant_config, **plant_inputs(plant, fmu_map)},
                 outputs={"--json": json_path},

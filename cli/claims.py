@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from acid_cli._common import check_paths, handle_errors, print_table, say, write_summary
+from acid_cli._common import check_paths, handle_errors, print_table, say, warn, write_summary
 
 
 @handle_errors
@@ -19,16 +19,20 @@ def claims(
 ) -> None:
     """The paper's claims: each result's value, where acid measures it and the verdict rule.
 
-    With a SUMMARY, the README's headline table (paper, acid, verdict per row) rendered from
-    that run's verdicts, which the registry computed (acid.claims).
+    With a SUMMARY, the README's headline table (paper, acid, verdict per row) of that run:
+    every verdict judged again by the registry (acid.claims) from the values the summary
+    stores (a stored verdict that differs is corrected, with one line saying so).
     """
     from acid.claims import headline_markdown, headline_rows, load_summary, registry_rows
+    from acid.claims.headline import correction_note, rejudge
 
     check_paths(inputs={"SUMMARY": summary}, outputs={"--json": json_path})
     if summary is not None:
-        s = load_summary(summary)
+        s, changed = rejudge(load_summary(summary), summary)
+        if changed:
+            warn(correction_note(summary, changed))
         typer.echo(headline_markdown(s), nl=False)
-        write_summary(json_path, {"summary": str(summary), "headline": [
+        write_summary(json_path, {"summary": str(summary), "corrected": changed, "headline": [
             dict(zip(("result", "paper", "acid", "verdict"), r, strict=True))
             for r in headline_rows(s)]})
         return

@@ -22,7 +22,7 @@ from acid_cli._common import (
     require_range,
     write_summary,
 )
-from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+from acid_cli._plant import config_input, fmu_map_option, plant_choice, plant_option
 
 PLANTS = ("hifi", "model")
 
@@ -116,6 +116,7 @@ def excite(
         help="Share of input steps held 600-1200 s (near-steady operating points)."),
 ) -> None:
     """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
+    plant_config = config_input(plant_config)  # a named vehicle ('paper') -> its file
     check_paths(inputs={"--params": params, "--plant-config": plant_config,
                         **plant_inputs(plant, fmu_map)},
                 outputs={"--out": out, "--json": json_out})

@@ -11,6 +11,7 @@ from acid import __version__
 from acid._io import file_sha256
 from acid.errors import ConfigError
 from acid_cli._common import check_paths, handle_errors, print_table, say, write_summary
+from acid_cli._plant import config_input
 
 
 @handle_errors
@@ -37,6 +38,7 @@ def export_fmu(
 
     if fmi_version not in (2, 3):
         raise ConfigError(f"--fmi-version must be 2 or 3, got {fmi_version}")
+    plant_config = config_input(plant_config)  # a named vehicle ('paper') -> its file
     if plant_config is not None and not plant_config.is_file():
         raise ConfigError(f"--plant-config: file not found: {plant_config}")
     if out.suffix != ".fmu":

@@ -20,25 +20,34 @@ from acid_cli._common import (
     say,
     write_summary,
 )
-from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+from acid_cli._plant import (
+    config_input,
+    config_option,
+    fmu_map_option,
+    plant_choice,
+    plant_option,
+)
 
 
 def _fmt(v) -> str:
+    if v == math.inf:
+        return "not reached"
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "n/a"
     return f"{v:.4g}"
 
 
-def _verdict(passed) -> str:
-    return "n/a" if passed is None else ("PASS" if passed else "FAIL")
+def _verdict(row) -> str:
+    if row.info:
+        return "info"
+    return "n/a" if row.passed is None else ("PASS" if row.passed else "FAIL")
 
 
 @handle_errors
 def plant_check(
     plant: str = plant_option(),
     fmu_map: Path | None = fmu_map_option(),
-    config: Path | None = typer.Option(None, "--config",
-                                       help="Plant configuration (TOML, SI units, K)."),
+    config: Path | None = config_option(),
     ambient: float | None = typer.Option(None, "--ambient",
                                          help="Ambient for checks (a)-(c), degC "
                                               "(default: the configuration's, 30 degC)."),
@@ -46,8 +55,9 @@ def plant_check(
                              help="Folder for the figures and the result JSON."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
-    """Check the plant: (a) Table I, (b) balances, (c) step size, (d) idle service chart,
-    (e) pull-down, (f) steady COP map, (g) COP gain at speed. Exits 1 on any FAIL.
+    """Check the plant: (a) Table I, (b) balances and the cycle recomputed with CoolProp,
+    (c) step size, (d) idle service chart, (e) pull-down (the 43 degC hot pull-down as
+    information), (f) steady COP map, (g) COP gain at speed. Exits 1 on any FAIL.
 
     Sources of every reference: datasets/plant/SOURCES.md.
     """
@@ -57,7 +67,7 @@ def plant_check(
     from acid.report.plant import plant_check_figures
     from acid.units import C2K
 
-    check_paths(inputs={"--config": config, **plant_inputs(plant, fmu_map)},
+    check_paths(inputs={"--config": config_input(config), **plant_inputs(plant, fmu_map)},
                 outputs={"--json": json_path},
                 folders={"--out": (out, ("plant_check_energy.png", "plant_check_service.png",
                                          "plant_check.json"))})
@@ -73,17 +83,22 @@ def plant_check(
     with progress_bar("plant check", total=13) as update:
         result = run_check(the_plant, progress=update, nominal_factory=nominal)
 
-    rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r.passed)]
+    rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r)]
             for r in result.rows]
     print_table(f"acid plant-check: {result.plant}",
                 ["_", "_check", "value", "_unit", "_reference", "_verdict"], rows)
+    from acid.plant.check import SEARCH_NOTE
+
+    say(SEARCH_NOTE)
     console.print(f"cop_steady_30C_standstill = {_fmt(result.cop_steady_30C_standstill)}, "
                   f"cop_gain_25_vs_0_equal_load_pct = "
                   f"{_fmt(result.cop_gain_25_vs_0_equal_load_pct)} %")
     summary = result.to_json_dict()
     summary.update(acid_version=__version__, **choice.to_json_dict(),
-                   config_path=str(config) if config is not None else None,
-                   config_sha256=file_sha256(config) if config is not None else None)
+                   vehicle=None if config is None else str(config),
+                   config_path=None if config_input(config) is None else str(config_input(config)),
+                   config_sha256=(file_sha256(config_input(config))
+                                  if config_input(config) is not None else None))
     figures = {}
     for name, fig in plant_check_figures(result).items():
         figures[name] = str(save_figure(fig, out / f"{name}.png"))

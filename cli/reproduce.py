@@ -10,15 +10,16 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.text import Text
 
-from acid.claims import contradictions, counts, headline_rows, load_summary
+from acid.claims import Verdict, contradictions, counts, headline_rows, load_summary
 from acid.errors import ConfigError
 from acid.outdir import claim
 from acid.pipeline import run_pipeline
-from acid.reproduce import ReproduceOptions, build_stages, write_outputs
+from acid.reproduce import ReproduceOptions, build_stages, is_quick, write_outputs
 from acid_cli._common import (
     check_paths,
     err_console,
     handle_errors,
+    note,
     print_table,
     say,
     warn,
@@ -47,7 +48,9 @@ def reproduce(
     """Sweep (Table I), excite, fit, validate (Figs. 5-6) and NMPC checks (Figs. 7-10).
 
     Stages are cached by their inputs under OUT/stages, so a second run redoes only what
-    changed. Writes OUT/report.html (self-contained) and OUT/summary.json.
+    changed (one line names what it reused; a cached record that fails its integrity check
+    is recomputed, with one line). Writes OUT/report.html (self-contained) and
+    OUT/summary.json. A run into a folder another run is using stops with one line.
     """
     check_paths(outputs={"--json": json_path},
                 folders={"--out": (out, ("report.html", "summary.json"))})
@@ -80,8 +83,14 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
         outcomes = run_pipeline(stages, out, jobs=jobs, on_start=on_start,
                                 on_progress=on_progress, on_done=on_done, force=force,
                                 scheduler=scheduler,
-                                notice=lambda msg: err_console.print(Text(msg), highlight=False))
+                                notice=lambda msg: err_console.print(Text(msg), highlight=False,
+                                                                    soft_wrap=True))
     elapsed = time.perf_counter() - t0
+    reused = [o.name for o in outcomes.values() if o.cached]
+    if reused:
+        note(f"reused {len(reused)} of {len(outcomes)} stages cached in {out / 'stages'} "
+            f"({', '.join(reused)}: same settings, inputs and code); the report is written "
+            "again from them; --force recomputes every stage")
     html, summary_path, verdicts = write_outputs(out, outcomes, opts, elapsed)
 
     print_table("Stages", ["stage", "time (s)", "cache"],
@@ -93,6 +102,9 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
                 [[r[0].replace("*", ""), *r[1:]] for r in headline_rows(summary)])
     n = counts(verdicts)
     say(", ".join(f"{c} {k}" for k, c in n.items()))
+    if is_quick(opts):
+        say(f"quick run: {n[Verdict.NOT_JUDGED.value]} claims not judged (the stages it "
+            "shortens); only the NMPC checks are judged. Run without --quick for the study.")
     bad = contradictions(verdicts)
     if bad:
         warn("contradictory verdicts: " + "; ".join(bad))

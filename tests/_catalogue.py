@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import shutil
 import sys
@@ -51,6 +52,15 @@ class Case:
 
     def fragments(self, w: Path) -> list[str]:
         return [n.replace("{w}", str(w)) for n in self.names]
+
+
+def _tampered_summary(w: Path, stages: dict | None) -> None:
+    """A ``summary.json`` of acid reproduce whose stage values were edited (``acid claims``
+    judges them again and must name the key)."""
+    d = {"claims": {"items": []}, "options": {}}
+    if stages is not None:
+        d["stages"] = stages
+    (w / "tampered.json").write_text(json.dumps(d))
 
 
 # ------------------------------------------------------------------------- workspace
@@ -589,6 +599,16 @@ CASES: list[Case] = [
          ("--json", "p.json")),
     Case("claims-json-under-a-file", "output", ("claims", "--json", "{w}/afile/c.json"),
          ("--json", "afile")),
+    Case("claims-summary-value-not-a-number", "files", ("claims", "{w}/tampered.json"),
+         ("tampered.json", "speeds_mps[1]", "expected a number"),
+         make=lambda w: _tampered_summary(w, {"sweep": {"summary": {"speeds_mps": [0, "x"]}}})),
+    Case("claims-summary-value-nan", "files", ("claims", "{w}/tampered.json"),
+         ("tampered.json", "stages.sweep.summary.duration_s", "finite"),
+         make=lambda w: _tampered_summary(w, {"sweep": {"summary": {"duration_s": math.nan}}})),
+    Case("claims-summary-without-stages", "files", ("claims", "{w}/tampered.json"),
+         ("tampered.json", "'stages'"), make=lambda w: _tampered_summary(w, None)),
+    Case("speed-sweep-config-unknown-vehicle", "files",
+         ("speed-sweep", "--config", "papr", "--out", "{w}/sw"), ("--config", "papr")),
     # ------------------------------------- plant-check, export-fmu, --plant fmu:PATH
     Case("plant-check-json-is-config", "collision",
          ("plant-check", "--config", "{w}/plant.toml", "--json", "{w}/plant.toml"),

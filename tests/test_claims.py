@@ -172,7 +172,8 @@ def test_headline_markdown_is_rendered_from_summary_json(tmp_path):
     md = headline_markdown(summary_of(tmp_path, results()))
     lines = md.splitlines()
     assert lines[0] == "| result | paper | acid | verdict |"
-    row = next(line for line in lines if line.startswith("| Table I: A/C energy"))
+    row = next(line for line in lines
+               if line.startswith("| Table I on the paper vehicle: A/C energy"))
     assert "1.33 MJ" in row and "agrees (each within 5 %)" in row
     assert "| CAV saving | 9 % | 20.0 % | disagrees (rule: within 50 %) |" in md
     assert re.search(r"\d+ claims agree, \d+ agree in direction only, \d+ disagree", md)
@@ -186,3 +187,65 @@ def test_claims_command_prints_the_headline_table(tmp_path, capsys):
     assert claims_mod.main([str(tmp_path / "missing.json")]) == 2
     assert claims_mod.main([]) == 0
     assert "table1.energy.0mps" in capsys.readouterr().out
+
+
+# ------------------------------------------------ quick runs, one criterion per quantity
+def test_a_quick_run_judges_only_the_stages_it_does_not_shorten(tmp_path):
+    """Issue 21: a --quick run's shortened stages are "not judged (quick run)", values kept;
+    its NMPC checks (the same scenarios as the study) are judged."""
+    from acid.reproduce import ReproduceOptions
+
+    v = _by_id(evaluate(results(), quick=True))
+    for cid in ("table1.energy.0mps", "table1.ratio", "validation.T_cab",
+                "energy.udds.E.saving", "energy.sc03.E.gap_to_bound", "econ.power_map_rms"):
+        assert v[cid].verdict is Verdict.NOT_JUDGED, cid
+        assert "--quick" in v[cid].reason and math.isfinite(v[cid].value)
+    assert v["identification.gamma1"].verdict is Verdict.NOT_COMPARABLE
+    assert v["nmpc.plant.violation"].verdict is Verdict.AGREES
+    assert v["cav.saving"].verdict is Verdict.DISAGREES
+    # the same results as a full run: verdicts
+    full = _by_id(evaluate(results()))
+    assert full["table1.ratio"].verdict is Verdict.AGREES
+    assert full["energy.udds.E.saving"].verdict is Verdict.BEYOND
+
+    s = summary_of(tmp_path, results(), ReproduceOptions.quick())
+    assert s["mode"] == "quick"
+    items = {i["id"]: i for i in s["claims"]["items"]}
+    assert items["energy.udds.E.saving"]["verdict"] == "not judged (quick run)"
+    assert s["claims"]["counts"]["not judged (quick run)"] >= 30
+    md = headline_markdown(s)
+    row = next(line for line in md.splitlines() if "economic NMPC with preview" in line)
+    assert row.rstrip(" |").split("| ")[-1].startswith("not judged (quick run)")
+    assert "not judged (quick run)" in md.splitlines()[-1]
+    html = (tmp_path / "report.html").read_text()
+    assert "Not judged (quick run)" in html and "Conclusion (from the numbers)" not in html
+    assert summary_of(tmp_path / "full", results())["mode"] == "full"
+
+
+def test_the_plant_violation_has_one_criterion_for_the_claim_and_mpc_check():
+    """Issue 21: a 0.187 K avoidable violation is not "agrees" in the report while acid
+    mpc-check calls it FAIL: both read the registry's limit."""
+    from acid.claims import judge_value
+    from acid.claims.registry import PLANT_VIOLATION_TOL_K
+    from acid.mpc import scenarios
+
+    assert scenarios.PLANT_TOL_K == claim("nmpc.plant.violation").rule.limit
+    assert scenarios.PLANT_TOL_K == PLANT_VIOLATION_TOL_K
+    assert scenarios.MODEL_TOL_K == claim("nmpc.model.violation").rule.limit
+    assert claim("nmpc.plant.violation").measured.path == "plant.max_avoidable_violation_K"
+    v = _by_id(evaluate(results(mpc=mpc(avoidable=0.187))))
+    assert v["nmpc.plant.violation"].verdict is Verdict.DISAGREES
+    assert judge_value("nmpc.plant.violation", 0.187)[0] is Verdict.DISAGREES
+    assert not 0.187 <= scenarios.PLANT_TOL_K  # mpc-check's scenario (b) criterion: FAIL
+    assert judge_value("nmpc.plant.violation", 0.03)[0] is Verdict.AGREES
+
+
+def test_table_i_is_judged_on_the_paper_vehicle_with_the_default_beside(tmp_path):
+    v = _by_id(evaluate(results()))
+    assert "paper vehicle" in claim("table1.energy.0mps").note
+    d = v["table1.default_vehicle.ratio"]
+    assert d.verdict is Verdict.BEYOND and d.value == pytest.approx(sweep().beside_ratio_last_first)
+    summary_of(tmp_path, results())
+    html = (tmp_path / "report.html").read_text()
+    assert "Table I: the paper vehicle and acid&#x27;s default vehicle" in html
+    assert "not exhaustive" in html and "capacity-limited compressor" in html

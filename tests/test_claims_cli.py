@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from _claims import results, summary_of
 from _cli import assert_one_line_error
 from typer.testing import CliRunner
@@ -40,3 +41,67 @@ def test_a_file_that_is_not_a_summary_is_refused_in_one_line(tmp_path):
                           "no 'claims' block")
     assert_one_line_error(CliRunner().invoke(app, ["claims", str(tmp_path / "none.json")]),
                           "none.json", "not found")
+
+
+def _write(tmp_path, s: dict, name="tampered.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps(s))
+    return path
+
+
+def test_a_tampered_verdict_is_judged_again_and_corrected_in_one_line(tmp_path):
+    """Issue 24: the stored verdicts are never trusted; the registry judges the stored values
+    again, and one line names what it corrected."""
+    s = _summary(tmp_path)
+    honest = headline_markdown(s)
+    items = {i["id"]: i for i in s["claims"]["items"]}
+    assert items["table1.ratio"]["verdict"] == "agrees"
+    items["table1.ratio"]["verdict"] = "disagrees"
+    items["cav.saving"]["verdict"] = "agrees"
+    res = CliRunner().invoke(app, ["claims", str(_write(tmp_path, s))])
+    assert res.exit_code == 0, res.output
+    assert res.stdout == honest
+    (line,) = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert line.startswith("warning:") and "2 stored verdicts" in line
+    assert "table1.ratio (disagrees -> agrees)" in line and "cav.saving" in line
+
+
+def test_a_tampered_value_is_judged_by_the_registry(tmp_path):
+    s = _summary(tmp_path)
+    s["stages"]["sweep"]["summary"]["ratio_last_first"] = 0.5   # the stored verdict: agrees
+    res = CliRunner().invoke(app, ["claims", str(_write(tmp_path, s)), "--json",
+                                   str(tmp_path / "h.json")])
+    assert res.exit_code == 0, res.output
+    assert "table1.ratio (agrees -> disagrees)" in res.stderr
+    rows = json.loads((tmp_path / "h.json").read_text())
+    assert rows["corrected"] == ["table1.ratio (agrees -> disagrees)"]
+    ratio = next(r for r in rows["headline"] if r["result"].startswith("E(25 m/s) / E(0"))
+    assert "0.500" in ratio["acid"] and ratio["verdict"].startswith("mixed")
+
+
+@pytest.mark.parametrize(("tamper", "fragments"), [
+    (lambda s: s["stages"]["sweep"]["summary"]["energy_MJ"].__setitem__(0, "1.3 MJ"),
+     ("tampered.json", "sweep", "energy_MJ[0]", "expected a number")),
+    (lambda s: s["stages"]["mpc"]["summary"].pop("timing"),
+     ("tampered.json", "missing key 'timing'")),
+    (lambda s: s["stages"]["validate"].__setitem__("summary", [1, 2]),
+     ("tampered.json", "stages.validate.summary")),
+    (lambda s: s.pop("stages"), ("tampered.json", "no 'stages' block")),
+    (lambda s: s.__setitem__("options", "quick"), ("tampered.json", "'options'")),
+])
+def test_a_malformed_value_is_one_line_naming_the_key(tmp_path, tamper, fragments):
+    s = _summary(tmp_path)
+    tamper(s)
+    res = CliRunner().invoke(app, ["claims", str(_write(tmp_path, s))])
+    assert res.exit_code == 2
+    assert_one_line_error(res, *fragments)
+
+
+def test_a_non_finite_value_is_one_line_naming_the_key(tmp_path):
+    path = _write(tmp_path, _summary(tmp_path))
+    text = path.read_text().replace('"ratio_last_first": ', '"ratio_last_first": NaN, "x": ', 1)
+    path.write_text(text)
+    res = CliRunner().invoke(app, ["claims", str(path)])
+    assert res.exit_code == 2
+    assert_one_line_error(res, "tampered.json", "stages.sweep.summary.ratio_last_first",
+                          "not a finite number")

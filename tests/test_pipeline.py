@@ -106,3 +106,98 @@ def test_without_dask_parallel_jobs_run_here_with_a_notice(tmp_path, monkeypatch
     out = run_pipeline(_stages(), tmp_path, jobs=2, notice=notes.append)
     assert out["sum"].summary == {"sum": 3}
     assert len(notes) == 1 and "pip install 'acid[distributed]'" in notes[0]
+
+
+# ------------------------------------------------ stage records validated on reuse (issue 24)
+def _record(root, name):
+    return root / "stages" / name / "stage.json"
+
+
+def test_a_record_carries_its_content_hash_and_its_files_hashes(tmp_path):
+    from acid._io import file_sha256
+
+    run_pipeline(_stages(), tmp_path)
+    d = json.loads(_record(tmp_path, "a").read_text())
+    assert d["file_sha256"] == {"number.json": file_sha256(tmp_path / "stages/a/number.json")}
+    assert len(d["content_sha256"]) == 64 and d["key"]
+
+
+@pytest.mark.parametrize("tamper", ["summary", "file", "missing file", "hash", "not json"])
+def test_a_tampered_record_is_recomputed_with_one_notice(tmp_path, tamper):
+    run_pipeline(_stages(), tmp_path)
+    rec = _record(tmp_path, "a")
+    d = json.loads(rec.read_text())
+    if tamper == "summary":        # the cached result edited: the sum would be wrong
+        d["summary"]["value"] = 100
+        rec.write_text(json.dumps(d))
+    elif tamper == "file":         # an output file a later stage reads
+        (tmp_path / "stages/a/number.json").write_text('{"value": 100}')
+    elif tamper == "missing file":
+        (tmp_path / "stages/a/number.json").unlink()
+    elif tamper == "hash":
+        d["content_sha256"] = "0" * 64
+        rec.write_text(json.dumps(d))
+    else:
+        rec.write_text("{ not json")
+    notes = []
+    out = run_pipeline(_stages(), tmp_path, notice=notes.append)
+    assert not out["a"].cached and out["b"].cached
+    assert out["a"].summary == {"value": 1} and out["sum"].summary == {"sum": 3}
+    (line,) = notes
+    assert line.startswith("stage a: the cached record") and "recomputing it" in line
+    assert "\n" not in line
+    # recomputed: the next run reuses it without a word
+    notes.clear()
+    again = run_pipeline(_stages(), tmp_path, notice=notes.append)
+    assert all(o.cached for o in again.values()) and notes == []
+
+
+def test_a_record_for_other_inputs_is_recomputed_silently(tmp_path):
+    run_pipeline(_stages(), tmp_path)
+    notes = []
+    out = run_pipeline(_stages(a=7), tmp_path, notice=notes.append)
+    assert not out["a"].cached and out["sum"].summary == {"sum": 9} and notes == []
+
+
+def test_a_record_of_another_acid_version_is_not_reused(tmp_path, monkeypatch):
+    import acid.pipeline
+
+    monkeypatch.setattr(acid.pipeline, "source_fingerprint", lambda: "same code")
+    run_pipeline(_stages(), tmp_path)
+    assert all(o.cached for o in run_pipeline(_stages(), tmp_path).values())
+    monkeypatch.setattr(acid.pipeline, "__version__", "0.0.0-other")
+    out = run_pipeline(_stages(), tmp_path)
+    assert not any(o.cached for o in out.values())
+
+
+def test_acid_reproduce_again_into_the_same_folder_reuses_and_says_so(tmp_path, monkeypatch):
+    """The README's promise (issue 24): a later run into the same folder reuses the cached
+    stages, names them in one line and writes the report again; a tampered record is
+    recomputed with one line."""
+    from typer.testing import CliRunner
+
+    import acid_cli.reproduce as cli_reproduce
+    from acid_cli.main import app
+
+    monkeypatch.setattr(cli_reproduce, "build_stages", lambda opts: _stages())
+    args = ["reproduce", "--out", str(tmp_path), "--jobs", "1"]
+    first = CliRunner().invoke(app, args)
+    assert first.exit_code == 0, first.output
+    assert "reused" not in first.output
+    report = tmp_path / "report.html"
+    report.unlink()
+    second = CliRunner().invoke(app, args)
+    assert second.exit_code == 0, second.output
+    (line,) = [ln for ln in second.output.splitlines() if ln.startswith("note: reused")]
+    assert "reused 3 of 3 stages" in line and "a, b, sum" in line
+    assert report.is_file()
+    d = json.loads(_record(tmp_path, "b").read_text())
+    d["summary"]["value"] = 40
+    _record(tmp_path, "b").write_text(json.dumps(d))
+    third = CliRunner().invoke(app, args)
+    assert third.exit_code == 0, third.output
+    (line,) = [ln for ln in third.output.splitlines() if ln.startswith("stage b:")]
+    assert "the cached record" in line and "recomputing it" in line
+    assert "reused 2 of 3 stages" in third.output and "(a, sum:" in third.output
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["stages"]["sum"]["summary"] == {"sum": 3}

@@ -9,7 +9,7 @@ import pytest
 
 from acid.errors import ConfigError
 from acid.plant import make_plant
-from acid.plant.check import SERVICE_CHART, build_plant, plant_check
+from acid.plant.check import CYCLE_CHECKS, SERVICE_CHART, build_plant, plant_check
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +34,7 @@ def test_physics_credentials_pass(hifi_check):
     """(b)-(g) pass on the default plant; Table I's shape and E(0) hold (a)."""
     for group in "bcdefg":
         for r in rows_of(hifi_check, group):
-            assert r.passed, (r.name, r.value, r.reference)
+            assert r.passed or (r.info and r.passed is None), (r.name, r.value, r.reference)
     a = {r.name: r for r in rows_of(hifi_check, "a")}
     assert a["Table I: E(0 m/s), 600 s"].passed
     assert a["Table I: smallest decrement (strictly decreasing)"].passed
@@ -46,9 +46,12 @@ HOT_PULLDOWN = "pull-down: 60 degC soak at 43 degC, 1000 W/m2, to 25 degC"
 
 
 def test_hot_pulldown_row_measures_the_time_to_25_degC(hifi_check):
-    """(e) against PLANT.md's 20-30 min from a 60 degC soak at 43 degC and 1000 W/m^2."""
+    """(e) beside PLANT.md's 20-30 min from a 60 degC soak at 43 degC and 1000 W/m^2: a
+    design target, not a published test, so information without a verdict (issue 21)."""
     (row,) = [r for r in rows_of(hifi_check, "e") if r.name == HOT_PULLDOWN]
     assert row.reference.startswith("20-30 min") and row.unit == "min"
+    assert row.info and row.passed is None and "not a published test" in row.reference
+    assert row.to_json_dict()["info"] is True
     T = np.asarray(hifi_check.pulldown["hot43"]["T_cab_C"])
     assert T[0] == pytest.approx(60.0)
     below = np.nonzero(T <= 25.0)[0]
@@ -56,17 +59,60 @@ def test_hot_pulldown_row_measures_the_time_to_25_degC(hifi_check):
     assert T[24] > 30.0  # still above 30 degC after 2 min
 
 
-def test_the_table_i_calibration_meets_table_i_and_the_chart_but_not_the_hot_pulldown():
-    """datasets/plant/table_i_20cc.toml (issue 9): every row passes but the hot pull-down,
-    which the 20 cc compressor and its evaporator cannot meet (notes/i9-plant.md)."""
-    from pathlib import Path
-
-    toml = Path(__file__).parents[1] / "datasets" / "plant" / "table_i_20cc.toml"
-    res = plant_check(build_plant("hifi", config_path=toml))
-    failed = [r.name for r in res.rows if r.passed is False]
-    assert failed == [HOT_PULLDOWN]
+def test_the_paper_vehicle_passes_every_check_and_the_hot_pulldown_is_information():
+    """The paper vehicle (datasets/plant/table_i_20cc.toml, by name): every row with a verdict
+    passes; the hot pull-down it does not meet is information (issue 21), and the result
+    says the search behind it was not exhaustive."""
+    res = plant_check(build_plant("hifi", config_path="paper"))
+    assert [r.name for r in res.rows if r.passed is False] == []
+    assert res.passed
     assert 0.77 <= res.table_i["ratio"] <= 0.83
     assert res.pulldown["hot43"]["T_cab_C"][360] > 30.0  # still above 30 degC after 30 min
+    (row,) = [r for r in res.rows if r.name == HOT_PULLDOWN]
+    assert row.info and row.passed is None and "outside the target" in row.note
+    d = res.to_json_dict()
+    assert "not exhaustive" in d["search_note"] and "1,000" in d["search_note"]
+
+
+def test_the_refrigerant_balance_is_replaced_by_the_coolprop_cycle(hifi_check):
+    """(b): no tautological 'balance: refrigerant' row; four CoolProp comparisons at three
+    operating points, within their tolerances on the plant."""
+    names = [r.name for r in rows_of(hifi_check, "b")]
+    assert not any("refrigerant (" in n for n in names)
+    cyc = [r for r in rows_of(hifi_check, "b") if r.name.startswith("cycle vs CoolProp")]
+    assert len(cyc) == len(CYCLE_CHECKS) and all(r.passed for r in cyc)
+    pts = hifi_check.cycle_check["points"]
+    assert len(pts) == 3
+    for p in pts:  # the plant's own numbers beside CoolProp's, physically sensible
+        assert 2.0 < p["coolprop"]["COP"] < 8.0 and 30.0 < p["coolprop"]["T_c_C"] < 70.0
+        assert p["coolprop"]["m_r_kg_s"] == pytest.approx(p["plant"]["m_r_kg_s"], rel=5e-3)
+
+
+def test_coolprop_cycle_catches_a_plant_that_misreports_its_cycle(monkeypatch):
+    """The check can fail: a cycle whose shaft power is 2 % high (COP 2 % low) or whose
+    condensing temperature is 0.3 K off fails its row."""
+    import dataclasses
+
+    from acid.plant import check
+    from acid.plant.cycle import cycle
+    from acid.plant.vehicles import vehicle_config
+
+    cfg = vehicle_config("default")
+    r = cycle(6000.0, 278.15, 318.15, cfg)
+    devs, _ = check.cycle_deviations(cfg, r)
+    assert max(abs(d) for d in devs.values()) < 0.05  # acid's cycle agrees with CoolProp
+    devs, _ = check.cycle_deviations(cfg, dataclasses.replace(r, W_comp=1.02 * r.W_comp))
+    assert devs[CYCLE_CHECKS[0]] == pytest.approx(100 * (1 / 1.02 - 1), abs=0.05)
+    plant = build_plant("hifi")
+    bad = [("hot", dataclasses.replace(r, T_c=r.T_c + 0.3)),
+           ("weak", dataclasses.replace(r, W_comp=1.02 * r.W_comp))]
+    monkeypatch.setattr(check, "_operating_points", lambda p, p0: (bad, plant))
+    rows, data = check.check_refrigerant_cycle(plant, plant)
+    verdicts = {n: row.passed for n, row in zip(CYCLE_CHECKS, rows, strict=True)}
+    assert all(n in row.name for n, row in zip(CYCLE_CHECKS, rows, strict=True))
+    assert verdicts == {CYCLE_CHECKS[0]: False, CYCLE_CHECKS[1]: False,
+                        CYCLE_CHECKS[2]: True, CYCLE_CHECKS[3]: True}
+    assert len(data["points"]) == 2
 
 
 def test_service_chart_rows_compare_gauge_pressures_with_the_chart(hifi_check):
@@ -97,3 +143,19 @@ def test_a_plant_without_pressures_degrades_gracefully():
 def test_ambient_outside_the_property_tables_is_refused():
     with pytest.raises(ConfigError, match="outside the refrigerant property tables"):
         build_plant("hifi", T_amb=400.0)
+
+
+def test_the_paper_vehicle_is_a_name_wherever_a_plant_configuration_is_accepted(tmp_path):
+    from acid.plant.config import PlantConfig
+    from acid.plant.vehicles import resolve_config, vehicle_config, vehicle_file
+
+    paper_file = vehicle_file("paper")
+    assert paper_file.name == "table_i_20cc.toml" and paper_file.is_file()
+    assert make_plant("hifi", config_path="paper").cfg == PlantConfig.from_toml(paper_file)
+    assert make_plant("hifi", config_path="default").cfg == PlantConfig()
+    assert vehicle_config(None) == PlantConfig() and resolve_config("default") is None
+    own = tmp_path / "mine.toml"
+    own.write_text('refrigerant = "R1234yf"\n')
+    assert resolve_config(own) == own and vehicle_config(own).refrigerant == "R1234yf"
+    with pytest.raises(ConfigError, match="unknown vehicle"):
+        vehicle_file("sedan")

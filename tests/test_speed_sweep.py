@@ -76,3 +76,14 @@ def test_figure_has_units_on_every_axis(sweep):
     assert isinstance(fig, Figure)
     for ax in fig.axes:
         assert "(" in ax.get_ylabel() and "(" in ax.get_xlabel(), ax.get_ylabel()
+
+
+def test_equal_traces_are_drawn_once_with_every_speed_in_the_label():
+    """The paper vehicle's blower runs at its maximum at every speed: one line labelled with
+    all speeds, not six lines hidden under each other (acid.report.audit)."""
+    from acid.report.plant import _distinct_traces
+
+    flat = np.full((3, 5), 297.0)
+    assert _distinct_traces(flat) == [(0, [0, 1, 2])]
+    mixed = np.vstack([flat[0], flat[0] + 1.0, flat[0], flat[0] * (1 + 1e-12)])
+    assert _distinct_traces(mixed) == [(0, [0, 2, 3]), (1, [1])]

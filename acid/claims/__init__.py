@@ -38,6 +38,7 @@ lists the registry; ``python -m acid.claims summary.json`` prints the headline t
 from __future__ import annotations
 
 from acid.claims.core import (
+    NO_VERDICT,
     AtMost,
     BeyondThePaper,
     Claim,
@@ -54,6 +55,7 @@ from acid.claims.core import (
     contradictions,
     counts,
     judge,
+    not_judged,
     resolve,
 )
 from acid.claims.headline import (
@@ -70,13 +72,15 @@ from acid.claims.registry import (
     HeadlineRow,
     claim,
     evaluate,
+    judge_value,
     summary_claims,
     validate_registry,
 )
 
-__all__ = ["CLAIMS", "HEADLINE", "MODEL", "PAPER_CITATION", "STUDIES", "TABLE_I", "TABLE_II",
+__all__ = ["CLAIMS", "HEADLINE", "MODEL", "NO_VERDICT", "PAPER_CITATION", "STUDIES", "TABLE_I",
+           "TABLE_II",
            "AtMost", "BeyondThePaper", "Claim", "ClaimVerdict", "HeadlineRow", "Measured",
            "NotComparable", "PaperValue", "Requires", "Rule", "SameSign", "Verdict", "Within",
            "check_path", "claim", "contradictions", "counts", "evaluate", "headline_markdown",
-           "headline_rows", "judge", "load_summary", "main", "registry_rows", "resolve",
-           "summary_claims", "validate_registry"]
+           "headline_rows", "judge", "judge_value", "load_summary", "main", "not_judged",
+           "registry_rows", "resolve", "summary_claims", "validate_registry"]

@@ -34,6 +34,11 @@ class Verdict(str, Enum):
     NOT_COMPARABLE = "not comparable"
     NOT_MEASURED = "not measured"
     BEYOND = "beyond the paper"
+    NOT_JUDGED = "not judged (quick run)"
+
+
+#: verdicts that say nothing about agreement (shown with their reason, never as a verdict)
+NO_VERDICT = (Verdict.NOT_COMPARABLE, Verdict.NOT_MEASURED, Verdict.NOT_JUDGED)
 
 
 @dataclass(frozen=True)
@@ -373,6 +378,15 @@ def judge(claim: Claim, results: StudyResults) -> ClaimVerdict:
     paper = claim.paper.value if claim.paper is not None else None
     verdict, reason = claim.rule.judge(paper, value, claim.unit)
     return ClaimVerdict(claim, verdict, value, est, reason)
+
+
+def not_judged(v: ClaimVerdict, why: str) -> ClaimVerdict:
+    """``v`` as "not judged (quick run)": the value kept, the verdict withheld (a claim that
+    was not measured, or that the paper's study cannot be compared with anyway, keeps its
+    own verdict)."""
+    if v.verdict is Verdict.NOT_MEASURED or isinstance(v.claim.rule, NotComparable):
+        return v
+    return dataclasses.replace(v, verdict=Verdict.NOT_JUDGED, reason=why)
 
 
 def _why_missing(res, path: str) -> str:

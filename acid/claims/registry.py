@@ -25,11 +25,13 @@ from acid.claims.core import (
     PaperValue,
     Requires,
     SameSign,
+    Verdict,
     Within,
     check_path,
     contradictions,
     counts,
     judge,
+    not_judged,
 )
 from acid.claims.paper import MODEL, PAPER_CITATION, STUDIES, TABLE_I, TABLE_II
 from acid.stage_results import (
@@ -37,10 +39,24 @@ from acid.stage_results import (
     EconStage,
     FitStage,
     MpcStage,
+    PlantCheckStage,
     StudyResults,
     SweepStage,
     ValidationStage,
 )
+
+#: where Table I is judged (``acid.plant.vehicles``)
+_VEHICLE_NOTE = ("on the paper vehicle (the Table I calibration, datasets/plant/"
+                 "table_i_20cc.toml); acid's default vehicle beside it in the report")
+#: the mechanism of Table I, as measured (issue 21): stated once, here
+TABLE_I_MECHANISM = (
+    "Table I's level and flatness together need a capacity-limited compressor: the paper "
+    "vehicle's runs at N_max for most of the 600 s, so its energy is its maximum power and "
+    "only the head pressure moves it with speed")
+DEFAULT_VEHICLE_MECHANISM = (
+    "the default compressor never saturates (at most 78 % of N_max): its energy follows "
+    "load / COP; about 80 % of the fall is COP gain at speed (2.42 to 3.68 at the test's "
+    "4.6 kW) and 20 % lower load")
 
 
 def _table_i_claims() -> list[Claim]:
@@ -54,7 +70,8 @@ def _table_i_claims() -> list[Claim]:
             f"table1.energy.{v:g}mps", "Table I",
             f"A/C energy over {TABLE_I.duration_s:g} s at {v:g} m/s",
             PaperValue(e, "MJ", "Table I", spec=".2f"),
-            Measured(SweepStage, f"energy_MJ[{i}]", (full, at), ".3f"), Within(rel=0.05)))
+            Measured(SweepStage, f"energy_MJ[{i}]", (full, at), ".3f"), Within(rel=0.05),
+            note=_VEHICLE_NOTE))
         if ekm is not None:
             per_km.append(Claim(
                 f"table1.per_km.{v:g}mps", "Table I", f"A/C energy per distance at {v:g} m/s",
@@ -69,7 +86,12 @@ def _table_i_claims() -> list[Claim]:
               f"E({TABLE_I.speeds_mps[-1]:g} m/s) / E({TABLE_I.speeds_mps[0]:g} m/s)",
               PaperValue(e_last / e0, "1", "Table I", spec=".3f"),
               Measured(SweepStage, "ratio_last_first", (full,), ".3f"), Within(abs=0.03),
-              note="ram air through the condenser lowers the condensing pressure"),
+              note=TABLE_I_MECHANISM),
+        Claim("table1.default_vehicle.ratio", "Beyond the paper",
+              f"E({TABLE_I.speeds_mps[-1]:g} m/s) / E({TABLE_I.speeds_mps[0]:g} m/s) on acid's "
+              "default vehicle (the plant of every other study)", None,
+              Measured(SweepStage, "beside_ratio_last_first", (full,), ".3f", unit="1"),
+              BeyondThePaper(), note=DEFAULT_VEHICLE_MECHANISM),
         Claim("table1.falls_with_speed", "Table I",
               "largest change of energy from one speed to the next",
               PaperValue(max(steps), "MJ", "Table I", spec="+.2f"),
@@ -126,6 +148,12 @@ def _validation_claims() -> list[Claim]:
         for ch in ("T_cab", "T_evap", "T_ain")]
 
 
+#: the largest avoidable violation of the state bounds on the plant (K) that acid reads as
+#: the paper's "slight violations" (Fig. 8): the claim nmpc.plant.violation and acid
+#: mpc-check's scenario (b) verdict both use it (one criterion per quantity, issue 21)
+PLANT_VIOLATION_TOL_K = 0.05
+
+
 def _nmpc_claims() -> list[Claim]:
     Ts_ms = 1000.0 * TABLE_II.Ts
     return [
@@ -143,12 +171,15 @@ def _nmpc_claims() -> list[Claim]:
               Measured(MpcStage, "model.ride_error_K", spec=".4f"),
               AtMost(limit=0.05, reading="'approaches'")),
         Claim("nmpc.plant.violation", "NMPC on the plant (Fig. 8)",
-              "largest state-bound violation after the first step",
+              "largest avoidable state-bound violation after the first step (beyond what "
+              "maximum cooling from t = 0 leaves)",
               PaperValue(None, "K", "section IV-B, Fig. 8",
                          "satisfied during most of the simulation period, with slight "
                          "violations at some time instants"),
-              Measured(MpcStage, "plant.max_violation_K", spec=".3f"),
-              AtMost(limit=0.5, reading="'slight violations'")),
+              Measured(MpcStage, "plant.max_avoidable_violation_K", spec=".3f"),
+              AtMost(limit=PLANT_VIOLATION_TOL_K, reading="'slight violations'"),
+              note="the one criterion of this quantity: acid mpc-check's scenario (b) "
+                   "verdict uses the same limit (acid.mpc.scenarios.PLANT_TOL_K)"),
         Claim("nmpc.computation", "Computation",
               "NMPC time per step, mean over the timed steps (the paper's average)",
               PaperValue(Ts_ms * STUDIES.computation_fraction_of_Ts, "ms", "section IV-B",
@@ -275,7 +306,7 @@ def _ids(prefix: str, claims: Sequence[Claim] = CLAIMS) -> tuple[str, ...]:
 
 
 HEADLINE: tuple[HeadlineRow, ...] = (
-    HeadlineRow("Table I: A/C energy over 600 s at "
+    HeadlineRow("Table I on the paper vehicle: A/C energy over 600 s at "
                 + " / ".join(f"{v:g}" for v in TABLE_I.speeds_mps) + " m/s (MJ)",
                 _ids("table1.energy.")),
     HeadlineRow("Table I: per distance at "
@@ -283,13 +314,15 @@ HEADLINE: tuple[HeadlineRow, ...] = (
                 _ids("table1.per_km.")),
     HeadlineRow("E(25 m/s) / E(0 m/s); energy falls with speed",
                 ("table1.ratio", "table1.falls_with_speed")),
+    HeadlineRow("*beyond the paper*: E(25 m/s) / E(0 m/s) on acid's default vehicle",
+                ("table1.default_vehicle.ratio",)),
     HeadlineRow("identified gamma1..7 (kelvin convention)", _ids("identification.gamma")),
     HeadlineRow("identified tau1..3 (K)", _ids("identification.tau")),
     HeadlineRow("300-step prediction error, 60 starts: p90 |error| of T_cab / T_evap / T_ain",
                 _ids("validation.")),
     HeadlineRow("NMPC on the model (Fig. 7): largest violation after the first step",
                 ("nmpc.model.violation",)),
-    HeadlineRow("NMPC on the plant (Fig. 8): largest violation after the first step",
+    HeadlineRow("NMPC on the plant (Fig. 8): largest avoidable violation after the first step",
                 ("nmpc.plant.violation",)),
     HeadlineRow("CAV case, energy over 10-85 s, Case 1 (ICM) / Case 2 (constant bound)",
                 ("cav.case1_energy", "cav.case2_energy")),
@@ -316,6 +349,15 @@ def claim(claim_id: str, claims: Sequence[Claim] = CLAIMS) -> Claim:
         if c.id == claim_id:
             return c
     raise KeyError(f"no claim {claim_id!r} in the registry")
+
+
+def judge_value(claim_id: str, value: float) -> tuple[Verdict, str]:
+    """The registry's (verdict, reason) on ``value`` for claim ``claim_id``: its rule against
+    its paper value. A command that measures the quantity itself (``acid speed-sweep``,
+    ``acid plant-check``, ``acid mpc-check``) judges with this, so that it and the report
+    cannot differ."""
+    c = claim(claim_id)
+    return c.rule.judge(c.paper.value if c.paper is not None else None, float(value), c.unit)
 
 
 def validate_registry(claims: Sequence[Claim] = CLAIMS,
@@ -346,10 +388,27 @@ def validate_registry(claims: Sequence[Claim] = CLAIMS,
 validate_registry()
 
 
-def evaluate(results: StudyResults, claims: Sequence[Claim] | None = None
-             ) -> list[ClaimVerdict]:
-    """Verdicts on every claim of ``claims`` (default: the registry ``CLAIMS``, in order)."""
-    return [judge(c, results) for c in (CLAIMS if claims is None else claims)]
+#: The stages whose claims a ``--quick`` run judges: the NMPC checks run the same scenarios,
+#: horizons and criteria as in the full study (only their timing is repeated less), and the
+#: plant check is not shortened at all. Every other stage is shortened (a 300 s sweep, 12
+#: starts x 120 steps, shorter records, warm-ups, tails and horizons), so its claims are
+#: "not judged (quick run)".
+QUICK_RUN_JUDGES: tuple[type, ...] = (MpcStage, PlantCheckStage)
+QUICK_RUN_REASON = "--quick shortens this stage; run without --quick to judge it"
+
+
+def evaluate(results: StudyResults, claims: Sequence[Claim] | None = None,
+             quick: bool = False) -> list[ClaimVerdict]:
+    """Verdicts on every claim of ``claims`` (default: the registry ``CLAIMS``, in order).
+
+    ``quick``: the results are of a ``--quick`` run; claims measured outside
+    ``QUICK_RUN_JUDGES`` are "not judged (quick run)", their values kept.
+    """
+    out = [judge(c, results) for c in (CLAIMS if claims is None else claims)]
+    if quick:
+        out = [v if v.claim.measured is None or v.claim.measured.stage in QUICK_RUN_JUDGES
+               else not_judged(v, QUICK_RUN_REASON) for v in out]
+    return out
 
 
 def summary_claims(verdicts: Sequence[ClaimVerdict]) -> dict:

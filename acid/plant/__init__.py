@@ -21,8 +21,9 @@ def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: floa
     """The plant chosen by ``--plant``: ``"hifi"`` (high-fidelity, default), ``"model"`` or
     ``"fmu:PATH.fmu"`` (an FMI co-simulation FMU driven through the map ``fmu_map``).
 
-    ``config_path`` is a TOML plant configuration (hifi); ``params`` the model parameters
-    (model plant); noise levels in K; ``T_amb`` in K overrides the ambient temperature;
+    ``config_path`` is a TOML plant configuration or a vehicle name (hifi; ``"paper"``, the
+    Table I calibration, or ``"default"``, see ``acid.plant.vehicles``); ``params`` the model
+    parameters (model plant); noise levels in K; ``T_amb`` in K overrides the ambient temperature;
     ``mode`` is "direct" (inputs commanded) or "nominal" (the plant's own controller; hifi
     and FMU plants).
     """
@@ -48,10 +49,10 @@ def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: floa
         return ModelPlant(params=params, meas_noise_std=meas_noise_std,
                           process_noise_std=process_noise_std, rng=rng, **kw)
     if name == "hifi":
-        from acid.plant.config import PlantConfig
         from acid.plant.hifi import HifiPlant
+        from acid.plant.vehicles import vehicle_config
 
-        cfg = PlantConfig.from_toml(config_path) if config_path else PlantConfig()
+        cfg = vehicle_config(config_path or None)
         if T_amb is not None:
             cfg = cfg.replace(T_amb=T_amb)
         return HifiPlant(cfg, mode=mode, meas_noise_std=meas_noise_std, rng=rng)

@@ -10,9 +10,13 @@ A/C energy of Fig. 8 from "blower power and compressor power". acid therefore re
 compressor + blower (``energy_MJ``) and reports the condenser fan apart
 (``energy_fan_MJ``) and in a total with it (``energy_with_fan_MJ``).
 
-Ram air through the condenser (and the fan switched off at speed) lowers the condensing
-temperature, and the shell's forced convection lowers the load, so the energy falls with
-speed; see ``datasets/plant/SOURCES.md`` for how far the cited physics takes it.
+Ram air through the condenser (and the fan switched off at speed) lowers the head pressure,
+so the COP rises with speed. How that moves the energy depends on the compressor: below its
+capacity (acid's default vehicle, at most 78 % of N_max) the energy follows load / COP and
+falls 37 % from 0 to 25 m/s (about 80 % of it COP gain, 20 % lower load); at its capacity
+(the paper vehicle, ``acid.plant.vehicles``) the energy is the compressor's maximum power and
+falls only as the head pressure does, as in the paper's Table I. See
+``datasets/plant/SOURCES.md``.
 """
 
 from __future__ import annotations

@@ -70,6 +70,7 @@ th{background:#f6f8fa} td.num{text-align:right;font-variant-numeric:tabular-nums
 td.section{background:#f6f8fa;font-weight:600}
 .v-agrees{color:#116329;font-weight:600} .v-agrees-in-direction{color:#7d4e00;font-weight:600}
 .v-disagrees{color:#a40e26;font-weight:600} .v-not-comparable,.v-not-measured,
+.v-not-judged-quick-run,
 .v-beyond-the-paper{color:#6e7781}
 .counts span{margin-right:1.2em} .alert{background:#ffebe9;border:1px solid #a40e26;
 padding:.6em;color:#a40e26} .small{font-size:.85em;color:#57606a}
@@ -84,7 +85,9 @@ def _img_tag(path: Path) -> str:
 
 
 def _css_class(v: Verdict) -> str:
-    return "v-" + v.value.replace(" ", "-")
+    import re
+
+    return "v-" + re.sub(r"[^a-z]+", "-", v.value).strip("-")
 
 
 def _claims_table(verdicts: Sequence[ClaimVerdict]) -> list[str]:
@@ -120,8 +123,8 @@ def render_report(report: Report) -> str:
            f"</title><style>{_CSS}</style></head><body>", f"<h1>{e(report.title)}</h1>"]
     out.append("<p class=meta>" + " &middot; ".join(f"{e(k)}: {e(str(v))}"
                                                      for k, v in report.meta.items()) + "</p>")
-    paper = [v for v in report.verdicts if v.verdict is not Verdict.BEYOND]
-    beyond = [v for v in report.verdicts if v.verdict is Verdict.BEYOND]
+    paper = [v for v in report.verdicts if v.claim.paper is not None]
+    beyond = [v for v in report.verdicts if v.claim.paper is None]
     n = counts(report.verdicts)
     out.append("<h2>Paper vs acid</h2><p class=counts id=counts>" + "".join(
         f'<span data-verdict="{e(k)}" data-count="{c}"><b>{c}</b> {e(k)}</span>'
@@ -140,9 +143,11 @@ def render_report(report: Report) -> str:
         for v in beyond:
             c = v.claim
             where = f"<div class=small>{e(c.measured.where())}</div>" if c.measured else ""
+            judged = "" if v.verdict is Verdict.BEYOND else \
+                f"<div class={_css_class(v.verdict)}>{e(v.verdict.value)}: {e(v.reason)}</div>"
             out.append(f'<tr data-claim="{e(c.id)}" data-verdict="{e(v.verdict.value)}" '
                        f'data-implies=""><td>{e(c.quantity)}{where}</td>'
-                       f"<td class=num>{e(v.acid_text)}</td><td>{e(c.note)}</td></tr>")
+                       f"<td class=num>{e(v.acid_text)}</td><td>{judged}{e(c.note)}</td></tr>")
         out.append("</table>")
     for s in report.sections:
         out.append(f"<h2>{e(s.title)}</h2>")

@@ -16,12 +16,16 @@ from acid.plant.sweep import SweepResult
 from acid.units import K2C
 
 
-def sweep_figure(result: SweepResult) -> Figure:
+def sweep_figure(result: SweepResult, beside: SweepResult | None = None,
+                 labels: tuple[str, str] = ("paper vehicle", "acid's default vehicle")
+                 ) -> Figure:
     """Paper Fig. 3 and Table I: responses and energy at constant vehicle speeds.
 
     Panels: cabin air temperature T_cab (degC), compressor power P_comp (W), condensing
-    temperature T_c (degC) and blower power P_bl (W) against time (s), one line per speed;
-    bars of the compressor + blower energy (MJ) per speed beside the paper's Table I values.
+    temperature T_c (degC) and blower power P_bl (W) against time (s), one line per speed,
+    of ``result``; bars of the compressor + blower energy (MJ) per speed of ``result``
+    (``labels[0]``), of ``beside`` (``labels[1]``, another vehicle at the same speeds, when
+    given) and the paper's Table I values.
     """
     fig = Figure(figsize=(11.0, 8.5), layout="constrained")
     gs = fig.add_gridspec(3, 2)
@@ -37,36 +41,64 @@ def sweep_figure(result: SweepResult) -> Figure:
               ("T_c", "condensing temperature $T_c$ (°C)", True),
               ("P_bl", "blower power $P_{bl}$ (W)", False))
     for ax, (name, label, is_temp) in zip(axes, panels, strict=True):
-        for s in range(S):
+        for s, same in _distinct_traces(result.traces[name]):
             y = result.traces[name][s]
+            speeds = ", ".join(f"{result.speeds_mps[k]:g}" for k in same)
             ax.plot(t, K2C(y) if is_temp else y, color=colors[s], lw=1.0 + 0.2 * (S - 1 - s),
-                    ls=_LINESTYLES[s % len(_LINESTYLES)],
-                    label=f"{result.speeds_mps[s]:g} m/s")
+                    ls=_LINESTYLES[s % len(_LINESTYLES)], label=f"{speeds} m/s")
         ax.set_ylabel(label)
         ax.set_xlabel("time (s)")
         ax.grid(True, alpha=0.3)
     axes[0].legend(title="vehicle speed", fontsize=8, ncols=2)
+    axes[0].set_title(f"traces: {labels[0]}", fontsize=9, loc="left")
 
     x = np.arange(S)
-    ax_bar.bar(x - 0.2, result.energy_MJ, width=0.4, color="tab:blue",
-               label="acid high-fidelity plant (compressor + blower)")
+    series = [(result.energy_MJ, f"{labels[0]} (compressor + blower)", "tab:blue")]
+    if beside is not None:
+        if not np.array_equal(beside.speeds_mps, result.speeds_mps):
+            raise ValueError("sweep_figure: the vehicle beside was run at other speeds")
+        series.append((beside.energy_MJ, labels[1], "tab:orange"))
     # the paper's bars only beside a run of the paper's length (a shorter run uses less)
     p_vals = [TABLE_I.energy_at(v) if abs(result.duration_s - TABLE_I.duration_s) < 1e-9
               else None for v in result.speeds_mps]
-    p_vals = [math.nan if p is None else p for p in p_vals]
-    if any(math.isfinite(p) for p in p_vals):
-        ax_bar.bar(x + 0.2, p_vals, width=0.4, color="0.6", label="paper Table I (CoolSim)")
-    for xi, e in zip(x, result.energy_MJ, strict=True):
-        ax_bar.text(xi - 0.2, e, f"{e:.2f}", ha="center", va="bottom", fontsize=8)
+    p_vals = np.array([math.nan if p is None else p for p in p_vals])
+    if np.any(np.isfinite(p_vals)):
+        series.append((p_vals, "paper Table I (CoolSim)", "0.6"))
+    w = 0.8 / len(series)
+    for k, (vals, label, color) in enumerate(series):
+        xs = x + (k - (len(series) - 1) / 2) * w
+        ax_bar.bar(xs, vals, width=w, color=color, label=label)
+        if k < len(series) - (1 if np.any(np.isfinite(p_vals)) else 0):
+            for xi, e in zip(xs, vals, strict=True):
+                ax_bar.text(xi, e, f"{e:.2f}", ha="center", va="bottom", fontsize=7)
     ax_bar.set_xticks(x, [f"{v:g}" for v in result.speeds_mps])
     ax_bar.set_xlabel("vehicle speed (m/s)")
     ax_bar.set_ylabel(f"A/C energy over {result.duration_s:g} s (MJ)")
     ax_bar.legend(fontsize=8, loc="lower left")
     ax_bar.grid(True, axis="y", alpha=0.3)
-    fig.suptitle(f"Speed sensitivity, nominal controller: E({result.speeds_mps[-1]:g} m/s) / "
-                 f"E({result.speeds_mps[0]:g} m/s) = {result.ratio_last_first:.3f} "
-                 f"(paper {TABLE_I.energy_MJ[-1] / TABLE_I.energy_MJ[0]:.2f})")
+    ratio = f"E({result.speeds_mps[-1]:g} m/s) / E({result.speeds_mps[0]:g} m/s) = " \
+            f"{result.ratio_last_first:.3f} ({labels[0]})"
+    if beside is not None:
+        ratio += f", {beside.ratio_last_first:.3f} ({labels[1]})"
+    fig.suptitle(f"Speed sensitivity, nominal controller: {ratio}; paper "
+                 f"{TABLE_I.energy_MJ[-1] / TABLE_I.energy_MJ[0]:.2f}")
     return fig
+
+
+def _distinct_traces(traces) -> list[tuple[int, list[int]]]:
+    """[(row, rows with the same trace)] for the rows of ``traces``: speeds whose traces are
+    equal (a blower at its maximum at every speed) are drawn once, labelled with all of them,
+    instead of as lines hidden under each other."""
+    out: list[tuple[int, list[int]]] = []
+    for s, y in enumerate(traces):
+        for first, same in out:
+            ref = traces[first]
+            if np.allclose(y, ref, rtol=1e-9, atol=1e-9 * max(1.0, float(np.nanmax(np.abs(ref))))):
+                same.append(s)
+                break
+        else:
+            out.append((s, [s]))
+    return out
 
 
 #: one dash pattern per speed as well as a colour, and earlier (lower) lines wider: close or
