@@ -22,6 +22,7 @@ fit; per-experiment parameters get one value per experiment.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -207,6 +208,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     P = data.parameter_matrix(model, declared)
     col_pos = {(c.index, c.experiment): k for k, c in enumerate(columns)}
     ls_method = "cvx" if method == "cvx" else "ls"
+    outside: list[str] = []
     for group in linear.groups(forms):
         reg = linear.regression(model, data, group, P, per_exp)
         if reg.X.shape[0] <= reg.X.shape[1]:
@@ -233,13 +235,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                         f"{', '.join(c.label for c, ok in zip(reg.columns, sol.identified, strict=True) if not ok)}"
                         f"; they identify {'; '.join(sol.combinations)} (estimates closest "
                         "to the declared values)")
-        if ls_method == "ls":
-            out = [f"{c.label} = {t:.4g}" for c, t, a, b in
-                   zip(reg.columns, sol.theta, lo[pos], hi[pos], strict=True)
-                   if not a <= t <= b]
-            if out:
-                warn.append(f"least squares leaves the declared bounds ({', '.join(out)}); "
-                            "--method cvx keeps them")
+        outside += [f"{c.label} = {t:.4g}" for c, t, a, b in
+                    zip(reg.columns, sol.theta, lo[pos], hi[pos], strict=True)
+                    if not a <= t <= b]
         for k, f in enumerate(group):
             rows = reg.eq == k
             r = reg.y[rows] - reg.X[rows] @ sol.theta
@@ -299,7 +297,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         if res.bandwidth is not None:
             bandwidths["oe"] = res.bandwidth
         oe_summary = {"windows": res.n_windows, "window": oe_window, "loss": res.loss,
-                      "status": res.status, "converged": res.success,
+                      "status": res.status, "converged": res.success, "nfev": res.nfev,
                       "channel_rms": res.channel_rms, "channel_fit_percent": res.channel_fit,
                       "weights": dict(zip(prob.chan_names, res.weights.tolist(),
                                           strict=True)),
@@ -311,10 +309,22 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                      "each window's initial state estimated" + (
                          f" (latent: {', '.join(latent)})" if latent else ""))
         for f in forms:
-            if reports[f.name].method == "-" and f.free:
+            q = reports[f.name]
+            if q.method == "-" and f.free:
                 reports[f.name] = EquationReport(f.name, "oe", f.reason,
                                                  tuple(names[i] for i in f.free))
+            elif q.method in ("ls", "cvx"):
+                reports[f.name] = dataclasses.replace(q, method=f"{q.method} start, oe")
+        at = [f"{c.label} at its {w} {b:g}" for c, t, a, z in zip(columns, theta, lo, hi,
+                                                                  strict=True)
+              for b, w in ((a, "min"), (z, "max"))
+              if math.isfinite(b) and abs(t - b) <= 1e-8 * (1 + abs(b))]
+        if at:
+            notes.append("output error ends on declared bounds: " + "; ".join(at))
     elif method in ("ls", "cvx"):
+        if outside and method == "ls":
+            warn.append(f"least squares leaves the declared bounds ({', '.join(outside)}); "
+                        "--method cvx keeps them")
         left = sorted({c.name for c, ok in zip(columns, ls_reached, strict=True) if not ok})
         if left:
             notes.append(f"not fitted by equation error (kept at the declared values): "

@@ -98,6 +98,7 @@ class OEResult:
     column_scale: np.ndarray
     bandwidth: int | None
     dof: int
+    nfev: int = 0
 
 
 class OEProblem:
@@ -176,12 +177,13 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     z[:len(hi)] = np.where(np.isfinite(hi) & (z[:len(hi)] >= hi), hi - 1e-9 * (1 + abs(hi)),
                            z[:len(hi)])
     res = None
+    floor = 1e-3 * prob.weights
     for it in range(2 if reweight else 1):
         if it == 1:
             e = prob.errors(z)
             rms = np.array([np.sqrt(np.mean(e[..., i][prob.obs[..., i]] ** 2))
                             for i in range(len(prob.chan))])
-            prob.weights = np.maximum(rms, 1e-6 * max(rms.max(), 1e-12))
+            prob.weights = np.maximum(rms, floor)
         with np.errstate(all="ignore"):
             res = scipy.optimize.least_squares(
                 prob.residuals, z, jac=prob.jacobian, bounds=(zlo, zhi), method="trf",
@@ -238,4 +240,5 @@ def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth) -> OEResu
                     window=prob.window,
                     condition=float(sv[0] / sv[-1]) if nth and sv[-1] > 0 else math.inf,
                     rank=rank, jacobian_scaled=Jth / cs, column_scale=cs,
-                    bandwidth=bandwidth, dof=dof)
+                    bandwidth=bandwidth, dof=dof,
+                    nfev=int(res.nfev) if res else 0)
