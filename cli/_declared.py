@@ -3,10 +3,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
 from acid import __version__
+from acid._io import file_sha256
 from acid.data import Dataset
 from acid.errors import ConfigError
 from acid_cli._common import note, print_table, require_range, say, warn, write_summary
@@ -65,7 +67,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
 
     say(f"{data}: {len(est)} of {len(ds)} samples, model {model.name!r} ({model_file}), "
         f"method {result.method}, covariance {covariance} ({result.elapsed_s:.1f} s)")
-    rows = [[e.name if e.experiment is None else f"{e.name} [exp {result.experiment_ids[e.experiment]}]",
+    ids = result.experiment_ids
+    rows = [[e.name if e.experiment is None else f"{e.name} [exp {ids[e.experiment]}]",
              e.unit, _num(e.declared), _num(e.value), _num(e.stderr, 2),
              "-" if not math.isfinite(e.ci95[0]) else f"[{_num(e.ci95[0])}, {_num(e.ci95[1])}]",
              e.status] for e in result.estimates]
@@ -109,22 +112,27 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
     """Validate the model declared in ``model_file`` on ``data``; print the errors."""
     from acid.ident.validate import declared_parameters, read_parameters, validate_model
     from acid.models import load
+    from acid.validate import held_out_part
 
     model = load(model_file)
     ps = declared_parameters(model) if params == "paper" else read_parameters(model, params)
     ds = Dataset.from_hdf5(data, min_samples=2)
-    frac = held_out_fraction
-    if frac is None:
-        est = ps.provenance.get("estimation_fraction")
-        if isinstance(est, (int, float)) and 0 < est < 1:
-            frac = 1.0 - float(est)
+    sha = file_sha256(data)
+    part = held_out_part(ps.provenance, str(data), sha, held_out_fraction)
+    if part.warning:
+        warn(part.warning)
+    frac = part.fraction
+    if ps.per_experiment and ps.provenance.get("data_sha256") != sha:
+        ps = dataclasses.replace(ps, per_experiment={})
+        note("per-experiment parameters were fitted on another record: their mean is used")
     if frac is not None and frac < 1.0:
         ds = ds.split(1.0 - frac)[1]
     res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
                          placement=placement, seed=seed)
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
         f"{model.name!r}, parameters from {ps.source}"
-        + (f", last {100 * frac:g} % of the record" if frac is not None and frac < 1 else ""))
+        + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
+           and frac < 1 else ""))
     print_table("Open-loop prediction error, all starts and steps",
                 ["channel", "unit", "RMSE", "p90 |e|", "max |e|", "fit %"],
                 [[c, u, _num(res.metrics[c]["rmse"], 3), _num(res.metrics[c]["p90_abs"], 3),

@@ -231,10 +231,11 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
             bandwidths["+".join(reg.names)] = sol.bandwidth
         combos += list(sol.combinations)
         if sol.combinations:
+            lost = [c.label for c, ok in zip(reg.columns, sol.identified, strict=True)
+                    if not ok]
             warn.append(f"{' + '.join(reg.names)}: the data do not separate "
-                        f"{', '.join(c.label for c, ok in zip(reg.columns, sol.identified, strict=True) if not ok)}"
-                        f"; they identify {'; '.join(sol.combinations)} (estimates closest "
-                        "to the declared values)")
+                        f"{', '.join(lost)}; they identify {'; '.join(sol.combinations)} "
+                        "(estimates closest to the declared values)")
         outside += [f"{c.label} = {t:.4g}" for c, t, a, b in
                     zip(reg.columns, sol.theta, lo[pos], hi[pos], strict=True)
                     if not a <= t <= b]

@@ -46,7 +46,7 @@ class Windows:
 def _window_function(model: Model, L: int, with_jacobian: bool = True):
     """``W(x0, ud, p) -> (Y, J)``: [x; y] over L samples of one window, (nx + ny, L), and
     its Jacobian w.r.t. [p, x0] (rows ordered sample-major)."""
-    nx, ny, nud = model.nx, model.ny, model.nu + model.nd
+    nx, nud = model.nx, model.nu + model.nd
     x, ud, p = ca.SX.sym("x", nx), ca.SX.sym("ud", nud), ca.SX.sym("p", model.np)
     xn, y = model.F(x, ud[:model.nu], ud[model.nu:], p)
     G = ca.Function("G", [x, ud, p], [xn, ca.vertcat(x, y)])

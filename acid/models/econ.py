@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 from acid.econ import model as econ
 from acid.econ.fit import _BOUNDS
-from acid.econ.params import MAP_TERMS, PARAMETER_TABLE, CONSTANTS
+from acid.econ.params import CONSTANTS, MAP_TERMS, PARAMETER_TABLE
 from acid.models.declaration import Constant, Model, Parameter, Signal, State
 from acid.params import PAPER_BETA
 from acid.params import PARAMETER_TABLE as PAPER_TABLE
