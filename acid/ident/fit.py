@@ -398,15 +398,17 @@ def _starts(rng: np.random.Generator, n: int, theta, lo, hi) -> list[np.ndarray]
 
 def _distinct(runs, columns, lo, hi, rtol_loss: float = 1e-6,
               rtol_theta: float = 1e-3) -> list[Optimum]:
-    """Runs grouped into optima: same loss (relative ``rtol_loss``) and parameters within
+    """Runs grouped into optima: same loss (relative ``rtol_loss``, or round-off of the
+    largest loss) and parameters within
     ``rtol_theta`` of their magnitude; best first."""
     runs = sorted(runs, key=lambda r: r[0])
+    atol = 1e-12 * max(abs(r[0]) for r in runs)        # zero losses differ by round-off
     groups: list[list] = []
     for loss, th in runs:
         for g in groups:
             l0, t0 = g[0]
             scale = np.maximum(np.abs(t0), 1e-9)
-            if abs(loss - l0) <= rtol_loss * max(abs(l0), 1e-300) and \
+            if abs(loss - l0) <= rtol_loss * abs(l0) + atol and \
                     np.all(np.abs(th - t0) <= rtol_theta * scale):
                 g.append((loss, th))
                 break
