@@ -2,8 +2,8 @@
 
 ``Model`` (``acid/models/declaration.py``) with ``State``, ``Signal``, ``Parameter``,
 ``Constant`` and ``RK4``; the built-in declarations ``paper`` (eqs. 1-5) and ``econ``; users'
-own files through :func:`load`. ``exp``, ``sqrt``, ``log``, ``sin``, ``cos``, ``fabs``, ``fmax``, ``fmin``, ``if_else``
-work on the symbols the equations receive (CasADi's).
+own files through :func:`load`. ``exp``, ``sqrt``, ``log``, ``sin``, ``cos``, ``fabs``,
+``fmax``, ``fmin`` and ``if_else`` work on the symbols the equations receive (CasADi's).
 """
 
 from __future__ import annotations

@@ -37,7 +37,8 @@ def load(spec: str | Path | Model) -> Model:
     spec_ = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec_)
     sys.modules[name] = module
-    try:
+    no_bytecode, sys.dont_write_bytecode = sys.dont_write_bytecode, True  # no __pycache__
+    try:                                                                   # beside the file
         spec_.loader.exec_module(module)
     except DeclarationError:
         raise
@@ -52,6 +53,7 @@ def load(spec: str | Path | Model) -> Model:
                                f"{type(exc).__name__}: {msg}") from None
     finally:
         sys.modules.pop(name, None)
+        sys.dont_write_bytecode = no_bytecode
     return _model_of(module, str(path))
 
 
