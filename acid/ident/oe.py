@@ -43,38 +43,49 @@ class Windows:
 
 
 @functools.lru_cache(maxsize=16)
-def _window_function(model: Model, L: int, with_jacobian: bool = True):
-    """``W(x0, ud, p) -> (Y, J)``: [x; y] over L samples of one window, (nx + ny, L), and
-    its Jacobian w.r.t. [p, x0] (rows ordered sample-major)."""
+def _window_function(model: Model, L: int, free: tuple[int, ...] | None):
+    """``W(x0, ud, p) -> Y`` ([x; y] over L samples of one window, (nx + ny, L)); with
+    ``free`` (declared parameter indices) also its Jacobian w.r.t. [p[free], x0] (rows
+    sample-major): forward directions only for what is estimated."""
     nx, nud = model.nx, model.nu + model.nd
     x, ud, p = ca.SX.sym("x", nx), ca.SX.sym("ud", nud), ca.SX.sym("p", model.np)
     xn, y = model.F(x, ud[:model.nu], ud[model.nu:], p)
     G = ca.Function("G", [x, ud, p], [xn, ca.vertcat(x, y)])
     acc = G.mapaccum("win", L)
     X0, UD, P = ca.MX.sym("x0", nx), ca.MX.sym("ud", nud, L), ca.MX.sym("p", model.np)
-    _, Y = acc(X0, UD, ca.repmat(P, 1, L))
-    outs = [Y]
-    if with_jacobian:
-        outs.append(ca.jacobian(ca.vec(Y), ca.vertcat(P, X0)))
-    return ca.Function("window", [X0, UD, P], outs)
+    if free is None:
+        _, Y = acc(X0, UD, ca.repmat(P, 1, L))
+        return ca.Function("window", [X0, UD, P], [Y])
+    Pf = ca.MX.sym("pf", len(free))
+    pos = {i: k for k, i in enumerate(free)}
+    Pfull = ca.vertcat(*[Pf[pos[i]] if i in pos else P[i] for i in range(model.np)]) \
+        if model.np else P
+    _, Y = acc(X0, UD, ca.repmat(Pfull, 1, L))
+    J = ca.jacobian(ca.vec(Y), ca.vertcat(Pf, X0))
+    fn = ca.Function("window_jac", [X0, UD, P, Pf], [Y, J])
+    return ca.Function("window", [X0, UD, P], fn(X0, UD, P, ca.vertcat(*[
+        P[i] for i in free]) if free else ca.MX(0, 1)))
 
 
 def simulate_windows(model: Model, data: ModelData, idx: np.ndarray, x0: np.ndarray,
-                     P: np.ndarray, jacobian: bool = False):
+                     P: np.ndarray, free: tuple[int, ...] | None = None):
     """Simulate windows ``idx`` (nw, L) from ``x0`` (nw, nx) with parameters ``P`` (nw, np).
 
-    Returns ``Y`` (nw, L, nx + ny) and, with ``jacobian``, ``J`` (nw, L, nx + ny, np + nx).
+    Returns ``Y`` (nw, L, nx + ny); with ``free`` (declared parameter indices, may be
+    empty) also ``J`` (nw, L, nx + ny, len(free) + nx), the derivatives w.r.t. those
+    parameters and the initial state.
     """
     nw, L = idx.shape
-    fn = _window_function(model, L, jacobian).map(nw)
+    free = None if free is None else tuple(int(i) for i in free)
+    fn = _window_function(model, L, free).map(nw)
     ud = np.concatenate([data.u[idx], data.d[idx]], axis=-1)          # (nw, L, nud)
     out = fn(x0.T, ud.reshape(nw * L, -1).T, P.T)
     C = model.nx + model.ny
-    Y = np.asarray(out[0] if jacobian else out).T.reshape(nw, L, C)
-    if not jacobian:
+    Y = np.asarray(out[0] if free is not None else out).T.reshape(nw, L, C)
+    if free is None:
         return Y
-    J = np.asarray(out[1])                                            # (L C, nw (np + nx))
-    J = J.reshape(L, C, nw, model.np + model.nx).transpose(2, 0, 1, 3)
+    J = np.asarray(out[1])                                            # (L C, nw (nf + nx))
+    J = J.reshape(L, C, nw, len(free) + model.nx).transpose(2, 0, 1, 3)
     return Y, J
 
 
@@ -132,6 +143,7 @@ class OEProblem:
             else:
                 self.E[self.win_exp == col.experiment, col.index, c] = 1.0
         self.x0_start = data.initial_states(model, self.w.idx[:, 0])
+        self.free = tuple(sorted({c.index for c in columns}))
 
     @property
     def n_theta(self) -> int:
@@ -152,10 +164,10 @@ class OEProblem:
 
     def jacobian(self, z) -> np.ndarray:
         _, P, x0 = self.unpack(z)
-        _, J = simulate_windows(self.model, self.data, self.w.idx, x0, P, jacobian=True)
+        _, J = simulate_windows(self.model, self.data, self.w.idx, x0, P, free=self.free)
         J = J[:, :, self.chan, :] / self.weights[None, None, :, None]
-        npar, nx = self.model.np, self.model.nx
-        Jth = np.einsum("wlcp,wpk->wlck", J[..., :npar], self.E)
+        npar, nx = len(self.free), self.model.nx
+        Jth = np.einsum("wlcp,wpk->wlck", J[..., :npar], self.E[:, list(self.free), :])
         Jx = np.zeros(J.shape[:3] + (self.nw * nx,))
         for w in range(self.nw):
             Jx[w, :, :, w * nx:(w + 1) * nx] = J[w, :, :, npar:]
@@ -172,10 +184,11 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     zlo = np.concatenate([lo, np.full(prob.nw * nx, -np.inf)])
     zhi = np.concatenate([hi, np.full(prob.nw * nx, np.inf)])
     # keep the start strictly inside (trf needs it)
-    z[:len(lo)] = np.where(np.isfinite(lo) & (z[:len(lo)] <= lo), lo + 1e-9 * (1 + abs(lo)),
-                           z[:len(lo)])
-    z[:len(hi)] = np.where(np.isfinite(hi) & (z[:len(hi)] >= hi), hi - 1e-9 * (1 + abs(hi)),
-                           z[:len(hi)])
+    with np.errstate(invalid="ignore"):
+        z[:len(lo)] = np.where(np.isfinite(lo) & (z[:len(lo)] <= lo),
+                               lo + 1e-9 * (1 + abs(lo)), z[:len(lo)])
+        z[:len(hi)] = np.where(np.isfinite(hi) & (z[:len(hi)] >= hi),
+                               hi - 1e-9 * (1 + abs(hi)), z[:len(hi)])
     res = None
     floor = 1e-3 * prob.weights
     for it in range(2 if reweight else 1):

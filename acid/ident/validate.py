@@ -227,8 +227,8 @@ def _warm_start(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np
         return ((Y - meas) / scale)[obs]
 
     def jac(z):
-        _, J = simulate_windows(model, data, idx[:, :W], z.reshape(n, nx), P, jacobian=True)
-        J = J[:, :, chan, model.np:] / scale[None, None, :, None]      # (n, W, C, nx)
+        _, J = simulate_windows(model, data, idx[:, :W], z.reshape(n, nx), P, free=())
+        J = J[:, :, chan, :] / scale[None, None, :, None]              # (n, W, C, nx)
         full = np.zeros(J.shape[:3] + (n * nx,))
         for s in range(n):
             full[s, :, :, s * nx:(s + 1) * nx] = J[s]
