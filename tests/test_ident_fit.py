@@ -172,3 +172,22 @@ def test_multi_start_finds_the_global_optimum_and_reports_distinct_optima():
     assert res.optima[0].values["w"] == pytest.approx(0.3, rel=1e-6)
     again = fit_model(m, ds, method="oe", oe_window=40, fit_starts=16, seed=3)
     assert again.optima == res.optima                  # same seed, same result
+
+
+def test_the_econ_declaration_gains_output_error():
+    from acid.econ.params import EconParams, PowerMap
+    from acid.econ.plant import EconPlant
+    from acid.excite import excite, spec_for_model
+    from acid.models.econ import _MAP_START, _START
+
+    truth = {**_START, "C_cab": 5000.0, "hA_int": 170.0, "Q_sh": 700.0, "tau_ew": 14.0}
+    plant = EconPlant(EconParams(values=truth, C_ew=2000.0, power_map=PowerMap(_MAP_START)))
+    ds = excite(plant, spec_for_model("econ", duration=1200.0, seed=1))
+    m = load("econ")
+    free = ("C_cab", "hA_int", "Q_sh", "tau_ew")
+    res = fit_model(m, ds, method="oe", oe_window=120,
+                    fix={n: v for n, v in zip(m.parameter_names, m.values, strict=True)
+                         if n not in free})
+    for n in free:
+        assert res.value(n) == pytest.approx(truth[n], rel=1e-6), n
+    assert set(res.output_error["channel_rms"]) >= {"T_cab", "T_int", "w_cab", "P_comp"}
