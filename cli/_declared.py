@@ -44,7 +44,7 @@ def parse_fix(items: list[str] | None) -> dict[str, float]:
 def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None, *,
                  method: str, fix: list[str] | None, free: list[str] | None, fit_starts: int,
                  seed: int, oe_window: int, covariance: str, bandwidth,
-                 estimation_fraction: float) -> None:
+                 estimation_fraction: float, more: list[Path] = ()) -> None:
     """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``."""
     from acid.ident.fit import METHODS, fit_model, provenance
     from acid.models import load
@@ -57,16 +57,25 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     fixes = parse_fix(fix)
     ds = Dataset.from_hdf5(data, min_samples=20)
     est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]
+    if more:
+        parts = [Dataset.from_hdf5(p, min_samples=20) for p in more]
+        parts = [p if estimation_fraction == 1.0 else p.split(estimation_fraction)[0]
+                 for p in parts]
+        est = Dataset.concatenate([est, *parts])
+        est.source = str(data)
     result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
                        fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                        covariance=covariance, hac_bandwidth=bandwidth)
     prov = provenance(ds, result.method)
-    prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file))
+    prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
+                records=[str(data), *map(str, more)])
     fitted = model.with_parameters(fixes, tuple(free or ()))
     result.write(out, fitted, prov)
 
-    say(f"{data}: {len(est)} of {len(ds)} samples, model {model.name!r} ({model_file}), "
-        f"method {result.method}, covariance {covariance} ({result.elapsed_s:.1f} s)")
+    say(f"{data}{' and ' + str(len(more)) + ' more record(s)' if more else ''}: "
+        f"{len(est)} samples, {len(result.experiment_ids)} experiment(s), model "
+        f"{model.name!r} ({model_file}), method {result.method}, covariance {covariance} "
+        f"({result.elapsed_s:.1f} s)")
     ids = result.experiment_ids
     rows = [[e.name if e.experiment is None else f"{e.name} [exp {ids[e.experiment]}]",
              e.unit, _num(e.declared), _num(e.value), _num(e.stderr, 2),

@@ -103,6 +103,9 @@ def fit(
         1, "--fit-starts", help="Output-error starts spread inside the declared bounds "
                                 "(model file); the distinct optima are reported."),
     seed: int = typer.Option(0, "--seed", help="Seed of the --fit-starts draws."),
+    add_record: list[Path] | None = typer.Option(
+        None, "--add-record", help="Another record fitted with DATA, as its own experiment "
+                                   "(model file; repeatable)."),
 ) -> None:
     """Fit the control-oriented model and write params.json (kelvin convention).
 
@@ -114,11 +117,13 @@ def fit(
             f"must be one of {', '.join(MODEL_FAMILIES)} or a model file FILE.py, got "
             f"{model!r}")
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
-                        "--model": model if declared else None},
+                        "--model": model if declared else None,
+                        **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
                 outputs={"--out": out, "--json": json_path})
     if not declared:
         given = [opt for opt, set_ in (("--fix", fix), ("--free", free),
-                                       ("--fit-starts", fit_starts != 1)) if set_]
+                                       ("--fit-starts", fit_starts != 1),
+                                       ("--add-record", add_record)) if set_]
         if given:
             raise ConfigError(f"{', '.join(given)}: only for --model FILE.py")
     method = method or ("auto" if declared else "ls")
@@ -147,7 +152,8 @@ def fit(
         return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                             covariance=covariance, bandwidth=bandwidth,
-                            estimation_fraction=estimation_fraction)
+                            estimation_fraction=estimation_fraction,
+                            more=list(add_record or []))
     if model == "econ":
         paper_only = {"--method": method != "ls", "--loss": loss != "squared",
                       "--use-eta-cop": use_eta_cop, "--strict": strict,
