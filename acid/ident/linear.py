@@ -271,7 +271,8 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
         h = np.zeros((uniq.size, k))
         np.add.at(h, inv, scores[order])
         g = segment_ids(uniq, data.segments)
-        bandwidth = resolve_bandwidth(hac_bandwidth, h, g)
+        bandwidth = resolve_bandwidth(hac_bandwidth, _centred_scores(X, resid, reg.sample,
+                                                                     order, inv, uniq.size), g)
         cov_phi = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread)
     else:
         cov_phi = float(resid @ resid) / dof * bread
@@ -284,6 +285,19 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
                     residual_std=float(np.sqrt(resid @ resid / dof)), dof=dof,
                     identified=ident, combinations=tuple(combos), bandwidth=bandwidth,
                     active=active, status=status)
+
+
+def _centred_scores(X, resid, sample, order, inv, n_inst) -> np.ndarray:
+    """Scores with the regressors centred when the regression has a constant column (the
+    intercept then absorbs the means): what the automatic HAC lag is chosen from, so that
+    it does not depend on where a temperature's zero lies (kelvin or degC). The sandwich
+    itself is invariant to that reparametrisation."""
+    std = X.std(axis=0)
+    const = (std <= 1e-12 * np.maximum(np.abs(X).max(axis=0), 1e-300)) & (np.abs(X[0]) > 0)
+    Xc = X - np.where(const, 0.0, X.mean(axis=0)) if const.any() else X
+    h = np.zeros((n_inst, X.shape[1]))
+    np.add.at(h, inv, (Xc * resid[:, None])[order])
+    return h
 
 
 def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start):
