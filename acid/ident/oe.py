@@ -67,6 +67,11 @@ def _window_function(model: Model, L: int, free: tuple[int, ...] | None):
         P[i] for i in free]) if free else ca.MX(0, 1)))
 
 
+@functools.lru_cache(maxsize=32)
+def _mapped(model: Model, L: int, free, nw: int):
+    return _window_function(model, L, free).map(nw)
+
+
 def simulate_windows(model: Model, data: ModelData, idx: np.ndarray, x0: np.ndarray,
                      P: np.ndarray, free: tuple[int, ...] | None = None):
     """Simulate windows ``idx`` (nw, L) from ``x0`` (nw, nx) with parameters ``P`` (nw, np).
@@ -77,7 +82,7 @@ def simulate_windows(model: Model, data: ModelData, idx: np.ndarray, x0: np.ndar
     """
     nw, L = idx.shape
     free = None if free is None else tuple(int(i) for i in free)
-    fn = _window_function(model, L, free).map(nw)
+    fn = _mapped(model, L, free, nw)
     ud = np.concatenate([data.u[idx], data.d[idx]], axis=-1)          # (nw, L, nud)
     out = fn(x0.T, ud.reshape(nw * L, -1).T, P.T)
     C = model.nx + model.ny
