@@ -201,3 +201,33 @@ def test_paper_hac_standard_errors_equal_acid_fit(noisy_model_dataset):
         if not e.name.startswith("beta"):      # P_bl is noise-free here: round-off errors
             assert e.stderr == pytest.approx(se_old[e.name], rel=1e-6), e.name
     assert res.hac_bandwidth["T_cab"] == old.hac_bandwidth["eq1"]
+
+
+def test_a_users_linear_model_file_equals_an_independent_lstsq(tmp_path, rng):
+    path = tmp_path / "arx_cabin.py"
+    path.write_text(
+        "from acid.models import Model, Parameter, Signal, State\n"
+        "def step(s):\n"
+        "    return {'T_cab': s.a * s.T_cab + s.b * s.T_amb + s.c * s.W_bl * s.T_ain + s.d}\n"
+        "model = Model('arx', states=[State('T_cab', 'K')],\n"
+        "              inputs=[Signal('W_bl', 'kg/s'), Signal('T_ain', 'K')],\n"
+        "              disturbances=[Signal('T_amb', 'K')],\n"
+        "              parameters=[Parameter(n, u, 0.0) for n, u in\n"
+        "                          (('a', '1'), ('b', '1'), ('c', 's/kg'), ('d', 'K'))],\n"
+        "              Ts=5.0, step=step)\n")
+    n = 400
+    W, Tain, Tamb = rng.uniform(0.05, 0.15, n), rng.uniform(280, 290, n), rng.uniform(300, 310, n)
+    T = np.empty(n)
+    T[0] = 300.0
+    for k in range(n - 1):
+        T[k + 1] = (0.95 * T[k] + 0.03 * Tamb[k] + 0.2 * W[k] * Tain[k] - 0.3
+                    + 0.02 * rng.standard_normal())
+    ds = _dataset({"T_cab": T - 273.15, "W_bl": W, "T_ain": Tain - 273.15,
+                   "T_amb": Tamb - 273.15},
+                  {"T_cab": "degC", "W_bl": "kg/s", "T_ain": "degC", "T_amb": "degC"}, 5.0)
+    res = fit_model(str(path), ds)
+    assert res.method == "ls" and res.equations[0].method == "ls"
+    X = np.c_[T[:-1], Tamb[:-1], W[:-1] * Tain[:-1], np.ones(n - 1)]
+    theta = np.linalg.lstsq(X, T[1:], rcond=None)[0]
+    for name, t in zip("abcd", theta, strict=True):
+        assert res.value(name) == pytest.approx(t, rel=1e-6), name
