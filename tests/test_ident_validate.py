@@ -14,6 +14,7 @@ from acid.ident.fit import fit_model
 from acid.ident.validate import (
     ParameterSet,
     declared_parameters,
+    fitted_parameters,
     read_parameters,
     validate_model,
 )
@@ -82,6 +83,8 @@ def test_per_experiment_values_are_used_per_start(rng):
     ps = ParameterSet(values=m.values, per_experiment={"Q_sol": {0: 100.0, 1: 1200.0}})
     good = validate_model(m, ds, ps, starts=6, horizon=50, warmup=30)
     assert good.metrics["T_cab"]["max_abs"] < 1e-6
+    fitted = fitted_parameters(fit_model(m, ds, method="ls"))     # Q_sol kept as declared
+    assert fitted.per_experiment == {"Q_sol": {0: 400.0, 1: 400.0}}
     mean = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=30)
     assert mean.metrics["T_cab"]["max_abs"] > 1e-2
     assert any("no fitted value" in n for n in mean.notes)

@@ -114,9 +114,11 @@ class DeclaredFitResult:
     elapsed_s: float = field(default=math.nan, compare=False)
 
     def value(self, name: str, experiment: int | None = None) -> float:
-        """The fitted value of ``name`` (of one experiment index for per-experiment ones)."""
-        if name in self.per_experiment and experiment is not None:
-            return float(self.per_experiment[name][experiment])
+        """The fitted value of ``name``; a per-experiment one of the experiment index
+        ``experiment`` (default: its mean over the experiments)."""
+        if name in self.per_experiment:
+            vals = self.per_experiment[name]
+            return float(vals[experiment] if experiment is not None else np.mean(vals))
         for e in self.estimates:
             if e.name == name and e.experiment is None:
                 return e.value

@@ -41,6 +41,14 @@ class ParameterSet:
     provenance: dict = field(default_factory=dict)
 
 
+def fitted_parameters(result) -> ParameterSet:
+    """The values of a ``DeclaredFitResult`` (per-experiment ones by experiment id)."""
+    per = {n: dict(zip(result.experiment_ids, map(float, v), strict=True))
+           for n, v in result.per_experiment.items()}
+    return ParameterSet(values=np.asarray(result.values, dtype=float), per_experiment=per,
+                        source=f"fit of {result.data_source}")
+
+
 def declared_parameters(model: Model) -> ParameterSet:
     return ParameterSet(values=model.values, source="declared values")
 

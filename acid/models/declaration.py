@@ -153,9 +153,8 @@ class Model:
                  ode: Callable | None = None, integrator: RK4 | None = None,
                  output: Callable | None = None, source: str | None = None,
                  description: str = ""):
-        if source is None:
-            frame = inspect.stack()[1]
-            source = frame.filename
+        if source is None:  # the file that declares the model
+            source = inspect.currentframe().f_back.f_code.co_filename
         self.source = str(source)
         self.name = str(name)
         self.description = description
