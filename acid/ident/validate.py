@@ -10,6 +10,7 @@ overall and at chosen horizons (RMSE, p90 of |e|), with ``acid.metrics``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
@@ -128,9 +129,19 @@ class DeclaredValidation:
 def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: int = 60,
                    placement: str = "even", seed: int = 0,
-                   horizons: tuple[int, ...] | None = None) -> DeclaredValidation:
-    """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring)."""
+                   horizons: tuple[int, ...] | None = None, hold: tuple[str, ...] = (),
+                   start_index=None) -> DeclaredValidation:
+    """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
+
+    ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
+    and T_shell) instead of measured along the prediction. ``start_index``: these start
+    samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
+    """
     model = load(model)
+    unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
+    if unknown:
+        raise ConfigError(f"hold: {unknown[0]!r} is not a disturbance of model "
+                          f"{model.name!r}")
     params = params or declared_parameters(model)
     if placement not in PLACEMENTS:
         raise ConfigError(f"placement must be one of {', '.join(PLACEMENTS)}, got "
@@ -146,7 +157,13 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     if cand.size == 0:
         raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
                         f"({need_warm} + {horizon} + 1 samples)")
-    if placement == "even":
+    if start_index is not None:
+        k0 = np.asarray(start_index, dtype=int)
+        bad = k0[~np.isin(k0, cand)]
+        if bad.size:
+            raise DataError(f"{ds.source}: start {int(bad[0])} leaves no room for the "
+                            f"warm-up and {horizon} steps inside its experiment")
+    elif placement == "even":
         pick = np.unique(np.round(np.linspace(0, cand.size - 1, min(starts, cand.size))))
         k0 = cand[pick.astype(int)]
     else:
@@ -163,6 +180,18 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
+    if hold:
+        held = [i for i, d in enumerate(model.disturbances) if d.name in hold]
+        dd = np.repeat(data.d[k0][:, None, :], horizon + 1, axis=1)   # (S, H + 1, nd)
+        # windows get their own rows: the held values differ per start
+        flat = np.arange(idx.size).reshape(idx.shape)
+        data = dataclasses.replace(
+            data, x=data.x[idx].reshape(-1, model.nx), u=data.u[idx].reshape(-1, model.nu),
+            d=np.where(np.isin(np.arange(model.nd), held), dd,
+                       data.d[idx]).reshape(-1, model.nd),
+            y=data.y[idx].reshape(-1, model.ny))
+        idx = flat
+        notes.append(f"held at their start values: {', '.join(hold)}")
     Y = simulate_windows(model, data, idx, x0, P)
     meas = np.concatenate([data.x, data.y], axis=1)[idx]
     channels, units, errors, metrics = [], [], {}, {}
