@@ -47,7 +47,7 @@ def validate(
     exogenous: str = typer.Option(
         "hold", "--exogenous",
         help="T_int/T_shell over a prediction: 'hold' at the start value (paper) or "
-             "'measured'."),
+             "'measured' (a model file: all its disturbances)."),
     held_out_fraction: float | None = typer.Option(
         None, "--held-out-fraction",
         help="Validate on the last F of the record only. Default: the part after "
@@ -84,8 +84,8 @@ def validate(
 
     if model is not None:
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
-                                    placement, seed, held_out_fraction,
-                                    exogenous != "hold" or beside is not None or allow_unstable)
+                                    placement, seed, held_out_fraction, exogenous,
+                                    beside is not None or allow_unstable)
 
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
@@ -184,13 +184,13 @@ def validate(
 
 
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
-                         seed, held_out_fraction, paper_options) -> None:
+                         seed, held_out_fraction, exogenous, paper_options) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
     from acid_cli._declared import is_model_file, validate_declared
 
     require(is_model_file(model), "--model", f"must be a model file FILE.py, got {model!r}")
     require(not paper_options, "--model",
-            "--exogenous, --beside and --allow-unstable are for the paper/econ families")
+            "--beside and --allow-unstable are for the paper/econ families")
     check_paths(inputs={"DATA": data, "--model": model, "--params": params_input(params)},
                 outputs={"--json": json_path})
     require_range(starts, "--starts", 1, MAX_STARTS)
@@ -199,8 +199,10 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
     require_range(seed, "--seed", 0, 2**63 - 1)
     require(placement in PLACEMENTS, "--placement",
             f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
+    require(exogenous in EXOGENOUS_MODES, "--exogenous",
+            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
     if held_out_fraction is not None:
         require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
-                      held_out_fraction=held_out_fraction)
+                      held_out_fraction=held_out_fraction, hold_all=exogenous == "hold")

@@ -186,10 +186,11 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
         # windows get their own rows: the held values differ per start
         flat = np.arange(idx.size).reshape(idx.shape)
         data = dataclasses.replace(
-            data, x=data.x[idx].reshape(-1, model.nx), u=data.u[idx].reshape(-1, model.nu),
+            data, x=data.x[idx].reshape(idx.size, model.nx),
+            u=data.u[idx].reshape(idx.size, model.nu),
             d=np.where(np.isin(np.arange(model.nd), held), dd,
-                       data.d[idx]).reshape(-1, model.nd),
-            y=data.y[idx].reshape(-1, model.ny))
+                       data.d[idx]).reshape(idx.size, model.nd),
+            y=data.y[idx].reshape(idx.size, model.ny))
         idx = flat
         notes.append(f"held at their start values: {', '.join(hold)}")
     Y = simulate_windows(model, data, idx, x0, P)
