@@ -83,6 +83,19 @@ def test_collinear_parameters_report_the_identified_combination(rng):
     assert res.value("a") + res.value("b") == pytest.approx(3.0, abs=0.01)
 
 
+def test_a_constant_input_identifies_the_scaled_combination(rng):
+    # u held at 0.1: y = g u + c identifies 0.1 g + c (acid.fit held g at a reference)
+    m = _toy(lambda s: {"y": s.g * s.u + s.c}, [Parameter("g", "1", 30.0),
+                                                 Parameter("c", "1", 150.0)])
+    u = np.full(300, 0.1)
+    res = fit_model(m, _toy_data(u, 0.1 * 35.0 + 154.5 + 0.01 * rng.standard_normal(300)),
+                    method="ls")
+    (combo,) = res.combinations
+    assert combo.startswith("0.1 g + c = "), combo
+    assert float(combo.split("= ")[1].split()[0]) == pytest.approx(158.0, abs=0.005)
+    assert 0.1 * res.value("g") + res.value("c") == pytest.approx(158.0, abs=0.005)
+
+
 def test_cvx_keeps_the_declared_bounds(rng):
     m = _toy(lambda s: {"y": s.g * s.u + s.c},
              [Parameter("g", "1", 0.5, 0.0, 1.0), Parameter("c", "1", 0.0)])
