@@ -86,11 +86,13 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                 rows)
     eq_rows = [[q.name, q.method, "-" if q.rank is None else f"{q.rank}/{q.n_columns}",
                 _num(q.condition, 3), _num(q.residual_std, 3), _num(q.fit_percent, 4),
+                _num(q.residual_acf1, 2), _num(q.ljung_box_p, 2),
                 q.reason or ", ".join(q.parameters)] for q in result.equations]
     print_table("Equations: how each was fitted (ls: equation-error least squares), rank, "
-                "condition, residual std, one-step fit %",
-                ["equation", "fit", "rank", "cond", "resid", "fit %", "parameters / why not ls"],
-                eq_rows)
+                "condition, residual std, one-step fit %, residual lag-1 autocorrelation and "
+                "Ljung-Box p (20 lags)",
+                ["equation", "fit", "rank", "cond", "resid", "fit %", "acf1", "LB p",
+                 "parameters / why not ls"], eq_rows)
     oe = result.output_error
     if oe:
         sim = ", ".join(f"{c} {v:.2f} %" for c, v in oe["channel_fit_percent"].items())

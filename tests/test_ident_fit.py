@@ -247,3 +247,18 @@ def test_a_users_linear_model_file_equals_an_independent_lstsq(tmp_path, rng):
     theta = np.linalg.lstsq(X, T[1:], rcond=None)[0]
     for name, t in zip("abcd", theta, strict=True):
         assert res.value(name) == pytest.approx(t, rel=1e-6), name
+
+
+def test_residual_whiteness_per_equation(rng):
+    m = _toy(lambda s: {"y": s.g * s.u + s.c}, [Parameter("g", "1", 1.0),
+                                                 Parameter("c", "1", 0.0)])
+    u = rng.standard_normal(2000)
+    white = fit_model(m, _toy_data(u, 2 * u + rng.standard_normal(2000)), method="ls")
+    ar = np.zeros(2000)
+    for k in range(1, 2000):   # AR(1) errors: the equation misses dynamics
+        ar[k] = 0.8 * ar[k - 1] + rng.standard_normal()
+    coloured = fit_model(m, _toy_data(u, 2 * u + ar), method="ls")
+    (w,) = [q for q in white.equations if q.name == "y"]
+    (c,) = [q for q in coloured.equations if q.name == "y"]
+    assert abs(w.residual_acf1) < 0.1 and w.ljung_box_p > 0.01
+    assert c.residual_acf1 == pytest.approx(0.8, abs=0.05) and c.ljung_box_p < 1e-6
