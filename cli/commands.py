@@ -39,6 +39,10 @@ from acid_cli import plant_check  # noqa: E402
 
 app.command(name="plant-check")(plant_check.plant_check)
 
+from acid_cli import heating_check  # noqa: E402
+
+app.command(name="heating-check")(heating_check.heating_check)
+
 from acid_cli import export_fmu  # noqa: E402
 
 app.command(name="export-fmu")(export_fmu.export_fmu)
@@ -50,3 +54,7 @@ app.command(name="export-c")(export_c.export_c_cmd)
 from acid_cli import sweep  # noqa: E402
 
 app.command(name="sweep")(sweep.sweep)
+
+from acid_cli import examples  # noqa: E402
+
+app.command(name="examples")(examples.examples)

@@ -16,6 +16,7 @@ them in degC in the dataset it returns (the edge).
 from __future__ import annotations
 
 import abc
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -71,6 +72,45 @@ class InputSchedule:
 
     def __len__(self) -> int:
         return int(self.W_bl.shape[0])
+
+
+def validated_initial(initial: dict[str, float] | None, keys: tuple[str, ...]
+                      ) -> dict[str, float]:
+    """``initial`` (a plant's ``reset`` argument) checked against the state names ``keys``:
+    floats, finite, temperatures (``T_*``) plausible in kelvin; ``ConfigError`` otherwise."""
+    out = {}
+    for key, value in (initial or {}).items():
+        if key not in keys:
+            raise ConfigError(f"initial condition {key!r} unknown (known: {', '.join(keys)})")
+        value = float(value)
+        if not math.isfinite(value):
+            raise ConfigError(f"initial {key} = {value} is not finite")
+        if key.startswith("T_") and not 200.0 < value < 400.0:
+            raise ConfigError(f"initial {key} = {value} K is implausible "
+                              "(temperatures are in kelvin)")
+        out[key] = value
+    return out
+
+
+def balance_table(flows: dict[str, tuple[float, float, float]]) -> dict:
+    """``{name: (stored, inflow, scale)}`` -> ``{name: {stored, inflow, residual, scale,
+    relative}}``: residual = stored - inflow, relative = |residual| / scale (0 when scale is
+    0). The form of every plant's ``balance()``."""
+    res = {}
+    for k, (stored, inflow, scale) in flows.items():
+        r = stored - inflow
+        res[k] = {"stored": stored, "inflow": inflow, "residual": r, "scale": scale,
+                  "relative": abs(r) / scale if scale > 0 else 0.0}
+    return res
+
+
+def checked_ambient(value) -> float:
+    """A per-step ambient temperature (K) as a float; ``ConfigError`` when implausible."""
+    T = float(value)
+    if not 230.0 < T < 330.0:
+        raise ConfigError(f"ambient temperature T_amb = {value} K is implausible "
+                          "(kelvin, -43 to 57 degC)")
+    return T
 
 
 class Plant(abc.ABC):

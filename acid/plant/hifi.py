@@ -48,7 +48,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.errors import ConfigError
-from acid.plant.base import Measurement, Plant
+from acid.plant.base import (
+    Measurement,
+    Plant,
+    balance_table,
+    checked_ambient,
+    validated_initial,
+)
 from acid.plant.config import PlantConfig
 from acid.plant.controller import BlowerLoop, CompressorLoop
 from acid.plant.cycle import make_solver
@@ -327,17 +333,7 @@ class HifiPlant(Plant):
         c = self.cfg
         init = {"T_cab": c.T_cab0, "T_int": c.T_int0, "T_shell": c.T_shell0,
                 "T_evap": c.T_ew0, "T_cw": c.T_cw0}
-        for key, value in (initial or {}).items():
-            if key not in INITIAL_KEYS:
-                raise ConfigError(f"initial condition {key!r} unknown "
-                                  f"(known: {', '.join(INITIAL_KEYS)})")
-            value = float(value)
-            if not math.isfinite(value):
-                raise ConfigError(f"initial {key} = {value} is not finite")
-            if key.startswith("T_") and not 200.0 < value < 400.0:
-                raise ConfigError(f"initial {key} = {value} K is implausible "
-                                  "(temperatures are in kelvin)")
-            init[key] = value
+        init.update(validated_initial(initial, INITIAL_KEYS))
         self.T_amb = c.T_amb
         self.w_amb = humidity_ratio(c.T_amb, c.RH_amb, c.p_atm)
         self.T_cab, self.T_int, self.T_shell = init["T_cab"], init["T_int"], init["T_shell"]
@@ -421,12 +417,7 @@ class HifiPlant(Plant):
                "condenser_wall": (U1[1] - self._U0[1], b[4], b[5]),
                "cabin": (U1[2] - self._U0[2], b[6], b[7]),
                "water": (U1[3] - self._U0[3], b[8], b[9])}
-        res = {}
-        for k, (stored, inflow, scale) in out.items():
-            r = stored - inflow
-            res[k] = {"stored": stored, "inflow": inflow, "residual": r, "scale": scale,
-                      "relative": abs(r) / scale if scale > 0 else 0.0}
-        return res
+        return balance_table(out)
 
     def step(self, W_bl: float, T_evap_set: float, v_veh: float = 0.0, **kw) -> Measurement:
         """Advance one sample period Ts (see the module docstring for the model).
@@ -467,10 +458,7 @@ class HifiPlant(Plant):
         T_set_in = c.T_ew_set if nominal else float(T_evap_set)
         v = float(v_veh)
         if "T_amb" in kw:
-            T_amb_k = float(kw["T_amb"])
-            if not 230.0 < T_amb_k < 330.0:
-                raise ConfigError(f"ambient temperature T_amb = {kw['T_amb']} K is implausible "
-                                  "(kelvin, -43 to 57 degC)")
+            T_amb_k = checked_ambient(kw["T_amb"])
             if T_amb_k != self.T_amb:
                 self.T_amb = T_amb_k
                 self.w_amb = humidity_ratio(T_amb_k, c.RH_amb, c.p_atm)

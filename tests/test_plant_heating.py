@@ -1,0 +1,203 @@
+"""The heating plant (issue 25): balances, heat pump, frost and defrost, fogging, controller."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from acid.errors import ConfigError
+from acid.plant.base import InputSchedule
+from acid.plant.check_heating import _hp_run, steady_cop
+from acid.plant.heating import HeatingPlant, dew_point
+from acid.plant.heating_config import HeatingConfig, winter_plant_config
+from acid.plant.hifi import humidity_ratio
+from acid.units import C2K
+
+
+def _run(plant, n, v=10.0, **kw):
+    return [plant.step(0.05, 0.0, v, **kw) for _ in range(n)]
+
+
+def test_every_heating_parameter_cites_a_source():
+    import re
+    from pathlib import Path
+
+    sources = (Path(__file__).parents[1] / "datasets/plant/SOURCES.md").read_text()
+    for name, unit, section, source in HeatingConfig.parameter_table():
+        assert unit and section and source, name
+        for key in re.findall(r"\[([A-Za-z0-9.\-]+)\]", source):
+            assert f"[{key}]" in sources, (name, key)
+
+
+def test_energy_balance_heater_to_coolant_to_air_to_cabin():
+    """Heater power in = heat to the coolant + its storage; coolant to air; air to cabin."""
+    p = HeatingPlant(HeatingConfig(heat_pump=False), winter_plant_config(C2K(0.0)))
+    rows = _run(p, 240)
+    b = p.balance()
+    for name in ("coolant", "air_path", "cabin"):
+        assert b[name]["relative"] < 1e-3, (name, b[name])
+    # the chain, from the reported means: electric heater power * eta = coolant gain + loss
+    # + heat to the air; the air's gain W c_p (T_sup - T_mix) is what the cabin receives
+    E_el = sum(r["P_heater"] for r in rows) * 5.0
+    E_q = sum(r["Q_heater"] for r in rows) * 5.0
+    assert E_q == pytest.approx(0.98 * E_el, rel=1e-12)
+    E_air = sum(r["Q_hc"] for r in rows) * 5.0
+    stored = b["coolant"]["stored"]
+    assert 0.0 < stored < E_q and 0.0 < E_air < E_q
+    E_loss = sum(r["Q_cool_loss"] for r in rows) * 5.0
+    assert 0.0 < E_loss < 0.1 * E_q
+    assert E_air + stored + E_loss == pytest.approx(E_q, rel=2e-3)
+    assert b["cabin"]["stored"] > 0.0
+
+
+def test_heat_pump_balance_and_no_heater_when_it_suffices():
+    p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(5.0)))
+    rows = _run(p, 360)
+    b = p.balance()
+    assert b["inner_condenser"]["relative"] < 1e-3 and b["cabin"]["relative"] < 1e-3
+    late = rows[240:]
+    assert np.mean([r["P_comp"] for r in late]) > 300.0
+    assert np.mean([r["P_heater"] for r in late]) == 0.0
+    assert all(r["COP_hp"] > 1.5 for r in late if r["P_comp"] > 0)
+
+
+def test_cop_rises_with_ambient_at_equal_supply_air():
+    cops = [steady_cop(T)["COP"] for T in (-10.0, 0.0, 10.0)]
+    assert cops[0] < cops[1] < cops[2]
+    assert 1.0 < cops[0] and cops[2] < 6.0
+
+
+def test_defrost_penalty_below_the_frost_limit_only():
+    N = 4000.0
+    wet = _hp_run(0.0, N, 0.9, 75.0)
+    dry = _hp_run(0.0, N, 0.3, 75.0)
+    assert max(r["M_frost"] for r in wet) > 0.3
+    assert max(r["defrosting"] for r in wet) > 0.0
+    assert max(r["M_frost"] for r in dry) == 0.0
+    q_wet = np.mean([r["Q_cond"] for r in wet])
+    q_dry = np.mean([r["Q_cond"] for r in dry])
+    assert q_wet < 0.97 * q_dry
+    # while defrosting the heat pump gives the cabin nothing
+    assert all(r["Q_cond"] == 0.0 for r in wet if r["defrosting"] == 1.0)
+    warm = _hp_run(10.0, N, 0.9, 30.0)
+    assert max(r["M_frost"] for r in warm) == 0.0 and max(r["defrosting"] for r in warm) == 0
+
+
+def test_outdoor_coil_balance_closes_through_frost_and_defrost():
+    p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(0.0), RH_amb=0.9), mode="direct")
+    rows = [p.step(0.108, 0.0, 0.0, N_hp=4100.0, recirc=0.0) for _ in range(12 * 90)]
+    assert max(r["M_frost"] for r in rows) > 0.5 and max(r["defrosting"] for r in rows) > 0
+    b = p.balance()["outdoor_coil"]
+    assert b["relative"] < 1e-4, b
+
+
+def test_coolant_heater_covers_the_defrost_in_nominal_mode():
+    p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(0.0), RH_amb=0.9))
+    rows = _run(p, 12 * 120, v=0.0)
+    d = np.array([r["defrosting"] for r in rows])
+    P = np.array([r["P_heater"] for r in rows])
+    assert (d > 0).any()
+    assert P[d > 0].mean() > 1000.0  # the heater takes over while the heat pump defrosts
+    assert P[240:][d[240:] == 0].mean() < 100.0  # and stays off while the heat pump suffices
+    T = np.array([r["T_cab"] for r in rows[360:]]) - 273.15
+    assert T.min() > 19.0
+
+
+def test_heat_pump_off_below_its_lowest_ambient_heater_takes_over():
+    h = HeatingConfig()
+    p = HeatingPlant(h, winter_plant_config(h.T_hp_min - 5.0))
+    rows = _run(p, 60)
+    assert max(r["P_comp"] for r in rows) == 0.0
+    assert np.mean([r["P_heater"] for r in rows]) > 0.5 * h.P_heater_max
+
+
+def test_fogging_onset_when_the_glass_is_below_the_dew_point():
+    cfg = winter_plant_config(C2K(2.0))
+    p = HeatingPlant(HeatingConfig(), cfg, mode="direct")
+    w = humidity_ratio(C2K(20.0), 0.6)
+    T_dp = dew_point(w)
+    assert T_dp == pytest.approx(C2K(12.0), abs=0.1)  # 20 degC, 60 % RH
+    p.reset({"T_cab": C2K(20.0), "w_cab": w, "T_glass": T_dp - 3.0})
+    r = p.step(0.05, 0.0, 0.0, recirc=1.0)
+    assert r["fog"] == 1.0 and r["fog_margin"] < 0.0
+    p.reset({"T_cab": C2K(20.0), "w_cab": w, "T_glass": T_dp + 3.0})
+    r = p.step(0.05, 0.0, 0.0, recirc=1.0)
+    assert r["fog"] == 0.0 and r["fog_margin"] > 0.0
+
+
+def test_anti_fog_override_trades_recirculation_for_a_clear_screen():
+    h = HeatingConfig(n_pass=4.0, heat_pump=False)
+    cfg = winter_plant_config(C2K(2.0), RH_amb=0.9)
+    on = _run(HeatingPlant(h, cfg), 360, v=0.0)
+    off = _run(HeatingPlant(h.replace(anti_fog=False), cfg), 360, v=0.0)
+    assert min(r["fog_margin"] for r in on[60:]) >= 0.0
+    assert min(r["fog_margin"] for r in off[60:]) < 0.0
+    assert np.mean([r["recirc"] for r in on]) < np.mean([r["recirc"] for r in off])
+    # fresh air costs heat: more heater energy with the override
+    assert sum(r["P_heater"] for r in on) > sum(r["P_heater"] for r in off)
+
+
+def test_production_controller_warms_up_and_holds():
+    p = HeatingPlant(HeatingConfig(heat_pump=False), winter_plant_config(C2K(5.0)))
+    rows = _run(p, 720, v=12.0)
+    T = np.array([r["T_cab"] for r in rows]) - 273.15
+    assert T[0] == pytest.approx(5.0)
+    assert T[-1] > 21.0 and T.max() < 25.0
+    W = [r["W_bl"] for r in rows]
+    assert W[0] == pytest.approx(0.05)  # cold-air prevention
+    assert max(W) > 0.12
+    P = [r["P_heater"] for r in rows]
+    assert P[0] == pytest.approx(HeatingConfig().P_heater_max) and P[-1] < P[0]
+
+
+def test_step_size_convergence():
+    def energy(dt):
+        cfg = winter_plant_config(C2K(0.0)).replace(dt_int=dt)
+        p = HeatingPlant(HeatingConfig(), cfg)
+        return sum(r["P_total"] for r in _run(p, 120)) * 5.0
+
+    assert energy(0.5) == pytest.approx(energy(0.125), rel=5e-3)
+
+
+def test_same_inputs_same_bits_and_protocol_simulate():
+    sched = InputSchedule(W_bl=np.full(60, 0.08), T_evap_set=0.0, v_veh=10.0)
+    a = HeatingPlant().simulate(sched)
+    b = HeatingPlant().simulate(sched)
+    for name in a.channels:
+        np.testing.assert_array_equal(a.channels[name], b.channels[name])
+    assert a.units["T_ain"] == "degC" and a.units["P_heater"] == "W"
+    assert a.channels["T_cab"][-1] > a.channels["T_cab"][0]
+
+
+def test_reset_restores_state():
+    p = HeatingPlant()
+    _run(p, 30)
+    s = p.measure()
+    r1 = p.step(0.05, 0.0, 5.0)
+    p.reset({k: v for k, v in s.items() if k not in ("T_amb", "T_evap")})
+    r2 = p.step(0.05, 0.0, 5.0)
+    assert r1["T_cab"] == r2["T_cab"] and r1["P_total"] == pytest.approx(r2["P_total"])
+
+
+@pytest.mark.parametrize("make, fragment", [
+    (lambda: HeatingConfig(eta_heater=1.5), "eta_heater must lie in [0, 1]"),
+    (lambda: HeatingConfig(T_hp_min=-20.0), "T_hp_min = -20.0 K is implausible"),
+    (lambda: HeatingConfig(C_cool=0.0), "C_cool must be positive"),
+    (lambda: HeatingConfig(m_cool=float("nan")), "m_cool must be a finite number"),
+    (lambda: HeatingConfig(heat_pump="yes"), "heat_pump must be true or false"),
+    (lambda: HeatingConfig().replace(P_heater=1.0), "unknown parameter 'P_heater'"),
+    (lambda: HeatingConfig(f_def0=0.9, f_def_max=0.5), "f_def0 = 0.9 must not exceed"),
+    (lambda: HeatingPlant(mode="auto"), "mode must be one of"),
+    (lambda: HeatingPlant().step(0.05, 0.0, 0.0, P_heat=1.0), "unknown keyword 'P_heat'"),
+    (lambda: HeatingPlant().reset({"T_coolant": 280.0}), "initial condition 'T_coolant'"),
+    (lambda: HeatingPlant().reset({"T_cool": 20.0}), "initial T_cool = 20.0 K is implausible"),
+    (lambda: HeatingPlant().step(0.05, 0.0, -1.0), "vehicle speed must be"),
+    (lambda: HeatingPlant(mode="direct").step(0.05, 0.0, 0.0, N_hp=math.nan), "non-finite"),
+])
+def test_bad_values_are_one_line_config_errors(make, fragment):
+    with pytest.raises(ConfigError) as exc:
+        make()
+    msg = str(exc.value)
+    assert fragment in msg and "\n" not in msg
