@@ -119,7 +119,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
 
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
                       starts: int, horizon: int, warmup: int, placement: str, seed: int,
-                      held_out_fraction: float | None, hold_all: bool = False) -> None:
+                      held_out_fraction: float | None, hold_all: bool = False,
+                      non_overlapping: bool = False) -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors."""
     from acid.ident.validate import declared_parameters, read_parameters, validate_model
     from acid.models import load
@@ -139,7 +140,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
     if frac is not None and frac < 1.0:
         ds = ds.split(1.0 - frac)[1]
     res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
-                         placement=placement, seed=seed,
+                         placement=placement, seed=seed, non_overlapping=non_overlapping,
                          hold=tuple(d.name for d in model.disturbances) if hold_all else ())
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
         f"{model.name!r}, parameters from {ps.source}"

@@ -96,7 +96,7 @@ def validate(
     if model is not None:
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
                                     placement, seed, held_out_fraction, exogenous,
-                                    beside is not None or allow_unstable)
+                                    beside is not None or allow_unstable, non_overlapping)
 
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
@@ -212,7 +212,8 @@ def validate(
 
 
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
-                         seed, held_out_fraction, exogenous, paper_options) -> None:
+                         seed, held_out_fraction, exogenous, paper_options,
+                         non_overlapping=False) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
     from acid_cli._declared import is_model_file, validate_declared
 
@@ -229,11 +230,14 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
             f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
     require(exogenous in EXOGENOUS_MODES, "--exogenous",
             f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
+    require(not (non_overlapping and placement != "even"), "--non-overlapping",
+            f"places the starts evenly: it cannot be combined with --placement {placement}")
     if held_out_fraction is not None:
         require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
-                      held_out_fraction=held_out_fraction, hold_all=exogenous == "hold")
+                      held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
+                      non_overlapping=non_overlapping)
 
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.

@@ -112,3 +112,13 @@ def test_the_paper_declaration_reproduces_acid_validate(noisy_model_dataset):
         for c, name in enumerate(old.channels):
             np.testing.assert_allclose(new.errors[name], old.errors[:, 1:, c], rtol=0,
                                        atol=1e-9)
+
+
+def test_non_overlapping_starts_and_the_window_design(rng):
+    m = load("cabin3")
+    ds = _cabin3_record(m.values, rng, n=400)
+    res = validate_model(m, ds, starts=60, horizon=50, warmup=20, non_overlapping=True)
+    assert np.all(np.diff(res.starts) >= 51) and res.starts.size == 7
+    assert "no overlap" in res.notes[0] and res.notes[0].startswith("window design: 7 starts")
+    dense = validate_model(m, ds, starts=60, horizon=50, warmup=20)
+    assert "overlapping" in dense.notes[0]

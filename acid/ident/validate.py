@@ -130,12 +130,13 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                    starts: int = 60, horizon: int = 300, warmup: int = 60,
                    placement: str = "even", seed: int = 0,
                    horizons: tuple[int, ...] | None = None, hold: tuple[str, ...] = (),
-                   start_index=None) -> DeclaredValidation:
+                   start_index=None, non_overlapping: bool = False) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
 
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
     and T_shell) instead of measured along the prediction. ``start_index``: these start
     samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
+    ``non_overlapping``: starts at least ``horizon + 1`` samples apart (acid.validate's rule).
     """
     model = load(model)
     unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
@@ -163,13 +164,22 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
         if bad.size:
             raise DataError(f"{ds.source}: start {int(bad[0])} leaves no room for the "
                             f"warm-up and {horizon} steps inside its experiment")
+    elif non_overlapping:
+        from acid.validate import _place_non_overlapping
+
+        k0 = _place_non_overlapping(cand, starts, horizon)
     elif placement == "even":
         pick = np.unique(np.round(np.linspace(0, cand.size - 1, min(starts, cand.size))))
         k0 = cand[pick.astype(int)]
     else:
         k0 = np.sort(np.random.default_rng(seed).choice(cand, min(starts, cand.size),
                                                         replace=False))
-    notes = []
+    gaps = np.diff(np.sort(k0))
+    notes = [f"window design: {k0.size} starts, spacing "
+             + (f"{np.median(gaps) * model.Ts:g} s (median, min {gaps.min() * model.Ts:g} s)"
+                if gaps.size else "one start")
+             + f", horizon {horizon * model.Ts:g} s, "
+             + ("overlapping" if gaps.size and gaps.min() <= horizon else "no overlap")]
     P = _parameters_at(model, data, params, k0, notes)
     x0 = data.initial_states(model, k0)
     if latent and need_warm > 0:
