@@ -120,7 +120,7 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
                       starts: int, horizon: int, warmup: int, placement: str, seed: int,
                       held_out_fraction: float | None, hold_all: bool = False,
-                      non_overlapping: bool = False) -> None:
+                      non_overlapping: bool = False, yardsticks: bool = True) -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors."""
     from acid.ident.validate import declared_parameters, read_parameters, validate_model
     from acid.models import load
@@ -137,11 +137,12 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
     if ps.per_experiment and ps.provenance.get("data_sha256") != sha:
         ps = dataclasses.replace(ps, per_experiment={})
         note("per-experiment parameters were fitted on another record: their mean is used")
-    if frac is not None and frac < 1.0:
-        ds = ds.split(1.0 - frac)[1]
+    lo = int(round(len(ds) * (1.0 - frac))) if frac is not None and frac < 1.0 else 0
     res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
                          placement=placement, seed=seed, non_overlapping=non_overlapping,
-                         hold=tuple(d.name for d in model.disturbances) if hold_all else ())
+                         hold=tuple(d.name for d in model.disturbances) if hold_all else (),
+                         start_range=(lo, len(ds)), yardsticks=yardsticks,
+                         estimation=(0, lo) if lo > 0 else None)
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
         f"{model.name!r}, parameters from {ps.source}"
         + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
@@ -156,6 +157,20 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                 [[str(r["step"]), f"{r['time_s']:g}",
                   *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
                     for c in res.channels]] for r in res.by_horizon])
+    if res.yardsticks:
+        ch = [c for c in res.channels if c in next(iter(res.yardsticks.values()))["channels"]]
+        rows = [[c, "model", *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
+                               for r in res.by_horizon]] for c in ch]
+        for name, y in res.yardsticks.items():
+            rows += [[c, f"{name} (yardstick)",
+                      *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
+                        for r in y["by_horizon"]]] for c in ch]
+        rows.sort(key=lambda r: ch.index(r[0]))
+        print_table("Model and yardsticks on the same windows: RMSE / p90 |e| at each step",
+                    ["_channel", "_predictor", *[f"{r['time_s']:g} s" for r in res.by_horizon]],
+                    rows)
+        for y in res.yardsticks.values():
+            say(f"  {y['description']}")
     for line in res.notes:
         note(line)
     write_summary(json_path, {"command": "validate", "acid_version": __version__,

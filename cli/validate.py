@@ -96,7 +96,8 @@ def validate(
     if model is not None:
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
                                     placement, seed, held_out_fraction, exogenous,
-                                    beside is not None or allow_unstable, non_overlapping)
+                                    beside is not None or allow_unstable, non_overlapping,
+                                    yardsticks)
 
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
@@ -213,7 +214,7 @@ def validate(
 
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
                          seed, held_out_fraction, exogenous, paper_options,
-                         non_overlapping=False) -> None:
+                         non_overlapping=False, yardsticks=True) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
     from acid_cli._declared import is_model_file, validate_declared
 
@@ -237,7 +238,7 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
-                      non_overlapping=non_overlapping)
+                      non_overlapping=non_overlapping, yardsticks=yardsticks)
 
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.

@@ -62,6 +62,9 @@ def test_fit_and_validate_a_users_model_file(record, tmp_path):
     assert set(v["channels"]) == {"T_cab"} and v["channels"]["T_cab"]["unit"] == "K"
     assert np.isfinite(v["channels"]["T_cab"]["rmse"])
     assert [r["step"] for r in v["by_horizon"]] == [1, 10, 25, 50, 100]
+    assert {"persistence", "arx", "subspace"} <= set(v["yardsticks"])
+    assert set(v["yardsticks"]["persistence"]["channels"]) == {"T_cab"}
+    assert "yardstick" in res.output
 
 
 def test_fix_holds_a_parameter_and_the_table_says_so(record, tmp_path):

@@ -115,6 +115,7 @@ class DeclaredValidation:
     metrics: dict
     by_horizon: tuple
     notes: tuple[str, ...]
+    yardsticks: dict = field(default_factory=dict)
 
     def to_json_dict(self) -> dict:
         return json_safe({
@@ -123,20 +124,27 @@ class DeclaredValidation:
             "starts": self.starts.tolist(),
             "channels": {c: {"unit": u, **self.metrics[c]}
                          for c, u in zip(self.channels, self.units, strict=True)},
-            "by_horizon": list(self.by_horizon), "notes": list(self.notes)})
+            "by_horizon": list(self.by_horizon), "notes": list(self.notes),
+            "yardsticks": self.yardsticks})
 
 
 def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: int = 60,
                    placement: str = "even", seed: int = 0,
                    horizons: tuple[int, ...] | None = None, hold: tuple[str, ...] = (),
-                   start_index=None, non_overlapping: bool = False) -> DeclaredValidation:
+                   start_index=None, non_overlapping: bool = False,
+                   start_range: tuple[int, int] | None = None, yardsticks: bool = False,
+                   estimation: tuple[int, int] | None = None) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
 
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
     and T_shell) instead of measured along the prediction. ``start_index``: these start
     samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
     ``non_overlapping``: starts at least ``horizon + 1`` samples apart (acid.validate's rule).
+    ``start_range`` (lo, hi): every window inside samples lo .. hi - 1 (e.g. the held-out
+    part). ``yardsticks``: persistence, ARX and subspace (``acid.yardsticks``) on the same
+    windows, given the same inputs and held disturbances, fitted on ``estimation`` (lo, hi)
+    samples (default: the whole record, in-sample).
     """
     model = load(model)
     unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
@@ -153,8 +161,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     data = ModelData.of(model, ds, min_samples=2)
     latent = [i for i, s in enumerate(model.states) if not s.measured]
     need_warm = warmup if latent else 0
-    cand = np.concatenate([np.arange(a + need_warm, b - horizon) for a, b in data.segments]
-                          + [np.zeros(0, int)]).astype(int)
+    lo_r, hi_r = start_range or (0, len(data))
+    cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - horizon)
+                           for a, b in data.segments] + [np.zeros(0, int)]).astype(int)
     if cand.size == 0:
         raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
                         f"({need_warm} + {horizon} + 1 samples)")
@@ -190,6 +199,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
+    data0 = data
     if hold:
         held = [i for i, d in enumerate(model.disturbances) if d.name in hold]
         dd = np.repeat(data.d[k0][:, None, :], horizon + 1, axis=1)   # (S, H + 1, nd)
@@ -230,10 +240,48 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                          "p90_abs": float(np.percentile(np.abs(e), 90)) if e.size
                          else math.nan}
         by_h.append(row)
+    ys = {}
+    if yardsticks:
+        ys = _yardsticks(model, data0, rows, k0, horizon, hold, steps,
+                         estimation or (0, len(data0)))
+        if estimation is None:
+            notes.append("yardsticks fitted on the whole record (in-sample: favoured)")
     return DeclaredValidation(model=model.name, channels=tuple(channels), units=tuple(units),
                               starts=k0, horizon=int(horizon), warmup=int(need_warm),
                               Ts=model.Ts, errors=errors, metrics=metrics,
-                              by_horizon=tuple(by_h), notes=tuple(notes))
+                              by_horizon=tuple(by_h), notes=tuple(notes), yardsticks=ys)
+
+
+def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, steps,
+                estimation) -> dict:
+    """Persistence, ARX and subspace (``acid.yardsticks``) on the model's windows: the same
+    inputs and disturbances (held as the model has them), predicting the measured channels
+    that are recorded throughout; RMSE and p90 |e| overall and at ``steps``."""
+    from acid.yardsticks import evaluate
+
+    meas = np.concatenate([data.x, data.y], axis=1)
+    use = [(c, n) for c, n in rows if np.all(np.isfinite(meas[:, c]))]
+    if not use:
+        return {}
+    y = meas[:, [c for c, _ in use]]
+    u = np.concatenate([data.u, data.d], axis=1)
+    names = tuple(r.name for r in model.inputs + model.disturbances)
+    held = np.array([n in hold for n in names], dtype=bool)
+    out = {}
+    for name, pred in evaluate(y, u, data.experiment, k0, horizon, held, estimation,
+                               input_names=names).items():
+        idx = k0[:, None] + np.arange(1, horizon + 1)[None, :]
+        e = pred.predicted[:, 1:, :] - y[idx]
+        out[name] = {
+            "description": pred.description,
+            "channels": {n: {"rmse": float(np.sqrt(np.mean(e[..., j] ** 2))),
+                             "p90_abs": float(np.percentile(np.abs(e[..., j]), 90))}
+                         for j, (_, n) in enumerate(use)},
+            "by_horizon": [{"step": h, **{n: {"rmse": float(np.sqrt(np.mean(e[:, h - 1, j] ** 2))),
+                                              "p90_abs": float(np.percentile(
+                                                  np.abs(e[:, h - 1, j]), 90))}
+                                          for j, (_, n) in enumerate(use)}} for h in steps]}
+    return out
 
 
 def _default_horizons(H: int) -> tuple[int, ...]:
