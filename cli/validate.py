@@ -102,17 +102,8 @@ def validate(
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
-    require_range(starts, "--starts", 1, MAX_STARTS)
-    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
-    require_range(seed, "--seed", 0, 2**63 - 1)
-    require(exogenous in EXOGENOUS_MODES, "--exogenous",
-            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
-    require(placement in PLACEMENTS, "--placement",
-            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
-    require(not (non_overlapping and placement != "even"), "--non-overlapping",
-            f"places the starts evenly: it cannot be combined with --placement {placement}")
-    if held_out_fraction is not None:
-        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+    _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction)
     p = load_any_params(params, allow_unstable=allow_unstable)
     families = {model_family(params)} | ({model_family(beside)} if beside else set())
     channels = MODEL_CHANNELS
@@ -212,6 +203,22 @@ def validate(
     write_summary(json_path, summary)
 
 
+def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction) -> None:
+    """The window options both branches share (one line naming the option)."""
+    require_range(starts, "--starts", 1, MAX_STARTS)
+    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
+    require_range(seed, "--seed", 0, 2**63 - 1)
+    require(exogenous in EXOGENOUS_MODES, "--exogenous",
+            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
+    require(placement in PLACEMENTS, "--placement",
+            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
+    require(not (non_overlapping and placement != "even"), "--non-overlapping",
+            f"places the starts evenly: it cannot be combined with --placement {placement}")
+    if held_out_fraction is not None:
+        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+
+
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
                          seed, held_out_fraction, exogenous, paper_options,
                          non_overlapping=False, yardsticks=True) -> None:
@@ -223,18 +230,9 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
             "--beside and --allow-unstable are for the paper/econ families")
     check_paths(inputs={"DATA": data, "--model": model, "--params": params_input(params)},
                 outputs={"--json": json_path})
-    require_range(starts, "--starts", 1, MAX_STARTS)
-    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
+    _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction)
     require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
-    require_range(seed, "--seed", 0, 2**63 - 1)
-    require(placement in PLACEMENTS, "--placement",
-            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
-    require(exogenous in EXOGENOUS_MODES, "--exogenous",
-            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
-    require(not (non_overlapping and placement != "even"), "--non-overlapping",
-            f"places the starts evenly: it cannot be combined with --placement {placement}")
-    if held_out_fraction is not None:
-        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
