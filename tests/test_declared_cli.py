@@ -92,3 +92,26 @@ def test_the_default_model_is_unchanged(record, tmp_path):
     assert res.exit_code == 0, res.output
     d = json.loads((tmp_path / "p.json").read_text())
     assert d["provenance"]["method"] == "ls" and len(d["gamma"]) == 7
+
+
+def test_add_record_makes_experiments(record, tmp_path):
+    import shutil
+
+    model = tmp_path / "my_cabin.py"
+    model.write_text(USER_MODEL)
+    second = tmp_path / "second.h5"
+    shutil.copy(record, second)
+    out = tmp_path / "p.json"
+    res = runner.invoke(app, ["fit", str(record), "--add-record", str(second), "--model",
+                              str(model), "--out", str(out), "--oe-window", "150"])
+    assert res.exit_code == 0, res.output
+    assert "2 experiment(s)" in res.output
+    d = json.loads(out.read_text())
+    q = d["per_experiment"]["Q"]
+    assert q["experiments"] == [0, 1] and len(q["values"]) == 2
+    # the same record twice: the same load in both experiments
+    assert q["values"][0] == pytest.approx(q["values"][1], rel=1e-6)
+    assert d["provenance"]["records"] == [str(record), str(second)]
+    res = runner.invoke(app, ["fit", str(record), "--add-record", str(second),
+                              "--out", str(tmp_path / "q.json")])
+    assert_one_line_error(res, "--add-record", "--model FILE.py")
