@@ -221,3 +221,99 @@ def kelvin(value: float) -> Temperature:
 def in_degC(value):
     """``value`` in degC: a :class:`Temperature` is converted, a plain number is degC."""
     return value.degC if isinstance(value, Temperature) else value
+
+
+# ------------------------------------------------------------------ compound units
+#: Atoms of compound units beyond ``UNIT_SCALES`` (whose single-word, offset-free units are
+#: atoms too, with ``BASE_DIMENSIONS``): name -> (factor to SI, {dimension: power}).
+_EXTRA_ATOMS: dict[str, tuple[float, dict[str, float]]] = {
+    "kg": (1.0, {"kg": 1}), "g": (1e-3, {"kg": 1}), "mm": (1e-3, {"m": 1}),
+    "min": (60.0, {"s": 1}), "h": (3600.0, {"s": 1}), "N": (1.0, {"kg": 1, "m": 1, "s": -2}),
+}
+
+
+def _atom(name: str):
+    """(factor, dimensions) of one word of a compound unit, or None."""
+    if name in _EXTRA_ATOMS:
+        f, d = _EXTRA_ATOMS[name]
+        return f, dict(d)
+    row = UNIT_SCALES.get(name)
+    if row is None or "/" in name or row[2] != 0.0:
+        return None
+    base, factor, _ = row
+    return factor, dict(BASE_DIMENSIONS.get(base, {}))
+
+
+def parse_unit(text: str) -> tuple[float, dict[str, float]]:
+    """A compound unit such as ``"W/K"``, ``"kJ/K"``, ``"K s/kg"``, ``"J/(kg K)"`` or
+    ``"W/K/(m/s)^0.8"`` as (factor to SI, {dimension: power}).
+
+    A unit of ``UNIT_SCALES`` is read from that one table (``degC`` and ``degF`` alone, as
+    temperatures). Otherwise: factors separated by spaces, ``*`` or ``/`` (``/`` divides by
+    the next factor only); a factor is a word (an offset-free unit of ``UNIT_SCALES`` or
+    kg, g, mm, min, h, N), ``1`` or a parenthesised unit, with an optional ``^power``.
+    Raises ``ValueError`` naming the part it cannot read.
+    """
+    text = str(text).strip()
+    if text in UNIT_SCALES:
+        base, factor, _ = UNIT_SCALES[text]
+        return factor, {k: float(v) for k, v in BASE_DIMENSIONS.get(base, {}).items()}
+    tokens = _unit_tokens(text)
+    factor, dims, pos = _unit_product(tokens, 0, text)
+    if pos != len(tokens):
+        raise ValueError(f"cannot read unit {text!r} at {tokens[pos]!r}")
+    return factor, {k: v for k, v in dims.items() if v != 0}
+
+
+def _unit_tokens(text: str) -> list[str]:
+    import re
+
+    tokens = re.findall(r"[A-Za-z%]+|\d+(?:\.\d+)?|[()*/^·-]|\S", text)
+    if not tokens:
+        raise ValueError("empty unit (write '1' for a dimensionless quantity)")
+    return tokens
+
+
+def _unit_product(tokens, pos, text):
+    factor, dims = 1.0, {}
+    divide = False
+    expect = True
+    while pos < len(tokens) and tokens[pos] != ")":
+        tok = tokens[pos]
+        if tok in ("*", "·"):
+            pos += 1
+            continue
+        if tok == "/":
+            divide, pos = True, pos + 1
+            continue
+        if tok == "(":
+            f, d, pos = _unit_product(tokens, pos + 1, text)
+            if pos >= len(tokens) or tokens[pos] != ")":
+                raise ValueError(f"unit {text!r}: unbalanced parenthesis")
+            pos += 1
+        elif _atom(tok) is not None:
+            f, d = _atom(tok)
+            pos += 1
+        else:
+            raise ValueError(f"unit {text!r}: unknown unit {tok!r} (known: the units of "
+                             "acid.units.UNIT_SCALES, kg, g, mm, min, h, N; degC alone)")
+        power = 1.0
+        if pos < len(tokens) and tokens[pos] == "^":
+            sign = 1.0
+            pos += 1
+            if pos < len(tokens) and tokens[pos] == "-":
+                sign, pos = -1.0, pos + 1
+            try:
+                power = sign * float(tokens[pos])
+            except (IndexError, ValueError):
+                raise ValueError(f"unit {text!r}: '^' needs a number") from None
+            pos += 1
+        if divide:
+            power, divide = -power, False
+        factor *= f ** power
+        for k, v in d.items():
+            dims[k] = dims.get(k, 0.0) + v * power
+        expect = False
+    if expect or divide:
+        raise ValueError(f"unit {text!r}: incomplete")
+    return factor, dims, pos

@@ -49,7 +49,7 @@ def validate(
     exogenous: str = typer.Option(
         "hold", "--exogenous",
         help="T_int/T_shell over a prediction: 'hold' at the start value (paper) or "
-             "'measured'."),
+             "'measured' (a model file: all its disturbances)."),
     held_out_fraction: float | None = typer.Option(
         None, "--held-out-fraction",
         help="Validate on the last F of the record only. Default: the part after "
@@ -77,6 +77,13 @@ def validate(
         None, "--beside",
         help="Another params.json (or 'paper') validated on the same data and starts, shown "
              "beside (e.g. the paper's model beside the econ model)."),
+    model: str | None = typer.Option(
+        None, "--model",
+        help="A model file FILE.py (acid.models): validate that declared model, with "
+             "--params from `acid fit --model FILE.py` (default: its declared values)."),
+    warmup: int = typer.Option(
+        60, "--warmup", help="Model file with latent states: samples before each start from "
+                             "which they are estimated."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -86,20 +93,17 @@ def validate(
     """
     from acid.report.validation import error_figure, prediction_figure, yardstick_figure
 
+    if model is not None:
+        return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
+                                    placement, seed, held_out_fraction, exogenous,
+                                    beside is not None or allow_unstable, non_overlapping,
+                                    yardsticks)
+
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
-    require_range(starts, "--starts", 1, MAX_STARTS)
-    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
-    require_range(seed, "--seed", 0, 2**63 - 1)
-    require(exogenous in EXOGENOUS_MODES, "--exogenous",
-            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
-    require(placement in PLACEMENTS, "--placement",
-            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
-    require(not (non_overlapping and placement != "even"), "--non-overlapping",
-            f"places the starts evenly: it cannot be combined with --placement {placement}")
-    if held_out_fraction is not None:
-        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+    _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction)
     p = load_any_params(params, allow_unstable=allow_unstable)
     families = {model_family(params)} | ({model_family(beside)} if beside else set())
     channels = MODEL_CHANNELS
@@ -197,6 +201,42 @@ def validate(
     if other is not None:
         summary["beside"] = {"params": beside, "channels": other.to_json_dict()["channels"]}
     write_summary(json_path, summary)
+
+
+def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction) -> None:
+    """The window options both branches share (one line naming the option)."""
+    require_range(starts, "--starts", 1, MAX_STARTS)
+    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
+    require_range(seed, "--seed", 0, 2**63 - 1)
+    require(exogenous in EXOGENOUS_MODES, "--exogenous",
+            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
+    require(placement in PLACEMENTS, "--placement",
+            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
+    require(not (non_overlapping and placement != "even"), "--non-overlapping",
+            f"places the starts evenly: it cannot be combined with --placement {placement}")
+    if held_out_fraction is not None:
+        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+
+
+def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
+                         seed, held_out_fraction, exogenous, paper_options,
+                         non_overlapping=False, yardsticks=True) -> None:
+    """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
+    from acid_cli._declared import is_model_file, validate_declared
+
+    require(is_model_file(model), "--model", f"must be a model file FILE.py, got {model!r}")
+    require(not paper_options, "--model",
+            "--beside and --allow-unstable are for the paper/econ families")
+    check_paths(inputs={"DATA": data, "--model": model, "--params": params_input(params)},
+                outputs={"--json": json_path})
+    _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction)
+    require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
+    validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
+                      warmup=warmup, placement=placement, seed=seed,
+                      held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
+                      non_overlapping=non_overlapping, yardsticks=yardsticks)
 
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.

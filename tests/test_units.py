@@ -1,4 +1,5 @@
-"""The one unit table (``acid.units.UNIT_SCALES``) that import maps and FMU maps share."""
+"""The one unit table (``acid.units.UNIT_SCALES``) that import maps and FMU maps share; the
+compound units of declared models (``acid.units.parse_unit``)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from acid.units import (
     base_unit,
     convert,
     from_base,
+    parse_unit,
     storage_unit,
     temperature_unit_consistent,
     to_base,
@@ -79,3 +81,33 @@ def test_a_map_unit_that_measures_another_quantity_than_the_channel_is_refused()
     with pytest.raises(DataError, match="v_veh.*kW"):
         ChannelMap.from_dict({"time": "t", "channels": {"v_veh": {"column": "V",
                                                                    "unit": "kW"}}})
+
+
+# ------------------------------------------------------------ compound units (declared models)
+W = {"kg": 1, "m": 2, "s": -3}
+
+
+@pytest.mark.parametrize("text, factor, dims", [
+    ("W/K", 1.0, {**W, "K": -1}),
+    ("kJ/K", 1e3, {"kg": 1, "m": 2, "s": -2, "K": -1}),
+    ("K s/kg", 1.0, {"K": 1, "s": 1, "kg": -1}),
+    ("J/(kg K)", 1.0, {"m": 2, "s": -2, "K": -1}),
+    ("W s^2/kg^2", 1.0, {"kg": -1, "m": 2, "s": -1}),
+    ("W/K/(m/s)^0.8", 1.0, {"kg": 1, "m": 1.2, "s": -2.2, "K": -1}),
+    ("kg/kg", 1.0, {}), ("1", 1.0, {}), ("%", 0.01, {}), ("1/K", 1.0, {"K": -1}),
+    ("kg m^-3", 1.0, {"kg": 1, "m": -3}), ("g/s", 1e-3, {"kg": 1, "s": -1}),
+    ("degC", 1.0, {"K": 1}),
+])
+def test_compound_units(text, factor, dims):
+    f, d = parse_unit(text)
+    assert f == pytest.approx(factor)
+    assert d.keys() == dims.keys() and all(d[k] == pytest.approx(v) for k, v in dims.items())
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("furlong", "unknown unit 'furlong'"), ("W/", "incomplete"), ("(K", "parenthesis"),
+    ("", "empty unit"), ("K^", "'^' needs a number"), ("degC/s", "unknown unit 'degC'"),
+])
+def test_unreadable_units_say_why(text, fragment):
+    with pytest.raises(ValueError, match=fragment.replace("^", "\\^").replace("(", "\\(")):
+        parse_unit(text)
