@@ -1,4 +1,4 @@
-"""acid.mpc.bound: the perfect-information, cyclic whole-cycle optimum on the econ model."""
+"""acid.mpc.best_plan: the perfect-information, cyclic whole-cycle optimum on the econ model."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 from acid.econ import model
 from acid.econ.plant import EconPlant
 from acid.errors import ConfigError, ExtrapolationWarning
-from acid.mpc.bound import BoundConfig, perfect_information_bound
+from acid.mpc.best_plan import PlanConfig, best_known_plan
 from acid.mpc.scenarios import stop_and_go_cycle
 from acid.units import C2K
 
@@ -18,10 +18,10 @@ T_AMB = C2K(30.0)
 
 @pytest.fixture(scope="module")
 def plans(econ_truth):
-    cfg = BoundConfig(T_mean=C2K(24.0), T_low=C2K(23.0), T_high=C2K(25.0))
-    band = perfect_information_bound(econ_truth, V, T_AMB, cfg)
-    pinned = perfect_information_bound(econ_truth, V, T_AMB,
-                                       BoundConfig(T_mean=C2K(24.0), pinned=True),
+    cfg = PlanConfig(T_mean=C2K(24.0), T_low=C2K(23.0), T_high=C2K(25.0))
+    band = best_known_plan(econ_truth, V, T_AMB, cfg)
+    pinned = best_known_plan(econ_truth, V, T_AMB,
+                                       PlanConfig(T_mean=C2K(24.0), pinned=True),
                                        guess=(band.x, band.inputs))
     return band, pinned
 
@@ -56,15 +56,15 @@ def test_replaying_the_plan_on_the_model_achieves_its_energy(plans, econ_truth):
 
 
 def test_an_unreachable_band_is_a_one_line_error(econ_truth):
-    cfg = BoundConfig(T_mean=C2K(12.5), T_low=C2K(12.0), T_high=C2K(13.0), max_iter=100)
+    cfg = PlanConfig(T_mean=C2K(12.5), T_low=C2K(12.0), T_high=C2K(13.0), max_iter=100)
     with pytest.raises(ConfigError, match="infeasible") as exc:
-        perfect_information_bound(econ_truth, V[:12], T_AMB, cfg)
+        best_known_plan(econ_truth, V[:12], T_AMB, cfg)
     assert "\n" not in str(exc.value)
 
 
 def test_mean_outside_the_band_and_extrapolation(econ_truth):
     with pytest.raises(ConfigError, match="outside the comfort band"):
-        BoundConfig(T_mean=C2K(27.0))
+        PlanConfig(T_mean=C2K(27.0))
     with pytest.warns(ExtrapolationWarning, match="T_amb up to"):
-        perfect_information_bound(econ_truth, V[:12], C2K(50.0),
-                                  BoundConfig(T_mean=C2K(24.0), max_iter=3))
+        best_known_plan(econ_truth, V[:12], C2K(50.0),
+                                  PlanConfig(T_mean=C2K(24.0), max_iter=3))
