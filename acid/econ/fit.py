@@ -241,7 +241,7 @@ def _excitation_checks(D: _Data, source: str) -> list[str]:
 
 
 # --------------------------------------------------------------------- start values
-def _start_values(D: _Data, beta, RH_amb: float | None = None) -> dict:
+def _start_values(D: _Data, beta) -> dict:
     """Start values from linear regressions of the balances (module docstring, stage 1)."""
     k, Ts = D.rows, D.Ts
     x0, x1 = D.x[k], D.x[k + 1]
@@ -281,8 +281,7 @@ def _start_values(D: _Data, beta, RH_amb: float | None = None) -> dict:
     e = lsq([Tset - Tev, one], rate[:, 3])
     v0.update(tau_ew=1.0 / max(e[0], 1e-3), dT_ew=e[1] / max(e[0], 1e-3))
     best = None
-    grid = np.linspace(0.05, 0.95, 19) if RH_amb is None else [float(RH_amb)]
-    for RH in grid:  # humidity: profile RH_amb on a grid (or the known value)
+    for RH in np.linspace(0.05, 0.95, 19):  # humidity: profile RH_amb on a grid
         p = _namespace({**v0, "RH_amb": RH}, beta)
         air_k = model.air_side(Tc, Tev, mid[:, 4], W, Ta, p)
         h = lsq([W * (air_k.w_ain - mid[:, 4]), one], rate[:, 4])
@@ -381,23 +380,16 @@ class EconFitter:
     skip_s : seconds left out at the start of every experiment (hot-soak pull-down).
     sim_window : samples per open-loop simulation of ``fit_percent_simulation``.
     fit_blower : fit eq. 5 from P_bl (kept at the paper's values when False or absent).
-    RH_amb : the ambient relative humidity (0-1) when it is known (a humidity sensor, the
-        test's conditions), held instead of estimated. Estimated, it absorbs what the
-        model's moisture balance lacks (infiltration of ambient air past the coil): on the
-        default plant it came out 0.46 for a true 0.50, the coil's latent load of the fresh
-        air fell short by about 1 g/kg, and the power map, fitted on the model's coil load,
-        priced the higher blower flow of a warm coil as a worse COP.
     """
 
     def __init__(self, covariance: str = DEFAULT_COVARIANCE, hac_bandwidth="auto",
                  skip_s: float = 600.0, sim_window: int = 300,
-                 fit_blower: bool = True, RH_amb: float | None = None):
+                 fit_blower: bool = True):
         self.covariance = covariance
         self.hac_bandwidth = hac_bandwidth
         self.skip_s = skip_s
         self.sim_window = sim_window
         self.fit_blower = fit_blower
-        self.RH_amb = RH_amb
 
     def _check_options(self) -> None:
         if self.covariance not in COVARIANCES:
@@ -407,8 +399,6 @@ class EconFitter:
             raise ConfigError(f"skip_s must be >= 0 s, got {self.skip_s}")
         if int(self.sim_window) < 2:
             raise ConfigError(f"sim_window must be >= 2 samples, got {self.sim_window}")
-        if self.RH_amb is not None and not 0.0 < self.RH_amb < 1.0:
-            raise ConfigError(f"RH_amb must lie in (0, 1), got {self.RH_amb}")
 
     def fit(self, ds: Dataset) -> EconFitResult:
         """Fit the econ model to ``ds`` (channels ``REQUIRED``; P_bl optional)."""
@@ -424,14 +414,10 @@ class EconFitter:
         lags: dict[str, int] = {}
 
         beta, beta_se, beta_cov = self._fit_blower(D, notes, lags)
-        theta0 = _start_values(D, beta, self.RH_amb)
+        theta0 = _start_values(D, beta)
         prob = _OneStep(D, beta)
         lo = np.array([_BOUNDS[n][0] for n in NAMES])
         hi = np.array([_BOUNDS[n][1] for n in NAMES])
-        if self.RH_amb is not None:  # held: a band far narrower than its standard error
-            j = NAMES.index("RH_amb")
-            lo[j], hi[j] = self.RH_amb - 1e-9, self.RH_amb + 1e-9
-            notes.append(f"RH_amb held at the known {self.RH_amb:g}")
         th = np.array([theta0[n] for n in NAMES])
         res = None
         prob.weights = prob.channel_std(th)   # weights from the start values' residuals
@@ -453,8 +439,7 @@ class EconFitter:
             warnings.warn(msg, SolverWarning, stacklevel=2)
             warn_lines.append(msg)
         at_bound = [n for n, v, a, b in zip(NAMES, th, lo, hi, strict=True)
-                    if min(v - a, b - v) <= 1e-6 * (b - a)
-                    and not (n == "RH_amb" and self.RH_amb is not None)]
+                    if min(v - a, b - v) <= 1e-6 * (b - a)]
         if at_bound:
             notes.append("at a bound (physical sign or range): " + ", ".join(at_bound))
         cov_th, lag = _sandwich(J, r, len(CHANNELS), D.rows, D.segments, self.covariance,
