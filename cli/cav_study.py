@@ -97,6 +97,13 @@ def cav_study(
     plan: bool = typer.Option(True, "--plan/--no-plan",
                               help="Compute the best known plan (perfect information): its "
                                    "variants, replayed."),
+    econ_modifier: bool = typer.Option(
+        True, "--econ-modifier/--no-econ-modifier",
+        help="Correct the econ model's coil economics for D and E from steady holds of the "
+             "plant (modifier adaptation) before they run."),
+    coil_max: float = typer.Option(12.0, "--coil-max",
+                                   help="Warmest coil set-point of D, E, the plan and F's "
+                                        "search, degC."),
     baselines: bool = typer.Option(True, "--baselines/--no-baselines",
                                    help="Run the PI baselines P (coil reset) and F (best "
                                         "fixed coil, searched)."),
@@ -162,6 +169,7 @@ def cav_study(
             f"must be 'fatrop' or 'ipopt', got {econ_solver!r}")
     require(econ_terminal in TERMINALS, "--econ-terminal",
             f"must be one of {', '.join(TERMINALS)}, got {econ_terminal!r}")
+    require_range(coil_max, "--coil-max", 4.0, 15.0, "degC")
     if rh_max is not None:
         require_range(rh_max, "--rh-max", 0.0, 100.0, "%", lo_open=True)
     if t_amb is not None:
@@ -178,7 +186,8 @@ def cav_study(
                               RH_max=None if rh_max is None else rh_max / 100.0)
     config = StudyConfig(horizon=horizon, econ=econ_cfg, T_low=C2K(T_low), T_high=C2K(T_high),
                          T_amb=None if t_amb is None else C2K(t_amb), warmup_s=warmup,
-                         tail_s=tail, plan=plan, baselines=baselines)
+                         tail_s=tail, plan=plan, baselines=baselines,
+                         econ_modifier=econ_modifier, coil_max=C2K(coil_max))
     for name in names if cycle == "all" else [cycle]:   # refuse before any long work
         sc = make_scenario(name, p.Ts, 303.15, config.stopgo_s)
         if sc.duration_s < econ_cfg.horizon_s:
@@ -238,6 +247,11 @@ def cav_study(
             line += (f"; F: coil set-point "
                      f"{K2C(st.results['F'].extra['coil_set_point_K']):.2f} °C")
         say(line)
+        if st.econ_modifier is not None:
+            m = st.econ_modifier
+            say(f"D, E: coil economics corrected from steady plant holds (modifier "
+                f"adaptation): the model's optimal coil set-point "
+                + " -> ".join(f"{K2C(t):.2f}" for t in m["model_optimal_coil_K"]) + " °C")
         if "plan" in st.results:
             bx = st.controller_json("plan")
             say(f"best known plan (perfect information, not a bound): variant "

@@ -1,4 +1,5 @@
-"""acid.mpc.best_plan: the perfect-information, cyclic whole-cycle optimum on the econ model."""
+"""acid.mpc.best_plan: the best known plan (perfect information), a whole-cycle optimum on the
+econ model."""
 
 from __future__ import annotations
 
@@ -20,9 +21,8 @@ T_AMB = C2K(30.0)
 def plans(econ_truth):
     cfg = PlanConfig(T_mean=C2K(24.0), T_low=C2K(23.0), T_high=C2K(25.0))
     band = best_known_plan(econ_truth, V, T_AMB, cfg)
-    pinned = best_known_plan(econ_truth, V, T_AMB,
-                                       PlanConfig(T_mean=C2K(24.0), pinned=True),
-                                       guess=(band.x, band.inputs))
+    pinned = best_known_plan(econ_truth, V, T_AMB, PlanConfig(T_mean=C2K(24.0), pinned=True),
+                             guess=(band.x, band.inputs))
     return band, pinned
 
 
@@ -66,5 +66,30 @@ def test_mean_outside_the_band_and_extrapolation(econ_truth):
     with pytest.raises(ConfigError, match="outside the comfort band"):
         PlanConfig(T_mean=C2K(27.0))
     with pytest.warns(ExtrapolationWarning, match="T_amb up to"):
-        best_known_plan(econ_truth, V[:12], C2K(50.0),
-                                  PlanConfig(T_mean=C2K(24.0), max_iter=3))
+        best_known_plan(econ_truth, V[:12], C2K(50.0), PlanConfig(T_mean=C2K(24.0), max_iter=3))
+
+
+def test_a_plan_from_a_given_state_starts_there_and_a_cyclic_one_returns(plans, econ_truth):
+    band, _ = plans
+    x0 = band.x[0] + np.array([0.2, 0.0, 0.0, 0.0, 0.0])   # not the periodic state
+    cfg = PlanConfig(T_mean=C2K(24.0), T_low=C2K(23.0), T_high=C2K(25.0))
+    back = best_known_plan(econ_truth, V, T_AMB, cfg, guess=(band.x, band.inputs), x_start=x0)
+    np.testing.assert_allclose(back.x[0], x0, atol=1e-6)
+    np.testing.assert_allclose(back.x[-1], x0, atol=1e-6)
+    assert back.energy_J >= band.energy_J * (1 - 1e-6)   # the free periodic state is best
+
+
+def test_a_terminal_price_charges_the_end_state(plans, econ_truth):
+    band, _ = plans
+    cfg = PlanConfig(T_mean=C2K(24.0), T_low=C2K(23.0), T_high=C2K(25.0), cyclic=False)
+    free = best_known_plan(econ_truth, V, T_AMB, cfg, guess=(band.x, band.inputs),
+                           x_start=band.x[0])
+    price = np.array([0.0, 2e4, 0.0, 0.0, 0.0])    # J per K of interior left warm
+    priced = best_known_plan(econ_truth, V, T_AMB, cfg, guess=(band.x, band.inputs),
+                             x_start=band.x[0], terminal_price=price)
+    # unpriced, the plan borrows the interior's cold; priced, it leaves it cooler
+    assert priced.x[-1, 1] < free.x[-1, 1] - 1e-3
+    assert free.energy_J < priced.energy_J
+    with pytest.raises(ConfigError, match="terminal price"):
+        best_known_plan(econ_truth, V, T_AMB, PlanConfig(T_mean=C2K(24.0)),
+                        terminal_price=price)

@@ -100,7 +100,10 @@ PLAN_VARIANTS = {"cyclic": "cyclic plan, replayed from its periodic state",
                  "cyclic_common_start": "the same cyclic plan, replayed from the common start",
                  "from_common_start": "plan optimised from the common start, end state "
                                       "priced at the optimal steady state's multipliers, "
-                                      "replayed from there"}
+                                      "replayed from there",
+                 "cyclic_corrected_model": "cyclic plan on the econ model with the coil "
+                                           "modifier (D's and E's), replayed from its "
+                                           "periodic state"}
 #: The paper's stop-and-go scenario as a study cycle (its 80 s period repeated).
 STOPGO = "stopgo"
 #: the econ model's states, read from the plant by D and E and set by the plan's replay
@@ -139,6 +142,11 @@ class StudyConfig:
     baselines : run the PI baselines P and F.
     coil_reset : P's evaporator set-point rule.
     coil_tol_K : width of F's coil set-point search interval at which it stops, K.
+    coil_max : the warmest coil set-point of D, E, the plan and F's search, K (one range for
+        all, 3 degC to this; paper Table II stops at 10 degC, a warm coil pays beyond it).
+    econ_modifier : correct the econ model's coil economics for D, E and one plan variant
+        from steady holds of the plant (:mod:`acid.mpc.econ_modifier`) before they run.
+    modifier_hold_s : length of each of those holds, s.
     rh_band : cabin relative-humidity band of the comparison (fractions).
     stopgo_s : length of the stop-and-go scenario (80 s periods), s.
     comfort : PMV assumptions.
@@ -159,6 +167,9 @@ class StudyConfig:
     baselines: bool = True
     coil_reset: CoilReset = field(default_factory=CoilReset)
     coil_tol_K: float = 0.25
+    coil_max: float = COIL_RANGE[1]
+    econ_modifier: bool = True
+    modifier_hold_s: float = 7200.0
     rh_band: tuple[float, float] = RH_BAND
     stopgo_s: float = 800.0
     comfort: ComfortConfig = field(default_factory=ComfortConfig)
@@ -181,6 +192,9 @@ class StudyConfig:
                               f"{100 * self.rh_band[0]:g}-{100 * self.rh_band[1]:g} %")
         if not 0.01 <= self.coil_tol_K <= 3.0:
             raise ConfigError(f"coil_tol_K must lie in 0.01..3 K, got {self.coil_tol_K}")
+        if not self.econ.T_evap_set_min + 1.0 <= self.coil_max <= C2K(15.0):
+            raise ConfigError(f"coil_max must lie between the coldest coil set-point + 1 K "
+                              f"and 15 degC, got {self.coil_max - 273.15:g} degC")
 
     def nmpc_config(self, T_amb: float) -> NMPCConfig:
         """The paper NMPC's options (Table II, horizon, lower bound, ambient of eq. 4)."""
@@ -193,7 +207,8 @@ class StudyConfig:
                 "tol_K": self.tol_K, "max_iter": self.max_iter, "tail_s": self.tail_s,
                 "icm": self.icm.to_json_dict(), "plan": self.plan,
                 "baselines": self.baselines, "coil_reset": self.coil_reset.to_json_dict(),
-                "coil_tol_K": self.coil_tol_K,
+                "coil_tol_K": self.coil_tol_K, "coil_max_K": self.coil_max,
+                "econ_modifier": self.econ_modifier, "modifier_hold_s": self.modifier_hold_s,
                 "rh_band_pct": [100 * self.rh_band[0], 100 * self.rh_band[1]],
                 "rh_band_source": RH_BAND_SOURCE, "stopgo_s": self.stopgo_s,
                 "comfort": self.comfort.to_json_dict()}
@@ -520,6 +535,8 @@ class CycleStudy:
     warnings : distinct warnings raised while the cycle ran (e.g. the power map
         extrapolated), one line each.
     rh_band : cabin RH band of the comparison (fractions).
+    econ_modifier : the coil modifier D and E ran with (:mod:`acid.mpc.econ_modifier`), or
+        None.
     """
 
     scenario: Scenario
@@ -531,6 +548,7 @@ class CycleStudy:
     elapsed_s: float = float("nan")
     warnings: tuple[str, ...] = ()
     rh_band: tuple[float, float] = RH_BAND
+    econ_modifier: dict | None = None
 
     def saving_pct(self, key: str, corrected: bool = True, ref: str = "A") -> float | None:
         """Saving of ``key`` against ``ref`` (A or the best fixed-coil PI ``F``), %,
@@ -623,7 +641,7 @@ class CycleStudy:
             "ranking_in_rh_band": self.ranking(),
             "econ_vs_best_pi_pct": {k: self.saving_pct(k, ref=BEST_PI) for k in ("D", "E")
                                     if k in self.results},
-            "best_plan_spread_pct": self.plan_spread_pct,
+            "best_plan_spread_pct": self.plan_spread_pct, "econ_modifier": self.econ_modifier,
             "preview_share_points": self.preview_share_points, "elapsed_s": self.elapsed_s,
             "warnings": list(self.warnings),
         })
@@ -755,7 +773,7 @@ class _CycleRunner:
 
     def best_fixed_coil(self, loops, p_atm: float) -> ControllerResult:
         """F: the coil set-point of least tail-corrected energy with RH in the band (golden
-        section over :data:`COIL_RANGE`, each point tuned to the target mean)."""
+        section from 3 degC to ``coil_max``, each point tuned to the target mean)."""
         band, last = self.config.rh_band, [None]
 
         def f(T_coil):
@@ -764,17 +782,20 @@ class _CycleRunner:
             out = rh_band_distance(r.comfort.rh_mean, band)
             return (out > 0.0, out, r.tail_corrected_J), r
 
-        x, r, hist = golden_min(f, *COIL_RANGE, tol=self.config.coil_tol_K)
+        rng = (COIL_RANGE[0], self.config.coil_max)
+        x, r, hist = golden_min(f, *rng, tol=self.config.coil_tol_K)
         search = [{"coil_set_point_K": float(c), "outside_rh_band": bool(k[0]),
                    "tail_corrected_energy_MJ": k[2] / 1e6} for c, k in hist]
         return dataclasses.replace(r, extra={"coil_set_point_K": float(x),
                                              "coil_search": search,
-                                             "coil_range_K": list(COIL_RANGE)})
+                                             "coil_range_K": list(rng)})
 
     # ------------------------------------------------------------- best known plan
-    def plan(self, econ: EconParams, guess_run: PlantRun | None) -> ControllerResult:
+    def plan(self, econ: EconParams, guess_run: PlantRun | None,
+             corrected: EconParams | None = None) -> ControllerResult:
         """The best known plan: every variant of :data:`PLAN_VARIANTS` solved, replayed and
-        tail-corrected at the target mean; the least is the plan, the others its spread."""
+        tail-corrected at the target mean (``corrected``: the econ model with the coil
+        modifier, one more variant); the least is the plan, the others its spread."""
         guess = None
         if guess_run is not None:
             x = np.column_stack([getattr(guess_run, n) for n in _MODEL_STATES])
@@ -788,6 +809,9 @@ class _CycleRunner:
         found["from_common_start"] = self._plan_variant(
             econ, (cyc_plan.x, cyc_plan.inputs), x_common, spin_up=False,
             price=self._steady_price(econ))
+        if corrected is not None:
+            found["cyclic_corrected_model"] = self._plan_variant(
+                corrected, (cyc_plan.x, cyc_plan.inputs), None, spin_up=True)
         # only variants whose replay meets the target mean compete (equal comfort)
         matched = [k for k, (r, _, _) in found.items()
                    if abs(r.run.mean_T_cab - self.target) <= self.config.tol_K] or [
@@ -929,6 +953,7 @@ def study_cycle(params: ModelParams, econ: EconParams, cycle: str, config: Study
 def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progress
                  ) -> CycleStudy:
     t0 = time.perf_counter()
+    config = dataclasses.replace(config, econ=config.econ.replace(T_evap_set_max=config.coil_max))
     probe = plant_factory()
     missing = [k for k in _MODEL_STATES + ("T_amb",) if k not in probe.measure()]
     if missing:
@@ -953,16 +978,25 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
     results = {"B": runner.result("B", run_B)}
     results["A"] = runner.tuned("A", partial(_constant_bound, paper, n + N + 1),
                                 config.T_low - 2.0, config.T_high)
+    loops = getattr(probe, "cfg", None) or PlantConfig()
+    p_atm = float(getattr(loops, "p_atm", P_ATM))
+    econ_ctl, modifier = econ, None
+    if config.econ_modifier and {"D", "E"} & set(controllers):
+        from acid.mpc.econ_modifier import coil_modifier
+
+        modifier = coil_modifier(econ, plant_factory, loops, float(np.mean(sc.v)),
+                                 float(np.mean(sc.T_amb)), runner.target, start=runner.start,
+                                 coil_range=(COIL_RANGE[0], config.coil_max),
+                                 hold_s=config.modifier_hold_s)
+        econ_ctl = modifier.params
     for key, preview in (("D", False), ("E", True)):
         if key in controllers:
-            mpc = EconNMPC(econ, config.econ.replace(T_cab_min=config.T_low,
-                                                     T_cab_max=config.T_high,
-                                                     preview=preview))
+            mpc = EconNMPC(econ_ctl, config.econ.replace(T_cab_min=config.T_low,
+                                                         T_cab_max=config.T_high,
+                                                         preview=preview))
             results[key] = runner.tuned(key, partial(_Econ, mpc, sc), config.T_low + 0.1,
                                         config.T_high)
     if config.baselines:
-        loops = getattr(probe, "cfg", None) or PlantConfig()
-        p_atm = float(getattr(loops, "p_atm", P_ATM))
         if "P" in controllers:
             results["P"] = runner.pi("P", config.coil_reset, loops, p_atm)
             results["P"] = dataclasses.replace(
@@ -971,10 +1005,12 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
             results["F"] = runner.best_fixed_coil(loops, p_atm)
     if config.plan and "plan" in controllers:
         guess = results.get("E", results.get("D"))
-        results["plan"] = runner.plan(econ, guess.run if guess is not None else None)
+        results["plan"] = runner.plan(econ, guess.run if guess is not None else None,
+                                      corrected=None if modifier is None else econ_ctl)
     return CycleStudy(scenario=sc, results=results, start_state=runner.start,
                       target_mean_K=runner.target, T_low=config.T_low, T_high=config.T_high,
-                      elapsed_s=time.perf_counter() - t0, rh_band=tuple(config.rh_band))
+                      elapsed_s=time.perf_counter() - t0, rh_band=tuple(config.rh_band),
+                      econ_modifier=None if modifier is None else modifier.to_json_dict())
 
 
 def _constant_bound(mpc: NMPC, n: int, b: float) -> _PaperBound:

@@ -72,10 +72,10 @@ class CoilModifier:
 
 
 def model_steady_power(econ: EconParams, v: float, T_amb: float, T_cab: float,
-                       T_coil: float | None = None):
+                       T_coil: float | None = None, coil_range=COIL_RANGE):
     """(power W, coil set-point K, Q_e W) of the model's optimal steady state at ``T_cab``,
-    the coil set-point held at ``T_coil`` or free within :data:`COIL_RANGE`."""
-    lo, hi = (T_coil, T_coil) if T_coil is not None else COIL_RANGE
+    the coil set-point held at ``T_coil`` or free within ``coil_range``."""
+    lo, hi = (T_coil, T_coil) if T_coil is not None else coil_range
     price = SteadyStatePrice(econ, [0.05, lo], [0.15, hi])
     ss = price.steady_state(v, T_amb, T_cab, T_cab)
     from acid.econ import model
@@ -103,15 +103,15 @@ def plant_steady_power(plant_factory: Callable[[], object], loops, start: dict |
 
 def coil_modifier(econ: EconParams, plant_factory: Callable[[], object], loops,
                   v: float, T_amb: float, T_cab: float, start: dict | None = None,
-                  dT: float = 1.0, iterations: int = 2, hold_s: float = 7200.0
-                  ) -> CoilModifier:
+                  dT: float = 1.0, iterations: int = 2, hold_s: float = 7200.0,
+                  coil_range=COIL_RANGE) -> CoilModifier:
     """Correct the map's ``t`` coefficient so the model's steady power gradient in the coil
     set-point matches the plant's at the model's optimum (module docstring)."""
     j = MAP_TERMS.index("t")
     e, total, steps = econ, 0.0, []
     for _ in range(max(1, int(iterations))):
-        _, T_star, Q_e = model_steady_power(e, v, T_amb, T_cab)
-        pts = np.clip([T_star - dT, T_star + dT], *COIL_RANGE)
+        _, T_star, Q_e = model_steady_power(e, v, T_amb, T_cab, coil_range=coil_range)
+        pts = np.clip([T_star - dT, T_star + dT], *coil_range)
         plant = [plant_steady_power(plant_factory, loops, start, v, T_amb, T_cab, float(c),
                                     hold_s) for c in pts]
         mod = [model_steady_power(e, v, T_amb, T_cab, float(c))[0] for c in pts]
@@ -126,7 +126,7 @@ def coil_modifier(econ: EconParams, plant_factory: Callable[[], object], loops,
         steps.append({"T_star_K": T_star, "plant_slope_W_K": s_plant,
                       "model_slope_W_K": s_model, "plant_W": plant, "model_W": mod,
                       "Q_e_W": Q_e, "delta_t_coef": dc})
-    _, T_final, _ = model_steady_power(e, v, T_amb, T_cab)
+    _, T_final, _ = model_steady_power(e, v, T_amb, T_cab, coil_range=coil_range)
     steps.append({"T_star_K": T_final})
     return CoilModifier(params=e, delta_t_coef=total, steps=tuple(steps),
                         conditions={"v_veh": v, "T_amb_K": T_amb, "T_cab_K": T_cab,
