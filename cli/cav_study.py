@@ -249,8 +249,8 @@ def cav_study(
         say(line)
         if st.econ_modifier is not None:
             m = st.econ_modifier
-            say(f"D, E: coil economics corrected from steady plant holds (modifier "
-                f"adaptation): the model's optimal coil set-point "
+            say("D, E: coil economics corrected from steady plant holds (modifier "
+                "adaptation): the model's optimal coil set-point "
                 + " -> ".join(f"{K2C(t):.2f}" for t in m["model_optimal_coil_K"]) + " °C")
         if "plan" in st.results:
             bx = st.controller_json("plan")
