@@ -78,3 +78,39 @@ def test_rh_band_distance():
     assert rh_band_distance(hi + 0.05) == pytest.approx(0.05)
     assert rh_band_distance(lo - 0.02) == pytest.approx(0.02)
     assert math.isclose(rh_band_distance(0.9, (0.3, 0.95)), 0.0)
+
+
+# ------------------------------------------------------------------------- in a sweep
+PI_SPEC = {"title": "pi", "baseline": "nmpc",
+           "defaults": {"cycle": 10.0, "duration_s": 150.0, "warmup_s": 600.0,
+                        "tail_s": 60.0},
+           "grid": {"ambient_C": [30.0]},
+           "controllers": {"nmpc": {},
+                           "P": {"type": "pi", "coil": "reset", "match": "nmpc"},
+                           "F": {"type": "pi", "coil": "search", "match": "nmpc",
+                                 "coil_tol_K": 2.0}}}
+
+
+def test_the_pi_baselines_run_in_a_sweep_at_the_paper_nmpcs_mean(tmp_path):
+    from acid.executor import InlineExecutor
+    from acid.sweep import run_sweep, spec_from_dict
+
+    res = run_sweep(spec_from_dict(PI_SPEC, "pi spec"), tmp_path, executor=InlineExecutor(),
+                    figures=False)
+    t = res.table.set_index("controller")
+    assert set(t["status"]) == {"ok"}, t["error"].tolist()
+    for key in ("P", "F"):
+        assert abs(t.loc[key, "mean_T_cab_C"] - t.loc["nmpc", "mean_T_cab_C"]) <= 0.05, key
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"coil": "magic"}, "coil = 'magic' unknown"),
+    ({"coil": "search"}, "needs match"),
+    ({"coil": "fixed", "T_evap_set_C": 20.0}, "T_evap_set_C"),
+])
+def test_bad_pi_options_are_refused_before_anything_runs(bad, message):
+    from acid.sweep import spec_from_dict
+
+    spec = {**PI_SPEC, "controllers": {"nmpc": {}, "X": {"type": "pi", **bad}}}
+    with pytest.raises(ConfigError, match=message):
+        spec_from_dict(spec, "pi spec")
