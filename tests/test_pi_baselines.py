@@ -114,3 +114,14 @@ def test_bad_pi_options_are_refused_before_anything_runs(bad, message):
     spec = {**PI_SPEC, "controllers": {"nmpc": {}, "X": {"type": "pi", **bad}}}
     with pytest.raises(ConfigError, match=message):
         spec_from_dict(spec, "pi spec")
+
+
+def test_the_prediction_sweep_example_loads():
+    from pathlib import Path
+
+    from acid.sweep.spec import load_spec
+
+    path = Path(__file__).resolve().parents[1] / "datasets/examples/sweep_prediction.toml"
+    spec = load_spec(path)
+    assert [c.label for c in spec.controllers] == ["nmpc", "F", "P", "econ"]
+    assert len(spec.scenarios) == 8
