@@ -37,6 +37,14 @@ def energy_figure(result: CavStudyResult) -> Figure:
                 for c in result.cycles.values()]
         bars = ax.bar(x + (j - (len(keys) - 1) / 2) * width, vals, width,
                       color=_COLORS[key], label=key, alpha=0.85)
+        if key == "plan":   # the plan's spread over its independent optima
+            for b, c in zip(bars, result.cycles.values(), strict=True):
+                var = c.results["plan"].extra.get("variants", {}) if "plan" in c.results else {}
+                e = [v["tail_corrected_energy_MJ"] for v in var.values() if v["matched"]]
+                if len(e) > 1:
+                    xc = b.get_x() + b.get_width() / 2
+                    ax.vlines(xc, min(e), max(e), color="tab:gray", lw=2.0, zorder=5,
+                              label="_spread")
         for b, c in zip(bars, result.cycles.values(), strict=True):
             s = c.saving_pct(key) if key in c.results and key != "A" else None
             out = key in c.results and not c.in_rh_band(key)
@@ -49,9 +57,9 @@ def energy_figure(result: CavStudyResult) -> Figure:
     ax.set_xticks(x, [c.upper() for c in cycles])
     ax.set_ylabel("energy, end state charged back (MJ)")
     ax.set_title("A/C energy (compressor + blower) at equal mean cabin temperature; "
-                 "labels: saving vs A (RH: outside the RH band); plan: best known plan, "
-                 "perfect information", fontsize=9)
-    ax.legend(fontsize=8, ncols=len(keys))
+                 "labels: saving vs A (RH: outside the RH band);\nplan: best known plan, "
+                 "perfect information (grey: spread of its independent optima)", fontsize=9)
+    ax.legend(fontsize=8, ncols=len(keys), loc="upper center", bbox_to_anchor=(0.5, -0.08))
     ax.grid(True, axis="y", alpha=0.3)
     return fig
 
