@@ -101,9 +101,9 @@ def cav_study(
         True, "--econ-modifier/--no-econ-modifier",
         help="Correct the econ model's coil economics for D and E from steady holds of the "
              "plant (modifier adaptation) before they run."),
-    coil_max: float = typer.Option(12.0, "--coil-max",
+    coil_max: float = typer.Option(10.0, "--coil-max",
                                    help="Warmest coil set-point of D, E, the plan and F's "
-                                        "search, degC."),
+                                        "search, degC (paper Table II: 10)."),
     baselines: bool = typer.Option(True, "--baselines/--no-baselines",
                                    help="Run the PI baselines P (coil reset) and F (best "
                                         "fixed coil, searched)."),

@@ -143,7 +143,9 @@ class StudyConfig:
     coil_reset : P's evaporator set-point rule.
     coil_tol_K : width of F's coil set-point search interval at which it stops, K.
     coil_max : the warmest coil set-point of D, E, the plan and F's search, K (one range for
-        all, 3 degC to this; paper Table II stops at 10 degC, a warm coil pays beyond it).
+        all, 3 degC to this; default paper Table II's 10 degC: with 12 degC the corrected
+        econ model ran D's and E's coils past the cycle's best fixed coil, measured in
+        notes/i21-energy.md).
     econ_modifier : correct the econ model's coil economics for D, E and one plan variant
         from steady holds of the plant (:mod:`acid.mpc.econ_modifier`) before they run.
     modifier_hold_s : length of each of those holds, s.
@@ -167,7 +169,7 @@ class StudyConfig:
     baselines: bool = True
     coil_reset: CoilReset = field(default_factory=CoilReset)
     coil_tol_K: float = 0.25
-    coil_max: float = COIL_RANGE[1]
+    coil_max: float = C2K(10.0)
     econ_modifier: bool = True
     modifier_hold_s: float = 7200.0
     rh_band: tuple[float, float] = RH_BAND

@@ -28,9 +28,10 @@ Built-in
              plant's blower PI with the coil set-point ``coil = "reset"`` (production-style
              reset, P), ``"fixed"`` (``T_evap_set_C``) or ``"search"`` (the fixed coil
              set-point of least energy with the mean cabin RH in the band, golden section
-             over 3-``coil_max_C`` degC, F); ``match`` tunes the cabin set-point to another
-             controller's mean cabin temperature. Sweeps compare raw energies (no tail
-             correction).
+             over 3-``coil_max_C`` degC, 10 by default as the econ controller's, F);
+             ``match`` tunes the cabin set-point to another controller's mean cabin
+             temperature. The search ranks raw run energies (the sweep's tail correction
+             comes after the controller has run).
 
 Further controllers register from their own module: add it to ``CONTROLLER_MODULES`` (in
 acid) or name it in the spec's ``plugins = ["my_package.my_controller"]``.
@@ -372,7 +373,7 @@ class PIControllerConfig:
 
     coil: str = "search"
     T_evap_set_C: float = 9.5
-    coil_max_C: float = 12.0
+    coil_max_C: float = 10.0
     coil_tol_K: float = 0.5
     match: str = ""
     tol_K: float = 0.02

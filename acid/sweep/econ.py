@@ -55,7 +55,7 @@ class EconControllerConfig:
         compiles for a minute or two, then is cached per user); False: inside CasADi.
     modifier : correct the model's coil economics from steady holds of the scenario's plant
         first (``acid cav-study``'s D and E; :mod:`acid.mpc.econ_modifier`).
-    coil_max_C : warmest coil set-point, degC (``acid cav-study``'s 12 degC).
+    coil_max_C : warmest coil set-point, degC (``acid cav-study``'s 10 degC, Table II).
     """
 
     preview: bool = True
@@ -68,7 +68,7 @@ class EconControllerConfig:
     max_iter: int = 8
     compiled: bool = True
     modifier: bool = True
-    coil_max_C: float = 12.0
+    coil_max_C: float = 10.0
 
     def __post_init__(self):
         if not 30.0 <= self.horizon_s <= 600.0:
