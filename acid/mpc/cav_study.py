@@ -148,7 +148,8 @@ class StudyConfig:
         notes/i21-energy.md).
     econ_modifier : correct the econ model's coil economics for D, E and one plan variant
         from steady holds of the plant (:mod:`acid.mpc.econ_modifier`) before they run.
-    modifier_hold_s : length of each of those holds, s.
+    modifier_hold_s : length of each of those holds, s (None: as long as the warm-up, at
+        least 30 min).
     rh_band : cabin relative-humidity band of the comparison (fractions).
     stopgo_s : length of the stop-and-go scenario (80 s periods), s.
     comfort : PMV assumptions.
@@ -171,7 +172,7 @@ class StudyConfig:
     coil_tol_K: float = 0.25
     coil_max: float = C2K(10.0)
     econ_modifier: bool = True
-    modifier_hold_s: float = 7200.0
+    modifier_hold_s: float | None = None
     rh_band: tuple[float, float] = RH_BAND
     stopgo_s: float = 800.0
     comfort: ComfortConfig = field(default_factory=ComfortConfig)
@@ -989,7 +990,9 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
         modifier = coil_modifier(econ, plant_factory, loops, float(np.mean(sc.v)),
                                  float(np.mean(sc.T_amb)), runner.target, start=runner.start,
                                  coil_range=(COIL_RANGE[0], config.coil_max),
-                                 hold_s=config.modifier_hold_s)
+                                 hold_s=(max(1800.0, config.warmup_s)
+                                         if config.modifier_hold_s is None
+                                         else config.modifier_hold_s))
         econ_ctl = modifier.params
     for key, preview in (("D", False), ("E", True)):
         if key in controllers:
