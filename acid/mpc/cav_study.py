@@ -804,17 +804,20 @@ class _CycleRunner:
             x = np.column_stack([getattr(guess_run, n) for n in _MODEL_STATES])
             guess = (x, np.column_stack([guess_run.W_bl, guess_run.T_evap_set]))
         x_common = np.array([self.start[n] for n in _MODEL_STATES])
-        found = {}
+        found, failed = {}, {}
         found["cyclic"] = self._plan_variant(econ, guess, None, spin_up=True)
         cyc_plan = found["cyclic"][1]
-        found["cyclic_common_start"] = self._plan_variant(
-            econ, (cyc_plan.x, cyc_plan.inputs), None, spin_up=False)
-        found["from_common_start"] = self._plan_variant(
-            econ, (cyc_plan.x, cyc_plan.inputs), x_common, spin_up=False,
-            price=self._steady_price(econ))
+        others = {"cyclic_common_start": (econ, None, False, None),
+                  "from_common_start": (econ, x_common, False, "steady")}
         if corrected is not None:
-            found["cyclic_corrected_model"] = self._plan_variant(
-                corrected, (cyc_plan.x, cyc_plan.inputs), None, spin_up=True)
+            others["cyclic_corrected_model"] = (corrected, None, True, None)
+        for key, (model, x_start, spin_up, price) in others.items():
+            try:   # an independent optimum that cannot be found is reported, not fatal
+                found[key] = self._plan_variant(
+                    model, (cyc_plan.x, cyc_plan.inputs), x_start, spin_up=spin_up,
+                    price=None if price is None else self._steady_price(model))
+            except ConfigError as exc:
+                failed[key] = {"description": PLAN_VARIANTS[key], "error": str(exc)}
         # only variants whose replay meets the target mean compete (equal comfort)
         matched = [k for k, (r, _, _) in found.items()
                    if abs(r.run.mean_T_cab - self.target) <= self.config.tol_K] or [
@@ -834,6 +837,7 @@ class _CycleRunner:
                         "replay_iterations": len(h)}
                     for k, (r, p, h) in found.items()}
         extra = _plan_extra(plan, pinned, res.run, len(hist))
+        extra["failed_variants"] = failed
         extra.update(best_variant=best, variants=variants)
         return dataclasses.replace(res, extra=extra)
 
