@@ -24,6 +24,20 @@ import numpy as np
 from acid.psychro import relative_humidity
 from acid.units import K2C
 
+#: Cabin relative-humidity band of every energy comparison (fractions): a controller whose mean
+#: cabin RH lies outside it is marked "outside RH band" and not ranked. The edges are EN
+#: 16798-1:2019 (after EN 15251:2007, Table B.6) category II ("normal expectation") design
+#: criteria for humidity: dehumidify above 60 %, humidify below 25 %. ASHRAE 55-2020 sets no
+#: lower limit and caps the humidity ratio at 0.012 kg/kg (about 60 % RH at 26 degC).
+RH_BAND = (0.25, 0.60)
+RH_BAND_SOURCE = ("EN 16798-1:2019 category II humidity design criteria (EN 15251:2007 "
+                  "Table B.6): 25-60 % RH")
+
+
+def rh_band_distance(rh: float, band: tuple[float, float] = RH_BAND) -> float:
+    """How far a relative humidity (0-1) lies outside ``band``, 0 inside (fraction of RH)."""
+    return max(0.0, band[0] - rh, rh - band[1])
+
 
 @dataclass(frozen=True)
 class ComfortConfig:

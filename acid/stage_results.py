@@ -423,15 +423,19 @@ class EnergyController(JsonDataclass):
     """One controller on one drive cycle of ``acid cav-study`` (MJ, %, K, g/kg, kg/s).
 
     ``tail_corrected_energy_MJ`` is the energy with the end state charged back (a common
-    continuation from the end and from the start); savings are against controller A, the
-    gap against the bound's replay, both on the tail-corrected energies.
+    continuation from the end and from the start); savings are against controller A and
+    against the best fixed-coil PI F, the gap against the best known plan's replay (perfect
+    information, not a bound), all on the tail-corrected energies. ``in_rh_band`` is 1 when
+    the mean cabin RH lies inside the study's band, 0 outside (not ranked), NaN unknown.
     """
 
     energy_MJ: float = math.nan
     tail_corrected_energy_MJ: float = math.nan
     saving_raw_pct: float = math.nan
     saving_tail_corrected_pct: float = math.nan
-    gap_to_bound_pct: float = math.nan
+    saving_vs_best_pi_pct: float = math.nan
+    gap_to_best_plan_pct: float = math.nan
+    in_rh_band: float = math.nan
     mean_T_cab_K: float = math.nan
     max_T_cab_K: float = math.nan
     pmv_mean: float = math.nan
@@ -443,15 +447,19 @@ class EnergyController(JsonDataclass):
 
 @dataclass(frozen=True)
 class EnergyCycle(JsonDataclass):
-    """One cycle of ``acid cav-study``: the controllers (A, B, D, E, bound), the target mean
-    cabin temperature (K), speed preview's share (E minus D, points), the bound's value of
-    the comfort band over pinning T_cab (%) and its replay's miss of the model energy (%)."""
+    """One cycle of ``acid cav-study``: the controllers (A, B, D, E, P, F, plan), the target
+    mean cabin temperature (K), speed preview's share (E minus D, points), the best known
+    plan's value of the comfort band over pinning T_cab (%), its replay's miss of the model
+    energy (%), its spread over independent optima (%, its uncertainty) and F's coil
+    set-point (K)."""
 
     target_mean_T_cab_K: float
     preview_share_points: float
     band_vs_pinned_pct: float
     replay_vs_model_pct: float
     controllers: dict[str, EnergyController]
+    best_plan_spread_pct: float = math.nan
+    best_pi_coil_set_point_K: float = math.nan
 
 
 @stage_result("cav")
@@ -468,14 +476,16 @@ class CavStudyStage(StageResult):
         cycles = {}
         for name, c in d["cycles"].items():
             ctl = c["controllers"]
-            bound = ctl.get("bound", {})
+            plan = ctl.get("plan", {})
             cycles[name] = EnergyCycle(
                 target_mean_T_cab_K=_f(c.get("target_mean_T_cab_K")),
                 preview_share_points=_f(c.get("preview_share_points")),
-                band_vs_pinned_pct=_f(bound.get("band_vs_pinned_pct")),
-                replay_vs_model_pct=_f(bound.get("replay_vs_model_pct")),
+                band_vs_pinned_pct=_f(plan.get("band_vs_pinned_pct")),
+                replay_vs_model_pct=_f(plan.get("replay_vs_model_pct")),
                 controllers={k: EnergyController(**{n: _f(v.get(n)) for n in names})
-                             for k, v in ctl.items()})
+                             for k, v in ctl.items()},
+                best_plan_spread_pct=_f(c.get("best_plan_spread_pct")),
+                best_pi_coil_set_point_K=_f(ctl.get("F", {}).get("coil_set_point_K")))
         return cls(cycles=cycles)
 
 

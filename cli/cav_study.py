@@ -1,9 +1,10 @@
 """``acid cav-study``: where the A/C energy is, over drive cycles, at equal comfort.
 
-Five controllers on the high-fidelity plant from the same warmed-up state, at the same mean
+Seven controllers on the high-fidelity plant from the same warmed-up state, at the same mean
 cabin temperature, end states charged back by a common continuation: A (paper NMPC, constant
-bound), B (paper NMPC, ICM bound), D and E (economic NMPC without and with speed preview) and
-the perfect-information bound replayed open loop.
+bound), B (paper NMPC, ICM bound), D and E (economic NMPC without and with speed preview), P
+(production-style PI with a coil set-point reset), F (best fixed-coil PI) and the best known
+plan (perfect information) replayed open loop, with its uncertainty.
 """
 
 from __future__ import annotations
@@ -93,8 +94,19 @@ def cav_study(
     tail: float = typer.Option(2400.0, "--tail",
                                help="Common continuation measuring the end-state cost, s "
                                     "(0: raw energies only)."),
-    bound: bool = typer.Option(True, "--bound/--no-bound",
-                               help="Compute the perfect-information bound and replay it."),
+    plan: bool = typer.Option(True, "--plan/--no-plan",
+                              help="Compute the best known plan (perfect information): its "
+                                   "variants, replayed."),
+    econ_modifier: bool = typer.Option(
+        True, "--econ-modifier/--no-econ-modifier",
+        help="Correct the econ model's coil economics for D and E from steady holds of the "
+             "plant (modifier adaptation) before they run."),
+    coil_max: float = typer.Option(10.0, "--coil-max",
+                                   help="Warmest coil set-point of D, E, the plan and F's "
+                                        "search, degC (paper Table II: 10)."),
+    baselines: bool = typer.Option(True, "--baselines/--no-baselines",
+                                   help="Run the PI baselines P (coil reset) and F (best "
+                                        "fixed coil, searched)."),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Cycles run in parallel (--cycle all)."),
     plant_config: Path | None = typer.Option(None, "--plant-config",
                                              help="TOML configuration of the plant."),
@@ -108,13 +120,16 @@ def cav_study(
     plant: str = plant_option("hifi", ("hifi",)),
     fmu_map: Path | None = fmu_map_option(),
 ) -> None:
-    """Energy of A, B, D, E and the bound per cycle, at equal mean cabin temperature.
+    """Energy of A, B, D, E, P, F and the best known plan per cycle, at equal comfort.
 
-    Reports energy (compressor + blower), the tail-corrected energy, savings against A, each
-    controller's gap to the bound, mean/max T_cab, PMV, humidity, and preview's share (E minus
-    D); writes energy_CYCLE.png (energy_all.png for --cycle all) and cav_CYCLE.png
-    (trajectories of A, E and the bound) to --out.
+    Equal comfort: equal mean cabin temperature, and cabin RH inside the band (a controller
+    outside it is marked and not ranked). Reports energy (compressor + blower), the
+    tail-corrected energy, savings against A and against the best fixed-coil PI F, each
+    controller's gap to the best known plan with the plan's spread, mean/max T_cab, PMV, RH,
+    and preview's share (E minus D); writes energy_CYCLE.png (energy_all.png for --cycle all)
+    and cav_CYCLE.png (trajectories of A, E, F and the plan) to --out.
     """
+    from acid.comfort import RH_BAND_SOURCE
     from acid.econ.params import EconParams
     from acid.mpc.cav_study import (
         CONTROLLERS,
@@ -155,6 +170,7 @@ def cav_study(
             f"must be 'fatrop' or 'ipopt', got {econ_solver!r}")
     require(econ_terminal in TERMINALS, "--econ-terminal",
             f"must be one of {', '.join(TERMINALS)}, got {econ_terminal!r}")
+    require_range(coil_max, "--coil-max", 4.0, 15.0, "degC")
     if rh_max is not None:
         require_range(rh_max, "--rh-max", 0.0, 100.0, "%", lo_open=True)
     if t_amb is not None:
@@ -171,7 +187,8 @@ def cav_study(
                               RH_max=None if rh_max is None else rh_max / 100.0)
     config = StudyConfig(horizon=horizon, econ=econ_cfg, T_low=C2K(T_low), T_high=C2K(T_high),
                          T_amb=None if t_amb is None else C2K(t_amb), warmup_s=warmup,
-                         tail_s=tail, bound=bound)
+                         tail_s=tail, plan=plan, baselines=baselines,
+                         econ_modifier=econ_modifier, coil_max=C2K(coil_max))
     for name in names if cycle == "all" else [cycle]:   # refuse before any long work
         sc = make_scenario(name, p.Ts, 303.15, config.stopgo_s)
         if sc.duration_s < econ_cfg.horizon_s:
@@ -212,28 +229,46 @@ def cav_study(
             d = st.controller_json(key)
             ms = d["step_ms"]
             rows.append([key, _fmt(d["energy_MJ"], 4), _fmt(d["tail_corrected_energy_MJ"], 4),
-                         _fmt(d["saving_raw_pct"], 2), _fmt(d["saving_tail_corrected_pct"], 2),
-                         _fmt(d["gap_to_bound_pct"], 2), f"{K2C(d['mean_T_cab_K']):.2f}",
+                         _fmt(d["saving_tail_corrected_pct"], 2),
+                         _fmt(d["saving_vs_best_pi_pct"], 2),
+                         _fmt(d["gap_to_best_plan_pct"], 2), f"{K2C(d['mean_T_cab_K']):.2f}",
                          f"{K2C(d['max_T_cab_K']):.2f}", _fmt(d["pmv_mean"], 2),
-                         _fmt(d["rh_mean_pct"], 0), _fmt(d["w_cab_mean_g_kg"], 2),
+                         _fmt(d["rh_mean_pct"], 0),
+                         "-" if d["rank"] is None else str(d["rank"]),
+                         "yes" if d["in_rh_band"] else "outside RH band",
                          "-" if ms is None else f"{ms['median']:.1f}"])
         title = ("the paper's stop-and-go, repeated" if name == STOPGO else name.upper())
         print_table(f"{title}: {sc.duration_s:g} s, mean {sc.v.mean():.1f} m/s, target mean "
                     f"T_cab {K2C(st.target_mean_K):.2f} °C",
-                    ["_ctrl", "E MJ", "E corr MJ", "save raw %", "save corr %",
-                     "gap bound %", "mean °C", "max °C", "PMV", "RH %", "w g/kg", "ms"], rows)
+                    ["_ctrl", "E MJ", "E corr MJ", "save vs A %", "save vs F %",
+                     "gap plan %", "mean °C", "max °C", "PMV", "RH %", "rank", "in band",
+                     "ms"], rows)
         line = f"preview's share (E minus D): {_fmt(st.preview_share_points, 3)} points"
-        if "bound" in st.results:
-            bx = st.controller_json("bound")
-            line += (f"; bound: model {bx['model_energy_MJ']:.4f} MJ, replay "
-                     f"{_fmt(bx['replay_vs_model_pct'], 2)} % off it, band vs pinned "
-                     f"T_cab {_fmt(bx['band_vs_pinned_pct'], 3)} %")
+        if "F" in st.results:
+            line += (f"; F: coil set-point "
+                     f"{K2C(st.results['F'].extra['coil_set_point_K']):.2f} °C")
         say(line)
+        if st.econ_modifier is not None:
+            m = st.econ_modifier
+            say("D, E: coil economics corrected from steady plant holds (modifier "
+                "adaptation): the model's optimal coil set-point "
+                + " -> ".join(f"{K2C(t):.2f}" for t in m["model_optimal_coil_K"]) + " °C")
+        if "plan" in st.results:
+            bx = st.controller_json("plan")
+            say(f"best known plan (perfect information, not a bound): variant "
+                f"{bx['best_variant']}, spread of {len(bx['variants'])} independent optima "
+                f"{_fmt(st.plan_spread_pct, 2)} %; model {bx['model_energy_MJ']:.4f} MJ, "
+                f"replay {_fmt(bx['replay_vs_model_pct'], 2)} % off it, band vs pinned "
+                f"T_cab {_fmt(bx['band_vs_pinned_pct'], 3)} %")
         for w in st.warnings:
             warn(f"{name}: {w}")
     say("E: compressor + blower over the cycle; E corr: + tail(end) - tail(start); savings "
-        "vs A and gaps to the bound on E corr; PMV: ISO 7730, 1.2 met, 0.5 clo, 0.2 m/s, "
-        "radiant = mean of interior and shell; ms: median controller step")
+        "vs A and vs F and gaps to the plan on E corr; PMV: ISO 7730, 1.2 met, 0.5 clo, "
+        "0.2 m/s, radiant = mean of interior and shell; RH band "
+        f"{100 * config.rh_band[0]:g}-{100 * config.rh_band[1]:g} % ({RH_BAND_SOURCE}), "
+        "rank among the controllers inside it; ms: median controller step")
+    if baselines:
+        say(f"P's rule: {config.coil_reset.describe()}")
 
     fig_paths = {}
     if figures:

@@ -603,6 +603,8 @@ CASES: list[Case] = [
     Case("cav-study-cycle", "options", ("cav-study", "--cycle", "moon"), ("--cycle",)),
     Case("cav-study-econ-terminal", "options", ("cav-study", "--econ-terminal", "zero"),
          ("--econ-terminal",)),
+    Case("cav-study-coil-max-hot", "options", ("cav-study", "--coil-max", "40"),
+         ("--coil-max",)),
     # ------------------------------------------------------------------------- claims
     Case("claims-summary-missing", "files", ("claims", "{w}/none.json"), ("SUMMARY",
                                                                           "none.json")),

@@ -85,7 +85,8 @@ def cav() -> CavStudyStage:
     def ctl(saving, gap):
         return EnergyController(energy_MJ=0.5, tail_corrected_energy_MJ=0.5,
                                 saving_raw_pct=saving, saving_tail_corrected_pct=saving,
-                                gap_to_bound_pct=gap, mean_T_cab_K=297.3, max_T_cab_K=297.4,
+                                saving_vs_best_pi_pct=saving - 7.0, in_rh_band=1.0,
+                                gap_to_best_plan_pct=gap, mean_T_cab_K=297.3, max_T_cab_K=297.4,
                                 pmv_mean=0.1, rh_mean_pct=35.0, w_cab_mean_g_kg=6.5,
                                 mean_T_evap_set_K=280.0, mean_W_bl_kg_s=0.07)
 
@@ -93,7 +94,9 @@ def cav() -> CavStudyStage:
                         band_vs_pinned_pct=0.9, replay_vs_model_pct=-1.6,
                         controllers={"A": ctl(0.0, 8.0), "B": ctl(1.2, 7.0),
                                      "D": ctl(5.6, 2.2), "E": ctl(5.6, 2.2),
-                                     "bound": ctl(7.6, 0.0)})
+                                     "P": ctl(4.0, 3.9), "F": ctl(7.0, 0.6),
+                                     "plan": ctl(7.6, 0.0)},
+                        best_plan_spread_pct=0.4, best_pi_coil_set_point_K=283.0)
     return CavStudyStage(cycles={"udds": cycle, "sc03": cycle})
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -13,6 +14,7 @@ from typer.testing import CliRunner
 from acid.errors import ConfigError
 from acid.mpc.cav_study import (
     CONTROLLERS,
+    PLAN_VARIANTS,
     StudyConfig,
     initial_keys,
     plant_state,
@@ -26,6 +28,7 @@ from acid_cli.main import app
 
 runner = CliRunner()
 SHORT = StudyConfig(econ=EconNMPCConfig(intervals=(5.0,) * 6, compiled=False), warmup_s=1800.0,
+                    modifier_hold_s=1800.0,
                     tail_s=120.0, stopgo_s=240.0)
 
 
@@ -47,21 +50,22 @@ def test_every_controller_ran_on_the_same_cycle(study):
 
 
 def test_same_start_and_equal_mean_cabin_temperature(study):
-    for key in ("A", "B", "D", "E"):
+    for key in ("A", "B", "D", "E", "P", "F"):
         run = study.results[key].run
         assert run.start == study.start_state
         assert run.T_cab[0] == pytest.approx(study.start_state["T_cab"])
     # the full plant state is carried, filtered by the plant's accepted keys
     assert set(study.start_state) == set(initial_keys(make_plant("hifi")))
-    for key in ("A", "D", "E", "bound"):
+    for key in ("A", "D", "E", "P", "F"):
         assert abs(study.results[key].run.mean_T_cab - study.target_mean_K) <= 0.05, key
     assert study.target_mean_K == pytest.approx(study.results["B"].run.mean_T_cab)
 
 
 def test_savings_gaps_and_preview_share_are_what_they_say(study):
-    A, E, D, bd = (study.results[k].tail_corrected_J for k in ("A", "E", "D", "bound"))
+    A, E, D, F, bd = (study.results[k].tail_corrected_J for k in ("A", "E", "D", "F", "plan"))
     assert study.saving_pct("E") == pytest.approx(100 * (A - E) / A)
-    assert study.gap_to_bound_pct("E") == pytest.approx(100 * (E - bd) / bd)
+    assert study.saving_pct("E", ref="F") == pytest.approx(100 * (F - E) / F)
+    assert study.gap_to_best_plan_pct("E") == pytest.approx(100 * (E - bd) / bd)
     assert study.preview_share_points == pytest.approx(study.saving_pct("E")
                                                        - study.saving_pct("D"))
     raw = study.results["E"].energy_J
@@ -74,23 +78,64 @@ def test_json_has_the_issue_keys(study):
     json.dumps(d)
     for key in CONTROLLERS:
         c = d["controllers"][key]
-        for field in ("energy_MJ", "saving_tail_corrected_pct", "gap_to_bound_pct",
+        for field in ("energy_MJ", "saving_tail_corrected_pct", "saving_vs_best_pi_pct",
+                      "gap_to_best_plan_pct", "best_plan_spread_pct", "in_rh_band",
                       "pmv_mean", "rh_mean_pct", "mean_T_cab_K", "max_T_cab_K"):
             assert field in c, (key, field)
         assert -3.0 < c["pmv_mean"] < 3.0 and 0.0 < c["rh_mean_pct"] < 100.0
-    assert "preview_share_points" in d
-    b = d["controllers"]["bound"]
+        assert not any("bound" in f for f in c if f != "upper_bound_K"), key
+    assert "preview_share_points" in d and "bound" not in d["controllers"]
+    b = d["controllers"]["plan"]
     assert math.isfinite(b["model_energy_MJ"]) and b["band_vs_pinned_pct"] >= -1e-6
+    assert set(b["variants"]) == set(PLAN_VARIANTS)   # the modifier adds the 4th
+    assert b["best_variant"] in b["variants"]
+
+
+def test_the_best_known_plan_is_the_least_matched_variant_and_its_spread_is_stated(study):
+    b = study.results["plan"]
+    matched = {k: v for k, v in b.extra["variants"].items() if v["matched"]}
+    if matched:   # the plan is the least tail-corrected energy among matched variants
+        best = min(matched.values(), key=lambda v: v["tail_corrected_energy_MJ"])
+        assert b.tail_corrected_J / 1e6 == pytest.approx(best["tail_corrected_energy_MJ"])
+    if len(matched) > 1:
+        e = [v["tail_corrected_energy_MJ"] for v in matched.values()]
+        assert study.plan_spread_pct == pytest.approx(100 * (max(e) - min(e)) / min(e))
+
+
+def test_the_fixed_coil_search_keeps_its_best_point_and_the_reset_rule(study):
+    F = study.results["F"]
+    search = F.extra["coil_search"]
+    assert len(search) >= 4
+    lo, hi = F.extra["coil_range_K"]
+    assert all(lo <= s["coil_set_point_K"] <= hi for s in search)
+    inside = [s for s in search if not s["outside_rh_band"]]
+    best = min(inside, key=lambda s: s["tail_corrected_energy_MJ"])
+    assert F.extra["coil_set_point_K"] == pytest.approx(best["coil_set_point_K"])
+    assert F.tail_corrected_J / 1e6 == pytest.approx(best["tail_corrected_energy_MJ"])
+    assert np.ptp(F.run.T_evap_set) == 0.0            # a fixed coil
+    P = study.results["P"]
+    assert np.ptp(P.run.T_evap_set) > 1.0 and "coil set-point" in P.extra["coil_rule"]
+
+
+def test_a_controller_outside_the_rh_band_is_marked_and_not_ranked(study):
+    narrow = dataclasses.replace(study, rh_band=(0.0, 0.01))   # every cabin is above 1 %
+    d = narrow.to_json_dict()
+    assert d["ranking_in_rh_band"] == []
+    for c in d["controllers"].values():
+        assert c["in_rh_band"] is False and c["rank"] is None
+        assert c["rh_status"] == "outside RH band"
+    ranked = study.ranking()
+    E = [study.results[k].tail_corrected_J for k in ranked]
+    assert E == sorted(E) and set(ranked) <= set(CONTROLLERS)
 
 
 def test_economic_nmpc_is_not_worse_than_the_paper_nmpc(study):
     # at equal comfort, optimising an identified power map should not cost more than the
-    # paper's eq. 4 (1 % allowed for model error); the bound, periodic, spins up first
+    # paper's eq. 4 (1 % allowed for model error)
     for key in ("D", "E"):
         assert study.saving_pct(key) > -1.0, key
-    bound = study.results["bound"]
-    assert bound.run.start != study.start_state       # its own periodic state, spun up
-    assert abs(bound.extra["replay_vs_model_pct"]) < 25.0
+    plan = study.results["plan"]
+    assert abs(plan.extra["replay_vs_model_pct"]) < 25.0
 
 
 def test_initial_keys_come_from_the_plant():
@@ -114,7 +159,8 @@ def test_tuning_hits_the_target_of_a_monotone_map():
 
 
 @pytest.mark.parametrize("kw", [{"horizon": 1}, {"T_low": 300.0, "T_high": 299.0},
-                                {"tol_K": 0.2}])
+                                {"tol_K": 0.2}, {"rh_band": (0.6, 0.3)},
+                                {"coil_tol_K": 0.0}])
 def test_study_config_rejects_bad_options(kw):
     with pytest.raises(ConfigError):
         StudyConfig(**kw)

@@ -87,7 +87,7 @@ def test_summary_numbers_are_finite_and_physical(quick_run):
     cav = mpc["cav_paper"]
     assert 0 < cav["case1_energy_MJ"] < 1 and 0 < cav["case2_energy_MJ"] < 1
     for cycle in st["cav"]["summary"]["cycles"].values():
-        assert set(cycle["controllers"]) == {"A", "B", "D", "E", "bound"}
+        assert set(cycle["controllers"]) == {"A", "B", "D", "E", "P", "F", "plan"}
         assert all(0 < c["energy_MJ"] < 2 for c in cycle["controllers"].values())
     assert 0 < st["econ"]["summary"]["power_map_rms_pct"] < 10
 

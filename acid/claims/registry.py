@@ -240,9 +240,9 @@ def _cav_claims() -> list[Claim]:
     ]
 
 
-_ENERGY_NOTE = ("acid cav-study: A, D, E and the bound's replay tuned to B's mean T_cab; "
-                "the end state charged back by a common continuation from the end and the "
-                "start")
+_ENERGY_NOTE = ("acid cav-study: A, D, E, the PI baselines P and F and the best known "
+                "plan's replay tuned to B's mean T_cab; the end state charged back by a "
+                "common continuation from the end and the start")
 #: the drive cycles of the issue's checks (acid reproduce studies them)
 ENERGY_CYCLES = ("udds", "sc03")
 
@@ -255,19 +255,34 @@ def _energy_claims() -> list[Claim]:
         for key, label in (("B", "paper NMPC on the ICM bound"),
                            ("D", "economic NMPC, no preview"),
                            ("E", "economic NMPC, speed preview"),
-                           ("bound", "perfect-information bound, replayed")):
+                           ("P", "production-style PI, coil set-point reset"),
+                           ("F", "best fixed-coil PI (coil set-point searched)"),
+                           ("plan", "best known plan (perfect information), replayed")):
             out.append(Claim(
                 f"energy.{cyc}.{key}.saving", "Beyond the paper",
                 f"{cyc.upper()} at equal mean T_cab: {label}, saving vs the paper's NMPC on a "
                 "constant bound, end state charged back", None,
                 Measured(CavStudyStage, f"{at}.controllers.{key}.saving_tail_corrected_pct",
                          spec=".2f", unit="%"), BeyondThePaper(), note=_ENERGY_NOTE))
+        for key, label in (("D", "no preview"), ("E", "speed preview")):
+            out.append(Claim(
+                f"energy.{cyc}.{key}.vs_best_pi", "Beyond the paper",
+                f"{cyc.upper()} at equal mean T_cab, RH in the band: economic NMPC ({label}), "
+                "saving vs the best fixed-coil PI, end state charged back", None,
+                Measured(CavStudyStage, f"{at}.controllers.{key}.saving_vs_best_pi_pct",
+                         spec=".2f", unit="%"), BeyondThePaper(), note=_ENERGY_NOTE))
         out.append(Claim(
-            f"energy.{cyc}.E.gap_to_bound", "Beyond the paper",
-            f"{cyc.upper()}: economic NMPC with preview above the perfect-information bound "
-            "replayed on the plant", None,
-            Measured(CavStudyStage, f"{at}.controllers.E.gap_to_bound_pct", spec=".2f",
+            f"energy.{cyc}.E.gap_to_best_plan", "Beyond the paper",
+            f"{cyc.upper()}: economic NMPC with preview above the best known plan (perfect "
+            "information, replayed on the plant; a feasible plan, not a bound)", None,
+            Measured(CavStudyStage, f"{at}.controllers.E.gap_to_best_plan_pct", spec=".2f",
                      unit="%"), BeyondThePaper(), note=_ENERGY_NOTE))
+        out.append(Claim(
+            f"energy.{cyc}.plan_spread", "Beyond the paper",
+            f"{cyc.upper()}: the best known plan's uncertainty, spread of independent optima "
+            "replayed on the plant", None,
+            Measured(CavStudyStage, f"{at}.best_plan_spread_pct", spec=".2f", unit="%"),
+            BeyondThePaper(), note=_ENERGY_NOTE))
         out.append(Claim(
             f"energy.{cyc}.preview_share", "Beyond the paper",
             f"{cyc.upper()}: speed preview's share of the saving (E minus D)", None,
@@ -336,8 +351,14 @@ HEADLINE: tuple[HeadlineRow, ...] = (
     HeadlineRow("*beyond the paper*: economic NMPC with preview, saving vs the paper's NMPC at "
                 "equal mean T_cab, end state charged back, UDDS / SC03",
                 tuple(f"energy.{c}.E.saving" for c in ENERGY_CYCLES)),
-    HeadlineRow("*beyond the paper*: its gap to the perfect-information bound replayed on the "
-                "plant, UDDS / SC03", tuple(f"energy.{c}.E.gap_to_bound" for c in ENERGY_CYCLES)),
+    HeadlineRow("*beyond the paper*: the same against the best fixed-coil PI at equal comfort "
+                "(RH in the band), UDDS / SC03",
+                tuple(f"energy.{c}.E.vs_best_pi" for c in ENERGY_CYCLES)),
+    HeadlineRow("*beyond the paper*: its gap to the best known plan (perfect information, "
+                "replayed on the plant), UDDS / SC03",
+                tuple(f"energy.{c}.E.gap_to_best_plan" for c in ENERGY_CYCLES)),
+    HeadlineRow("*beyond the paper*: the best known plan's spread over independent optima, "
+                "UDDS / SC03", tuple(f"energy.{c}.plan_spread" for c in ENERGY_CYCLES)),
     HeadlineRow("*beyond the paper*: speed preview's share of that saving (points), UDDS / SC03",
                 tuple(f"energy.{c}.preview_share" for c in ENERGY_CYCLES)),
 )

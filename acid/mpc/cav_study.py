@@ -1,4 +1,4 @@
-"""Where the A/C energy is: five controllers on the high-fidelity plant over drive cycles.
+"""Where the A/C energy is: seven controllers on the high-fidelity plant over drive cycles.
 
 For each cycle (a standard drive cycle of ``datasets/drive_cycles`` or the paper's
 stop-and-go scenario, repeated) every controller drives the plant through the plant's own
@@ -12,20 +12,33 @@ inputs ``W_bl`` and ``T_evap_set``:
   (:mod:`acid.econ`), comfort band ``[T_low, b]``, speed and ambient held at their current
   values over the horizon (no preview);
 * **E** -- the same controller with the cycle's speed and ambient previewed;
-* **bound** -- the perfect-information bound (:mod:`acid.mpc.bound`): the whole cycle as one
-  optimisation on the same econ model (cyclic state, band, same mean), its plan replayed open
-  loop on the plant.
+* **P** -- production-style automatic climate control: the plant's PI loops with the
+  evaporator set-point reset by cabin error and humidity (:class:`acid.mpc.pi_baselines.
+  CoilReset`, its rule printed with the results);
+* **F** -- the best fixed-coil PI at equal comfort: the plant's PI loops with the coil
+  set-point held, searched over 3-12 degC by golden section (each point tuned to the target
+  mean), the least tail-corrected energy with the cabin RH in the band;
+* **plan** -- the best known plan (perfect information) (:mod:`acid.mpc.best_plan`): the whole
+  cycle as one optimisation on the same econ model (band, same mean), replayed open loop on
+  the plant. It is a feasible plan, an upper estimate of the optimum, not a bound: several
+  independent optima (a cyclic plan replayed from its periodic state, the same plan replayed
+  from the controllers' start, a plan optimised from the controllers' start back to it) are
+  replayed and tail-corrected; the least is the best known plan, their spread its
+  uncertainty.
 
 Fairness
 --------
 * **Same start.** The plant is warmed up (``warmup_s`` at the cycle's mean speed, paper NMPC
   on ``warmup_bound``); A, B, D and E start from that full plant state (``plant.measure()``
-  filtered by the plant's accepted initial keys). The bound's plan is periodic: it is
+  filtered by the plant's accepted initial keys). The cyclic plan is periodic: it is
   replayed once from its optimal periodic state (the plant's other states from the warm-up)
-  to spin up what the model does not have, and measured on the second pass.
-* **Same comfort.** A's bound and D's and E's upper band edge ``b`` are tuned (secant steps)
-  until the run's mean T_cab over samples 1..n equals B's within ``tol_K``; the bound's mean
-  constraint is re-set until its plant replay does.
+  to spin up what the model does not have, and measured on the second pass; the other plan
+  variants start where the controllers do.
+* **Same comfort.** A's bound, D's and E's upper band edge and P's and F's cabin set-point are
+  tuned (secant steps) until the run's mean T_cab over samples 1..n equals B's within
+  ``tol_K``; each plan's mean constraint is re-set until its plant replay does. Humidity is
+  part of comfort: a controller whose mean cabin RH lies outside :data:`acid.comfort.RH_BAND`
+  is marked and not ranked.
 * **Same end state, model-free.** Runs end in different states (cabin, interior, humidity).
   From every start and end state the plant continues for ``tail_s`` under one common
   controller (paper NMPC, constant bound at the target, cycle mean speed); the
@@ -34,9 +47,11 @@ Fairness
   re-derived here.
 
 Reported per controller: energy (compressor + blower, ``sum(P) Ts``), tail-corrected energy,
-mean and max T_cab, comfort violation, PMV (:mod:`acid.comfort`), humidity, saving against
-A (raw and tail-corrected), gap to the bound; per cycle, preview's share (E minus D, points)
-and the bound's band-versus-pinned value. Temperatures in K, energies in J inside.
+mean and max T_cab, comfort violation, PMV (:mod:`acid.comfort`), humidity and the RH-band
+flag, savings against A and against the best fixed-coil PI (tail-corrected; raw against A),
+gap to the best known plan with the plan's spread; per cycle, preview's share (E minus D,
+points) and the plan's band-versus-pinned value. Every comparison uses tail-corrected
+energies. Temperatures in K, energies in J inside.
 """
 
 from __future__ import annotations
@@ -51,24 +66,47 @@ from functools import partial
 import numpy as np
 
 from acid._io import json_safe
-from acid.comfort import ComfortConfig, ComfortStats, comfort_stats
+from acid.comfort import (
+    RH_BAND,
+    RH_BAND_SOURCE,
+    ComfortConfig,
+    ComfortStats,
+    comfort_stats,
+    rh_band_distance,
+)
 from acid.econ import model as econ_model
 from acid.econ.params import MAP_INPUTS, EconParams
 from acid.errors import ConfigError, ExtrapolationWarning
-from acid.mpc.bound import BoundConfig, BoundPlan, perfect_information_bound
+from acid.mpc.best_plan import PlanConfig, WholeCyclePlan, best_known_plan
 from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
 from acid.mpc.icm import ICMConfig, icm_upper_bound
 from acid.mpc.nmpc import NMPC, NMPCConfig
+from acid.mpc.pi_baselines import COIL_RANGE, CoilReset, PlantPI, golden_min
 from acid.params import ModelParams
+from acid.plant.config import PlantConfig
+from acid.psychro import P_ATM
 from acid.units import C2K
 
-CONTROLLERS = ("A", "B", "D", "E", "bound")
+CONTROLLERS = ("A", "B", "D", "E", "P", "F", "plan")
 LABELS = {"A": "A: paper NMPC, constant bound", "B": "B: paper NMPC, ICM bound",
           "D": "D: economic NMPC, no preview", "E": "E: economic NMPC, speed preview",
-          "bound": "bound: perfect information, replayed"}
+          "P": "P: production-style PI, coil set-point reset",
+          "F": "F: best fixed-coil PI at equal comfort",
+          "plan": "plan: best known plan (perfect information), replayed"}
+#: the reference of the second saving column: the best fixed-coil PI
+BEST_PI = "F"
+#: the independent optima whose least tail-corrected energy is the best known plan
+PLAN_VARIANTS = {"cyclic": "cyclic plan, replayed from its periodic state",
+                 "cyclic_common_start": "the same cyclic plan, replayed from the common start",
+                 "from_common_start": "plan optimised from the common start, end state "
+                                      "priced at the optimal steady state's multipliers, "
+                                      "replayed from there",
+                 "cyclic_corrected_model": "cyclic plan on the econ model with the coil "
+                                           "modifier (D's and E's), replayed from its "
+                                           "periodic state"}
 #: The paper's stop-and-go scenario as a study cycle (its 80 s period repeated).
 STOPGO = "stopgo"
-#: the econ model's states, read from the plant by D and E and set by the bound's replay
+#: the econ model's states, read from the plant by D and E and set by the plan's replay
 _MODEL_STATES = econ_model.STATES
 
 PlantFactory = Callable[[], object]
@@ -95,12 +133,24 @@ class StudyConfig:
     T_amb : ambient temperature, K (None: the plant's own).
     warmup_s, warmup_bound : warm-up before the cycle, s, and its constant bound, K (2 h: a
         heavy interior, e.g. a slow node of 25 min, must settle or it dominates the cycle).
-    tol_K : mean-T_cab match of A, D, E and the bound's replay to B, K.
+    tol_K : mean-T_cab match of A, D, E, P, F and the plans' replays to B, K.
     max_iter : iterations of each mean-T_cab tuning.
     tail_s : common continuation measuring the cost of a state, s (0: no correction); long
         enough (40 min) for the interior to converge, so a state's whole cost is charged.
     icm : rule of B.
-    bound : compute the bound (and its replay).
+    plan : compute the best known plan (its variants and their replays).
+    baselines : run the PI baselines P and F.
+    coil_reset : P's evaporator set-point rule.
+    coil_tol_K : width of F's coil set-point search interval at which it stops, K.
+    coil_max : the warmest coil set-point of D, E, the plan and F's search, K (one range for
+        all, 3 degC to this; default paper Table II's 10 degC: with 12 degC the corrected
+        econ model ran D's and E's coils past the cycle's best fixed coil, measured in
+        notes/i21-energy.md).
+    econ_modifier : correct the econ model's coil economics for D, E and one plan variant
+        from steady holds of the plant (:mod:`acid.mpc.econ_modifier`) before they run.
+    modifier_hold_s : length of each of those holds, s (None: as long as the warm-up, at
+        least 30 min).
+    rh_band : cabin relative-humidity band of the comparison (fractions).
     stopgo_s : length of the stop-and-go scenario (80 s periods), s.
     comfort : PMV assumptions.
     """
@@ -116,7 +166,14 @@ class StudyConfig:
     max_iter: int = 8
     tail_s: float = 2400.0
     icm: ICMConfig = field(default_factory=ICMConfig)
-    bound: bool = True
+    plan: bool = True
+    baselines: bool = True
+    coil_reset: CoilReset = field(default_factory=CoilReset)
+    coil_tol_K: float = 0.25
+    coil_max: float = C2K(10.0)
+    econ_modifier: bool = True
+    modifier_hold_s: float | None = None
+    rh_band: tuple[float, float] = RH_BAND
     stopgo_s: float = 800.0
     comfort: ComfortConfig = field(default_factory=ComfortConfig)
 
@@ -133,6 +190,14 @@ class StudyConfig:
             raise ConfigError("warm-up and tail must be >= 0 s, the stop-and-go >= 80 s")
         if not 0 < self.tol_K <= 0.05:
             raise ConfigError(f"tol_K must lie in (0, 0.05] K, got {self.tol_K}")
+        if not 0.0 <= self.rh_band[0] < self.rh_band[1] <= 1.0:
+            raise ConfigError(f"RH band must satisfy 0 <= low < high <= 100 %, got "
+                              f"{100 * self.rh_band[0]:g}-{100 * self.rh_band[1]:g} %")
+        if not 0.01 <= self.coil_tol_K <= 3.0:
+            raise ConfigError(f"coil_tol_K must lie in 0.01..3 K, got {self.coil_tol_K}")
+        if not self.econ.T_evap_set_min + 1.0 <= self.coil_max <= C2K(15.0):
+            raise ConfigError(f"coil_max must lie between the coldest coil set-point + 1 K "
+                              f"and 15 degC, got {self.coil_max - 273.15:g} degC")
 
     def nmpc_config(self, T_amb: float) -> NMPCConfig:
         """The paper NMPC's options (Table II, horizon, lower bound, ambient of eq. 4)."""
@@ -143,8 +208,13 @@ class StudyConfig:
                 "T_low_K": self.T_low, "T_high_K": self.T_high, "T_amb_K": self.T_amb,
                 "warmup_s": self.warmup_s, "warmup_bound_K": self.warmup_bound,
                 "tol_K": self.tol_K, "max_iter": self.max_iter, "tail_s": self.tail_s,
-                "icm": self.icm.to_json_dict(), "bound": self.bound,
-                "stopgo_s": self.stopgo_s, "comfort": self.comfort.to_json_dict()}
+                "icm": self.icm.to_json_dict(), "plan": self.plan,
+                "baselines": self.baselines, "coil_reset": self.coil_reset.to_json_dict(),
+                "coil_tol_K": self.coil_tol_K, "coil_max_K": self.coil_max,
+                "econ_modifier": self.econ_modifier, "modifier_hold_s": self.modifier_hold_s,
+                "rh_band_pct": [100 * self.rh_band[0], 100 * self.rh_band[1]],
+                "rh_band_source": RH_BAND_SOURCE, "stopgo_s": self.stopgo_s,
+                "comfort": self.comfort.to_json_dict()}
 
 
 @dataclass(frozen=True)
@@ -328,7 +398,7 @@ class _ReplayLog:
 
 
 class _Replay:
-    """A fixed input plan applied open loop (the bound's replay)."""
+    """A fixed input plan applied open loop (the plan's replay)."""
 
     def __init__(self, inputs: np.ndarray):
         self.inputs = np.asarray(inputs, dtype=float)
@@ -379,15 +449,15 @@ def run_on_plant(plant_factory: PlantFactory, controller, start: dict, scenario:
 
 
 def tune_mean(run_fn: Callable[[float], tuple], target: float, lo: float, hi: float,
-              tol: float, max_iter: int):
+              tol: float, max_iter: int, start: float | None = None):
     """Constant bound b in [lo, hi] whose run has mean T_cab = ``target`` (secant steps).
 
-    ``run_fn(b)`` returns ``(mean_T_cab, payload)``. Returns ``(b, payload, history)`` of the
-    iterate closest to the target.
+    ``run_fn(b)`` returns ``(mean_T_cab, payload)``; the first iterate is ``start`` (default
+    the target). Returns ``(b, payload, history)`` of the iterate closest to the target.
     """
     hist, best = [], None
     b_prev = f_prev = None
-    b = float(np.clip(target, lo, hi))
+    b = float(np.clip(target if start is None else start, lo, hi))
     for _ in range(max(1, int(max_iter))):
         m, payload = run_fn(b)
         f = m - target
@@ -415,15 +485,15 @@ class ControllerResult:
 
     Attributes
     ----------
-    key, label : ``"A"`` .. ``"bound"`` and a description.
+    key, label : ``"A"`` .. ``"plan"`` and a description.
     run : the plant run over the cycle.
     tail_end_J, tail_start_J : energy of the common continuation from the end and the start
         state, J (NaN without tails).
     comfort : PMV and humidity statistics.
-    upper_bound_K : A's constant bound or D's/E's upper band edge after tuning (None: B,
-        bound).
+    upper_bound_K : A's constant bound, D's/E's upper band edge or P's/F's cabin set-point
+        after tuning (None: B, plan).
     tuning : [(bound K, mean T_cab K)] of the tuning iterations.
-    extra : controller-specific numbers (the bound's model energies, ...).
+    extra : controller-specific numbers (the plan's variants, F's coil search, ...).
     """
 
     key: str
@@ -455,18 +525,21 @@ def _pct(ref: float, x: float) -> float | None:
 
 @dataclass(frozen=True)
 class CycleStudy:
-    """The five controllers on one cycle.
+    """The controllers on one cycle.
 
     Attributes
     ----------
     scenario : the cycle.
     results : {key: ControllerResult} for the controllers that ran.
     start_state : the common warmed-up plant state, K (w_cab kg/kg).
-    target_mean_K : B's mean T_cab, the target of A, D, E and the bound, K.
+    target_mean_K : B's mean T_cab, the target of A, D, E, P, F and the plan, K.
     T_low, T_high : comfort band, K.
     elapsed_s : wall time, s.
     warnings : distinct warnings raised while the cycle ran (e.g. the power map
         extrapolated), one line each.
+    rh_band : cabin RH band of the comparison (fractions).
+    econ_modifier : the coil modifier D and E ran with (:mod:`acid.mpc.econ_modifier`), or
+        None.
     """
 
     scenario: Scenario
@@ -477,21 +550,46 @@ class CycleStudy:
     T_high: float
     elapsed_s: float = float("nan")
     warnings: tuple[str, ...] = ()
+    rh_band: tuple[float, float] = RH_BAND
+    econ_modifier: dict | None = None
 
-    def saving_pct(self, key: str, corrected: bool = True) -> float | None:
-        """Saving of ``key`` against A, %, tail-corrected (``E + tail(end) - tail(start)``)."""
-        a, x = self.results["A"], self.results[key]
+    def saving_pct(self, key: str, corrected: bool = True, ref: str = "A") -> float | None:
+        """Saving of ``key`` against ``ref`` (A or the best fixed-coil PI ``F``), %,
+        tail-corrected (``E + tail(end) - tail(start)``) unless ``corrected`` is False."""
+        if ref not in self.results:
+            return None
+        a, x = self.results[ref], self.results[key]
         if corrected:
             return _pct(a.tail_corrected_J, x.tail_corrected_J)
         return _pct(a.energy_J, x.energy_J)
 
-    def gap_to_bound_pct(self, key: str) -> float | None:
-        """(tail-corrected energy of ``key`` - the bound's replay) / the bound's replay, %."""
-        if "bound" not in self.results:
+    def in_rh_band(self, key: str) -> bool:
+        """Whether ``key``'s mean cabin RH lies inside the band."""
+        return rh_band_distance(self.results[key].comfort.rh_mean, self.rh_band) == 0.0
+
+    def ranking(self) -> list[str]:
+        """The controllers inside the RH band, least tail-corrected energy first (those
+        outside it are not ranked)."""
+        keys = [k for k in CONTROLLERS if k in self.results and self.in_rh_band(k)]
+        return sorted(keys, key=lambda k: self.results[k].tail_corrected_J)
+
+    def gap_to_best_plan_pct(self, key: str) -> float | None:
+        """(tail-corrected energy of ``key`` - the best known plan's) / the plan's, %."""
+        if "plan" not in self.results:
             return None
-        b = self.results["bound"].tail_corrected_J
+        b = self.results["plan"].tail_corrected_J
         x = self.results[key].tail_corrected_J
         return 100.0 * (x - b) / b if b > 0 and math.isfinite(x) else None
+
+    @property
+    def plan_spread_pct(self) -> float | None:
+        """The best known plan's uncertainty: (max - min) / min of the tail-corrected
+        energies of its variants that met the target mean, %."""
+        if "plan" not in self.results:
+            return None
+        e = [v["tail_corrected_energy_MJ"] for v in
+             self.results["plan"].extra.get("variants", {}).values() if v["matched"]]
+        return 100.0 * (max(e) - min(e)) / min(e) if len(e) > 1 else None
 
     @property
     def preview_share_points(self) -> float | None:
@@ -505,6 +603,8 @@ class CycleStudy:
         r = self.results[key]
         run = r.run
         ms = run.step_ms
+        in_band = self.in_rh_band(key)
+        ranking = self.ranking()
         return {
             "label": r.label, "energy_MJ": r.energy_J / 1e6,
             "energy_with_fan_MJ": run.energy_with_fan_J / 1e6,
@@ -512,7 +612,11 @@ class CycleStudy:
             "tail_end_MJ": r.tail_end_J / 1e6, "tail_start_MJ": r.tail_start_J / 1e6,
             "saving_raw_pct": self.saving_pct(key, corrected=False),
             "saving_tail_corrected_pct": self.saving_pct(key),
-            "gap_to_bound_pct": self.gap_to_bound_pct(key),
+            "saving_vs_best_pi_pct": self.saving_pct(key, ref=BEST_PI),
+            "gap_to_best_plan_pct": self.gap_to_best_plan_pct(key),
+            "best_plan_spread_pct": self.plan_spread_pct,
+            "in_rh_band": in_band, "rh_status": "in RH band" if in_band else "outside RH band",
+            "rank": ranking.index(key) + 1 if key in ranking else None,
             "mean_T_cab_K": run.mean_T_cab, "max_T_cab_K": run.max_T_cab,
             "min_T_cab_K": float(np.min(run.T_cab[1:])),
             "comfort_violation_Ks": run.violation_Ks(self.T_low, self.T_high),
@@ -536,6 +640,11 @@ class CycleStudy:
             "target_mean_T_cab_K": self.target_mean_K, "start_state": self.start_state,
             "controllers": {k: self.controller_json(k) for k in CONTROLLERS
                             if k in self.results},
+            "rh_band_pct": [100 * self.rh_band[0], 100 * self.rh_band[1]],
+            "ranking_in_rh_band": self.ranking(),
+            "econ_vs_best_pi_pct": {k: self.saving_pct(k, ref=BEST_PI) for k in ("D", "E")
+                                    if k in self.results},
+            "best_plan_spread_pct": self.plan_spread_pct, "econ_modifier": self.econ_modifier,
             "preview_share_points": self.preview_share_points, "elapsed_s": self.elapsed_s,
             "warnings": list(self.warnings),
         })
@@ -576,8 +685,15 @@ DEFINITIONS = {
                                 "energy of a common continuation (paper NMPC, constant bound "
                                 "at the target, cycle mean speed)",
     "saving_tail_corrected_pct": "100 (A - X) / A of the tail-corrected energies",
-    "gap_to_bound_pct": "100 (X - bound) / bound of the tail-corrected energies, the bound "
-                        "replayed open loop on the plant",
+    "saving_vs_best_pi_pct": "100 (F - X) / F of the tail-corrected energies, F the best "
+                             "fixed-coil PI at equal mean T_cab with RH in the band",
+    "gap_to_best_plan_pct": "100 (X - plan) / plan of the tail-corrected energies, plan the "
+                            "best known plan (perfect information) replayed open loop on the "
+                            "plant: a feasible plan, not a bound",
+    "best_plan_spread_pct": "100 (max - min) / min of the tail-corrected energies of the "
+                            "plan's independent variants: its uncertainty",
+    "in_rh_band": "mean cabin RH inside rh_band_pct (RH_BAND_SOURCE); controllers outside "
+                  "are not ranked",
     "preview_share_points": "saving of E minus saving of D (tail-corrected), points",
 }
 
@@ -639,47 +755,136 @@ class _CycleRunner:
             tuning=tuple(tuning), extra=extra or {})
 
     def tuned(self, key: str, make_controller: Callable[[float], object], lo: float,
-              hi: float) -> ControllerResult:
+              hi: float, start: float | None = None) -> ControllerResult:
         """The controller whose constant bound ``b`` gives the target mean T_cab."""
         def run_fn(b):
             run = self.run(make_controller(b), LABELS[key])
             return run.mean_T_cab, run
 
         b, run, hist = tune_mean(run_fn, self.target, lo, hi, self.config.tol_K,
-                                 self.config.max_iter)
+                                 self.config.max_iter, start=start)
         return self.result(key, run, b, hist)
 
-    def bound(self, econ: EconParams, guess_run: PlantRun | None) -> ControllerResult:
-        """Solve the bound, replay it open loop, re-set its mean until the replay matches."""
-        cfg, sc = self.config, self.sc
+    # ------------------------------------------------------------------ PI baselines
+    def pi(self, key: str, coil, loops, p_atm: float,
+           start: float | None = None) -> ControllerResult:
+        """The plant's PI loops with ``coil`` (K or a :class:`CoilReset`), the cabin
+        set-point tuned to the target mean."""
+        cfg = self.config
+        return self.tuned(key, partial(_plant_pi, loops, self.sc.Ts, coil, p_atm),
+                          cfg.T_low - 2.0, cfg.T_high, start=start)
+
+    def best_fixed_coil(self, loops, p_atm: float) -> ControllerResult:
+        """F: the coil set-point of least tail-corrected energy with RH in the band (golden
+        section from 3 degC to ``coil_max``, each point tuned to the target mean)."""
+        band, last = self.config.rh_band, [None]
+
+        def f(T_coil):
+            r = self.pi("F", T_coil, loops, p_atm, start=last[0])
+            last[0] = r.upper_bound_K
+            out = rh_band_distance(r.comfort.rh_mean, band)
+            return (out > 0.0, out, r.tail_corrected_J), r
+
+        rng = (COIL_RANGE[0], self.config.coil_max)
+        x, r, hist = golden_min(f, *rng, tol=self.config.coil_tol_K)
+        search = [{"coil_set_point_K": float(c), "outside_rh_band": bool(k[0]),
+                   "tail_corrected_energy_MJ": k[2] / 1e6} for c, k in hist]
+        return dataclasses.replace(r, extra={"coil_set_point_K": float(x),
+                                             "coil_search": search,
+                                             "coil_range_K": list(rng)})
+
+    # ------------------------------------------------------------- best known plan
+    def plan(self, econ: EconParams, guess_run: PlantRun | None,
+             corrected: EconParams | None = None) -> ControllerResult:
+        """The best known plan: every variant of :data:`PLAN_VARIANTS` solved, replayed and
+        tail-corrected at the target mean (``corrected``: the econ model with the coil
+        modifier, one more variant); the least is the plan, the others its spread."""
         guess = None
         if guess_run is not None:
             x = np.column_stack([getattr(guess_run, n) for n in _MODEL_STATES])
             guess = (x, np.column_stack([guess_run.W_bl, guess_run.T_evap_set]))
+        x_common = np.array([self.start[n] for n in _MODEL_STATES])
+        found, failed = {}, {}
+        found["cyclic"] = self._plan_variant(econ, guess, None, spin_up=True)
+        cyc_plan = found["cyclic"][1]
+        others = {"cyclic_common_start": (econ, None, False, None),
+                  "from_common_start": (econ, x_common, False, "steady")}
+        if corrected is not None:
+            others["cyclic_corrected_model"] = (corrected, None, True, None)
+        for key, (model, x_start, spin_up, price) in others.items():
+            try:   # an independent optimum that cannot be found is reported, not fatal
+                found[key] = self._plan_variant(
+                    model, (cyc_plan.x, cyc_plan.inputs), x_start, spin_up=spin_up,
+                    price=None if price is None else self._steady_price(model))
+            except ConfigError as exc:
+                failed[key] = {"description": PLAN_VARIANTS[key], "error": str(exc)}
+        # only variants whose replay meets the target mean compete (equal comfort)
+        matched = [k for k, (r, _, _) in found.items()
+                   if abs(r.run.mean_T_cab - self.target) <= self.config.tol_K] or [
+            min(found, key=lambda k: abs(found[k][0].run.mean_T_cab - self.target))]
+        best = min(matched, key=lambda k: found[k][0].tail_corrected_J)
+        res, plan, hist = found[best]
+        pinned = best_known_plan(
+            econ, self.sc.v, self.sc.T_amb,
+            dataclasses.replace(plan.config, pinned=True, cyclic=True),
+            guess=(plan.x, plan.inputs))
+        variants = {k: {"description": PLAN_VARIANTS[k],
+                        "energy_MJ": r.energy_J / 1e6,
+                        "tail_corrected_energy_MJ": r.tail_corrected_J / 1e6,
+                        "mean_T_cab_K": r.run.mean_T_cab, "matched": k in matched,
+                        "rh_mean_pct": 100 * r.comfort.rh_mean,
+                        "model_energy_MJ": p.energy_J / 1e6, "solve_status": p.status,
+                        "replay_iterations": len(h)}
+                    for k, (r, p, h) in found.items()}
+        extra = _plan_extra(plan, pinned, res.run, len(hist))
+        extra["failed_variants"] = failed
+        extra.update(best_variant=best, variants=variants)
+        return dataclasses.replace(res, extra=extra)
+
+    def _steady_price(self, econ: EconParams) -> np.ndarray:
+        """Multipliers of the model's optimal steady state at the cycle's mean speed and
+        ambient (:mod:`acid.mpc.econ_terminal`), J per unit state."""
+        from acid.mpc.econ_terminal import SteadyStatePrice
+
+        e = self.config.econ
+        price = SteadyStatePrice(econ, [e.W_bl_min, e.T_evap_set_min],
+                                 [e.W_bl_max, e.T_evap_set_max])
+        return price(float(np.mean(self.sc.v)), float(np.mean(self.sc.T_amb)),
+                     self.config.T_low, self.config.T_high)
+
+    def _plan_variant(self, econ: EconParams, guess, x_start, spin_up: bool, price=None):
+        """One plan solved at the target mean (re-set until its replay matches), replayed
+        from its periodic state after a spin-up pass (``spin_up``) or from the common start;
+        ``x_start`` and ``price`` make it a plan from that state with its end state priced.
+        Returns ``(result, plan, history)``."""
+        cfg, sc = self.config, self.sc
         T_req, hist, best = self.target, [], None
         for _ in range(max(1, cfg.max_iter // 2)):
-            bc = BoundConfig(T_mean=float(np.clip(T_req, cfg.T_low, cfg.T_high)),
-                             T_low=cfg.T_low, T_high=cfg.T_high, RH_max=cfg.econ.RH_max)
-            plan = perfect_information_bound(econ, sc.v, sc.T_amb, bc, guess=guess)
-            spin_up = self.run(_Replay(plan.inputs), "bound spin-up", self._replay_start(plan))
-            run = self.run(_Replay(plan.inputs), LABELS["bound"], spin_up.end)
+            pc = PlanConfig(T_mean=float(np.clip(T_req, cfg.T_low, cfg.T_high)),
+                            T_low=cfg.T_low, T_high=cfg.T_high, RH_max=cfg.econ.RH_max,
+                            T_evap_set_max=cfg.econ.T_evap_set_max,
+                            T_evap_set_min=cfg.econ.T_evap_set_min,
+                            cyclic=x_start is None)
+            plan = best_known_plan(econ, sc.v, sc.T_amb, pc, guess=guess, x_start=x_start,
+                                   terminal_price=price)
+            start = self.start
+            if spin_up:
+                start = self.run(_Replay(plan.inputs), "plan spin-up",
+                                 self._replay_start(plan)).end
+            run = self.run(_Replay(plan.inputs), LABELS["plan"], start)
             err = run.mean_T_cab - self.target
-            hist.append((bc.T_mean, run.mean_T_cab))
+            hist.append((pc.T_mean, run.mean_T_cab))
             if best is None or abs(err) < abs(best[2]):
                 best = (plan, run, err)
             if abs(err) <= cfg.tol_K:
                 break
-            T_req = bc.T_mean - err
+            T_req = pc.T_mean - err
             guess = (plan.x, plan.inputs)
         plan, run, _ = best
-        pinned = perfect_information_bound(
-            econ, sc.v, sc.T_amb,
-            BoundConfig(T_mean=plan.config.T_mean, T_low=cfg.T_low, T_high=cfg.T_high,
-                        pinned=True, RH_max=cfg.econ.RH_max), guess=(plan.x, plan.inputs))
-        return self.result("bound", run, tuning=hist, tail_start=self.tail(run.start),
-                           extra=_bound_extra(plan, pinned, run, len(hist)))
+        tail_start = self.tail(run.start) if spin_up else None
+        return self.result("plan", run, tuning=hist, tail_start=tail_start), plan, hist
 
-    def _replay_start(self, plan: BoundPlan) -> dict:
+    def _replay_start(self, plan: WholeCyclePlan) -> dict:
         """The common start with the model's states replaced by the plan's periodic state.
 
         The plant has states the model does not (a second interior node, the condenser wall,
@@ -692,8 +897,14 @@ class _CycleRunner:
         return init
 
 
-def _bound_extra(plan: BoundPlan, pinned: BoundPlan, run: PlantRun, iterations: int) -> dict:
-    """The bound's own numbers: model energies, replay error, band-versus-pinned value."""
+def _plant_pi(loops, Ts: float, coil, p_atm: float, T_cab_set: float) -> PlantPI:
+    """P or F at the cabin set-point ``T_cab_set`` (K)."""
+    return PlantPI(loops, Ts, T_cab_set, coil, p_atm)
+
+
+def _plan_extra(plan: WholeCyclePlan, pinned: WholeCyclePlan, run: PlantRun,
+                iterations: int) -> dict:
+    """The plan's own numbers: model energies, replay error, band-versus-pinned value."""
     return {"model_energy_MJ": plan.energy_J / 1e6, "model_mean_T_cab_K": plan.mean_T_cab,
             "replay_vs_model_pct": 100.0 * (run.energy_J - plan.energy_J) / plan.energy_J,
             "pinned_model_energy_MJ": pinned.energy_J / 1e6,
@@ -710,7 +921,7 @@ def study_cycle(params: ModelParams, econ: EconParams, cycle: str, config: Study
     Parameters
     ----------
     params : paper model parameters of A, B, the warm-up and the tails.
-    econ : identified econ model of D, E and the bound.
+    econ : identified econ model of D, E and the plan.
     cycle : cycle name (``available_cycles()``).
     config : study options.
     plant_factory : builds a fresh plant (picklable for ``--cycle all`` in parallel).
@@ -749,6 +960,7 @@ def study_cycle(params: ModelParams, econ: EconParams, cycle: str, config: Study
 def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progress
                  ) -> CycleStudy:
     t0 = time.perf_counter()
+    config = dataclasses.replace(config, econ=config.econ.replace(T_evap_set_max=config.coil_max))
     probe = plant_factory()
     missing = [k for k in _MODEL_STATES + ("T_amb",) if k not in probe.measure()]
     if missing:
@@ -773,19 +985,41 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
     results = {"B": runner.result("B", run_B)}
     results["A"] = runner.tuned("A", partial(_constant_bound, paper, n + N + 1),
                                 config.T_low - 2.0, config.T_high)
+    loops = getattr(probe, "cfg", None) or PlantConfig()
+    p_atm = float(getattr(loops, "p_atm", P_ATM))
+    econ_ctl, modifier = econ, None
+    if config.econ_modifier and {"D", "E"} & set(controllers):
+        from acid.mpc.econ_modifier import coil_modifier
+
+        modifier = coil_modifier(econ, plant_factory, loops, float(np.mean(sc.v)),
+                                 float(np.mean(sc.T_amb)), runner.target, start=runner.start,
+                                 coil_range=(COIL_RANGE[0], config.coil_max),
+                                 hold_s=(max(1800.0, config.warmup_s)
+                                         if config.modifier_hold_s is None
+                                         else config.modifier_hold_s))
+        econ_ctl = modifier.params
     for key, preview in (("D", False), ("E", True)):
         if key in controllers:
-            mpc = EconNMPC(econ, config.econ.replace(T_cab_min=config.T_low,
-                                                     T_cab_max=config.T_high,
-                                                     preview=preview))
+            mpc = EconNMPC(econ_ctl, config.econ.replace(T_cab_min=config.T_low,
+                                                         T_cab_max=config.T_high,
+                                                         preview=preview))
             results[key] = runner.tuned(key, partial(_Econ, mpc, sc), config.T_low + 0.1,
                                         config.T_high)
-    if config.bound and "bound" in controllers:
+    if config.baselines:
+        if "P" in controllers:
+            results["P"] = runner.pi("P", config.coil_reset, loops, p_atm)
+            results["P"] = dataclasses.replace(
+                results["P"], extra={"coil_rule": config.coil_reset.describe()})
+        if "F" in controllers:
+            results["F"] = runner.best_fixed_coil(loops, p_atm)
+    if config.plan and "plan" in controllers:
         guess = results.get("E", results.get("D"))
-        results["bound"] = runner.bound(econ, guess.run if guess is not None else None)
+        results["plan"] = runner.plan(econ, guess.run if guess is not None else None,
+                                      corrected=None if modifier is None else econ_ctl)
     return CycleStudy(scenario=sc, results=results, start_state=runner.start,
                       target_mean_K=runner.target, T_low=config.T_low, T_high=config.T_high,
-                      elapsed_s=time.perf_counter() - t0)
+                      elapsed_s=time.perf_counter() - t0, rh_band=tuple(config.rh_band),
+                      econ_modifier=None if modifier is None else modifier.to_json_dict())
 
 
 def _constant_bound(mpc: NMPC, n: int, b: float) -> _PaperBound:
@@ -796,7 +1030,9 @@ def _constant_bound(mpc: NMPC, n: int, b: float) -> _PaperBound:
 def estimated_steps(config: StudyConfig, n: int, Ts: float = 5.0) -> int:
     """Plant steps one cycle's study takes (for a progress bar; tuning may stop early)."""
     n_t = int(round(config.tail_s / Ts))
-    return int(round(config.warmup_s / Ts)) + n * (1 + 3 * 3 + 4) + 6 * n_t
+    pi = 3 * 2 + 8 * 3 if config.baselines else 0
+    return (int(round(config.warmup_s / Ts)) + n * (1 + 3 * 3 + 3 * 4 + pi)
+            + (6 + 3 + 8) * n_t)
 
 
 def identify_econ(plant_factory: PlantFactory, duration_s: float = 6 * 3600.0,

@@ -24,6 +24,14 @@ Built-in
              the evaporator set-point): the conventional A/C.
 ``econ``     the economic NMPC on the identified power map (``acid cav-study``'s D and E;
              :mod:`acid.sweep.econ`).
+``pi``       the PI baselines of ``acid cav-study`` (:mod:`acid.mpc.pi_baselines`): the
+             plant's blower PI with the coil set-point ``coil = "reset"`` (production-style
+             reset, P), ``"fixed"`` (``T_evap_set_C``) or ``"search"`` (the fixed coil
+             set-point of least energy with the mean cabin RH in the band, golden section
+             over 3-``coil_max_C`` degC, 10 by default as the econ controller's, F);
+             ``match`` tunes the cabin set-point to another controller's mean cabin
+             temperature. The search ranks raw run energies (the sweep's tail correction
+             comes after the controller has run).
 
 Further controllers register from their own module: add it to ``CONTROLLER_MODULES`` (in
 acid) or name it in the spec's ``plugins = ["my_package.my_controller"]``.
@@ -346,13 +354,155 @@ class NominalController:
             predicted_T_cab=np.full((n, 1), np.nan)), plant_state(plant))
 
 
+PI_COILS = ("reset", "fixed", "search")
+
+
+@dataclass(frozen=True)
+class PIControllerConfig:
+    """The PI baselines (module docstring).
+
+    Attributes
+    ----------
+    coil : ``"reset"`` (P), ``"fixed"`` or ``"search"`` (F).
+    T_evap_set_C : the fixed coil set-point, degC (``coil = "fixed"``).
+    coil_max_C : warmest coil set-point of the search, degC.
+    coil_tol_K : search interval width at which the search stops, K.
+    match : label of another controller whose mean cabin temperature is the target.
+    tol_K, max_iter : tolerance and runs of the match.
+    """
+
+    coil: str = "search"
+    T_evap_set_C: float = 9.5
+    coil_max_C: float = 10.0
+    coil_tol_K: float = 0.5
+    match: str = ""
+    tol_K: float = 0.02
+    max_iter: int = 8
+
+    def __post_init__(self):
+        if self.coil not in PI_COILS:
+            raise ConfigError(f"coil = {self.coil!r} unknown (choose {', '.join(PI_COILS)})")
+        if not 3.0 <= self.T_evap_set_C <= 15.0 or not 4.0 <= self.coil_max_C <= 15.0:
+            raise ConfigError("T_evap_set_C must lie in 3..15 degC and coil_max_C in 4..15 "
+                              "degC")
+        if not (0.01 <= self.coil_tol_K <= 3.0 and self.tol_K > 0
+                and 1 <= self.max_iter <= 30):
+            raise ConfigError("need coil_tol_K in 0.01..3 K, tol_K > 0, max_iter in 1..30")
+        if self.coil == "search" and not self.match:
+            raise ConfigError('coil = "search" needs match = "<label>" (equal comfort)')
+
+
+class PIController:
+    """The plant's PI loops with a coil set-point rule, on the sweep's plant."""
+
+    def __init__(self, config: PIControllerConfig):
+        self.config = config
+
+    def run(self, ctx: ScenarioContext) -> ControllerRun:
+        from acid.comfort import RH_BAND, rh_band_distance
+        from acid.mpc.pi_baselines import COIL_RANGE, CoilReset, golden_min
+
+        c = self.config
+        if c.coil != "search":
+            coil = CoilReset() if c.coil == "reset" else C2K(c.T_evap_set_C)
+            return self._matched(ctx, coil)
+
+        def f(T_coil):
+            r = self._matched(ctx, T_coil)
+            out = rh_band_distance(r.info["rh_mean"], RH_BAND)
+            return (out > 0.0, out, r.info["energy_MJ"]), r
+
+        x, r, hist = golden_min(f, COIL_RANGE[0], C2K(c.coil_max_C), tol=c.coil_tol_K)
+        r.info.update(coil_set_point_K=float(x), coil_search=[
+            [float(t), float(k[2])] for t, k in hist])
+        return r
+
+    def _matched(self, ctx: ScenarioContext, coil) -> ControllerRun:
+        """The run at the cabin set-point matching ``match`` (or the scenario's set-point)."""
+        c = self.config
+        if not c.match:
+            return self._simulate(ctx, coil, ctx.conditions.T_set)
+        from acid.mpc.cav_study import tune_mean
+
+        target = ctx.completed[c.match].mean_T_cab
+
+        def run_at(b: float):
+            r = self._simulate(ctx, coil, b)
+            return r.mean_T_cab, r
+
+        b, r, hist = tune_mean(run_at, target, ctx.conditions.T_low - 2.0,
+                               ctx.conditions.T_high, c.tol_K, c.max_iter)
+        r.info.update(T_cab_set_K=b, matched_to=c.match, target_mean_K=target,
+                      tuning_runs=len(hist))
+        return r
+
+    @staticmethod
+    def _simulate(ctx: ScenarioContext, coil, T_cab_set: float) -> ControllerRun:
+        from acid.mpc.pi_baselines import PlantPI
+        from acid.psychro import relative_humidity
+
+        plant = ctx.make_plant()
+        ctl = PlantPI(plant.cfg, ctx.Ts, T_cab_set, coil, plant.cfg.p_atm)
+        r = direct_loop(ctx, plant, lambda meas, k: ctl.make_step(meas, k), "pi",
+                        T_cab_set)
+        w = r.info.pop("w_cab")
+        rh = relative_humidity(r.run.T_cab[1:], w[1:], plant.cfg.p_atm)
+        r.info.update(rh_mean=float(np.mean(rh)), energy_MJ=float(
+            np.sum(r.run.P_comp + r.run.P_bl) * ctx.Ts / 1e6))
+        return r
+
+
+def direct_loop(ctx: ScenarioContext, plant, make_step, label: str, T_cab_max: float,
+                step_ms=None, fallback=None) -> ControllerRun:
+    """``u = make_step(measure(), k); plant.step(u)`` from the scenario's start over its
+    speed, recorded as a :class:`ControllerRun` (``info["w_cab"]``: the cabin humidity
+    ratio at the sample instants, kg/kg)."""
+    from acid.mpc.scenarios import ClosedLoopRun
+    from acid.sweep.context import plant_state
+
+    plant.reset(ctx.start)
+    T_amb = ctx.conditions.T_amb
+    n = ctx.n
+    states, rows = [plant.measure()], []
+    for k in range(n):
+        u = make_step(states[-1], k)
+        rows.append(plant.step(float(u[0]), float(u[1]), float(ctx.v_step[k]), T_amb=T_amb))
+        states.append(plant.measure())
+        if ctx.tick is not None:
+            ctx.tick()
+
+    def col(name):
+        return np.array([float(r.get(name, 0.0)) for r in rows])
+
+    def st(name):
+        return np.array([float(s[name]) for s in states])
+
+    return ControllerRun(ClosedLoopRun(
+        label=label, Ts=ctx.Ts, time=np.arange(n + 1) * ctx.Ts, T_cab=st("T_cab"),
+        T_evap=st("T_evap"), T_int=st("T_int"), T_shell=st("T_shell"),
+        T_cab_max=np.full(n + 1, float(T_cab_max)),
+        T_cab_min=np.full(n + 1, ctx.conditions.T_low), T_evap_min=C2K(0.0),
+        T_evap_max=C2K(12.0), W_bl=col("W_bl"), T_evap_set=col("T_evap_set"),
+        v_veh=np.asarray(ctx.v_step, dtype=float), T_ain=col("T_ain"),
+        P_comp=col("P_comp"), P_bl=col("P_bl"), P_fan=col("P_fan"),
+        compressor_on=np.ones(n, dtype=bool),
+        step_ms=np.full(n, np.nan) if step_ms is None else step_ms(n),
+        fallback=np.zeros(n, dtype=bool) if fallback is None else fallback(n),
+        iterations=np.full(n, -1), predicted_T_cab=np.full((n, 1), np.nan)),
+        plant_state(plant), {"w_cab": st("w_cab")})
+
+
 register_controller("nmpc", PaperNMPCConfig, PaperNMPC,
                     "the paper's NMPC on a constant cabin bound (set-point or band top)")
 register_controller("icm", ICMControllerConfig, ICMController,
                     "the paper's NMPC on the speed-coordinated ICM bound (paper Fig. 9)")
 register_controller("nominal", NominalConfig, NominalController,
                     "the plant's PI controllers (conventional A/C)")
+register_controller("pi", PIControllerConfig, PIController,
+                    "the PI baselines of acid cav-study: coil reset (P), fixed, or the best "
+                    "fixed coil at equal comfort (F)")
 
 __all__ = ["register_controller", "controller_types", "build_config", "ControllerType",
            "PaperNMPC", "PaperNMPCConfig", "ICMController", "ICMControllerConfig",
-           "NominalController", "NominalConfig"]
+           "NominalController", "NominalConfig", "PIController", "PIControllerConfig",
+           "direct_loop"]

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from acid.errors import ConfigError
-from acid.sweep.context import ControllerRun, ScenarioContext, plant_state
+from acid.sweep.context import ControllerRun, ScenarioContext
 from acid.sweep.controllers import register_controller
 from acid.units import C2K
 
@@ -53,6 +53,9 @@ class EconControllerConfig:
     max_iter : closed-loop runs the match may take.
     compiled : solve as generated C when a compiler works (the first build of a horizon
         compiles for a minute or two, then is cached per user); False: inside CasADi.
+    modifier : correct the model's coil economics from steady holds of the scenario's plant
+        first (``acid cav-study``'s D and E; :mod:`acid.mpc.econ_modifier`).
+    coil_max_C : warmest coil set-point, degC (``acid cav-study``'s 10 degC, Table II).
     """
 
     preview: bool = True
@@ -64,6 +67,8 @@ class EconControllerConfig:
     tol_K: float = 0.02
     max_iter: int = 8
     compiled: bool = True
+    modifier: bool = True
+    coil_max_C: float = 10.0
 
     def __post_init__(self):
         if not 30.0 <= self.horizon_s <= 600.0:
@@ -75,6 +80,8 @@ class EconControllerConfig:
                               "'identify')")
         if not (self.tol_K > 0 and 1 <= self.max_iter <= 30):
             raise ConfigError("match needs tol_K > 0 and max_iter in 1..30")
+        if not 4.0 <= self.coil_max_C <= 15.0:
+            raise ConfigError(f"coil_max_C = {self.coil_max_C:g} must lie in 4..15 degC")
 
 
 @functools.lru_cache(maxsize=8)
@@ -134,15 +141,28 @@ class EconController:
 
         c, cond = self.config, ctx.conditions
         n_iv = int(round(c.horizon_s / ctx.Ts))
-        mpc = EconNMPC(econ_params_for(ctx, c),
-                       EconNMPCConfig(intervals=(ctx.Ts,) * n_iv, T_cab_min=cond.T_low,
-                                      T_cab_max=cond.T_high, preview=c.preview,
-                                      compiled="auto" if c.compiled else False))
-        if not c.match:
-            return self._simulate(ctx, mpc, cond.T_high)
-        from acid.mpc.cav_study import tune_mean
+        econ = econ_params_for(ctx, c)
+        target = ctx.completed[c.match].mean_T_cab if c.match else cond.T_set
+        info = {}
+        if c.modifier:
+            from acid.mpc.econ_modifier import coil_modifier
+            from acid.mpc.pi_baselines import COIL_RANGE
 
-        target = ctx.completed[c.match].mean_T_cab
+            plant = ctx.make_plant()
+            mod = coil_modifier(econ, ctx.make_plant, plant.cfg, float(np.mean(ctx.v_step)),
+                                cond.T_amb, target, start=ctx.start,
+                                coil_range=(COIL_RANGE[0], C2K(c.coil_max_C)))
+            econ, info = mod.params, {"modifier_optimal_coil_K": [
+                s["T_star_K"] for s in mod.steps]}
+        mpc = EconNMPC(econ, EconNMPCConfig(intervals=(ctx.Ts,) * n_iv, T_cab_min=cond.T_low,
+                                            T_cab_max=cond.T_high, preview=c.preview,
+                                            T_evap_set_max=C2K(c.coil_max_C),
+                                            compiled="auto" if c.compiled else False))
+        if not c.match:
+            r = self._simulate(ctx, mpc, cond.T_high)
+            r.info.update(info)
+            return r
+        from acid.mpc.cav_study import tune_mean
 
         def run_at(b: float):
             r = self._simulate(ctx, mpc, b)
@@ -151,7 +171,7 @@ class EconController:
         b, r, hist = tune_mean(run_at, target, cond.T_low, cond.T_high, c.tol_K, c.max_iter)
         return ControllerRun(r.run, r.end_state,
                              {"bound_K": b, "matched_to": c.match, "target_mean_K": target,
-                              "tuning_runs": len(hist)})
+                              "tuning_runs": len(hist), **info})
 
     @staticmethod
     def _simulate(ctx: ScenarioContext, mpc, T_cab_max: float) -> ControllerRun:
@@ -159,45 +179,23 @@ class EconController:
         scenario's start with the upper cabin bound ``T_cab_max`` (K)."""
         from acid.econ.model import STATES
         from acid.mpc.econ_nmpc import stage_means
-        from acid.mpc.scenarios import ClosedLoopRun
+        from acid.sweep.controllers import direct_loop
 
-        plant = ctx.make_plant()
-        plant.reset(ctx.start)
         mpc.reset()
-        T_amb = ctx.conditions.T_amb
         iv = mpc.config.intervals
-        n = ctx.n
-        T_amb_preview = np.full(n + ctx.v_preview.size, T_amb)
-        states, rows = [plant.measure()], []
-        for k in range(n):
-            x = [states[-1][name] for name in STATES]
-            u = mpc.make_step(x, stage_means(ctx.v_preview, k, iv, ctx.Ts),
-                              stage_means(T_amb_preview, k, iv, ctx.Ts), T_cab_max=T_cab_max)
-            rows.append(plant.step(float(u[0]), float(u[1]), float(ctx.v_step[k]),
-                                   T_amb=T_amb))
-            states.append(plant.measure())
-            if ctx.tick is not None:
-                ctx.tick()
+        T_amb_preview = np.full(ctx.n + ctx.v_preview.size, ctx.conditions.T_amb)
 
-        def col(name):
-            return np.array([float(r.get(name, 0.0)) for r in rows])
+        def make_step(meas, k):
+            return mpc.make_step([meas[name] for name in STATES],
+                                 stage_means(ctx.v_preview, k, iv, ctx.Ts),
+                                 stage_means(T_amb_preview, k, iv, ctx.Ts),
+                                 T_cab_max=T_cab_max)
 
-        def st(name):
-            return np.array([float(s[name]) for s in states])
-
-        log = mpc.log
-        return ControllerRun(ClosedLoopRun(
-            label="econ", Ts=ctx.Ts, time=np.arange(n + 1) * ctx.Ts, T_cab=st("T_cab"),
-            T_evap=st("T_evap"), T_int=st("T_int"), T_shell=st("T_shell"),
-            T_cab_max=np.full(n + 1, float(T_cab_max)),
-            T_cab_min=np.full(n + 1, ctx.conditions.T_low), T_evap_min=C2K(0.0),
-            T_evap_max=C2K(12.0), W_bl=col("W_bl"), T_evap_set=col("T_evap_set"),
-            v_veh=np.asarray(ctx.v_step, dtype=float), T_ain=col("T_ain"),
-            P_comp=col("P_comp"), P_bl=col("P_bl"), P_fan=col("P_fan"),
-            compressor_on=np.ones(n, dtype=bool),
-            step_ms=np.asarray(log.step_time_s[-n:], dtype=float) * 1e3,
-            fallback=np.asarray(log.fallback[-n:], dtype=bool), iterations=np.full(n, -1),
-            predicted_T_cab=np.full((n, 1), np.nan)), plant_state(plant))
+        r = direct_loop(ctx, ctx.make_plant(), make_step, "econ", T_cab_max,
+                        step_ms=lambda n: np.asarray(mpc.log.step_time_s[-n:]) * 1e3,
+                        fallback=lambda n: np.asarray(mpc.log.fallback[-n:], dtype=bool))
+        r.info.pop("w_cab")
+        return r
 
 
 register_controller("econ", EconControllerConfig, EconController,

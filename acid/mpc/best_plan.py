@@ -1,4 +1,5 @@
-"""The perfect-information bound: a whole drive cycle as one optimisation on the econ model.
+"""The best known plan (perfect information): a whole drive cycle as one optimisation on the
+econ model.
 
 Knowing the whole cycle (speed and ambient at every sample) in advance, the least energy the
 econ model needs to keep the cabin in the comfort band at a given mean temperature::
@@ -13,9 +14,15 @@ econ model needs to keep the cabin in the comfort band at a given mean temperatu
          w_cab(k) <= w(T_cab(k), RH_max)                 optional humidity bound
          u_min <= u(k) <= u_max
 
-``x(0)`` is free (the best periodic state). ``pinned=True`` replaces the band and the mean by
+``x(0)`` is free (the best periodic state), or fixed to a given state (``x_start``; with
+``cyclic`` the plan then returns to it). ``pinned=True`` replaces the band and the mean by
 ``T_cab(k) = T_mean`` for every k: the difference between the two is what shifting cooling in
-time can be worth at all (an upper bound on speed preview's value on this model).
+time can be worth at all (an upper estimate of speed preview's value on this model).
+
+**Not a bound on the plant.** The NLP is nonconvex and solved locally on an identified model;
+replayed open loop on the plant its plan is a feasible operation, an upper estimate of the
+plant's optimum. ``acid cav-study`` therefore replays several independent optima and quotes
+the least as the best known plan, their spread as its uncertainty.
 
 It is one NLP of ``7 n + 5`` variables (CasADi ``Function.map`` over the cycle, exact
 derivatives), solved with IPOPT (the cyclic and mean constraints couple the first and last
@@ -42,15 +49,15 @@ _X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
 
 
 @dataclass(frozen=True)
-class BoundConfig:
-    """Options of the bound (temperatures in K).
+class PlanConfig:
+    """Options of the whole-cycle plan (temperatures in K).
 
     Attributes
     ----------
     T_mean : required mean cabin temperature over samples 1..n, K.
     T_low, T_high : comfort band, K.
     pinned : hold ``T_cab = T_mean`` at every sample instead of band + mean.
-    cyclic : ``x(n) = x(0)`` (otherwise ``x(0)`` is fixed to ``x_start``).
+    cyclic : ``x(n) = x(0)`` (otherwise ``x(0)`` is fixed to ``x_start`` and ``x(n)`` free).
     RH_max : optional cabin relative humidity bound (0-1).
     W_bl_min, W_bl_max, T_evap_set_min, T_evap_set_max : input bounds (paper Table II).
     tol, max_iter : IPOPT options.
@@ -86,7 +93,7 @@ class BoundConfig:
 
 
 @dataclass(frozen=True)
-class BoundPlan:
+class WholeCyclePlan:
     """The optimal cycle on the model.
 
     Attributes
@@ -110,7 +117,7 @@ class BoundPlan:
     success: bool
     iterations: int
     solve_time_s: float
-    config: BoundConfig
+    config: PlanConfig
 
     @property
     def inputs(self) -> np.ndarray:
@@ -124,9 +131,9 @@ class BoundPlan:
                 "config": self.config.to_json_dict()}
 
 
-def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundConfig,
-                              guess: tuple[np.ndarray, np.ndarray] | None = None,
-                              x_start=None) -> BoundPlan:
+def best_known_plan(params: EconParams, v_veh, T_amb, config: PlanConfig,
+                    guess: tuple[np.ndarray, np.ndarray] | None = None,
+                    x_start=None, terminal_price=None) -> WholeCyclePlan:
     """Solve the whole-cycle NLP (module docstring).
 
     Parameters
@@ -135,13 +142,17 @@ def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundCon
     v_veh, T_amb : (n,) vehicle speed (m/s) and ambient (K) per sample.
     config : band, mean, options.
     guess : optional (x (n+1, 5), u (n, 2)) initial guess (e.g. a closed-loop run's).
-    x_start : (5,) fixed initial state when ``config.cyclic`` is False.
+    x_start : (5,) fixed initial state (required when ``config.cyclic`` is False; with
+        ``cyclic`` the plan starts and ends there).
+    terminal_price : (5,) J per unit state: with a non-cyclic plan from ``x_start``, the
+        objective adds ``price . (x(n) - x_start)`` (the end state charged, e.g. at the
+        optimal steady state's multipliers, :mod:`acid.mpc.econ_terminal`).
 
     Raises
     ------
     ConfigError
         The band or mean cannot be met on this model (IPOPT reports infeasibility), or
-        ``x_start`` is missing for a non-cyclic bound.
+        ``x_start`` is missing for a non-cyclic plan.
     """
     import warnings
 
@@ -149,9 +160,9 @@ def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundCon
     Ta = np.broadcast_to(np.asarray(T_amb, dtype=float), v.shape).copy()
     n, Ts, cfg = v.size, params.Ts, config
     if n < 2:
-        raise ConfigError("the bound needs a cycle of at least 2 samples")
+        raise ConfigError("the plan needs a cycle of at least 2 samples")
     for msg in params.power_map.outside(v_veh=v, T_amb=Ta):
-        warnings.warn(f"bound: power map extrapolated: {msg}", ExtrapolationWarning,
+        warnings.warn(f"plan: power map extrapolated: {msg}", ExtrapolationWarning,
                       stacklevel=2)
     F = model.casadi_step(params, Ts).map(n)
     Z = ca.MX.sym("Z", model.NX, n + 1)
@@ -181,14 +192,20 @@ def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundCon
         lbg.append(np.zeros(model.NX))
         ubg.append(np.zeros(model.NX))
     elif x_start is None:
-        raise ConfigError("a non-cyclic bound needs x_start")
+        raise ConfigError("a non-cyclic plan needs x_start")
     w = ca.vertcat(ca.vec(Z), ca.vec(U))
     energy = Ts * ca.sum2(P_c + P_b)
-    nlp = {"x": w, "f": energy / 1e3, "g": ca.vertcat(*g)}
+    cost = energy
+    if terminal_price is not None:
+        if x_start is None or cfg.cyclic:
+            raise ConfigError("a terminal price needs a non-cyclic plan from x_start")
+        lam = ca.DM(np.asarray(terminal_price, dtype=float))
+        cost = energy + ca.dot(lam, X[:, n] - ca.DM(np.asarray(x_start, dtype=float)))
+    nlp = {"x": w, "f": cost / 1e3, "g": ca.vertcat(*g)}
     opts = {"print_time": False, "ipopt": {"print_level": 0, "sb": "yes", "tol": cfg.tol,
                                            "max_iter": int(cfg.max_iter),
                                            "mu_strategy": "adaptive"}}
-    solver = ca.nlpsol("acid_bound", "ipopt", nlp, opts)
+    solver = ca.nlpsol("acid_best_plan", "ipopt", nlp, opts)
     nz = model.NX * (n + 1)
     lbx = np.full(w.shape[0], -np.inf)
     ubx = np.full(w.shape[0], np.inf)
@@ -196,7 +213,7 @@ def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundCon
     u_hi = np.array([cfg.W_bl_max, cfg.T_evap_set_max])
     lbx[nz:] = np.tile(u_lo, n)
     ubx[nz:] = np.tile(u_hi, n)
-    if not cfg.cyclic:
+    if x_start is not None:
         z0 = (np.asarray(x_start, dtype=float) - _X_OFF) / _X_SCL
         lbx[:model.NX] = z0
         ubx[:model.NX] = z0
@@ -210,7 +227,7 @@ def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundCon
     status = str(st.get("return_status", ""))
     if "Infeasible" in status:
         raise ConfigError(
-            f"bound infeasible on this model ({status}): the comfort band "
+            f"whole-cycle plan infeasible on this model ({status}): the comfort band "
             f"{K2C(cfg.T_low):.2f}-{K2C(cfg.T_high):.2f} degC with mean "
             f"{K2C(cfg.T_mean):.2f} degC cannot be held with the inputs' bounds")
     wv = np.asarray(res["x"]).ravel()
@@ -218,9 +235,9 @@ def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundCon
     u = np.clip(wv[nz:].reshape(n, model.NU), u_lo, u_hi)
     _, _, q, pc, pb = (np.asarray(a) for a in F(x[:n].T, u.T, D, ca.DM.zeros(model.NX, n)))
     for msg in params.power_map.outside(Q_e=q.ravel(), T_evap=0.5 * (x[:-1, 3] + x[1:, 3])):
-        warnings.warn(f"bound: the optimal plan extrapolates the power map: {msg}",
+        warnings.warn(f"plan: the optimal plan extrapolates the power map: {msg}",
                       ExtrapolationWarning, stacklevel=2)
-    return BoundPlan(x=x, W_bl=u[:, 0], T_evap_set=u[:, 1], Q_e=q.ravel(), P_comp=pc.ravel(),
+    return WholeCyclePlan(x=x, W_bl=u[:, 0], T_evap_set=u[:, 1], Q_e=q.ravel(), P_comp=pc.ravel(),
                      P_bl=pb.ravel(), energy_J=float(Ts * np.sum(pc + pb)),
                      mean_T_cab=float(np.mean(x[1:, 0])), status=status,
                      success=bool(st.get("success", False)),
@@ -228,7 +245,7 @@ def perfect_information_bound(params: EconParams, v_veh, T_amb, config: BoundCon
                      config=cfg)
 
 
-def _initial_guess(params, v, Ta, cfg: BoundConfig, guess, x_start):
+def _initial_guess(params, v, Ta, cfg: PlanConfig, guess, x_start):
     """The given guess, else a simulation at a constant mid-range input from a mild state."""
     n = v.size
     if guess is not None:
