@@ -83,6 +83,8 @@ def import_data(
     ds.validate(require=required, min_samples=min_samples)
     for rec, p in zip(ds.metadata["experiments"], srcs, strict=True):
         rec["source_sha256"] = file_sha256(p)
+    if len(srcs) == 1:  # one file: its hash at the top level too, as before several files
+        ds.metadata["source_sha256"] = ds.metadata["experiments"][0]["source_sha256"]
     ds.metadata.update({"channel_map_file": str(map_path),
                         "channel_map_sha256": file_sha256(map_path)})
     ds.to_hdf5(out)
