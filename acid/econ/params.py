@@ -12,7 +12,6 @@ A parameter file is JSON with ``"model": "econ"`` (the paper's files have no ``m
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -253,13 +252,9 @@ class EconParams:
 
 
 def _read_json(path: str | Path) -> object:
-    path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{path}: parameter file not found")
-    try:
-        return json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: not valid JSON ({exc.__class__.__name__}: {exc})") from None
+    from acid._readers import load_json
+
+    return load_json(path, "parameter file", DataError, top=None)
 
 
 def model_family(spec) -> str:

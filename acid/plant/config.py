@@ -382,18 +382,10 @@ class PlantConfig:
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> PlantConfig:
         """Read a TOML plant configuration (keys as in ``parameter_table()``, SI units, K)."""
-        try:
-            import tomllib
-        except ModuleNotFoundError:  # Python < 3.11
-            import tomli as tomllib
+        from acid._readers import load_toml
+
         path = Path(path)
-        if not path.is_file():
-            raise ConfigError(f"{path}: plant configuration not found")
-        try:
-            d = tomllib.loads(path.read_text())
-        except Exception as exc:
-            msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise ConfigError(f"{path}: not valid TOML ({msg})") from None
+        d = load_toml(path, "plant configuration", ConfigError)
         return cls.from_dict(d, str(path))
 
     def to_dict(self) -> dict:

@@ -375,18 +375,10 @@ def _controllers(w: _Where, table, plugins) -> tuple[tuple[ControllerEntry, ...]
 
 def load_spec(path: str | Path) -> SweepSpec:
     """Read and validate a sweep specification (TOML); see the module docstring."""
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # Python < 3.11
-        import tomli as tomllib
+    from acid._readers import load_toml
+
     path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{path}: sweep specification not found")
-    try:
-        d = tomllib.loads(path.read_text())
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ConfigError(f"{path}: not valid TOML ({msg})") from None
+    d = load_toml(path, "sweep specification", ConfigError)
     return spec_from_dict(d, str(path), base=path.parent, path=path)
 
 
