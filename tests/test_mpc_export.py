@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from acid.mpc.codegen import find_compiler
 from acid.errors import ConfigError
+from acid.mpc.codegen import find_compiler
 from acid.mpc.export import (
     MAX_DISTURBANCE_K,
     STATUS,

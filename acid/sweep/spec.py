@@ -280,7 +280,12 @@ def _check_value(key: str, value):
         return value
     if key == "plant":
         if not isinstance(value, dict):
-            raise ValueError(f"plant = {value!r} must be a table of PlantConfig fields")
+            raise ValueError(f"plant = {_show(value)} must be a table of PlantConfig fields")
+        for k, v in value.items():
+            if isinstance(v, (dict, list)):
+                raise ValueError(f"plant.{k} must be a value, got a "
+                                 f"{'table' if isinstance(v, dict) else 'list'} (plant "
+                                 "overrides are flat: { V_disp = 4.0e-5 })")
         return dict(value)
     raise KeyError(key)
 
@@ -306,7 +311,8 @@ def _check_table(w: _Where, where: str, table, grid: bool = False) -> dict:
     return out
 
 
-def _params_source(w: _Where, spec: str, base: Path) -> ParamsSource:
+def _params_source(w: _Where, spec: str, base: Path, allow_unstable: bool = False
+                   ) -> ParamsSource:
     if spec in ("paper", "identify"):
         if spec == "paper":
             from acid.params import paper
@@ -325,6 +331,9 @@ def _params_source(w: _Where, spec: str, base: Path) -> ParamsSource:
         p = ModelParams.from_json(path)
     except AcidError as exc:
         raise w.error("params", f"{spec!r}: {exc}") from None
+    problems = [] if allow_unstable else p.stability_problems()
+    if problems:
+        raise w.error("params", f"{spec!r}: {problems[0]} (--allow-unstable uses them anyway)")
     return ParamsSource(spec, "file", p, file_sha256(path))
 
 
@@ -373,19 +382,24 @@ def _controllers(w: _Where, table, plugins) -> tuple[tuple[ControllerEntry, ...]
     return tuple(entries.values()), tuple(order)
 
 
-def load_spec(path: str | Path) -> SweepSpec:
-    """Read and validate a sweep specification (TOML); see the module docstring."""
+def load_spec(path: str | Path, allow_unstable: bool = False) -> SweepSpec:
+    """Read and validate a sweep specification (TOML); see the module docstring.
+
+    Parameter files with unstable or implausible eqs. 1-3 are refused (as by every other
+    command) unless ``allow_unstable``."""
     from acid._readers import load_toml
 
     path = Path(path)
     d = load_toml(path, "sweep specification", ConfigError)
-    return spec_from_dict(d, str(path), base=path.parent, path=path)
+    return spec_from_dict(d, str(path), base=path.parent, path=path,
+                          allow_unstable=allow_unstable)
 
 
 def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None,
-                   path: Path | None = None) -> SweepSpec:
+                   path: Path | None = None, allow_unstable: bool = False) -> SweepSpec:
     """Validate a parsed specification (``source`` names it in messages; relative parameter
-    files are read from ``base``)."""
+    files are read from ``base``; unstable parameter files refused unless
+    ``allow_unstable``)."""
     w = _Where(source)
     base = base or Path.cwd()
     for key in d:
@@ -438,7 +452,7 @@ def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None
         except ConfigError as exc:
             raise w.error(where, str(exc)) from None
         if m["params"] not in sources:
-            sources[m["params"]] = _params_source(w, m["params"], base)
+            sources[m["params"]] = _params_source(w, m["params"], base, allow_unstable)
         s = Scenario(cond, cycle=m["cycle"], duration_s=m["duration_s"],
                      warmup_s=m["warmup_s"], tail_s=m["tail_s"], params=m["params"],
                      plant=tuple(sorted(m["plant"].items())), origin=where)
