@@ -41,6 +41,7 @@ import signal
 import threading
 import time
 import uuid
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 
@@ -359,11 +360,17 @@ class DaskExecutor(Executor):
             # never parked behind another on a busy worker while one idles
             import multiprocessing
 
+            from distributed.deploy.spec import SpecCluster
+
             before = {c.pid for c in multiprocessing.active_children()}
+            clusters = set(SpecCluster._instances)
             try:
                 with dask.config.set({"distributed.scheduler.allowed-failures": 1,
                                       "distributed.scheduler.worker-saturation": 1.0,
-                                      "distributed.worker.daemon": False}):
+                                      "distributed.worker.daemon": False}), \
+                        warnings.catch_warnings():
+                    # no dashboard: its port taken by another cluster is no news
+                    warnings.filterwarnings("ignore", message="Port .* is already in use")
                     self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
                                                 processes=True, dashboard_address=None,
                                                 silence_logs=logging.CRITICAL)
@@ -371,9 +378,11 @@ class DaskExecutor(Executor):
                 self.address = self.cluster.scheduler_address
                 self.client.register_plugin(_ignore_sigint_plugin())
                 self._pids = set(self.client.run(os.getpid).values())
-            except Exception as exc:  # a worker died or could not start: one line
+            except BaseException as exc:  # a worker died, or Ctrl-C / SIGTERM while starting
                 _silence_dask_logs()
-                self._abandon(before)
+                self._abandon(before, clusters)
+                if not isinstance(exc, Exception):
+                    raise
                 first = str(exc).splitlines()[0] if str(exc) else ""
                 raise AcidError(f"the local Dask cluster of {n} worker"
                                 f"{'s' * (n != 1)} did not start ({type(exc).__name__}"
@@ -436,17 +445,25 @@ class DaskExecutor(Executor):
             self.cluster.close(timeout=2 if interrupted else 10)
         self._kill_workers()  # whatever a close that timed out left running
 
-    def _abandon(self, before: set[int]) -> None:
-        """Close what a failed start left (client, cluster, the worker processes started
-        since ``before``), quietly."""
+    def _abandon(self, before: set[int], clusters: set) -> None:
+        """End what a failed or interrupted start left, quietly: the worker processes started
+        since ``before`` are killed, and the clusters created since ``clusters`` are taken off
+        Dask's exit handler, which would otherwise try to close a half-started cluster at
+        exit and print a traceback (``AssertionError: Status.init``)."""
         import multiprocessing
 
+        from distributed.deploy.spec import SpecCluster
+
         self._pids |= {c.pid for c in multiprocessing.active_children()} - before
-        for part in (getattr(self, "client", None), self.cluster):
-            if part is not None:
-                with contextlib.suppress(Exception):
-                    part.close(timeout=2)
         self._kill_workers()
+        client = getattr(self, "client", None)
+        if client is not None:
+            with contextlib.suppress(Exception):
+                client.close(timeout=2)
+        for cluster in set(SpecCluster._instances) - clusters:
+            SpecCluster._instances.discard(cluster)
+            with contextlib.suppress(Exception):
+                cluster.shutdown_on_close = False
 
     def _kill_workers(self) -> None:
         """SIGKILL the local cluster's worker processes (only children of this process)."""
@@ -460,7 +477,7 @@ class DaskExecutor(Executor):
 
 def _silence_dask_logs() -> None:
     """Mute Dask's and Tornado's loggers in this process (closing comms on purpose)."""
-    for name in ("distributed", "tornado"):
+    for name in ("distributed", "tornado", "asyncio"):
         logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 

@@ -61,6 +61,11 @@ from acid.sweep.conditions import G_REF, RANGES, Conditions, plant_config_for
 
 MAX_SCENARIOS = 100_000
 MAX_DURATION_S = 86_400.0
+#: most samples of one scenario (warm-up + run + tail at the plant's Ts: 3 days at 5 s is
+#: 51840), checked when the spec is read
+MAX_SCENARIO_SAMPLES = 100_000
+#: a drive cycle pass counts as this long for that bound (the shipped cycles are shorter)
+CYCLE_PASS_BOUND_S = 3600.0
 MAX_SPEED_M_S = 45.0
 DEFAULT_CONSTANT_DURATION_S = 600.0
 DEFAULT_CONTROLLERS = ("nmpc", "icm")
@@ -462,6 +467,14 @@ def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None
                 configs[ck] = s.plant_config()
             except ConfigError as exc:
                 raise w.error(where, str(exc).replace("plant overrides: ", "plant: ")) from None
+        run_s = s.duration_s or (CYCLE_PASS_BOUND_S if isinstance(s.cycle, str)
+                                 else DEFAULT_CONSTANT_DURATION_S)
+        n = (s.warmup_s + run_s + s.tail_s) / configs[ck].Ts
+        if n > MAX_SCENARIO_SAMPLES:
+            raise w.error(where, f"warmup_s + duration_s + tail_s = "
+                                 f"{s.warmup_s + run_s + s.tail_s:g} s at the plant's Ts = "
+                                 f"{configs[ck].Ts:g} s is {n:.0f} samples (at most "
+                                 f"{MAX_SCENARIO_SAMPLES})")
         scenarios.append(s)
 
     controllers, run_order = _controllers(w, d.get("controllers"), tuple(plugins))
