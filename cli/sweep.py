@@ -115,16 +115,17 @@ def sweep(
         say("specification OK; nothing run (--dry-run)")
         return
     with claim(out, "acid sweep"):  # before anything is printed: a busy folder is one line
-        say(header)
-        _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path)
+        _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path, header)
 
 
-def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path) -> None:
+def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path,
+         header) -> None:
     from acid.sweep import run_sweep
 
     n = len(spec.scenarios)
     with progress_bar(f"sweep {spec.title}", total=n) as update:
         def on_start(to_run: int, reused: int, where: str) -> None:
+            say(header)  # once the workers are up: a cluster that fails is one line alone
             update(0, max(to_run, 1))
             done = f"{reused} scenario{'s' * (reused != 1)} finished earlier"
             err_console.print(Text(f"{done}; running {to_run} on {where}" if to_run else

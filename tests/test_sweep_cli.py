@@ -194,3 +194,27 @@ def test_a_malformed_scheduler_address_is_one_line(tmp_path, no_workers, address
     assert res.exit_code == 2
     assert_one_line_error(res, "--scheduler", fragment)
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_a_worker_that_dies_while_the_cluster_starts_is_one_line(tmp_path):
+    """Every worker process exits in its preload (as a worker killed by the OOM killer or a
+    broken environment would): one line, exit 2, nothing left running."""
+    import os
+    import subprocess
+    import sys
+
+    die = tmp_path / "die.py"
+    die.write_text("import os\nos._exit(3)\n")
+    spec = tmp_path / "s.toml"
+    spec.write_text(TINY)
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__PRELOAD": json.dumps([str(die)])}
+    exe = os.path.join(os.path.dirname(sys.executable), "acid")
+    r = subprocess.run([exe, "sweep", str(spec), "--out", str(tmp_path / "o"), "--workers",
+                        "2"], capture_output=True, text=True, env=env, timeout=600)
+    text = r.stdout + r.stderr
+    assert r.returncode == 2, text
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: the local Dask cluster"), text
+    assert "did not start" in lines[0] and "--workers 1" in lines[0]
+    assert not (tmp_path / "o" / "results.csv").exists()

@@ -116,7 +116,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
         tasks = spec.tasks()
         todo = [t for t in tasks if force or not store.finished(t.key, retry_failed)]
         tampered = dict(store.tampered)
-        if spec.path is not None and spec.path.is_file() and not (out / "spec.toml").exists():
+        if spec.path is not None and spec.path.is_file():
             from acid._io import write_text  # marks the folder as this spec's at once
 
             write_text(out / "spec.toml", spec.path.read_text())
@@ -159,21 +159,24 @@ def check_out_folder(spec: SweepSpec, out: str | Path, force: bool = False) -> N
     """Refuse (``ConfigError`` naming ``--out``) an output folder that holds the results of
     another specification: its ``spec.toml`` (written when a sweep starts) is not this
     spec's (compared as parsed TOML: comments and layout may differ), or it has results
-    without one. The same specification resumes; ``force`` replaces them."""
+    (tables, summary or scenario records) without one. The same specification resumes;
+    ``force`` replaces them; a folder without results takes any specification."""
     from acid._readers import load_toml
 
     out = Path(out)
     if force or spec.path is None:
         return
+    found = [n for n in ("summary.json", "results.parquet", "results.csv")
+             if (out / n).exists()]
+    if not found and (out / "scenarios").is_dir() and any((out / "scenarios").glob("*.json")):
+        found = ["scenarios/"]
+    if not found:  # nothing to lose (a run that never finished a scenario)
+        return
     theirs = out / "spec.toml"
     hint = "choose another --out, or give --force to replace them"
     if not theirs.exists():
-        found = [n for n in ("summary.json", "results.parquet", "results.csv")
-                 if (out / n).exists()]
-        if found:
-            raise ConfigError(f"--out {out}: holds sweep results ({found[0]}) of an unknown "
-                              f"specification (no spec.toml); {hint}")
-        return
+        raise ConfigError(f"--out {out}: holds sweep results ({found[0]}) of an unknown "
+                          f"specification (no spec.toml); {hint}")
     try:
         same = load_toml(theirs, "spec.toml") == load_toml(spec.path, "sweep specification")
     except AcidError:
