@@ -5,14 +5,14 @@ sweep specifications, FMU maps, ``summary.json``) goes through :func:`load_toml`
 :func:`load_json`. They refuse, with one line naming the file (and the key where there is
 one), a file larger than ``max_bytes`` (checked before it is read), text that is not UTF-8,
 syntax errors, nesting deeper than ``max_depth`` (refused while scanning, before the parser
-recurses) and a top level that is not a table / object. What a reader then does with the
-values is its own business; :func:`require_table` helps name the key of a table that is not
-one.
+recurses; dotted TOML keys are checked on the parsed tree) and a top level of the wrong
+kind. What a reader then does with the values is its own business.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 
@@ -91,15 +91,19 @@ def _check_depth(text: str, path: Path, what: str, error, max_depth: int, toml: 
 
 
 def check_tree(obj, source: str, error: type[AcidError] = DataError,
-               max_depth: int = MAX_DEPTH) -> None:
+               max_depth: int = MAX_DEPTH, finite: bool = False) -> None:
     """Refuse a parsed tree nested deeper than ``max_depth`` (dotted TOML keys nest without
-    brackets), naming the first key path that does; iterative."""
+    brackets), or holding NaN or an infinity when ``finite`` (JSON has no such numbers),
+    naming the first key path that does; iterative."""
     stack = [(obj, "", 0)]
     while stack:
         node, where, depth = stack.pop()
         if depth > max_depth:
             raise error(f"{source}: {where or 'the top level'} nests deeper than {max_depth} "
                         "levels")
+        if finite and isinstance(node, float) and not math.isfinite(node):
+            raise error(f"{source}: {where or 'the top level'} = {node} is not a finite "
+                        "number (JSON has no NaN or infinity)")
         if isinstance(node, dict):
             stack.extend((v, f"{where}.{k}" if where else str(k), depth + 1)
                          for k, v in node.items())
@@ -111,19 +115,16 @@ def load_json(path: str | os.PathLike, what: str = "JSON file",
               error: type[AcidError] = DataError, max_bytes: int = MAX_BYTES,
               max_depth: int = MAX_DEPTH, top: type | None = dict):
     """Parse a JSON file (see the module docstring); ``top`` the required type of the top
-    level (None: any). NaN and infinities are refused (not JSON)."""
+    level (None: any). NaN and infinities are refused, naming their key (not JSON)."""
     path = Path(path)
     text = read_text(path, what, error, max_bytes)
     _check_depth(text, path, what, error, max_depth, toml=False)
 
-    def no_constant(name):
-        raise ValueError(f"{name} is not a JSON number")
-
     try:
-        obj = json.loads(text, parse_constant=no_constant)
+        obj = json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise error(f"{path}: not valid JSON ({_first_line(exc)})") from None
-    check_tree(obj, str(path), error, max_depth)
+    check_tree(obj, str(path), error, max_depth, finite=True)
     if top is not None and not isinstance(obj, top):
         kind = {dict: "object", list: "array"}.get(top, top.__name__)
         raise error(f"{path}: {what} must be a JSON {kind} at the top level, got "
@@ -164,25 +165,5 @@ def _kind(value) -> str:
     return "a number" if isinstance(value, (int, float)) else type(value).__name__
 
 
-def require_table(value, source: str, key: str, error: type[AcidError] = ConfigError) -> dict:
-    """``value`` if it is a table (dict), else ``error`` naming ``key``."""
-    if not isinstance(value, dict):
-        raise error(f"{source}: {key} must be a table, got {_kind(value)}")
-    return value
-
-
-def flat_values(table: dict, source: str, key: str,
-                error: type[AcidError] = ConfigError) -> dict:
-    """``table`` if none of its values is itself a table or an array of tables (override
-    tables are flat: ``{ V_disp = 4e-5 }``), else ``error`` naming ``key.<entry>``."""
-    require_table(table, source, key, error)
-    for k, v in table.items():
-        if isinstance(v, dict) or (isinstance(v, list) and any(isinstance(x, (dict, list))
-                                                               for x in v)):
-            raise error(f"{source}: {key}.{k} must be a value, got {_kind(v)} (override "
-                        "tables are flat: NAME = value)")
-    return table
-
-
-__all__ = ["load_json", "load_toml", "read_text", "nesting_depth", "check_tree",
-           "require_table", "flat_values", "MAX_BYTES", "MAX_DEPTH"]
+__all__ = ["load_json", "load_toml", "read_text", "nesting_depth", "check_tree", "MAX_BYTES",
+           "MAX_DEPTH"]
