@@ -26,7 +26,7 @@ MAX_DEPTH = 32
 
 
 def read_text(path: str | os.PathLike, what: str = "file", error: type[AcidError] = DataError,
-              max_bytes: int = MAX_BYTES) -> str:
+              max_bytes: int = MAX_BYTES, kind: str = "text") -> str:
     """The UTF-8 text of ``path``, refused (``error``, one line) when it is missing, not a
     file, larger than ``max_bytes`` or not UTF-8."""
     path = Path(path)
@@ -44,7 +44,7 @@ def read_text(path: str | os.PathLike, what: str = "file", error: type[AcidError
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise error(f"{path}: {what} is not UTF-8 text (byte {exc.start})") from None
+        raise error(f"{path}: not valid {kind} (not UTF-8 text at byte {exc.start})") from None
 
 
 def nesting_depth(text: str, toml: bool = False) -> int:
@@ -117,7 +117,7 @@ def load_json(path: str | os.PathLike, what: str = "JSON file",
     """Parse a JSON file (see the module docstring); ``top`` the required type of the top
     level (None: any). NaN and infinities are refused, naming their key (not JSON)."""
     path = Path(path)
-    text = read_text(path, what, error, max_bytes)
+    text = read_text(path, what, error, max_bytes, "JSON")
     _check_depth(text, path, what, error, max_depth, toml=False)
 
     try:
@@ -141,7 +141,7 @@ def load_toml(path: str | os.PathLike, what: str = "TOML file",
     except ModuleNotFoundError:  # Python < 3.11
         import tomli as tomllib
     path = Path(path)
-    text = read_text(path, what, error, max_bytes)
+    text = read_text(path, what, error, max_bytes, "TOML")
     _check_depth(text, path, what, error, max_depth, toml=True)
     try:
         d = tomllib.loads(text)

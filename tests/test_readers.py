@@ -39,7 +39,7 @@ def test_size_encoding_syntax_and_top_level_are_one_line(tmp_path):
     with pytest.raises(DataError, match="f.json: JSON file is larger than"):
         load_json(f, max_bytes=2048)
     f.write_bytes(b'{"a": "\xff"}')
-    with pytest.raises(DataError, match=r"f.json: JSON file is not UTF-8 text \(byte 7\)"):
+    with pytest.raises(DataError, match=r"f.json: not valid JSON \(not UTF-8 text at byte 7\)"):
         load_json(f)
     f.write_text('{"a": [1.0, {"b": NaN}]}')
     with pytest.raises(DataError, match=r"f.json: a\[1\]\.b = nan is not a finite number"):
