@@ -102,7 +102,7 @@ def check_tree(obj, source: str, error: type[AcidError] = DataError,
             raise error(f"{source}: {where or 'the top level'} nests deeper than {max_depth} "
                         "levels")
         if finite and isinstance(node, float) and not math.isfinite(node):
-            raise error(f"{source}: {where or 'the top level'} = {node} is not a finite "
+            raise error(f"{source}: {where or 'the top level'} = {node} is a non-finite "
                         "number (JSON has no NaN or infinity)")
         if isinstance(node, dict):
             stack.extend((v, f"{where}.{k}" if where else str(k), depth + 1)

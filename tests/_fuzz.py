@@ -699,6 +699,43 @@ def _read_record(path: Path):
     return rec
 
 
+# ------------------------------------------------------------------ econ parameters
+def _valid_econ() -> dict:
+    from conftest import ECON_MAP, ECON_TRUTH
+
+    from acid.econ.params import EconParams, PowerMap
+
+    domain = {"Q_e": (-500.0, 6000.0), "T_evap": (270.0, 290.0), "v_veh": (0.0, 35.0),
+              "T_amb": (290.0, 320.0)}
+    return json.loads(json.dumps(EconParams(values=dict(ECON_TRUTH), C_ew=2000.0, power_map=(
+        PowerMap(coef=ECON_MAP, domain=domain)), name="truth").to_json_dict()))
+
+
+econ_keys = ["model", "name", "Ts", "parameters", "parameters.C_cab", "parameters.C_cab.value",
+             "parameters.r_max.value", "C_ew", "C_ew.value", "beta", "power_map",
+             "power_map.coef", "power_map.domain", "provenance", "extra"]
+
+
+@st.composite
+def econ_files(draw):
+    kind = draw(st.sampled_from(["mutated", "mutated", "mutated", "damaged", "deep", "bytes"]))
+    if kind == "bytes":
+        return draw(raw_bytes())
+    if kind == "deep":
+        return draw(deep_text(toml=False))
+    base = _valid_econ()
+    if kind == "damaged":
+        return draw(damaged(json.dumps(base)))
+    d = draw(mutated(base, econ_keys, st.one_of(json_value, odd_float, number_lists)))
+    return _text_writer(json.dumps(d))
+
+
+def _read_econ(path: Path):
+    from acid.econ.params import load_any_params
+
+    return load_any_params(path)
+
+
 # ------------------------------------------------------------------------- readers
 def _read_csv(path: Path, cmap: dict):
     from acid.data import ChannelMap, from_csv
@@ -727,6 +764,7 @@ READERS: dict[str, Reader] = {
     "fmu_map": Reader("fmu_map", ".toml", fmu_map_files(), _read_fmu_map),
     "summary_json": Reader("summary_json", ".json", summary_files(), _read_summary),
     "sweep_record": Reader("sweep_record", ".json", record_files(), _read_record),
+    "econ_params": Reader("econ_params", ".json", econ_files(), _read_econ),
 }
 
 

@@ -42,7 +42,7 @@ def test_size_encoding_syntax_and_top_level_are_one_line(tmp_path):
     with pytest.raises(DataError, match=r"f.json: not valid JSON \(not UTF-8 text at byte 7\)"):
         load_json(f)
     f.write_text('{"a": [1.0, {"b": NaN}]}')
-    with pytest.raises(DataError, match=r"f.json: a\[1\]\.b = nan is not a finite number"):
+    with pytest.raises(DataError, match=r"f.json: a\[1\]\.b = nan is a non-finite number"):
         load_json(f)
     f.write_text("[1]")
     with pytest.raises(DataError, match="must be a JSON object at the top level, got an array"):

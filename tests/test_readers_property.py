@@ -1,5 +1,6 @@
 """Property: every reader of acid (HDF5 datasets, CSV and MAT imports, channel maps,
-params.json, the plant configuration TOML, sweep specifications, FMU maps, summary.json, sweep
+params.json, econ parameters, the plant configuration TOML, sweep specifications, FMU maps,
+summary.json, sweep
 scenario records) refuses damaged or foreign files with acid's own
 one-line error (``AcidError``) and nothing else.
 

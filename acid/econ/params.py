@@ -139,7 +139,7 @@ class PowerMap:
         try:
             return cls(coef=tuple(d["coef"]), stderr=tuple(d.get("stderr") or ()),
                        domain=d.get("domain") or {}, quality=d.get("quality") or {})
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise DataError(f"{source}: malformed power_map ({exc})") from None
 
 
@@ -241,7 +241,7 @@ class EconParams:
                        provenance=d.get("provenance") or {})
         except DataError as exc:
             raise DataError(f"{source}: {exc}") from None
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise DataError(f"{source}: malformed econ parameters (missing or bad {exc})") \
                 from None
 
