@@ -348,3 +348,18 @@ def test_an_fmu_failing_during_extraction_leaves_no_temporary_folder(exported_fm
     with pytest.raises(FmuError, match="crc.fmu: cannot extract the FMU"):
         make_plant(f"fmu:{bad}", fmu_map=fmu_map)
     assert list(private_tmp.iterdir()) == []
+
+
+def test_an_fmu_rejected_after_unpacking_leaves_no_temporary_folder(exported_fmu, tmp_path,
+                                                                    private_tmp):
+    """The map names a variable the FMU lacks: refused after extraction, folder removed."""
+    import shutil
+
+    fmu, fmu_map = exported_fmu
+    own = tmp_path / "own.fmu"
+    shutil.copy(fmu, own)  # a file of its own: nothing cached for it
+    bad_map = tmp_path / "bad.toml"
+    bad_map.write_text(fmu_map.read_text().replace('"state.T_cab"', '"state.T_nowhere"'))
+    with pytest.raises(FmuError, match="own.fmu does not have"):
+        make_plant(f"fmu:{own}", fmu_map=bad_map)
+    assert list(private_tmp.iterdir()) == []

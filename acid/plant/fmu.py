@@ -628,13 +628,20 @@ class FmuPlant(Plant):
         if mode == "nominal" and "nominal" not in self.map.modes:
             raise ConfigError(f"{self.map.source}: no [modes.nominal] table: the FMU's own "
                               "(nominal) controller cannot be selected")
+        fresh = self.path.is_file() and _file_key(self.path) not in _EXTRACTED
         self.md, folder = _open_fmu(self.path)
-        self.fmi_version = str(self.md.fmiVersion)
-        self._vars = {v.name: v for v in self.md.modelVariables}
-        self._units = {u.name: u for u in (self.md.unitDefinitions or [])}
-        self._resolve_all()
-        self._embedded = self._read_embedded(folder)
-        self._inst = _Instance(self.md, folder, self.fmu_name, instance_name)
+        try:
+            self.fmi_version = str(self.md.fmiVersion)
+            self._vars = {v.name: v for v in self.md.modelVariables}
+            self._units = {u.name: u for u in (self.md.unitDefinitions or [])}
+            self._resolve_all()
+            self._embedded = self._read_embedded(folder)
+            self._inst = _Instance(self.md, folder, self.fmu_name, instance_name)
+        except BaseException:  # a rejected FMU (map, binary): its unpacked copy goes now
+            if fresh:
+                _EXTRACTED.pop(_file_key(self.path), None)
+                shutil.rmtree(folder, ignore_errors=True)
+            raise
         self._finalizer = weakref.finalize(self, self._inst.close)
         self._finalizer.atexit = False  # no FMI calls while the interpreter shuts down
         self._state: dict[str, float] = {}
