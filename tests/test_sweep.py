@@ -118,9 +118,9 @@ def test_identification_runs_once_per_plant_configuration(tmp_path, monkeypatch)
 
     calls, real = [], runner.identify_params
 
-    def counted(cfg, settings):
+    def counted(cfg, settings, *rest):
         calls.append(settings)
-        return real(cfg, settings)
+        return real(cfg, settings, *rest)
 
     monkeypatch.setattr(runner, "identify_params", counted)
     res = run_sweep(spec_from_dict(d, "ident"), tmp_path, executor=InlineExecutor(),
@@ -165,3 +165,26 @@ def test_tampered_records_are_reported_and_run_again(tmp_path):
     assert json.loads((tmp_path / "summary.json").read_text())["tampered_records"] == why
     assert record_problem(good, good["key"], ("nominal",)) == ""
     assert "controllers" in record_problem(good, good["key"], ("nmpc", "icm"))
+
+
+def test_unstable_identified_parameters_fail_their_scenarios_unless_allowed(tmp_path,
+                                                                            monkeypatch):
+    """What the spec check cannot see before the run (params = "identify") is checked where
+    the parameters appear: the scenarios that need them are errors naming the flag."""
+    from acid.params import ModelParams
+
+    d = {"defaults": {"cycle": 15.0, "duration_s": 60.0, "warmup_s": 0.0,
+                      "params": "identify"},
+         "grid": {"ambient_C": [30.0]}, "identify": {"duration_s": 1800.0, "method": "ls"},
+         "controllers": {"nominal": {}}}
+    # the identified model is made to look unstable: the check, not the fit, is under test
+    monkeypatch.setattr(ModelParams, "stability_problems",
+                        lambda self: ["eq. 2 is unstable: gamma4 + gamma5 = 1.2"])
+    res = run_sweep(spec_from_dict(d, "ident"), tmp_path / "a", executor=InlineExecutor(),
+                    figures=False)
+    assert res.failed == 1
+    [f] = res.failures()
+    assert "eq. 2 is unstable" in f["error"] and "--allow-unstable" in f["error"]
+    ok = run_sweep(spec_from_dict(d, "ident", allow_unstable=True), tmp_path / "b",
+                   executor=InlineExecutor(), figures=False)
+    assert ok.failed == 0 and set(ok.table["status"]) == {"ok"}

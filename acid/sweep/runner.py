@@ -198,7 +198,8 @@ def _execute(spec, todo, store, ex: Executor, on_progress, on_start,
         if t.params_kind == "identify":
             k = repr(t.plant_config)
             if k not in ident:
-                ident[k] = ex.submit(identify_params, t.plant_config, spec.identify)
+                ident[k] = ex.submit(identify_params, t.plant_config, spec.identify,
+                                     spec.allow_unstable)
             params = ident[k]
         running[ex.submit(run_scenario, t, params, check_interrupt)] = t
     done = failed = 0

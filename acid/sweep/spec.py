@@ -197,6 +197,7 @@ class SweepSpec:
     identify: IdentifySettings = field(default_factory=IdentifySettings)
     plugins: tuple[str, ...] = ()
     path: Path | None = None
+    allow_unstable: bool = False
 
     def scenario_key(self, s: Scenario) -> str:
         """Hash of the scenario, its controllers, parameters and acid's version (16 hex)."""
@@ -504,7 +505,7 @@ def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None
     return SweepSpec(title=title, scenarios=tuple(scenarios), controllers=controllers,
                      run_order=run_order, baseline=baseline, params=sources,
                      identify=identify,
-                     plugins=tuple(plugins), path=path)
+                     plugins=tuple(plugins), path=path, allow_unstable=allow_unstable)
 
 
 def _show(v) -> str:
