@@ -540,6 +540,28 @@ def deep_text(draw, toml: bool):
     return _text_writer(f'{{"x": {inner}}}')
 
 
+@st.composite
+def documents(draw, base: Callable[[], dict], keys: list[str], value: st.SearchStrategy,
+              toml: bool, edit: Callable | None = None):
+    """A file of one kind of document: ``base()`` with keys mutated (``mutated``), or
+    edited by ``edit(draw, base)`` (a strategy's own change), damaged text, deep nesting,
+    or raw bytes."""
+    kinds = ["mutated", "mutated", "damaged", "deep", "bytes"] + ["edit"] * 2 * bool(edit)
+    kind = draw(st.sampled_from(kinds))
+    if kind == "bytes":
+        return draw(raw_bytes())
+    if kind == "deep":
+        return draw(deep_text(toml=toml))
+    d = base()
+    dump = toml_document if toml else (lambda x: json.dumps(x, allow_nan=True))
+    if kind == "damaged":
+        return draw(damaged(dump(d)))
+    if kind == "edit":
+        edit(draw, d)
+        return _text_writer(dump(d))
+    return _text_writer(dump(draw(mutated(d, keys, value))))
+
+
 # ----------------------------------------------------------------------- sweep specs
 VALID_SPEC = {"title": "fuzz", "baseline": "nmpc",
               "defaults": {"cycle": 15.0, "duration_s": 60.0, "warmup_s": 0.0,
@@ -554,17 +576,8 @@ spec_keys = ["title", "baseline", "defaults", "defaults.cycle", "defaults.durati
              "controllers.nmpc.N", "identify", "identify.seed", "scenarios", "extra"]
 
 
-@st.composite
-def sweep_spec_files(draw):
-    kind = draw(st.sampled_from(["mutated", "mutated", "mutated", "damaged", "deep", "bytes"]))
-    if kind == "bytes":
-        return draw(raw_bytes())
-    if kind == "deep":
-        return draw(deep_text(toml=True))
-    if kind == "damaged":
-        return draw(damaged(toml_document(VALID_SPEC)))
-    d = draw(mutated(VALID_SPEC, spec_keys, st.one_of(toml_any, odd_float)))
-    return _text_writer(toml_document(d))
+sweep_spec_files = documents(lambda: json.loads(json.dumps(VALID_SPEC)), spec_keys,
+                             st.one_of(toml_any, odd_float), toml=True)
 
 
 def _read_sweep_spec(path: Path):
@@ -582,19 +595,14 @@ def _valid_fmu_map() -> dict:
     return tomllib.loads(fmu_map_text(plant_interface(), "plant.fmu", 2))
 
 
-@st.composite
-def fmu_map_files(draw):
+def _fmu_map_keys() -> list[str]:
     base = _valid_fmu_map()
-    keys = [k for k in base] + [f"{k}.{kk}" for k, v in base.items() if isinstance(v, dict)
+    return [k for k in base] + [f"{k}.{kk}" for k, v in base.items() if isinstance(v, dict)
                                 for kk in list(v)[:3]] + ["extra", "outputs.T_cab.unit"]
-    kind = draw(st.sampled_from(["mutated", "mutated", "damaged", "deep", "bytes"]))
-    if kind == "bytes":
-        return draw(raw_bytes())
-    if kind == "deep":
-        return draw(deep_text(toml=True))
-    if kind == "damaged":
-        return draw(damaged(toml_document(base)))
-    return _text_writer(toml_document(draw(mutated(base, keys, toml_any))))
+
+
+fmu_map_files = st.deferred(lambda: documents(_valid_fmu_map, _fmu_map_keys(), toml_any,
+                                              toml=True))
 
 
 def _read_fmu_map(path: Path):
@@ -618,28 +626,20 @@ summary_keys = ["claims", "claims.items", "claims.counts", "claims.counts.agrees
                 "claims.counts.not measured", "command"]
 
 
-@st.composite
-def summary_files(draw):
-    kind = draw(st.sampled_from(["mutated", "items", "items", "damaged", "deep", "bytes"]))
-    if kind == "bytes":
-        return draw(raw_bytes())
-    if kind == "deep":
-        return draw(deep_text(toml=False))
-    base = _valid_summary()
-    if kind == "damaged":
-        return draw(damaged(json.dumps(base)))
-    if kind == "items":  # one claim's entries changed
-        i = draw(st.integers(0, len(base["claims"]["items"]) - 1))
-        item = base["claims"]["items"][i]
-        for key in draw(st.lists(st.sampled_from(list(item) + ["x"]), min_size=1,
-                                 max_size=3)):
-            if draw(st.booleans()):
-                item.pop(key, None)
-            else:
-                item[key] = draw(st.one_of(json_value, st.sampled_from(
-                    ["agrees", "not comparable", "not measured", "mixed"])))
-        return _text_writer(json.dumps(base))
-    return _text_writer(json.dumps(draw(mutated(base, summary_keys, json_value))))
+def _edit_claim(draw, d: dict) -> None:
+    """One claim's entries removed or replaced."""
+    items = d["claims"]["items"]
+    item = items[draw(st.integers(0, len(items) - 1))]
+    for key in draw(st.lists(st.sampled_from([*item, "x"]), min_size=1, max_size=3)):
+        if draw(st.booleans()):
+            item.pop(key, None)
+        else:
+            item[key] = draw(st.one_of(json_value, st.sampled_from(
+                ["agrees", "not comparable", "not measured", "mixed"])))
+
+
+summary_files = documents(_valid_summary, summary_keys, json_value, toml=False,
+                          edit=_edit_claim)
 
 
 def _read_summary(path: Path):
@@ -667,22 +667,14 @@ def _valid_record() -> dict:
 record_keys = ["key", "status", "rows", "index", "error"]
 
 
-@st.composite
-def record_files(draw):
-    kind = draw(st.sampled_from(["mutated", "row", "row", "damaged", "deep", "bytes"]))
-    if kind == "bytes":
-        return draw(raw_bytes())
-    if kind == "deep":
-        return draw(deep_text(toml=False))
-    base = _valid_record()
-    if kind == "damaged":
-        return draw(damaged(json.dumps(base)))
-    if kind == "row":
-        row = base["rows"][0]
-        for key in draw(st.lists(st.sampled_from(list(row)), min_size=1, max_size=3)):
-            row[key] = draw(st.one_of(json_value, odd_float))
-        return _text_writer(json.dumps(base, allow_nan=True))
-    return _text_writer(json.dumps(draw(mutated(base, record_keys, json_value))))
+def _edit_row(draw, d: dict) -> None:
+    """Entries of the record's row replaced."""
+    row = d["rows"][0]
+    for key in draw(st.lists(st.sampled_from(list(row)), min_size=1, max_size=3)):
+        row[key] = draw(st.one_of(json_value, odd_float))
+
+
+record_files = documents(_valid_record, record_keys, json_value, toml=False, edit=_edit_row)
 
 
 def _read_record(path: Path):
@@ -716,18 +708,8 @@ econ_keys = ["model", "name", "Ts", "parameters", "parameters.C_cab", "parameter
              "power_map.coef", "power_map.domain", "provenance", "extra"]
 
 
-@st.composite
-def econ_files(draw):
-    kind = draw(st.sampled_from(["mutated", "mutated", "mutated", "damaged", "deep", "bytes"]))
-    if kind == "bytes":
-        return draw(raw_bytes())
-    if kind == "deep":
-        return draw(deep_text(toml=False))
-    base = _valid_econ()
-    if kind == "damaged":
-        return draw(damaged(json.dumps(base)))
-    d = draw(mutated(base, econ_keys, st.one_of(json_value, odd_float, number_lists)))
-    return _text_writer(json.dumps(d))
+econ_files = documents(_valid_econ, econ_keys, st.one_of(json_value, odd_float, number_lists),
+                       toml=False)
 
 
 def _read_econ(path: Path):
@@ -760,11 +742,11 @@ READERS: dict[str, Reader] = {
     "plant_config": Reader("plant_config", ".toml", st.one_of(plant_config_files(),
                                                               deep_text(True)),
                            _read_plant_config),
-    "sweep_spec": Reader("sweep_spec", ".toml", sweep_spec_files(), _read_sweep_spec),
-    "fmu_map": Reader("fmu_map", ".toml", fmu_map_files(), _read_fmu_map),
-    "summary_json": Reader("summary_json", ".json", summary_files(), _read_summary),
-    "sweep_record": Reader("sweep_record", ".json", record_files(), _read_record),
-    "econ_params": Reader("econ_params", ".json", econ_files(), _read_econ),
+    "sweep_spec": Reader("sweep_spec", ".toml", sweep_spec_files, _read_sweep_spec),
+    "fmu_map": Reader("fmu_map", ".toml", fmu_map_files, _read_fmu_map),
+    "summary_json": Reader("summary_json", ".json", summary_files, _read_summary),
+    "sweep_record": Reader("sweep_record", ".json", record_files, _read_record),
+    "econ_params": Reader("econ_params", ".json", econ_files, _read_econ),
 }
 
 
