@@ -137,3 +137,23 @@ def test_text_of_a_parameter_file_cannot_reach_the_generated_c_as_code(tmp_path)
     assert c_number(0.1, "v") == "0.1" and c_number(5, "v") == "5.0"
     with pytest.raises(ConfigError, match="Ts"):
         c_number(float("nan"), "Ts")
+
+
+@needs_cc
+def test_export_c_cli_with_a_hostile_parameter_name_builds_and_checks(tmp_path):
+    """A params.json whose name closes a C comment and adds code: the package still builds,
+    --check passes, and the name reaches the C only as whitelisted text."""
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    p = tmp_path / "evil.json"
+    paper().replace(name='*/ int evil(void) { return 1; } /*\n#error "x"').to_json(p)
+    out = tmp_path / "pkg"
+    res = CliRunner().invoke(app, ["export-c", "--params", str(p), "--out", str(out),
+                                   "--horizon", "2", "--check-states", "2"])
+    assert res.exit_code == 0, res.output
+    assert "C solves OK" in res.output
+    text = "".join((out / n).read_text() for n in ("acid_nmpc.h", "acid_nmpc.c"))
+    assert "evil(void)" not in text and "#error" not in text and "*/ int" not in text
+    assert "__ int evil_void_ _ return 1_ _ ____error _x_" in text

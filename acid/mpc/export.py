@@ -55,12 +55,12 @@ MAX_DISTURBANCE_K = 5.0
 #: return codes of ``acid_nmpc_step`` (also in the generated header and problem.json)
 STATUS = {"ok": 0, "not_finite": 1, "solver_failed": 2, "implausible_temperature": 3,
           "crossed_bounds": 4, "absurd_disturbance": 5}
-_C_TEXT = re.compile(r"[^A-Za-z0-9 _.,:+()-]")
+_C_TEXT = re.compile(r"[^A-Za-z0-9 _.,:+-]")
 
 
 def c_text(text: object, limit: int = 80) -> str:
     """``text`` made safe inside a C comment or string literal: only letters, digits and
-    `` _.,:+()-`` are kept (anything else, quotes, backslashes, ``*/``, newlines, becomes
+    `` _.,:+-`` are kept (anything else, quotes, backslashes, ``*/``, newlines, becomes
     ``_``), at most ``limit`` characters."""
     s = _C_TEXT.sub("_", str(text))
     return s if len(s) <= limit else s[:limit - 3] + "..."
