@@ -159,9 +159,9 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "dt_int": (1.0e-3, 60.0, "internal steps; also Ts / dt_int <= MAX_SUBSTEPS"),
 }
 _UNITS: dict[str, str] = {}
-#: most internal steps per sample (Ts / dt_int): 0.01 s at Ts = 5 s is the finest plant-check
-#: uses; 1e-6 s would run for days
-MAX_SUBSTEPS = 1000
+#: most internal steps per sample (Ts / dt_int): plant-check's 0.01 s reference at the
+#: longest Ts (60 s) is 6000; 1e-6 s would run for days
+MAX_SUBSTEPS = 10_000
 
 
 def _p(default, unit: str, section: str, source: str):

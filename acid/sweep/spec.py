@@ -62,8 +62,10 @@ from acid.sweep.conditions import G_REF, RANGES, Conditions, plant_config_for
 MAX_SCENARIOS = 100_000
 MAX_DURATION_S = 86_400.0
 #: most samples of one scenario (warm-up + run + tail at the plant's Ts: 3 days at 5 s is
-#: 51840), checked when the spec is read
+#: 51840) and most internal plant steps (3 days at the default 0.5 s is 518400), checked when
+#: the spec is read
 MAX_SCENARIO_SAMPLES = 100_000
+MAX_SCENARIO_STEPS = 2_000_000
 #: a drive cycle pass counts as this long for that bound (the shipped cycles are shorter)
 CYCLE_PASS_BOUND_S = 3600.0
 MAX_SPEED_M_S = 45.0
@@ -470,12 +472,14 @@ def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None
                 raise w.error(where, str(exc).replace("plant overrides: ", "plant: ")) from None
         run_s = s.duration_s or (CYCLE_PASS_BOUND_S if isinstance(s.cycle, str)
                                  else DEFAULT_CONSTANT_DURATION_S)
-        n = (s.warmup_s + run_s + s.tail_s) / configs[ck].Ts
-        if n > MAX_SCENARIO_SAMPLES:
-            raise w.error(where, f"warmup_s + duration_s + tail_s = "
-                                 f"{s.warmup_s + run_s + s.tail_s:g} s at the plant's Ts = "
-                                 f"{configs[ck].Ts:g} s is {n:.0f} samples (at most "
-                                 f"{MAX_SCENARIO_SAMPLES})")
+        total, cfg = s.warmup_s + run_s + s.tail_s, configs[ck]
+        for n, per, what, most in ((total / cfg.Ts, f"Ts = {cfg.Ts:g} s", "samples",
+                                    MAX_SCENARIO_SAMPLES),
+                                   (total / cfg.dt_int, f"dt_int = {cfg.dt_int:g} s",
+                                    "internal steps", MAX_SCENARIO_STEPS)):
+            if n > most:
+                raise w.error(where, f"warmup_s + duration_s + tail_s = {total:g} s at the "
+                                     f"plant's {per} is {n:.0f} {what} (at most {most})")
         scenarios.append(s)
 
     controllers, run_order = _controllers(w, d.get("controllers"), tuple(plugins))
