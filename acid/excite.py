@@ -43,6 +43,8 @@ SPEED_LEVELS = 7
 
 #: Longest record ``excite`` makes (30 days: about 0.9 GB at Ts = 5 s on the hifi plant), s.
 MAX_DURATION_S = 30 * 86400.0
+#: Most samples a record may have (30 days at Ts = 5 s is 518400), checked before allocation.
+MAX_SAMPLES = 1_000_000
 #: Fastest vehicle speed accepted, m/s (360 km/h; Table I goes to 25 m/s).
 MAX_SPEED = 100.0
 #: Largest measurement noise standard deviation accepted, K.
@@ -134,6 +136,9 @@ class ExcitationSpec:
                               f"{MAX_DURATION_S:g} (30 days), got {self.duration}")
         if not (math.isfinite(self.Ts) and self.Ts > 0):
             raise ConfigError(f"sample time must be positive, got {self.Ts}")
+        if self.duration / self.Ts > MAX_SAMPLES:
+            raise ConfigError(f"--duration {self.duration:g} s at Ts = {self.Ts:g} s gives "
+                              f"{self.duration / self.Ts:.3g} samples (at most {MAX_SAMPLES})")
         if self.n_samples < 2:
             raise ConfigError(f"--duration {self.duration:g} s gives {self.n_samples} samples "
                               f"at Ts = {self.Ts:g} s; at least 2 are needed")

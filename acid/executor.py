@@ -36,14 +36,16 @@ import contextlib
 import logging
 import os
 import queue
+import re
 import signal
 import threading
 import time
 import uuid
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 
-from acid.errors import AcidError
+from acid.errors import AcidError, ConfigError
 
 #: how often a task may send a progress message to the client, s (the last one always goes)
 PROGRESS_INTERVAL_S = 0.25
@@ -302,6 +304,27 @@ def _worker_acid_version() -> str:
     return __version__
 
 
+_SCHEMES = ("tcp", "tls", "inproc", "ucx", "ws", "wss")
+_ADDRESS = re.compile(r"^(?:(?P<scheme>[a-z]+)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]"
+                      r"(?:[A-Za-z0-9._-]{0,252}))(?::(?P<port>[0-9]{1,5}))?/?$")
+
+
+def check_scheduler_address(address: str) -> str:
+    """``address`` if it reads as a Dask scheduler address (``[scheme://]host[:port]``, a
+    known scheme, a host name or IP, a port 1-65535), else ``ConfigError`` naming
+    ``--scheduler``."""
+    m = _ADDRESS.match(address) if isinstance(address, str) else None
+    if m is None:
+        raise ConfigError(f"--scheduler {address!r}: not a scheduler address (expected "
+                          "tcp://HOST:PORT)")
+    if m["scheme"] is not None and m["scheme"] not in _SCHEMES:
+        raise ConfigError(f"--scheduler {address!r}: unknown scheme {m['scheme']!r} "
+                          f"(known: {', '.join(_SCHEMES)})")
+    if m["port"] is not None and not 1 <= int(m["port"]) <= 65535:
+        raise ConfigError(f"--scheduler {address!r}: port {m['port']} outside 1..65535")
+    return address
+
+
 class DaskExecutor(Executor):
     """Tasks on Dask distributed: a new ``LocalCluster`` of ``workers`` processes (one
     thread each), or the existing cluster at ``address``.
@@ -320,10 +343,11 @@ class DaskExecutor(Executor):
         self.cluster = None
         self._pids: set[int] = set()
         if address:
+            check_scheduler_address(address)
             self.kind, self.address = "cluster", address
             try:
                 self.client = Client(address, timeout="10s")
-            except (OSError, TimeoutError) as exc:
+            except (OSError, TimeoutError, ValueError, TypeError) as exc:
                 raise AcidError(f"--scheduler {address}: cannot connect "
                                 f"({str(exc).splitlines()[0]})") from None
             self._check_versions()
@@ -334,16 +358,36 @@ class DaskExecutor(Executor):
             self.kind = "local"
             # one task per worker at a time, the rest queued on the scheduler: a long task is
             # never parked behind another on a busy worker while one idles
-            with dask.config.set({"distributed.scheduler.allowed-failures": 1,
-                                  "distributed.scheduler.worker-saturation": 1.0,
-                                  "distributed.worker.daemon": False}):
-                self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                            dashboard_address=None,
-                                            silence_logs=logging.CRITICAL)
-                self.client = Client(self.cluster)
-            self.address = self.cluster.scheduler_address
-            self.client.register_plugin(_ignore_sigint_plugin())
-            self._pids = set(self.client.run(os.getpid).values())
+            import multiprocessing
+
+            from distributed.deploy.spec import SpecCluster
+
+            before = {c.pid for c in multiprocessing.active_children()}
+            clusters = set(SpecCluster._instances)
+            try:
+                with dask.config.set({"distributed.scheduler.allowed-failures": 1,
+                                      "distributed.scheduler.worker-saturation": 1.0,
+                                      "distributed.worker.daemon": False}), \
+                        warnings.catch_warnings():
+                    # no dashboard: its port taken by another cluster is no news
+                    warnings.filterwarnings("ignore", message="Port .* is already in use")
+                    self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
+                                                processes=True, dashboard_address=None,
+                                                silence_logs=logging.CRITICAL)
+                    self.client = Client(self.cluster)
+                self.address = self.cluster.scheduler_address
+                self.client.register_plugin(_ignore_sigint_plugin())
+                self._pids = set(self.client.run(os.getpid).values())
+            except BaseException as exc:  # a worker died, or Ctrl-C / SIGTERM while starting
+                _silence_dask_logs()
+                self._abandon(before, clusters)
+                if not isinstance(exc, Exception):
+                    raise
+                first = str(exc).splitlines()[0] if str(exc) else ""
+                raise AcidError(f"the local Dask cluster of {n} worker"
+                                f"{'s' * (n != 1)} did not start ({type(exc).__name__}"
+                                f"{': ' + first[:200] if first else ''}); try --workers 1 "
+                                "or --jobs 1") from None
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
 
     def _check_versions(self) -> None:
@@ -401,6 +445,26 @@ class DaskExecutor(Executor):
             self.cluster.close(timeout=2 if interrupted else 10)
         self._kill_workers()  # whatever a close that timed out left running
 
+    def _abandon(self, before: set[int], clusters: set) -> None:
+        """End what a failed or interrupted start left, quietly: the worker processes started
+        since ``before`` are killed, and the clusters created since ``clusters`` are taken off
+        Dask's exit handler, which would otherwise try to close a half-started cluster at
+        exit and print a traceback (``AssertionError: Status.init``)."""
+        import multiprocessing
+
+        from distributed.deploy.spec import SpecCluster
+
+        self._pids |= {c.pid for c in multiprocessing.active_children()} - before
+        self._kill_workers()
+        client = getattr(self, "client", None)
+        if client is not None:
+            with contextlib.suppress(Exception):
+                client.close(timeout=2)
+        for cluster in set(SpecCluster._instances) - clusters:
+            SpecCluster._instances.discard(cluster)
+            with contextlib.suppress(Exception):
+                cluster.shutdown_on_close = False
+
     def _kill_workers(self) -> None:
         """SIGKILL the local cluster's worker processes (only children of this process)."""
         import multiprocessing
@@ -413,7 +477,7 @@ class DaskExecutor(Executor):
 
 def _silence_dask_logs() -> None:
     """Mute Dask's and Tornado's loggers in this process (closing comms on purpose)."""
-    for name in ("distributed", "tornado"):
+    for name in ("distributed", "tornado", "asyncio"):
         logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
@@ -452,4 +516,5 @@ def open_executor(workers: int | None = 1, scheduler: str | None = None,
 
 
 __all__ = ["Executor", "InlineExecutor", "DaskExecutor", "open_executor", "check_interrupt",
+           "check_scheduler_address",
            "interrupt_guard", "ProgressReporter", "dask_available", "usable_cores"]

@@ -38,9 +38,11 @@ class FolderBusyError(AcidError):
 
 
 def _holder(lock_file: Path) -> str:
+    from acid._readers import load_json
+
     try:
-        d = json.loads(lock_file.read_text() or "{}")
-    except (OSError, ValueError):
+        d = load_json(lock_file, "lock file", max_bytes=64 * 1024)
+    except AcidError:  # empty, tampered or gone
         return "another acid run"
     since = d.get("started")
     since = f", started {since}" if since else ""

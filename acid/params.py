@@ -248,16 +248,10 @@ class ModelParams:
     @classmethod
     def from_json(cls, path: str | Path) -> ModelParams:
         """Read and validate a ``params.json`` (one-line ``DataError`` on any problem)."""
+        from acid._readers import load_json
+
         path = Path(path)
-        if not path.is_file():
-            raise DataError(f"{path}: parameter file not found")
-        try:
-            d = json.loads(path.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
-            raise DataError(f"{path}: not valid JSON ({exc.__class__.__name__}: "
-                            f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
-        except OSError as exc:
-            raise DataError(f"{path}: cannot read ({exc.strerror or exc})") from None
+        d = load_json(path, "parameter file", DataError, top=None)
         return cls.from_json_dict(d, source=str(path))
 
 

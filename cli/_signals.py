@@ -43,10 +43,19 @@ def _exit_now(signum: int, frame=None) -> None:
     os._exit(128 + signum)
 
 
+def _in_worker_process() -> bool:
+    """True while a process that multiprocessing spawned from acid (a Dask worker) imports
+    the ``acid`` script as ``__mp_main__`` (its ``sys.argv`` is then the parent's): its
+    signals are its parent's business, and it must not print ``interrupted`` when the parent
+    ends it. (In the parent, ``__mp_main__`` is ``__main__`` itself, or absent.)"""
+    mp_main = sys.modules.get("__mp_main__")
+    return mp_main is not None and mp_main is not sys.modules.get("__main__")
+
+
 def begin_startup() -> None:
     """Exit quietly (128 + signal: 130, 143) on SIGINT or SIGTERM while the CLI is importing
-    its modules (seconds on a busy machine)."""
-    if not _in_main_thread():
+    its modules (seconds on a busy machine). Not in a worker process (``_in_worker_process``)."""
+    if not _in_main_thread() or _in_worker_process():
         return
     for sig in HANDLED:
         try:

@@ -56,6 +56,10 @@ def reproduce(
                 folders={"--out": (out, ("report.html", "summary.json"))})
     if jobs > 8:
         raise ConfigError(f"--jobs {jobs}: at most 8 local processes")
+    if scheduler is not None:
+        from acid.executor import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     opts = ReproduceOptions.quick() if quick else ReproduceOptions()
     stages = build_stages(opts)
     with claim(out, "acid reproduce"):

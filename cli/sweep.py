@@ -63,6 +63,9 @@ def sweep(
     figures: bool = typer.Option(True, "--figures/--no-figures",
                                  help="Write the summary figures."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    allow_unstable: bool = typer.Option(
+        False, "--allow-unstable",
+        help="Use parameter files of the spec even if eqs. 1-3 are unstable or not in kelvin."),
 ) -> None:
     """Run every scenario x controller of SPEC.toml and tabulate energy, savings and comfort.
 
@@ -74,10 +77,16 @@ def sweep(
     interrupted sweep resumes. Writes OUT/results.parquet, OUT/results.csv, two figures and
     OUT/summary.json.
     """
+    from acid.executor import check_scheduler_address
     from acid.outdir import claim
     from acid.sweep import load_spec
+    from acid.sweep.runner import check_out_folder
 
-    out = out if out is not None else Path("reports/sweep") / spec_path.stem
+    if out is None:
+        if not spec_path.stem.strip("." + "/\\"):
+            raise ConfigError(f"SPEC.toml {spec_path}: a name made only of dots cannot name "
+                              "its output folder (rename it, or give --out)")
+        out = Path("reports/sweep") / spec_path.stem
     check_paths(inputs={"SPEC.toml": spec_path}, outputs={"--json": json_path},
                 folders={"--out": (out, OUTPUTS)})
     if json_path is not None and (out / "scenarios").resolve() in json_path.resolve().parents:
@@ -87,7 +96,10 @@ def sweep(
         raise ConfigError("--workers and --scheduler: give one (the cluster has its workers)")
     if workers is not None and not 1 <= workers <= 256:
         raise ConfigError(f"--workers {workers}: must lie in 1..256")
-    spec = load_spec(spec_path)
+    if scheduler is not None:
+        check_scheduler_address(scheduler)
+    spec = load_spec(spec_path, allow_unstable=allow_unstable)
+    check_out_folder(spec, out, force)  # another spec's results: one line, nothing lost
     n, m = len(spec.scenarios), len(spec.controllers)
     header = (f"{spec_path}: {spec.title!r}: {n} scenario{'s' * (n != 1)} x {m} "
               f"controller{'s' * (m != 1)} ({', '.join(c.label for c in spec.controllers)}; "
@@ -103,16 +115,17 @@ def sweep(
         say("specification OK; nothing run (--dry-run)")
         return
     with claim(out, "acid sweep"):  # before anything is printed: a busy folder is one line
-        say(header)
-        _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path)
+        _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path, header)
 
 
-def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path) -> None:
+def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path,
+         header) -> None:
     from acid.sweep import run_sweep
 
     n = len(spec.scenarios)
     with progress_bar(f"sweep {spec.title}", total=n) as update:
         def on_start(to_run: int, reused: int, where: str) -> None:
+            say(header)  # once the workers are up: a cluster that fails is one line alone
             update(0, max(to_run, 1))
             done = f"{reused} scenario{'s' * (reused != 1)} finished earlier"
             err_console.print(Text(f"{done}; running {to_run} on {where}" if to_run else
@@ -133,6 +146,8 @@ def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path)
     print_table(f"{spec.title}: means over the scenarios (* baseline)",
                 ["_controller", "ok", "fail", "E MJ", "saving %", "range %", "tail-corr %",
                  "T_cab C", "viol Ks", "ms"], rows)
+    for key, why in list(result.tampered.items())[:10]:
+        say(f"ignored and ran again: scenario record {key} ({why})")
     for f in d["failures"][:10]:
         say(f"failed: scenario {f['scenario']} ({f['label']}), {f['controller']}: "
             f"{f['error']}")

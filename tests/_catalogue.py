@@ -113,6 +113,7 @@ def _map_toml(extra: str = "", channels: dict | None = None) -> str:
 
 def _write(name: str, text: str) -> Callable[[Path], None]:
     def make(w: Path) -> None:
+        (w / name).parent.mkdir(parents=True, exist_ok=True)
         (w / name).write_text(text)
     return make
 
@@ -204,6 +205,31 @@ def _csv_with(column: str, values: str, name: str = "bad.csv") -> Callable[[Path
             cells[j] = str(eval(values, {}, {"x": float(cells[j])}))  # noqa: S307 - test data
             out.append(",".join(cells))
         (w / name).write_text("\n".join(out) + "\n")
+    return make
+
+
+def _zip(name: str, members: dict[str, bytes]) -> Callable[[Path], None]:
+    """A zip archive (an FMU as far as its name goes) with these members."""
+    def make(w: Path) -> None:
+        import zipfile
+
+        with zipfile.ZipFile(w / name, "w") as z:
+            for member, data in members.items():
+                z.writestr(member, data)
+    return make
+
+
+def _summary(name: str, edit: Callable[[dict], None]) -> Callable[[Path], None]:
+    """A summary.json whose claims block is well formed but for ``edit``."""
+    def make(w: Path) -> None:
+        from acid.claims import CLAIMS
+        from acid.claims.core import Verdict
+
+        items = [{"id": c.id, "verdict": "agrees", "rule_text": "r", "reason": "",
+                  "paper_text": "1", "acid_text": "1"} for c in CLAIMS]
+        d = {"claims": {"items": items, "counts": {v.value: 0 for v in Verdict}}}
+        edit(d)
+        (w / name).write_text(json.dumps(d))
     return make
 
 
@@ -745,6 +771,95 @@ CASES: list[Case] = [
     Case("validate-model-file-paper-params", "params",
          (*V[:2], "--model", "{w}/m.py", "--params", P), ("p.json", "declared model"),
          _write("m.py", MODEL_FILE)),
+
+
+    # ------------------------------------------- hostile inputs, round 3 (issue 24)
+    Case("sweep-out-holds-another-spec", "dataloss", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("--out", "another specification"),
+         _both(_write("s.toml", "[grid]\nambient_C = [30.0]\n"),
+               _write("o/spec.toml", "[grid]\nambient_C = [45.0]\n"),
+               _write("o/summary.json", '{"command": "sweep"}\n'),
+               _write("o/results.csv", "scenario,controller\n0,nmpc\n"))),
+    Case("sweep-out-holds-results-without-spec", "dataloss",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o"), ("--out", "unknown specification"),
+         _both(_write("s.toml", "[grid]\nambient_C = [30.0]\n"),
+               _write("o/results.csv", "scenario,controller\n0,nmpc\n"))),
+    Case("sweep-unstable-params", "params", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "b.json", "unstable", "--allow-unstable"),
+         _both(_params("b.json", gamma4=3.0),
+               _write("s.toml", '[defaults]\nparams = "b.json"\n[grid]\nambient_C = [30.0]\n'))),
+    Case("sweep-spec-named-dots", "paths", ("sweep", "{w}/..toml"),
+         ("SPEC.toml", "..toml", "only of dots"), _write("..toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-nested-plant-override", "structure", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "defaults", "plant.V_disp must be a value"),
+         _write("s.toml", "[defaults]\nplant = { V_disp = { a = 1.0 } }\n[grid]\n"
+                          "ambient_C = [30.0]\n")),
+    Case("sweep-spec-deep", "structure", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "nests 20000 levels"), _write("s.toml", "x = " + "[" * 20000 + "]" * 20000)),
+    Case("sweep-spec-dotted-deep", "structure", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "nests deeper than 32"), _write("s.toml", "a" + ".a" * 40 + " = 1\n")),
+    Case("sweep-scheduler-malformed", "options",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o", "--scheduler", "tcp://[::"),
+         ("--scheduler", "not a scheduler address"),
+         _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("reproduce-scheduler-malformed", "options",
+         ("reproduce", "--out", "{w}/r", "--scheduler", "tcp://host:notaport"),
+         ("--scheduler", "not a scheduler address")),
+    Case("sweep-scheduler-port", "options",
+         ("sweep", "{w}/s.toml", "--out", "{w}/o", "--scheduler", "tcp://h:70000"),
+         ("--scheduler", "port 70000"), _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-displacement-1m3", "sizes", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "V_disp = 1 m^3", "physical range"),
+         _write("s.toml", "[defaults]\nplant = { V_disp = 1.0 }\n[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-dt-1e-6", "sizes", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "dt_int"),
+         _write("s.toml", "[defaults]\nplant = { dt_int = 1e-6 }\n[grid]\nambient_C = [30.0]\n")),
+    Case("sweep-scenario-samples", "sizes", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "samples", "at most 100000"),
+         _write("s.toml", "[defaults]\nduration_s = 86400.0\nwarmup_s = 86400.0\n"
+                          "plant = { Ts = 0.5, dt_int = 0.5 }\n[grid]\nambient_C = [30.0]\n")),
+    Case("excite-plant-config-absurd", "sizes",
+         ("excite", "--out", "{w}/x.h5", "--plant-config", "{w}/c.toml"),
+         ("c.toml", "C_cab = 5e+07 J/K", "physical range"),
+         _write("c.toml", "[cabin]\nC_cab = 5.0e7\n")),
+    Case("sweep-scenario-internal-steps", "sizes", ("sweep", "{w}/s.toml", "--out", "{w}/o"),
+         ("s.toml", "internal steps", "at most 2000000"),
+         _write("s.toml", "[defaults]\nduration_s = 86400.0\nwarmup_s = 86400.0\n"
+                          "plant = { dt_int = 0.05 }\n[grid]\nambient_C = [30.0]\n")),
+    Case("excite-plant-config-dt-1e-6", "sizes",
+         ("excite", "--out", "{w}/x.h5", "--plant-config", "{w}/c.toml"),
+         ("c.toml", "dt_int = 1e-06 s", "physical range"),
+         _write("c.toml", "[solver]\ndt_int = 1e-6\n")),
+    Case("speed-sweep-config-internal-steps", "sizes",
+         ("speed-sweep", "--config", "{w}/c.toml", "--out", "{w}/sw"),
+         ("c.toml", "internal steps", "at most 10000"),
+         _write("c.toml", "[solver]\nTs = 60.0\ndt_int = 0.001\n")),
+    Case("excite-plant-config-deep", "structure",
+         ("excite", "--out", "{w}/x.h5", "--plant-config", "{w}/c.toml"),
+         ("c.toml", "nests"), _write("c.toml", "[cabin]\nC_cab = " + "[" * 5000 + "]" * 5000)),
+    Case("excite-params-deep", "structure",
+         ("excite", "--plant", "model", "--params", "{w}/d.json", "--out", "{w}/x.h5"),
+         ("d.json", "nests 100001 levels"),
+         _write("d.json", '{"gamma": ' + "[" * 100000 + "]" * 100000 + "}")),
+    Case("excite-params-not-utf8", "structure",
+         ("excite", "--plant", "model", "--params", "{w}/d.json", "--out", "{w}/x.h5"),
+         ("d.json", "not UTF-8"), lambda w: (w / "d.json").write_bytes(b'{"name": "\xff"}')),
+    Case("excite-fmu-escaping-member", "paths",
+         ("excite", "--plant", "fmu:{w}/z.fmu", "--fmu-map", "{w}/f.toml", "--out", "{w}/y.h5"),
+         ("z.fmu", "escapes its folder"),
+         _both(_zip("z.fmu", {"modelDescription.xml": b"<x/>", "../../evil.sh": b"x"}),
+               _write("f.toml", '[inputs]\nW_bl = { name = "a" }\nT_evap_set = { name = "b" }\n'
+                                '[states]\nT_cab = { name = "c" }\nT_evap = { name = "d" }\n'
+                                'T_int = { name = "e" }\nT_shell = { name = "f" }\n'
+                                '[outputs]\nT_ain = { name = "g" }\n'))),
+    Case("claims-summary-tampered-verdict", "structure", ("claims", "{w}/s.json"),
+         ("s.json", "claims.items[0].verdict"),
+         _summary("s.json", lambda d: d["claims"]["items"][0].update(verdict=["x"]))),
+    Case("claims-summary-tampered-counts", "structure", ("claims", "{w}/s.json"),
+         ("s.json", "claims.counts.'disagrees'"),
+         _summary("s.json", lambda d: d["claims"]["counts"].update(disagrees=-1))),
+    Case("claims-summary-deep", "structure", ("claims", "{w}/s.json"), ("s.json", "nests"),
+         _write("s.json", '{"claims": ' + "[" * 50000 + "]" * 50000 + "}")),
 ]
 
 

@@ -552,6 +552,200 @@ def _read_plant_config(path: Path):
     return PlantConfig.from_toml(path)
 
 
+# --------------------------------------------------- deep nesting (any TOML/JSON reader)
+@st.composite
+def deep_text(draw, toml: bool):
+    """A document nested 20-5000 levels deep: arrays, inline tables or (TOML) dotted keys."""
+    depth = draw(st.integers(20, 5000))
+    kind = draw(st.sampled_from(["array", "table", "dotted"] if toml else ["array", "object"]))
+    if kind == "dotted":
+        return _text_writer("a" + ".a" * depth + " = 1\n")
+    if toml:
+        inner = "[" * depth + "]" * depth if kind == "array" else \
+            "{ a = " * depth + "1" + " }" * depth
+        return _text_writer(f"x = {inner}\n")
+    inner = "[" * depth + "]" * depth if kind == "array" else '{"a": ' * depth + "1" + "}" * depth
+    return _text_writer(f'{{"x": {inner}}}')
+
+
+@st.composite
+def documents(draw, base: Callable[[], dict], keys: list[str], value: st.SearchStrategy,
+              toml: bool, edit: Callable | None = None):
+    """A file of one kind of document: ``base()`` with keys mutated (``mutated``), or
+    edited by ``edit(draw, base)`` (a strategy's own change), damaged text, deep nesting,
+    or raw bytes."""
+    kinds = ["mutated", "mutated", "damaged", "deep", "bytes"] + ["edit"] * 2 * bool(edit)
+    kind = draw(st.sampled_from(kinds))
+    if kind == "bytes":
+        return draw(raw_bytes())
+    if kind == "deep":
+        return draw(deep_text(toml=toml))
+    d = base()
+    dump = toml_document if toml else (lambda x: json.dumps(x, allow_nan=True))
+    if kind == "damaged":
+        return draw(damaged(dump(d)))
+    if kind == "edit":
+        edit(draw, d)
+        return _text_writer(dump(d))
+    return _text_writer(dump(draw(mutated(d, keys, value))))
+
+
+# ----------------------------------------------------------------------- sweep specs
+VALID_SPEC = {"title": "fuzz", "baseline": "nmpc",
+              "defaults": {"cycle": 15.0, "duration_s": 60.0, "warmup_s": 0.0,
+                           "band_C": [22.0, 26.0], "plant": {"V_disp": 3.3e-5}},
+              "grid": {"ambient_C": [25.0, 35.0]},
+              "controllers": {"nmpc": {}, "icm": {"match": "nmpc"}},
+              "identify": {"seed": 0}}
+spec_keys = ["title", "baseline", "defaults", "defaults.cycle", "defaults.duration_s",
+             "defaults.band_C", "defaults.plant", "defaults.plant.V_disp", "defaults.params",
+             "defaults.plant.dt_int", "grid", "grid.ambient_C", "grid.plant", "controllers",
+             "controllers.nmpc", "controllers.icm.match", "controllers.icm.type",
+             "controllers.nmpc.N", "identify", "identify.seed", "scenarios", "extra"]
+
+
+sweep_spec_files = documents(lambda: json.loads(json.dumps(VALID_SPEC)), spec_keys,
+                             st.one_of(toml_any, odd_float), toml=True)
+
+
+def _read_sweep_spec(path: Path):
+    from acid.sweep.spec import load_spec
+
+    return load_spec(path)
+
+
+# -------------------------------------------------------------------------- FMU maps
+def _valid_fmu_map() -> dict:
+    import tomllib
+
+    from acid.plant.fmu_export import fmu_map_text, plant_interface
+
+    return tomllib.loads(fmu_map_text(plant_interface(), "plant.fmu", 2))
+
+
+def _fmu_map_keys() -> list[str]:
+    base = _valid_fmu_map()
+    return [k for k in base] + [f"{k}.{kk}" for k, v in base.items() if isinstance(v, dict)
+                                for kk in list(v)[:3]] + ["extra", "outputs.T_cab.unit"]
+
+
+fmu_map_files = st.deferred(lambda: documents(_valid_fmu_map, _fmu_map_keys(), toml_any,
+                                              toml=True))
+
+
+def _read_fmu_map(path: Path):
+    from acid.plant.fmu import FmuMap
+
+    return FmuMap.from_file(path)
+
+
+# -------------------------------------------------------------- summary.json (claims)
+def _valid_summary() -> dict:
+    from acid.claims import CLAIMS
+    from acid.claims.core import Verdict
+
+    items = [{"id": c.id, "verdict": "agrees", "rule_text": "within 5 %", "reason": "",
+              "paper_text": "1.0", "acid_text": "1.1"} for c in CLAIMS]
+    return {"command": "reproduce", "claims": {"items": items,
+                                               "counts": {v.value: 0 for v in Verdict}}}
+
+
+summary_keys = ["claims", "claims.items", "claims.counts", "claims.counts.agrees",
+                "claims.counts.not measured", "command"]
+
+
+def _edit_claim(draw, d: dict) -> None:
+    """One claim's entries removed or replaced."""
+    items = d["claims"]["items"]
+    item = items[draw(st.integers(0, len(items) - 1))]
+    for key in draw(st.lists(st.sampled_from([*item, "x"]), min_size=1, max_size=3)):
+        if draw(st.booleans()):
+            item.pop(key, None)
+        else:
+            item[key] = draw(st.one_of(json_value, st.sampled_from(
+                ["agrees", "not comparable", "not measured", "mixed"])))
+
+
+summary_files = documents(_valid_summary, summary_keys, json_value, toml=False,
+                          edit=_edit_claim)
+
+
+def _read_summary(path: Path):
+    from acid.claims import headline_markdown, load_summary
+    from acid_cli.claims import check_summary
+
+    check_summary(path)
+    return headline_markdown(load_summary(path))
+
+
+# ------------------------------------------------------------- sweep scenario records
+RECORD_KEY = "0123456789abcdef"
+
+
+def _valid_record() -> dict:
+    row = {"scenario_key": RECORD_KEY, "scenario": 0, "label": "15 m/s, 30 C",
+           "cycle": "15 m/s", "ambient_C": 30.0, "controller": "nominal",
+           "controller_type": "nominal", "baseline": "nominal", "status": "ok", "error": None,
+           "energy_MJ": 1.5, "mean_T_cab_C": 25.0, "comfort_violation_Ks": 0.0,
+           "max_T_cab_C": 26.0, "solve_ms_median": None, "plant": {}}
+    return {"key": RECORD_KEY, "index": 0, "label": "x", "status": "ok", "error": None,
+            "rows": [row], "tracebacks": {}, "elapsed_s": 1.0, "worker": None}
+
+
+record_keys = ["key", "status", "rows", "index", "error"]
+
+
+def _edit_row(draw, d: dict) -> None:
+    """Entries of the record's row replaced."""
+    row = d["rows"][0]
+    for key in draw(st.lists(st.sampled_from(list(row)), min_size=1, max_size=3)):
+        row[key] = draw(st.one_of(json_value, odd_float))
+
+
+record_files = documents(_valid_record, record_keys, json_value, toml=False, edit=_edit_row)
+
+
+def _read_record(path: Path):
+    """A record written where ``acid sweep`` keeps it, read back as a resumed sweep does;
+    a valid one goes into the table and the summary."""
+    from acid.sweep.results import ResultStore, controller_summary, results_table
+
+    folder = path.parent / "sweep" / "scenarios"
+    folder.mkdir(parents=True, exist_ok=True)
+    path.replace(folder / f"{RECORD_KEY}.json")
+    rec = ResultStore(folder.parent, ("nominal",)).load(RECORD_KEY)
+    if rec is not None:
+        controller_summary(results_table([rec]), "nominal")
+    return rec
+
+
+# ------------------------------------------------------------------ econ parameters
+def _valid_econ() -> dict:
+    from conftest import ECON_MAP, ECON_TRUTH
+
+    from acid.econ.params import EconParams, PowerMap
+
+    domain = {"Q_e": (-500.0, 6000.0), "T_evap": (270.0, 290.0), "v_veh": (0.0, 35.0),
+              "T_amb": (290.0, 320.0)}
+    return json.loads(json.dumps(EconParams(values=dict(ECON_TRUTH), C_ew=2000.0, power_map=(
+        PowerMap(coef=ECON_MAP, domain=domain)), name="truth").to_json_dict()))
+
+
+econ_keys = ["model", "name", "Ts", "parameters", "parameters.C_cab", "parameters.C_cab.value",
+             "parameters.r_max.value", "C_ew", "C_ew.value", "beta", "power_map",
+             "power_map.coef", "power_map.domain", "provenance", "extra"]
+
+
+econ_files = documents(_valid_econ, econ_keys, st.one_of(json_value, odd_float, number_lists),
+                       toml=False)
+
+
+def _read_econ(path: Path):
+    from acid.econ.params import load_any_params
+
+    return load_any_params(path)
+
+
 # ------------------------------------------------------------------------- readers
 def _read_csv(path: Path, cmap: dict):
     from acid.data import ChannelMap, from_csv
@@ -571,8 +765,16 @@ READERS: dict[str, Reader] = {
     "csv": Reader("csv", ".csv", csv_with_map(), _read_csv),
     "mat": Reader("mat", ".mat", mat_with_map(), _read_mat),
     "channel_map": Reader("channel_map", "", map_files(), _read_map),
-    "params_json": Reader("params_json", ".json", params_files(), _read_params),
-    "plant_config": Reader("plant_config", ".toml", plant_config_files(), _read_plant_config),
+    "params_json": Reader("params_json", ".json", st.one_of(params_files(), deep_text(False)),
+                          _read_params),
+    "plant_config": Reader("plant_config", ".toml", st.one_of(plant_config_files(),
+                                                              deep_text(True)),
+                           _read_plant_config),
+    "sweep_spec": Reader("sweep_spec", ".toml", sweep_spec_files, _read_sweep_spec),
+    "fmu_map": Reader("fmu_map", ".toml", fmu_map_files, _read_fmu_map),
+    "summary_json": Reader("summary_json", ".json", summary_files, _read_summary),
+    "sweep_record": Reader("sweep_record", ".json", record_files, _read_record),
+    "econ_params": Reader("econ_params", ".json", econ_files, _read_econ),
 }
 
 

@@ -105,3 +105,35 @@ def test_a_non_finite_value_is_one_line_naming_the_key(tmp_path):
     assert res.exit_code == 2
     assert_one_line_error(res, "tampered.json", "stages.sweep.summary.ratio_last_first",
                           "not a finite number")
+
+def test_a_tampered_summary_is_one_line_naming_the_key(tmp_path):
+    s = _summary(tmp_path)
+    path = tmp_path / "summary.json"
+
+    def tampered(edit) -> dict:
+        d = json.loads(json.dumps(s))
+        edit(d)
+        return d
+
+    cases = [
+        (lambda d: d["claims"]["items"][0].update(verdict=7), "claims.items[0].verdict"),
+        (lambda d: d["claims"]["items"][1].update(verdict="splendid"),
+         "claims.items[1].verdict 'splendid' is not a verdict"),
+        (lambda d: d["claims"]["items"][2].pop("acid_text"), "claims.items[2].acid_text"),
+        (lambda d: d["claims"]["items"].insert(0, ["x"]), "claims.items[0] must be an object"),
+        (lambda d: d["claims"].update(items={"a": 1}), "claims.items must be a list"),
+        (lambda d: d["claims"]["counts"].update(agrees="3"), "claims.counts.'agrees'"),
+        (lambda d: d["claims"].pop("counts"), "claims.counts must be an object"),
+        (lambda d: d.update(claims=[1]), "no 'claims' block"),
+    ]
+    for edit, fragment in cases:
+        path.write_text(json.dumps(tampered(edit)))
+        res = CliRunner().invoke(app, ["claims", str(path)])
+        assert res.exit_code == 2, (fragment, res.output)
+        assert_one_line_error(res, "summary.json", fragment)
+    path.write_text('{"claims": ' * 50_000 + "1" + "}" * 50_000)
+    assert_one_line_error(CliRunner().invoke(app, ["claims", str(path)]), "summary.json",
+                          "nests 50000 levels")
+    path.write_text("[1, 2]")
+    assert_one_line_error(CliRunner().invoke(app, ["claims", str(path)]), "summary.json",
+                          "JSON object at the top level")

@@ -290,3 +290,14 @@ def test_cli_excite_model_econ(tmp_path):
     assert np.ptp(ds["v_veh"]) > 5.0 and 28.0 <= ds["T_amb"].min() <= ds["T_amb"].max() <= 35.0
     res = runner.invoke(app, ["excite", "--model", "thermal", "--out", str(tmp_path / "x.h5")])
     assert_one_line_error(res, "--model", "thermal")
+
+
+def test_a_microsecond_sample_time_is_refused_before_anything_is_allocated():
+    from acid.excite import MAX_SAMPLES
+
+    with pytest.raises(ConfigError, match=r"--duration 7200 s at Ts = 1e-06 s gives 7.2e\+09 "
+                                          r"samples \(at most 1000000\)"):
+        ExcitationSpec(Ts=1e-6)
+    assert ExcitationSpec(Ts=2.0, duration=2.0 * MAX_SAMPLES).n_samples == MAX_SAMPLES
+    with pytest.raises(ConfigError, match="at most 1000000"):
+        ExcitationSpec(Ts=1.0, duration=MAX_SAMPLES + 5.0)

@@ -104,3 +104,38 @@ def test_an_error_inside_the_write_keeps_the_old_file_and_no_part(tmp_path):
         tmp.write_text("new, half")
         raise RuntimeError("boom")
     assert target.read_text() == "old" and _parts(tmp_path) == []
+
+
+def _file_size_limit(nbytes: int):
+    """``preexec_fn``: files of this process may not grow beyond ``nbytes`` (writes past it
+    fail with EFBIG instead of killing the process with SIGXFSZ)."""
+    import resource
+
+    def limit():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
+    return limit
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("args, culprit", [
+    (["export-c", "--no-check", "--out", "OUT/c"], "OUT/c/acid_nmpc_solver.c"),
+    (["export-fmu", "--out", "OUT/p.fmu"], "OUT/p.fmu"),
+    (["claims", "--json", "OUT/c.json"], "OUT/c.json"),
+])
+def test_a_file_size_limit_is_one_line_naming_the_output(tmp_path, args, culprit):
+    """EFBIG (a quota or ``ulimit -f``): one line naming the output, exit 2, no temporary
+    file and no temporary folder left."""
+    exe = os.path.join(os.path.dirname(sys.executable), "acid")
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    out = tmp_path / "out"
+    r = subprocess.run([exe, *[a.replace("OUT", str(out)) for a in args]], text=True,
+                       capture_output=True, preexec_fn=_file_size_limit(2048), timeout=600,
+                       env={**os.environ, "TMPDIR": str(tmp)})
+    lines = [ln for ln in (r.stdout + r.stderr).splitlines() if ln.strip()]
+    assert r.returncode == 2, lines
+    assert lines[-1].startswith("error: ") and culprit.replace("OUT", str(out)) in lines[-1]
+    assert "File too large" in lines[-1] and "internal error" not in lines[-1]
+    assert "Traceback" not in r.stderr
+    assert [p for p in out.rglob(".*")] == [] and list(tmp.iterdir()) == []

@@ -138,3 +138,40 @@ def test_flat_plate_shell_convection_and_speed_blind_switches():
     blind = cfg.replace(k_ram=0.0, hA_ext_v=0.0)  # generation-1 names, as callers use them
     assert not blind.front_end_speed and not blind.cabin_speed
     assert blind.hA_ext(25.0) == blind.hA_ext0
+
+
+def test_every_numeric_parameter_has_a_physical_range_holding_its_default():
+    import dataclasses
+
+    from acid.plant.config import RANGES
+
+    numeric = {f.name for f in dataclasses.fields(PlantConfig) if f.metadata["unit"] != "-"}
+    assert set(RANGES) == numeric
+    c = PlantConfig()
+    for name, (lo, hi, why) in RANGES.items():
+        assert lo < hi and why and lo <= getattr(c, name) <= hi, name
+
+
+@pytest.mark.parametrize("changes, fragments", [
+    ({"V_disp": 1.0}, ["V_disp = 1 m^3", "physical range 5e-06..0.0005 m^3"]),
+    ({"C_cab": 5.0e7}, ["C_cab = 5e+07 J/K", "500..100000 J/K"]),
+    ({"P_rated": 1.0e9}, ["P_rated", "200..100000 W"]),
+    ({"dt_int": 0.001, "Ts": 60.0}, ["60000 internal steps", "at most 10000"]),
+])
+def test_absurd_positive_values_are_refused_naming_the_key_and_its_range(changes, fragments):
+    with pytest.raises(ConfigError) as err:
+        PlantConfig().replace(**changes)
+    assert all(f in str(err.value) for f in fragments), str(err.value)
+
+
+def test_a_plant_toml_with_absurd_or_deep_values_is_one_line(tmp_path):
+    f = tmp_path / "p.toml"
+    f.write_text("[compressor]\nV_disp = 1.0\n")
+    with pytest.raises(ConfigError, match=r"p.toml: V_disp = 1 m\^3 is outside"):
+        PlantConfig.from_toml(f)
+    f.write_text("[compressor]\nV_disp = " + "[" * 3000 + "]" * 3000 + "\n")
+    with pytest.raises(ConfigError, match="p.toml: plant configuration nests 3000 levels"):
+        PlantConfig.from_toml(f)
+    f.write_text("[compressor]\nV_disp = { a = 1 }\n")
+    with pytest.raises(ConfigError, match="p.toml: V_disp must be a number"):
+        PlantConfig.from_toml(f)

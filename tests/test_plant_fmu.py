@@ -280,3 +280,86 @@ def test_the_configuration_is_baked_into_the_fmu(tmp_path):
     for _ in range(10):
         a, b = native.step(0.12, C2K(6.0), 5.0), plant.step(0.12, C2K(6.0), 5.0)
         assert max(abs(a[k] - b[k]) for k in a) <= 1e-9
+
+
+# -------------------------------------------------- hostile archives (issue 24)
+def _with_members(src: Path, dst: Path, members: dict[str, bytes],
+                  compression=zipfile.ZIP_DEFLATED) -> Path:
+    """A copy of the FMU ``src`` with more members."""
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", compression) as zout:
+        for item in zin.infolist():
+            zout.writestr(item, zin.read(item.filename))
+        for name, data in members.items():
+            zout.writestr(name, data)
+    return dst
+
+
+@pytest.fixture
+def private_tmp(tmp_path, monkeypatch):
+    """A temporary-files folder of this test's own, to see what an FMU left behind."""
+    import tempfile
+
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    return folder
+
+
+def test_a_zip_bomb_is_refused_before_anything_is_extracted(exported_fmu, tmp_path,
+                                                            monkeypatch, private_tmp):
+    import acid.plant.fmu as fmu_module
+
+    fmu, fmu_map = exported_fmu
+    with zipfile.ZipFile(fmu) as z:
+        real = sum(m.file_size for m in z.infolist())
+    # the limit scaled down to this FMU's size: 8 MB of zeros compress to about 8 kB
+    monkeypatch.setattr(fmu_module, "MAX_FMU_BYTES", real + (1 << 20))
+    bomb = _with_members(fmu, tmp_path / "bomb.fmu", {"resources/zeros.bin": bytes(8 << 20)})
+    assert bomb.stat().st_size < fmu.stat().st_size + (1 << 20)
+    with pytest.raises(FmuError, match=r"bomb.fmu: the FMU unpacks to \d+ MB \(at most"):
+        make_plant(f"fmu:{bomb}", fmu_map=fmu_map)
+    monkeypatch.setattr(fmu_module, "MAX_FMU_MEMBERS", 40)
+    many = _with_members(fmu, tmp_path / "many.fmu", {f"resources/f{i}": b"" for i in range(50)})
+    with pytest.raises(FmuError, match=r"many.fmu: the FMU holds \d+ files \(at most 40\)"):
+        make_plant(f"fmu:{many}", fmu_map=fmu_map)
+    assert list(private_tmp.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", ["../escape.txt", "/abs/escape.txt", "resources/../../x",
+                                  "C:/escape.txt", "..\\escape.txt"])
+def test_a_member_escaping_the_folder_is_refused(exported_fmu, tmp_path, private_tmp, name):
+    fmu, fmu_map = exported_fmu
+    bad = _with_members(fmu, tmp_path / "bad.fmu", {name: b"x"})
+    with pytest.raises(FmuError, match="bad.fmu: the FMU member .* escapes its folder"):
+        make_plant(f"fmu:{bad}", fmu_map=fmu_map)
+    assert list(private_tmp.iterdir()) == [] and not (tmp_path / "escape.txt").exists()
+
+
+def test_an_fmu_failing_during_extraction_leaves_no_temporary_folder(exported_fmu, tmp_path,
+                                                                      private_tmp):
+    fmu, fmu_map = exported_fmu
+    payload = b"acid-payload-" * 20
+    bad = _with_members(fmu, tmp_path / "crc.fmu", {"resources/data.bin": payload},
+                        compression=zipfile.ZIP_STORED)
+    raw = bytearray(bad.read_bytes())
+    at = raw.index(payload)
+    raw[at] ^= 0xFF  # the stored data no longer matches its CRC
+    bad.write_bytes(bytes(raw))
+    with pytest.raises(FmuError, match="crc.fmu: cannot extract the FMU"):
+        make_plant(f"fmu:{bad}", fmu_map=fmu_map)
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_an_fmu_rejected_after_unpacking_leaves_no_temporary_folder(exported_fmu, tmp_path,
+                                                                    private_tmp):
+    """The map names a variable the FMU lacks: refused after extraction, folder removed."""
+    import shutil
+
+    fmu, fmu_map = exported_fmu
+    own = tmp_path / "own.fmu"
+    shutil.copy(fmu, own)  # a file of its own: nothing cached for it
+    bad_map = tmp_path / "bad.toml"
+    bad_map.write_text(fmu_map.read_text().replace('"state.T_cab"', '"state.T_nowhere"'))
+    with pytest.raises(FmuError, match="own.fmu does not have"):
+        make_plant(f"fmu:{own}", fmu_map=bad_map)
+    assert list(private_tmp.iterdir()) == []

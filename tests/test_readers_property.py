@@ -1,6 +1,7 @@
 """Property: every reader of acid (HDF5 datasets, CSV and MAT imports, channel maps,
-params.json, the plant configuration TOML) refuses damaged or foreign files with acid's own
-one-line error (``AcidError``) and nothing else.
+params.json, econ parameters, the plant configuration TOML, sweep specifications, FMU maps,
+summary.json, sweep scenario records) refuses damaged or foreign files, also nested thousands
+of levels deep, with acid's own one-line error (``AcidError``) and nothing else.
 
 Example counts come from the hypothesis profile (``tests/conftest.py``): ``acid-ci`` (150 per
 reader, the default) or ``--hypothesis-profile=acid-thorough`` (1,500 per reader).

@@ -54,3 +54,30 @@ def test_killed_run_takes_its_workers_along_and_the_next_run_cleans_up(tmp_path)
     assert hidden(out)  # the killed run's stage folders ...
     with claim(out, "acid reproduce"):  # ... are removed when the next run takes the folder
         assert hidden(out) == []
+
+
+@pytest.mark.parametrize("when, group", [("cluster-starting", False),
+                                         ("workers-up", True)])
+def test_sigterm_with_two_jobs_is_one_quiet_line(tmp_path, when, group):
+    """SIGTERM while the local Dask cluster starts (a worker process exists, the cluster is
+    not up: Dask's exit handler used to print a 20-line traceback) or once both workers run
+    (the whole process group: workers used to print 'interrupted' each): exit 143 and one
+    line. Waits on process state, never on a fixed sleep."""
+    import os
+    import signal
+
+    out = tmp_path / "paper"
+    p = start("reproduce", "--quick", "--jobs", "2", "--out", str(out))
+    n = 1 if when == "cluster-starting" else 2
+    assert wait_for(lambda: len(descendants(p)) >= n or p.poll() is not None, 120)
+    kids = descendants(p)
+    if group:
+        os.killpg(p.pid, signal.SIGTERM)
+    else:
+        p.send_signal(signal.SIGTERM)
+    text, _ = p.communicate(timeout=120)
+    assert p.returncode == 143, text
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    assert lines == ["interrupted: stopped, no partial output was kept"], text
+    assert wait_for(lambda: not alive(kids), 30), alive(kids)
+    assert not (out / "summary.json").exists()

@@ -118,9 +118,9 @@ def test_identification_runs_once_per_plant_configuration(tmp_path, monkeypatch)
 
     calls, real = [], runner.identify_params
 
-    def counted(cfg, settings):
+    def counted(cfg, settings, *rest):
         calls.append(settings)
-        return real(cfg, settings)
+        return real(cfg, settings, *rest)
 
     monkeypatch.setattr(runner, "identify_params", counted)
     res = run_sweep(spec_from_dict(d, "ident"), tmp_path, executor=InlineExecutor(),
@@ -130,3 +130,61 @@ def test_identification_runs_once_per_plant_configuration(tmp_path, monkeypatch)
     assert len(recs) == 2 and recs[0]["params"] == recs[1]["params"]
     assert recs[0]["params"]["name"] == "identified-ls"
     assert set(res.table["params"]) == {"identified-ls"}
+
+
+def test_tampered_records_are_reported_and_run_again(tmp_path):
+    """A record that is not what acid wrote (another key, a text where a number goes, not
+    JSON, too deep) neither stops the sweep nor enters its table: it is run again."""
+    from acid.sweep.results import record_problem
+
+    d = {"defaults": {"cycle": 10.0, "duration_s": 60.0, "warmup_s": 0.0},
+         "grid": {"ambient_C": [30.0, 35.0, 40.0, 25.0]}, "controllers": {"nominal": {}}}
+    first = run_sweep(spec_from_dict(d, "t"), tmp_path, executor=InlineExecutor(),
+                      figures=False)
+    assert first.computed == 4
+    files = sorted((tmp_path / "scenarios").glob("*.json"))
+    good = json.loads(files[1].read_text())
+    files[0].write_text(json.dumps({**good, "key": "0" * 16}))
+    bad = json.loads(files[1].read_text())
+    bad["rows"][0]["energy_MJ"] = "lots"
+    files[1].write_text(json.dumps(bad))
+    files[2].write_text("[" * 100_000 + "]" * 100_000)
+    files[3].write_text(json.dumps({**good, "key": files[3].stem, "rows": "x"}))
+    again = run_sweep(spec_from_dict(d, "t"), tmp_path, executor=InlineExecutor(),
+                      figures=False)
+    assert (again.computed, again.reused) == (4, 0)
+    why = again.tampered
+    assert set(why) == {f.stem for f in files}
+    assert "does not match its file name" in why[files[0].stem]
+    assert why[files[1].stem] == 'rows[0].energy_MJ = "lots" is not a number'
+    assert "nests 100000 levels" in why[files[2].stem]
+    assert "rows must be a non-empty list" in why[files[3].stem]
+    timing = [c for c in first.table.columns if "elapsed" in c or c == "worker"]
+    pd.testing.assert_frame_equal(again.table.drop(columns=timing),
+                                  first.table.drop(columns=timing))
+    assert json.loads((tmp_path / "summary.json").read_text())["tampered_records"] == why
+    assert record_problem(good, good["key"], ("nominal",)) == ""
+    assert "controllers" in record_problem(good, good["key"], ("nmpc", "icm"))
+
+
+def test_unstable_identified_parameters_fail_their_scenarios_unless_allowed(tmp_path,
+                                                                            monkeypatch):
+    """What the spec check cannot see before the run (params = "identify") is checked where
+    the parameters appear: the scenarios that need them are errors naming the flag."""
+    from acid.params import ModelParams
+
+    d = {"defaults": {"cycle": 15.0, "duration_s": 60.0, "warmup_s": 0.0,
+                      "params": "identify"},
+         "grid": {"ambient_C": [30.0]}, "identify": {"duration_s": 1800.0, "method": "ls"},
+         "controllers": {"nominal": {}}}
+    # the identified model is made to look unstable: the check, not the fit, is under test
+    monkeypatch.setattr(ModelParams, "stability_problems",
+                        lambda self: ["eq. 2 is unstable: gamma4 + gamma5 = 1.2"])
+    res = run_sweep(spec_from_dict(d, "ident"), tmp_path / "a", executor=InlineExecutor(),
+                    figures=False)
+    assert res.failed == 1
+    [f] = res.failures()
+    assert "eq. 2 is unstable" in f["error"] and "--allow-unstable" in f["error"]
+    ok = run_sweep(spec_from_dict(d, "ident", allow_unstable=True), tmp_path / "b",
+                   executor=InlineExecutor(), figures=False)
+    assert ok.failed == 0 and set(ok.table["status"]) == {"ok"}

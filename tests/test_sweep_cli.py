@@ -32,6 +32,16 @@ def no_workers(monkeypatch):
     ('[grid]\nhumidity_pct = [-5.0]\n', ["grid", "humidity_pct = -5"]),
     ('[grid]\nambient_C = []\n', ["grid", "ambient_C is empty"]),
     ('[grid\n', ["not valid TOML"]),
+    # hostile inputs (issue 24): nested overrides, deep nesting, physical ranges, step counts
+    ('[defaults]\nplant = { V_disp = { x = 1.0 } }\n[grid]\nambient_C = [30.0]\n',
+     ["defaults", "plant.V_disp must be a value"]),
+    ('[[scenarios]]\nplant = { a = [[1.0]] }\n', ["scenarios #1", "plant.a must be a value"]),
+    ("x = " + "[" * 5000 + "]" * 5000 + "\n", ["nests 5000 levels", "at most 32"]),
+    ("a" + ".a" * 60 + " = 1\n", ["nests deeper than 32"]),
+    ('[defaults]\nplant = { V_disp = 1.0 }\n[grid]\nambient_C = [30.0]\n',
+     ["V_disp = 1 m^3", "5e-06..0.0005"]),
+    ('[defaults]\nplant = { dt_int = 1e-6, Ts = 5.0 }\n[grid]\nambient_C = [30.0]\n',
+     ["dt_int"]),
 ])
 def test_bad_spec_is_one_line_before_any_worker_starts(tmp_path, no_workers, text, fragments):
     spec = tmp_path / "s.toml"
@@ -94,3 +104,107 @@ def test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes(tmp_path):
     assert res.exit_code == 0, res.output
     s = json.loads((tmp_path / "s.json").read_text())
     assert (s["computed"], s["reused"], s["failed"]) == (12 - kept, kept, 0)
+
+
+# ------------------------------------------------------------- hostile inputs (issue 24)
+TINY = ('[defaults]\ncycle = 10.0\nduration_s = 60.0\nwarmup_s = 0.0\n'
+        '[grid]\nambient_C = [30.0]\n[controllers.nominal]\n')
+
+
+def _files(folder):
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def test_a_folder_of_another_specs_results_is_refused_and_the_same_spec_resumes(
+        tmp_path, no_workers):
+    from acid.executor import InlineExecutor
+    from acid.sweep import load_spec, run_sweep
+
+    first = tmp_path / "first.toml"
+    first.write_text(TINY)
+    out = tmp_path / "out"
+    run_sweep(load_spec(first), out, executor=InlineExecutor(), figures=False)
+    before = _files(out)
+    assert {"spec.toml", "summary.json", "results.csv"} <= set(before)
+    other = tmp_path / "other.toml"
+    other.write_text(TINY.replace("30.0", "35.0"))
+    res = runner.invoke(app, ["sweep", str(other), "--out", str(out)])
+    assert res.exit_code == 2
+    assert_one_line_error(res, "--out", str(out), "another specification")
+    assert _files(out) == before  # nothing overwritten
+    # the same specification (another file, other comments) resumes: nothing to run
+    again = tmp_path / "again.toml"
+    again.write_text("# the same sweep\n" + TINY)
+    res = runner.invoke(app, ["sweep", str(again), "--out", str(out), "--no-figures"])
+    assert res.exit_code == 0, res.output
+    assert "1 scenario finished earlier: nothing to run" in res.output
+    # results without a spec.toml are another (unknown) specification's too
+    (out / "spec.toml").unlink()
+    res = runner.invoke(app, ["sweep", str(first), "--out", str(out)])
+    assert_one_line_error(res, "--out", "unknown specification")
+
+
+def test_unstable_parameters_are_refused_before_any_worker_unless_allowed(tmp_path,
+                                                                          no_workers):
+    from acid.params import paper
+
+    paper().replace(gamma=(0.9, 0.9, 0.2, 0.5, 0.6, 0.3, 10.0), name="bad").to_json(
+        tmp_path / "b.json")
+    spec = tmp_path / "s.toml"
+    spec.write_text('[defaults]\nparams = "b.json"\n[grid]\nambient_C = [30.0]\n')
+    res = runner.invoke(app, ["sweep", str(spec), "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2
+    assert_one_line_error(res, "s.toml", "params", "b.json", "unstable", "--allow-unstable")
+    assert not (tmp_path / "o").exists()
+    res = runner.invoke(app, ["sweep", str(spec), "--out", str(tmp_path / "o"), "--dry-run",
+                              "--allow-unstable"])
+    assert res.exit_code == 0, res.output
+
+
+def test_a_spec_named_only_by_dots_is_refused(tmp_path, no_workers, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for name in ("..toml", "...toml"):
+        (tmp_path / name).write_text(TINY)
+        res = runner.invoke(app, ["sweep", name])
+        assert res.exit_code == 2
+        assert_one_line_error(res, "SPEC.toml", name, "only of dots", "--out")
+    assert not (tmp_path / "reports").exists()
+
+
+@pytest.mark.parametrize("address, fragment", [
+    ("tcp://[::", "not a scheduler address"), ("foo://h:1", "unknown scheme"),
+    ("tcp://h:99999", "port 99999"), ("tcp://h:port", "not a scheduler address"),
+])
+def test_a_malformed_scheduler_address_is_one_line(tmp_path, no_workers, address, fragment):
+    spec = tmp_path / "s.toml"
+    spec.write_text(TINY)
+    res = runner.invoke(app, ["sweep", str(spec), "--out", str(tmp_path / "o"),
+                              "--scheduler", address])
+    assert res.exit_code == 2
+    assert_one_line_error(res, "--scheduler", fragment)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_a_worker_that_dies_while_the_cluster_starts_is_one_line(tmp_path):
+    """Every worker process exits in its preload (as a worker killed by the OOM killer or a
+    broken environment would): one line, exit 2, nothing left running."""
+    import os
+    import subprocess
+    import sys
+
+    die = tmp_path / "die.py"
+    die.write_text("import os\nos._exit(3)\n")
+    spec = tmp_path / "s.toml"
+    spec.write_text(TINY)
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__PRELOAD": json.dumps([str(die)])}
+    exe = os.path.join(os.path.dirname(sys.executable), "acid")
+    r = subprocess.run([exe, "sweep", str(spec), "--out", str(tmp_path / "o"), "--workers",
+                        "2"], capture_output=True, text=True, env=env, timeout=600)
+    text = r.stdout + r.stderr
+    assert r.returncode == 2, text
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: the local Dask cluster"), text
+    assert "did not start" in lines[0] and "--workers 1" in lines[0]
+    assert not (tmp_path / "o" / "results.csv").exists()

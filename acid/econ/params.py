@@ -12,7 +12,6 @@ A parameter file is JSON with ``"model": "econ"`` (the paper's files have no ``m
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -140,7 +139,7 @@ class PowerMap:
         try:
             return cls(coef=tuple(d["coef"]), stderr=tuple(d.get("stderr") or ()),
                        domain=d.get("domain") or {}, quality=d.get("quality") or {})
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise DataError(f"{source}: malformed power_map ({exc})") from None
 
 
@@ -242,7 +241,7 @@ class EconParams:
                        provenance=d.get("provenance") or {})
         except DataError as exc:
             raise DataError(f"{source}: {exc}") from None
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise DataError(f"{source}: malformed econ parameters (missing or bad {exc})") \
                 from None
 
@@ -253,13 +252,9 @@ class EconParams:
 
 
 def _read_json(path: str | Path) -> object:
-    path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{path}: parameter file not found")
-    try:
-        return json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: not valid JSON ({exc.__class__.__name__}: {exc})") from None
+    from acid._readers import load_json
+
+    return load_json(path, "parameter file", DataError, top=None)
 
 
 def model_family(spec) -> str:

@@ -45,6 +45,125 @@ _LEGACY_ZERO = {"k_ram": ("front_end_speed", "no ram air"),
                 "hA_ext_v": ("cabin_speed", "no speed-dependent shell convection")}
 
 
+_FRACTION = "a fraction"
+_CAR_TO_BUS = "a city car to a bus"
+#: physical range of every numeric parameter, (min, max, why): wide enough for any vehicle
+#: from a city car to a bus and any climate acid's property tables cover, narrow enough to
+#: refuse a typo of orders of magnitude (a 1 m^3 displacement, a MJ/K cabin air)
+RANGES: dict[str, tuple[float, float, str]] = {
+    # ambient
+    "T_amb": (233.15, 330.15, "the refrigerant property tables, -40 to 57 degC"),
+    "RH_amb": (0.0, 1.0, _FRACTION),
+    "p_atm": (5.0e4, 1.1e5, "sea level to about 5500 m altitude"),
+    "G_solar": (0.0, 1400.0, "the solar constant, 1361 W/m^2, bounds irradiance at ground"),
+    "A_glass_sun": (0.0, 5.0, "projected glazing of " + _CAR_TO_BUS),
+    "tau_glass": (0.0, 1.0, _FRACTION),
+    "A_shell_sun": (0.0, 20.0, "projected roof and sides of " + _CAR_TO_BUS),
+    "alpha_shell": (0.0, 1.0, _FRACTION),
+    "Q_pass": (0.0, 6000.0, "sensible heat of up to about 60 occupants"),
+    "m_moist_pass": (0.0, 1.0e-3, "moisture of up to about 60 occupants"),
+    # cabin
+    "C_cab": (500.0, 1.0e5, "air of 0.4-80 m^3 at 1.2 kJ/(m^3 K): " + _CAR_TO_BUS),
+    "hA_int": (1.0, 2.0e4, "1-200 m^2 of interior at 1-100 W/(m^2 K)"),
+    "hA_sh": (1.0, 2.0e4, "1-200 m^2 of inner shell at 1-100 W/(m^2 K)"),
+    "C_int": (1.0e3, 5.0e6, "1 kg to 5 t of interior at about 1 kJ/(kg K)"),
+    "C_int_slow": (1.0e3, 5.0e6, "as C_int"),
+    "hA_int_slow": (0.1, 2.0e4, "as hA_int"),
+    "C_sh": (1.0e3, 1.0e7, "shell steel and glass of " + _CAR_TO_BUS),
+    "A_shell": (1.0, 300.0, "outer surface of " + _CAR_TO_BUS),
+    "L_shell": (1.0, 25.0, "length of " + _CAR_TO_BUS),
+    "h_ext_nat": (1.0, 50.0, "natural convection plus linearised radiation, 2-25 W/(m^2 K)"),
+    "m_inf0": (0.0, 0.5, "below about 20 air changes per hour of a bus"),
+    "k_inf": (0.0, 0.05, "as m_inf0 per m/s of vehicle speed"),
+    # HVAC air side
+    "c_p_air": (1000.0, 1050.0, "moist air, 1005-1030 J/(kg K)"),
+    "h_fg": (2.2e6, 2.6e6, "latent heat of water between 0 and 100 degC"),
+    "W_bl_min": (0.005, 1.0, "blower flows of " + _CAR_TO_BUS),
+    "W_bl_max": (0.01, 3.0, "blower flows of " + _CAR_TO_BUS),
+    "beta1": (-1.0e6, 1.0e6, "blower power map coefficient: within 10^4 W at 1 kg/s"),
+    "beta2": (-1.0e5, 1.0e5, "blower power map coefficient: within 10^4 W at 1 kg/s"),
+    "beta3": (-1.0e4, 1.0e4, "blower power offset within 10 kW"),
+    "f_bl_heat": (0.0, 1.0, _FRACTION),
+    "k_rec": (0.0, 10.0, "saturates within 0.1-100 K of ambient-cabin difference"),
+    "r_max": (0.0, 1.0, _FRACTION),
+    # evaporator
+    "C_ew": (100.0, 1.0e6, "0.1 kg to a bus's 1 t of aluminium and refrigerant"),
+    "UA_ea0": (10.0, 1.0e5, "evaporator air sides of " + _CAR_TO_BUS),
+    "W_ea0": (0.01, 3.0, "a reference blower flow (W_bl range)"),
+    "n_ea": (0.0, 1.5, "Reynolds exponents of heat-transfer correlations lie in 0.3-1"),
+    "UA_er0": (100.0, 1.0e6, "refrigerant sides of " + _CAR_TO_BUS),
+    "m_r0": (0.001, 2.0, "refrigerant flows of " + _CAR_TO_BUS),
+    "n_r": (0.0, 1.5, "as n_ea"),
+    "dT_suc0": (0.0, 10.0, "suction lines are sized for about 1 K, never 10 K"),
+    # condenser / front end
+    "C_cw": (100.0, 1.0e6, "as C_ew"),
+    "UA_cr0": (50.0, 1.0e6, "refrigerant sides of " + _CAR_TO_BUS),
+    "UA_ca0": (50.0, 2.0e5, "condenser air sides of " + _CAR_TO_BUS),
+    "m_ca0": (0.05, 50.0, "front-end air flows of " + _CAR_TO_BUS),
+    "n_ca": (0.0, 1.5, "as n_ea"),
+    "A_cond": (0.02, 5.0, "condenser faces of " + _CAR_TO_BUS),
+    "K_front": (1.0, 1.0e4, "front-end resistances of 5-5000 Pa at the design flow"),
+    "C_ram": (0.0, 1.5, "ram pressure recovery, below about 1"),
+    "dp_fan0": (10.0, 3000.0, "axial fan shut-off pressures"),
+    "Q_fan_free": (0.01, 50.0, "fan free deliveries of " + _CAR_TO_BUS),
+    "K_fan_off": (0.1, 1.0e4, "as K_front"),
+    "s_fan_low": (0.0, 1.0, _FRACTION),
+    "eta_fan": (0.01, 1.0, "an efficiency"),
+    "v_fan_off": (0.0, 60.0, "vehicle speeds, m/s"),
+    "p_fan_high": (2.0e5, 6.0e6, "head pressures of R134a/R1234yf, 2-60 bar"),
+    "p_fan_low": (1.0e5, 6.0e6, "as p_fan_high"),
+    "dT_recirc": (0.0, 20.0, "hot-air recirculation of a few K"),
+    "v_recirc": (0.1, 60.0, "vehicle speeds, m/s"),
+    # compressor / cycle
+    "V_disp": (5.0e-6, 5.0e-4, "5-500 cm^3: car scrolls (20-35 cc) to bus compressors"),
+    "N_min": (100.0, 5000.0, "compressor speeds, rpm"),
+    "N_max": (500.0, 20000.0, "compressor speeds, rpm"),
+    "tau_N": (0.05, 60.0, "motor and inverter speed responses"),
+    "superheat": (0.5, 30.0, "a vapour suction state, a few K of superheat"),
+    "subcool": (0.0, 30.0, "a few K of subcooling"),
+    "eta_v0": (0.3, 1.0, "a volumetric efficiency"),
+    "k_v": (0.0, 0.2, "efficiency loss per unit pressure ratio"),
+    "c_L": (0.0, 3000.0, "leakage as an rpm equivalent, below N_min"),
+    "eta_is_max": (0.2, 1.0, "an isentropic efficiency"),
+    "k_is": (0.0, 0.5, "efficiency curvature in the pressure ratio"),
+    "PR_opt": (1.2, 10.0, "pressure ratios of an A/C cycle"),
+    "c_is_lo": (0.0, 5000.0, "as c_L"),
+    "c_is_hi": (0.0, 0.5, "an efficiency loss"),
+    "P_loss0": (0.0, 5000.0, "inverter and motor losses of " + _CAR_TO_BUS),
+    "P_loss_N": (0.0, 1.0e4, "as P_loss0"),
+    "P_loss_cu": (0.0, 1.0e4, "as P_loss0"),
+    "P_rated": (200.0, 1.0e5, "shaft powers of " + _CAR_TO_BUS),
+    # nominal controller
+    "T_cab_set": (283.15, 308.15, "cabin set-points, 10-35 degC"),
+    "T_ew_set": (268.15, 293.15, "evaporator set-points, -5 to 20 degC"),
+    "T_ew_set_max": (268.15, 298.15, "evaporator set-points, -5 to 25 degC"),
+    "k_reset": (0.0, 1.0, "reset rates of at most 1 K/s per K"),
+    "Kp_comp": (0.0, 1.0e5, "compressor gains, rpm/K"),
+    "Ki_comp": (0.0, 1.0e4, "compressor gains, rpm/(K s)"),
+    "hyst_off": (0.0, 20.0, "a hysteresis of a few K"),
+    "hyst_on": (0.0, 20.0, "a hysteresis of a few K"),
+    "Kp_bl": (0.0, 10.0, "blower gains, kg/s/K"),
+    "Ki_bl": (0.0, 1.0, "blower gains, kg/s/(K s)"),
+    "p_derate": (5.0e5, 6.0e6, "as p_fan_high"),
+    "p_cut": (5.0e5, 6.0e6, "as p_fan_high"),
+    "T_e_min": (243.15, 283.15, "frost limits, -30 to 10 degC"),
+    "K_frost": (0.0, 1.0e5, "speed-cap gains, rpm/K"),
+    # initial hot soak
+    "T_cab0": (233.15, 363.15, "a soaked cabin, -40 to 90 degC"),
+    "T_int0": (233.15, 373.15, "sun-heated seats and dash, up to 100 degC"),
+    "T_shell0": (233.15, 373.15, "as T_int0"),
+    "T_ew0": (233.15, 363.15, "as T_cab0"),
+    "T_cw0": (233.15, 363.15, "as T_cab0"),
+    # solver
+    "Ts": (0.1, 60.0, "sample periods of a climate controller"),
+    "dt_int": (1.0e-3, 60.0, "internal steps; also Ts / dt_int <= MAX_SUBSTEPS"),
+}
+_UNITS: dict[str, str] = {}
+#: most internal steps per sample (Ts / dt_int): plant-check's 0.01 s reference at the
+#: longest Ts (60 s) is 6000; 1e-6 s would run for days
+MAX_SUBSTEPS = 10_000
+
+
 def _p(default, unit: str, section: str, source: str):
     """A configuration field with its unit, section and source in the field metadata."""
     return field(default=default, metadata={"unit": unit, "section": section, "source": source})
@@ -286,6 +405,8 @@ class PlantConfig:
 
     # ---------------------------------------------------------------- construction
     def __post_init__(self):
+        if not _UNITS:
+            _UNITS.update({f.name: f.metadata["unit"] for f in dataclasses.fields(self)})
         self._validate("PlantConfig")
 
     @classmethod
@@ -382,18 +503,10 @@ class PlantConfig:
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> PlantConfig:
         """Read a TOML plant configuration (keys as in ``parameter_table()``, SI units, K)."""
-        try:
-            import tomllib
-        except ModuleNotFoundError:  # Python < 3.11
-            import tomli as tomllib
+        from acid._readers import load_toml
+
         path = Path(path)
-        if not path.is_file():
-            raise ConfigError(f"{path}: plant configuration not found")
-        try:
-            d = tomllib.loads(path.read_text())
-        except Exception as exc:
-            msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise ConfigError(f"{path}: not valid TOML ({msg})") from None
+        d = load_toml(path, "plant configuration", ConfigError)
         return cls.from_dict(d, str(path))
 
     def to_dict(self) -> dict:
@@ -460,7 +573,17 @@ class PlantConfig:
         for name in ("eta_v0", "eta_is_max", "eta_fan"):
             if getattr(self, name) > 1.0:
                 bad(f"{name} must not exceed 1, got {getattr(self, name)}")
+        for name, (lo, hi, why) in RANGES.items():
+            v = getattr(self, name)
+            if not lo <= v <= hi:
+                unit = _UNITS.get(name, "")
+                unit = "" if unit in ("1", "") else " " + unit
+                bad(f"{name} = {v:g}{unit} is outside its physical range {lo:g}..{hi:g}{unit} "
+                    f"({why})")
         ratio = self.Ts / self.dt_int
+        if ratio > MAX_SUBSTEPS:
+            bad(f"dt_int = {self.dt_int:g} s gives {ratio:.0f} internal steps per Ts = "
+                f"{self.Ts:g} s (at most {MAX_SUBSTEPS})")
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             bad(f"dt_int = {self.dt_int} s must divide Ts = {self.Ts} s")
         if self.superheat < 0.5:

@@ -29,7 +29,6 @@ import atexit
 import collections
 import difflib
 import hashlib
-import json
 import math
 import os
 import shutil
@@ -130,17 +129,9 @@ class VariableMap:
 
 
 def _read_toml(path: Path, what: str) -> dict:
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # Python < 3.11
-        import tomli as tomllib
-    if not path.is_file():
-        raise ConfigError(f"{path}: {what} not found")
-    try:
-        return tomllib.loads(path.read_text())
-    except Exception as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ConfigError(f"{path}: not valid TOML ({msg})") from None
+    from acid._readers import load_toml
+
+    return load_toml(path, what, ConfigError)
 
 
 @dataclass(frozen=True)
@@ -304,11 +295,16 @@ def _open_fmu(path: Path):
     import zipfile
 
     try:
-        from fmpy import extract, read_model_description
+        from fmpy import read_model_description
     except ImportError:
         raise FmuError(f"{path}: FMU plants need fmpy (pip install 'acid[fmi]')") from None
     if not zipfile.is_zipfile(path):
         raise FmuError(f"{path}: not a valid FMU (not a zip archive)")
+    try:
+        with zipfile.ZipFile(path) as z:
+            check_archive(path, z.infolist())
+    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+        raise FmuError(f"{path}: not a valid FMU ({type(exc).__name__})") from None
     try:
         md = read_model_description(str(path), validate=True)
     except Exception as exc:
@@ -321,12 +317,55 @@ def _open_fmu(path: Path):
         kinds = "model exchange" if md.modelExchange is not None else "no co-simulation"
         raise FmuError(f"{path}: the FMU supports {kinds} only; acid needs an FMI "
                        f"{md.fmiVersion} co-simulation FMU (export it with co-simulation)")
-    try:
-        folder = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="acid-fmu-"))
-    except Exception as exc:
-        raise FmuError(f"{path}: cannot extract the FMU ({exc})") from None
+    folder = _extract(path)
     _EXTRACTED[key] = (md, folder)
     return md, folder
+
+
+#: most members and uncompressed bytes an FMU may hold (a large FMU with all platforms'
+#: binaries and tables is some hundred MB and a few thousand files)
+MAX_FMU_MEMBERS = 10_000
+MAX_FMU_BYTES = 1 << 30
+
+
+def check_archive(path: Path, members) -> None:
+    """Refuse (``FmuError``) an archive with too many members, too many uncompressed bytes
+    (a zip bomb: checked from the central directory before anything is extracted) or a
+    member whose path escapes the extraction folder (absolute, ``..``, a drive letter)."""
+    if len(members) > MAX_FMU_MEMBERS:
+        raise FmuError(f"{path}: the FMU holds {len(members)} files (at most "
+                       f"{MAX_FMU_MEMBERS})")
+    total = sum(max(int(m.file_size), 0) for m in members)
+    if total > MAX_FMU_BYTES:
+        raise FmuError(f"{path}: the FMU unpacks to {total / 2**20:.0f} MB (at most "
+                       f"{MAX_FMU_BYTES >> 20} MB)")
+    for m in members:
+        name = m.filename.replace("\\", "/")
+        parts = [p for p in name.split("/") if p not in ("", ".")]
+        if name.startswith("/") or ".." in parts or (parts and ":" in parts[0]):
+            raise FmuError(f"{path}: the FMU member {m.filename!r} escapes its folder")
+
+
+def _extract(path: Path) -> str:
+    """Unpack an FMU into a new temporary folder (removed again on every failure)."""
+    import zipfile
+
+    folder = tempfile.mkdtemp(prefix="acid-fmu-")
+    try:
+        try:
+            with zipfile.ZipFile(path) as z:
+                members = z.infolist()
+                check_archive(path, members)
+                for m in members:
+                    z.extract(m, folder)
+        except (zipfile.BadZipFile, OSError, ValueError, RuntimeError, EOFError,
+                NotImplementedError) as exc:
+            msg = " ".join(str(exc).split()) or type(exc).__name__
+            raise FmuError(f"{path}: cannot extract the FMU ({msg[:200]})") from None
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return folder
 
 
 # ---------------------------------------------------------------- FMI instances
@@ -584,13 +623,20 @@ class FmuPlant(Plant):
         if mode == "nominal" and "nominal" not in self.map.modes:
             raise ConfigError(f"{self.map.source}: no [modes.nominal] table: the FMU's own "
                               "(nominal) controller cannot be selected")
+        fresh = self.path.is_file() and _file_key(self.path) not in _EXTRACTED
         self.md, folder = _open_fmu(self.path)
-        self.fmi_version = str(self.md.fmiVersion)
-        self._vars = {v.name: v for v in self.md.modelVariables}
-        self._units = {u.name: u for u in (self.md.unitDefinitions or [])}
-        self._resolve_all()
-        self._embedded = self._read_embedded(folder)
-        self._inst = _Instance(self.md, folder, self.fmu_name, instance_name)
+        try:
+            self.fmi_version = str(self.md.fmiVersion)
+            self._vars = {v.name: v for v in self.md.modelVariables}
+            self._units = {u.name: u for u in (self.md.unitDefinitions or [])}
+            self._resolve_all()
+            self._embedded = self._read_embedded(folder)
+            self._inst = _Instance(self.md, folder, self.fmu_name, instance_name)
+        except BaseException:  # a rejected FMU (map, binary): its unpacked copy goes now
+            if fresh:
+                _EXTRACTED.pop(_file_key(self.path), None)
+                shutil.rmtree(folder, ignore_errors=True)
+            raise
         self._finalizer = weakref.finalize(self, self._inst.close)
         self._finalizer.atexit = False  # no FMI calls while the interpreter shuts down
         self._state: dict[str, float] = {}
@@ -737,9 +783,11 @@ class FmuPlant(Plant):
         spec = Path(folder) / "resources" / "acid_plant.json"
         if not spec.is_file():
             return None
+        from acid._readers import load_json
+
         try:
-            d = json.loads(spec.read_text())
-        except (OSError, ValueError):
+            d = load_json(spec, "embedded plant description", FmuError)
+        except AcidError:
             return None
         return {"acid_version": d.get("acid_version"), "config": d.get("config")}
 

@@ -25,7 +25,7 @@ from pathlib import Path
 
 from acid import __version__
 from acid._io import atomic_path, write_text
-from acid.errors import ConfigError
+from acid.errors import ConfigError, OutputError
 from acid.plant.config import PlantConfig
 
 #: Model identifier (and slave class) per FMI version: distinct, so that FMUs of both
@@ -208,17 +208,25 @@ def export_fmu(out: str | Path, config: PlantConfig | None = None, fmi_version: 
               .replace("class AcidHifiPlant(Slave):",
                        f"class {ident}(Fmi{fmi_version}Slave):"))
     saved_path, saved_modules = list(sys.path), set(sys.modules)
-    with tempfile.TemporaryDirectory(prefix="acid-export-") as tmp:
+    try:
+        tmp_dir = tempfile.TemporaryDirectory(prefix="acid-export-")
+    except OSError as exc:
+        raise OutputError(f"{out}: cannot create a temporary folder to build the FMU "
+                          f"({exc.strerror or type(exc).__name__})") from None
+    with tmp_dir as tmp:
         tmp = Path(tmp)
         src = tmp / "src"
-        src.mkdir()
-        script = src / f"{ident}.py"
-        script.write_text(source)
-        spec_file = src / SPEC_FILE
-        spec_file.write_text(json.dumps(spec, indent=1))
-        try:
+        try:  # a full disk or a file-size limit while building: one line naming --out
+            src.mkdir()
+            script = src / f"{ident}.py"
+            script.write_text(source)
+            spec_file = src / SPEC_FILE
+            spec_file.write_text(json.dumps(spec, indent=1))
             built = Path(FmuBuilder.build_FMU(script, dest=tmp / f"{ident}.fmu",
                                               project_files=[spec_file]))
+        except OSError as exc:
+            raise OutputError(f"{out}: cannot build the FMU in a temporary folder "
+                              f"({exc.strerror or type(exc).__name__})") from None
         finally:
             sys.path[:] = saved_path
             for name in set(sys.modules) - saved_modules:

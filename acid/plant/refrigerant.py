@@ -132,14 +132,15 @@ def table(fluid: str = "R134a", superheat: float = 5.0, subcool: float = 5.0
                 arr.setflags(write=False)
             return RefrigerantTable(fluid, float(superheat), float(subcool), **arrays)
     tab = _build(fluid, superheat, subcool)
-    try:
-        from acid._io import atomic_path
+    from acid._io import atomic_path
+    from acid.errors import AcidError
 
+    try:
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez(fh, **{k: getattr(tab, k) for k in _ARRAYS})
-    except OSError:
-        pass  # a read-only home only costs the rebuild next time
+    except (OSError, AcidError):
+        pass  # a read-only home or a full disk only costs the rebuild next time
     return tab
 
 

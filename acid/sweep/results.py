@@ -36,21 +36,92 @@ LEADING = ("scenario", "label", "cycle", "duration_s", "ambient_C", "humidity_pc
            "distance_km", "tail_energy_MJ")
 
 
-class ResultStore:
-    """The per-scenario records of one output folder."""
+#: statuses of a record and of its rows
+STATUSES = ("ok", "error", "lost")
+#: row entries that must be numbers (or null) and texts (or null) in a record
+NUMERIC = tuple(c for c in LEADING if c not in (
+    "label", "cycle", "refrigerant", "params", "plant", "controller", "controller_type",
+    "baseline", "status", "error")) + ("solve_ms_median",)
+TEXT = ("label", "refrigerant", "params", "controller", "controller_type", "baseline",
+        "status", "error")
+#: largest record file read back, bytes (a record is a few kB)
+MAX_RECORD_BYTES = 4 * 1024 * 1024
 
-    def __init__(self, out: str | Path):
+
+def record_problem(rec, key: str, controllers: tuple[str, ...] | None = None) -> str:
+    """Why ``rec`` is not a record acid wrote for scenario ``key`` (empty when it is one):
+    its key, status, rows (one per controller, in ``controllers`` when given), and the type
+    of every row entry the table and the summary read."""
+    if not isinstance(rec, dict):
+        return "not a JSON object"
+    if rec.get("key") != key:
+        return f"key {_short(rec.get('key'))} does not match its file name"
+    if rec.get("status") not in STATUSES:
+        return f"status {_short(rec.get('status'))} is not one of {', '.join(STATUSES)}"
+    rows = rec.get("rows")
+    if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) for r in rows):
+        return "rows must be a non-empty list of objects"
+    for i, row in enumerate(rows):
+        for k in NUMERIC:
+            v = row.get(k)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                return f"rows[{i}].{k} = {_short(v)} is not a number"
+        for k in TEXT:
+            v = row.get(k)
+            if v is not None and not isinstance(v, str):
+                return f"rows[{i}].{k} = {_short(v)} is not a text"
+        if row.get("status") not in STATUSES:
+            return f"rows[{i}].status = {_short(row.get('status'))} is not one of " \
+                   f"{', '.join(STATUSES)}"
+        if not isinstance(row.get("cycle", ""), (str, int, float)):
+            return f"rows[{i}].cycle is not a cycle"
+    labels = [r.get("controller") for r in rows]
+    if controllers is not None and sorted(labels) != sorted(controllers):
+        return f"its controllers {labels} are not this spec's {list(controllers)}"
+    return ""
+
+
+def _short(v) -> str:
+    text = json.dumps(v) if isinstance(v, (str, int, float, bool, type(None))) else \
+        type(v).__name__
+    return text if len(text) <= 30 else text[:27] + "..."
+
+
+class ResultStore:
+    """The per-scenario records of one output folder.
+
+    A record that is not what acid wrote (unreadable, not JSON, a wrong key, status or row
+    entry, other controllers: tampered or damaged) counts as absent: it is run again, and
+    ``tampered`` says which key and why.
+    """
+
+    def __init__(self, out: str | Path, controllers: tuple[str, ...] | None = None):
         self.dir = Path(out) / "scenarios"
+        self.controllers = controllers
+        self.tampered: dict[str, str] = {}
 
     def path(self, key: str) -> Path:
         return self.dir / f"{key}.json"
 
     def load(self, key: str) -> dict | None:
-        """The record of ``key``, or None (absent or unreadable)."""
-        try:
-            return json.loads(self.path(key).read_text())
-        except (OSError, ValueError):
+        """The record of ``key``, or None (absent, unreadable or not a valid record)."""
+        from acid._readers import load_json
+        from acid.errors import AcidError
+
+        path = self.path(key)
+        if not path.exists() and not path.is_symlink():
             return None
+        try:
+            rec = load_json(path, "scenario record", max_bytes=MAX_RECORD_BYTES, top=None)
+        except AcidError as exc:
+            self.tampered[key] = str(exc).removeprefix(f"{path}: ")
+            return None
+        problem = record_problem(rec, key, self.controllers)
+        if problem:
+            self.tampered[key] = problem
+            return None
+        self.tampered.pop(key, None)
+        return rec
 
     def finished(self, key: str, retry_failed: bool = False) -> bool:
         """True when ``key`` needs no new run: its record is ``"ok"``, or ``"error"`` unless
@@ -134,5 +205,5 @@ def controller_summary(df, baseline: str) -> dict:
     return out
 
 
-__all__ = ["ResultStore", "results_table", "write_table", "controller_summary",
+__all__ = ["ResultStore", "record_problem", "results_table", "write_table", "controller_summary",
            "failure_record"]

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from acid import __version__
 from acid._io import save_figure, write_json
-from acid.errors import AcidError
+from acid.errors import AcidError, ConfigError
 from acid.executor import Executor, check_interrupt, open_executor
 from acid.outdir import claim
 from acid.sweep.results import (
@@ -48,6 +48,7 @@ class SweepResult:
     elapsed_s : wall time, s.
     executor : where it ran (one line).
     files : name -> path of what was written.
+    tampered : key -> why, of earlier records that were not valid (run again).
     """
 
     spec: SweepSpec
@@ -59,6 +60,7 @@ class SweepResult:
     elapsed_s: float
     executor: str
     files: dict = field(default_factory=dict)
+    tampered: dict = field(default_factory=dict)
 
     def failures(self) -> list[dict]:
         """``{scenario, label, controller, error}`` of every failed row."""
@@ -79,7 +81,8 @@ class SweepResult:
             "computed": self.computed, "reused": self.reused, "failed": self.failed,
             "executor": self.executor, "elapsed_s": self.elapsed_s,
             "per_controller": controller_summary(self.table, self.spec.baseline),
-            "failures": self.failures(), "files": {k: str(v) for k, v in self.files.items()}})
+            "failures": self.failures(), "tampered_records": dict(self.tampered),
+            "files": {k: str(v) for k, v in self.files.items()}})
 
 
 def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
@@ -108,9 +111,15 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
         raise AcidError("acid sweep writes Parquet with pyarrow: pip install "
                         "'acid[distributed]'") from None
     with claim(out, "acid sweep"):
-        store = ResultStore(out)
+        check_out_folder(spec, out, force)
+        store = ResultStore(out, tuple(c.label for c in spec.controllers))
         tasks = spec.tasks()
         todo = [t for t in tasks if force or not store.finished(t.key, retry_failed)]
+        tampered = dict(store.tampered)
+        if spec.path is not None and spec.path.is_file():
+            from acid._io import write_text  # marks the folder as this spec's at once
+
+            write_text(out / "spec.toml", spec.path.read_text())
         computed = failed = 0
         where = "nothing to run"
         if todo:
@@ -140,9 +149,41 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
         files["summary"] = out / "summary.json"
         result = SweepResult(spec=spec, out=out, table=table, computed=computed,
                              reused=len(tasks) - len(todo), failed=failed,
-                             elapsed_s=time.perf_counter() - t0, executor=where, files=files)
+                             elapsed_s=time.perf_counter() - t0, executor=where, files=files,
+                             tampered=tampered)
         write_json(files["summary"], result.to_json_dict())
     return result
+
+
+def check_out_folder(spec: SweepSpec, out: str | Path, force: bool = False) -> None:
+    """Refuse (``ConfigError`` naming ``--out``) an output folder that holds the results of
+    another specification: its ``spec.toml`` (written when a sweep starts) is not this
+    spec's (compared as parsed TOML: comments and layout may differ), or it has results
+    (tables, summary or scenario records) without one. The same specification resumes;
+    ``force`` replaces them; a folder without results takes any specification."""
+    from acid._readers import load_toml
+
+    out = Path(out)
+    if force or spec.path is None:
+        return
+    found = [n for n in ("summary.json", "results.parquet", "results.csv")
+             if (out / n).exists()]
+    if not found and (out / "scenarios").is_dir() and any((out / "scenarios").glob("*.json")):
+        found = ["scenarios/"]
+    if not found:  # nothing to lose (a run that never finished a scenario)
+        return
+    theirs = out / "spec.toml"
+    hint = "choose another --out, or give --force to replace them"
+    if not theirs.exists():
+        raise ConfigError(f"--out {out}: holds sweep results ({found[0]}) of an unknown "
+                          f"specification (no spec.toml); {hint}")
+    try:
+        same = load_toml(theirs, "spec.toml") == load_toml(spec.path, "sweep specification")
+    except AcidError:
+        same = False
+    if not same:
+        raise ConfigError(f"--out {out}: holds the results of another specification "
+                          f"({theirs} is not {spec.path}); {hint}")
 
 
 def _execute(spec, todo, store, ex: Executor, on_progress, on_start,
@@ -157,7 +198,8 @@ def _execute(spec, todo, store, ex: Executor, on_progress, on_start,
         if t.params_kind == "identify":
             k = repr(t.plant_config)
             if k not in ident:
-                ident[k] = ex.submit(identify_params, t.plant_config, spec.identify)
+                ident[k] = ex.submit(identify_params, t.plant_config, spec.identify,
+                                     spec.allow_unstable)
             params = ident[k]
         running[ex.submit(run_scenario, t, params, check_interrupt)] = t
     done = failed = 0
@@ -179,4 +221,4 @@ def _execute(spec, todo, store, ex: Executor, on_progress, on_start,
     return done, failed, ex.describe()
 
 
-__all__ = ["run_sweep", "SweepResult"]
+__all__ = ["run_sweep", "SweepResult", "check_out_folder"]

@@ -95,9 +95,12 @@ def speed_profiles(scenario: Scenario, Ts: float) -> tuple[np.ndarray, np.ndarra
     return v[:n].copy(), v
 
 
-def identify_params(plant_config: PlantConfig, settings: IdentifySettings) -> ModelParams:
+def identify_params(plant_config: PlantConfig, settings: IdentifySettings,
+                    allow_unstable: bool = False) -> ModelParams:
     """Excite the plant of ``plant_config`` (APRBS, ``acid excite``) and fit eqs. 1-3 and 5
-    (``acid fit``) on the whole record: the model parameters for that configuration."""
+    (``acid fit``) on the whole record: the model parameters for that configuration.
+    Unstable or implausible identified parameters raise ``DataError`` (every scenario that
+    needs them is recorded as an error) unless ``allow_unstable``."""
     import warnings
 
     from acid.excite import ExcitationSpec, excite
@@ -113,6 +116,12 @@ def identify_params(plant_config: PlantConfig, settings: IdentifySettings) -> Mo
     prov = dict(res.params.provenance, identified_in="acid sweep",
                 excitation={"duration_s": settings.duration_s, "seed": settings.seed,
                             "speed_m_s": settings.speed_m_s})
+    problems = [] if allow_unstable else res.params.stability_problems()
+    if problems:
+        from acid.errors import DataError
+
+        raise DataError(f"parameters identified ({settings.method}) for this climate: "
+                        f"{problems[0]} (--allow-unstable uses them anyway)")
     return res.params.replace(name=f"identified-{settings.method}", provenance=prov)
 
 

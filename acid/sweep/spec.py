@@ -61,6 +61,13 @@ from acid.sweep.conditions import G_REF, RANGES, Conditions, plant_config_for
 
 MAX_SCENARIOS = 100_000
 MAX_DURATION_S = 86_400.0
+#: most samples of one scenario (warm-up + run + tail at the plant's Ts: 3 days at 5 s is
+#: 51840) and most internal plant steps (3 days at the default 0.5 s is 518400), checked when
+#: the spec is read
+MAX_SCENARIO_SAMPLES = 100_000
+MAX_SCENARIO_STEPS = 2_000_000
+#: a drive cycle pass counts as this long for that bound (the shipped cycles are shorter)
+CYCLE_PASS_BOUND_S = 3600.0
 MAX_SPEED_M_S = 45.0
 DEFAULT_CONSTANT_DURATION_S = 600.0
 DEFAULT_CONTROLLERS = ("nmpc", "icm")
@@ -192,6 +199,7 @@ class SweepSpec:
     identify: IdentifySettings = field(default_factory=IdentifySettings)
     plugins: tuple[str, ...] = ()
     path: Path | None = None
+    allow_unstable: bool = False
 
     def scenario_key(self, s: Scenario) -> str:
         """Hash of the scenario, its controllers, parameters and acid's version (16 hex)."""
@@ -280,7 +288,12 @@ def _check_value(key: str, value):
         return value
     if key == "plant":
         if not isinstance(value, dict):
-            raise ValueError(f"plant = {value!r} must be a table of PlantConfig fields")
+            raise ValueError(f"plant = {_show(value)} must be a table of PlantConfig fields")
+        for k, v in value.items():
+            if isinstance(v, (dict, list)):
+                raise ValueError(f"plant.{k} must be a value, got a "
+                                 f"{'table' if isinstance(v, dict) else 'list'} (plant "
+                                 "overrides are flat: { V_disp = 4.0e-5 })")
         return dict(value)
     raise KeyError(key)
 
@@ -306,7 +319,8 @@ def _check_table(w: _Where, where: str, table, grid: bool = False) -> dict:
     return out
 
 
-def _params_source(w: _Where, spec: str, base: Path) -> ParamsSource:
+def _params_source(w: _Where, spec: str, base: Path, allow_unstable: bool = False
+                   ) -> ParamsSource:
     if spec in ("paper", "identify"):
         if spec == "paper":
             from acid.params import paper
@@ -325,6 +339,9 @@ def _params_source(w: _Where, spec: str, base: Path) -> ParamsSource:
         p = ModelParams.from_json(path)
     except AcidError as exc:
         raise w.error("params", f"{spec!r}: {exc}") from None
+    problems = [] if allow_unstable else p.stability_problems()
+    if problems:
+        raise w.error("params", f"{spec!r}: {problems[0]} (--allow-unstable uses them anyway)")
     return ParamsSource(spec, "file", p, file_sha256(path))
 
 
@@ -373,27 +390,24 @@ def _controllers(w: _Where, table, plugins) -> tuple[tuple[ControllerEntry, ...]
     return tuple(entries.values()), tuple(order)
 
 
-def load_spec(path: str | Path) -> SweepSpec:
-    """Read and validate a sweep specification (TOML); see the module docstring."""
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # Python < 3.11
-        import tomli as tomllib
+def load_spec(path: str | Path, allow_unstable: bool = False) -> SweepSpec:
+    """Read and validate a sweep specification (TOML); see the module docstring.
+
+    Parameter files with unstable or implausible eqs. 1-3 are refused (as by every other
+    command) unless ``allow_unstable``."""
+    from acid._readers import load_toml
+
     path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{path}: sweep specification not found")
-    try:
-        d = tomllib.loads(path.read_text())
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ConfigError(f"{path}: not valid TOML ({msg})") from None
-    return spec_from_dict(d, str(path), base=path.parent, path=path)
+    d = load_toml(path, "sweep specification", ConfigError)
+    return spec_from_dict(d, str(path), base=path.parent, path=path,
+                          allow_unstable=allow_unstable)
 
 
 def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None,
-                   path: Path | None = None) -> SweepSpec:
+                   path: Path | None = None, allow_unstable: bool = False) -> SweepSpec:
     """Validate a parsed specification (``source`` names it in messages; relative parameter
-    files are read from ``base``)."""
+    files are read from ``base``; unstable parameter files refused unless
+    ``allow_unstable``)."""
     w = _Where(source)
     base = base or Path.cwd()
     for key in d:
@@ -446,7 +460,7 @@ def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None
         except ConfigError as exc:
             raise w.error(where, str(exc)) from None
         if m["params"] not in sources:
-            sources[m["params"]] = _params_source(w, m["params"], base)
+            sources[m["params"]] = _params_source(w, m["params"], base, allow_unstable)
         s = Scenario(cond, cycle=m["cycle"], duration_s=m["duration_s"],
                      warmup_s=m["warmup_s"], tail_s=m["tail_s"], params=m["params"],
                      plant=tuple(sorted(m["plant"].items())), origin=where)
@@ -456,6 +470,16 @@ def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None
                 configs[ck] = s.plant_config()
             except ConfigError as exc:
                 raise w.error(where, str(exc).replace("plant overrides: ", "plant: ")) from None
+        run_s = s.duration_s or (CYCLE_PASS_BOUND_S if isinstance(s.cycle, str)
+                                 else DEFAULT_CONSTANT_DURATION_S)
+        total, cfg = s.warmup_s + run_s + s.tail_s, configs[ck]
+        for n, per, what, most in ((total / cfg.Ts, f"Ts = {cfg.Ts:g} s", "samples",
+                                    MAX_SCENARIO_SAMPLES),
+                                   (total / cfg.dt_int, f"dt_int = {cfg.dt_int:g} s",
+                                    "internal steps", MAX_SCENARIO_STEPS)):
+            if n > most:
+                raise w.error(where, f"warmup_s + duration_s + tail_s = {total:g} s at the "
+                                     f"plant's {per} is {n:.0f} {what} (at most {most})")
         scenarios.append(s)
 
     controllers, run_order = _controllers(w, d.get("controllers"), tuple(plugins))
@@ -485,7 +509,7 @@ def spec_from_dict(d: dict, source: str = "sweep spec", base: Path | None = None
     return SweepSpec(title=title, scenarios=tuple(scenarios), controllers=controllers,
                      run_order=run_order, baseline=baseline, params=sources,
                      identify=identify,
-                     plugins=tuple(plugins), path=path)
+                     plugins=tuple(plugins), path=path, allow_unstable=allow_unstable)
 
 
 def _show(v) -> str:
