@@ -366,11 +366,18 @@ class Dataset:
         meta = dict(self.metadata)
         meta.setdefault("acid_version", __version__)
         meta["created"] = created or meta.get("created") or _now_iso()
+        # Built in memory, then written as bytes: a write that fails (a full disk, a file-size
+        # limit, EFBIG) is then an OSError of Python's, one line through atomic_path, never a
+        # failure inside the HDF5 library halfway through the file (which crashed the process).
+        with h5py.File(f"{path.name}.in-memory", "w", driver="core", backing_store=False,
+                       track_order=True) as f:
+            _write_group(f, self, meta)
+            if self.fine is not None:
+                _write_group(f.create_group("fine"), self.fine, None)
+            f.flush()
+            image = f.id.get_file_image()
         with atomic_path(path) as tmp:
-            with h5py.File(tmp, "w", track_order=True) as f:
-                _write_group(f, self, meta)
-                if self.fine is not None:
-                    _write_group(f.create_group("fine"), self.fine, None)
+            tmp.write_bytes(image)
         return path
 
     @classmethod

@@ -122,6 +122,7 @@ def _file_size_limit(nbytes: int):
     (["export-c", "--no-check", "--out", "OUT/c"], "OUT/c/acid_nmpc_solver.c"),
     (["export-fmu", "--out", "OUT/p.fmu"], "OUT/p.fmu"),
     (["claims", "--json", "OUT/c.json"], "OUT/c.json"),
+    (["excite", "--duration", "600", "--out", "OUT/x.h5"], "OUT/x.h5"),  # an HDF5 dataset
 ])
 def test_a_file_size_limit_is_one_line_naming_the_output(tmp_path, args, culprit):
     """EFBIG (a quota or ``ulimit -f``): one line naming the output, exit 2, no temporary
