@@ -29,7 +29,10 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "acid_hifi_fmu_map.toml": ("FMU map", "acid's plant exported with `acid export-fmu`"),
     "sweep_climates.toml": ("sweep spec", "ICM against NMPC across climates and drive cycles"),
     "sweep_econ.toml": ("sweep spec", "economic NMPC against NMPC across climates"),
-    "table_i_20cc.toml": ("plant config", "a 20 cc electric scroll calibrated to Table I"),
+    "sweep_prediction.toml": ("sweep spec", "where prediction pays: economic NMPC against the "
+                                            "best fixed-coil PI across climates and cycles"),
+    "table_i_20cc.toml": ("plant config", "the paper vehicle: a 20 cc electric scroll "
+                                          "calibrated to Table I (--config paper)"),
 }
 
 

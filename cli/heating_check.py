@@ -57,7 +57,7 @@ def heating_check(
             update(done[0], 14)
 
         result = run_check(logs, progress=tick)
-    rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r.passed), r.note]
+    rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r), r.note]
             for r in result.rows]
     print_table("acid heating-check", ["_", "_check", "value", "_unit", "_reference",
                                        "_verdict", "_note"], rows)

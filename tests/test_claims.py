@@ -197,7 +197,7 @@ def test_a_quick_run_judges_only_the_stages_it_does_not_shorten(tmp_path):
 
     v = _by_id(evaluate(results(), quick=True))
     for cid in ("table1.energy.0mps", "table1.ratio", "validation.T_cab",
-                "energy.udds.E.saving", "energy.sc03.E.gap_to_bound", "econ.power_map_rms"):
+                "energy.udds.E.saving", "energy.sc03.E.gap_to_best_plan", "econ.power_map_rms"):
         assert v[cid].verdict is Verdict.NOT_JUDGED, cid
         assert "--quick" in v[cid].reason and math.isfinite(v[cid].value)
     assert v["identification.gamma1"].verdict is Verdict.NOT_COMPARABLE

@@ -106,7 +106,7 @@ def test_verdicts_come_from_the_registry_and_do_not_contradict(quick_run):
     # judged (issue 21); the NMPC checks run as in the study and are judged
     assert s["mode"] == "quick"
     for cid in ("table1.energy.0mps", "table1.ratio", "validation.T_cab",
-                "energy.udds.E.saving", "energy.sc03.E.gap_to_bound"):
+                "energy.udds.E.saving", "energy.sc03.E.gap_to_best_plan"):
         assert items[cid]["verdict"] == "not judged (quick run)", cid
     assert items["cav.case1_below_case2"]["verdict"] == "agrees in direction"
     assert items["nmpc.plant.violation"]["verdict"] in ("agrees", "disagrees")
