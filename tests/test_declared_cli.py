@@ -115,3 +115,34 @@ def test_add_record_makes_experiments(record, tmp_path):
     res = runner.invoke(app, ["fit", str(record), "--add-record", str(second),
                               "--out", str(tmp_path / "q.json")])
     assert_one_line_error(res, "--add-record", "--model FILE.py")
+
+
+def test_fit_starts_take_the_built_in_families_through_the_declared_fitter(record, tmp_path):
+    out, summary = tmp_path / "p.json", tmp_path / "fit.json"
+    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--fit-starts", "3",
+                              "--oe-window", "150", "--out", str(out), "--json", str(summary)])
+    assert res.exit_code == 0, res.output
+    text = " ".join(res.output.split())
+    assert "Distinct optima of 3 starts" in text and "method oe" in text
+    rep = json.loads(summary.read_text())
+    optima = rep["optima"]
+    assert sum(o["n_starts"] for o in optima) == 3
+    assert [o["loss"] for o in optima] == sorted(o["loss"] for o in optima)
+    assert set(optima[0]["values"]) == set(optima[0]["spread"]) >= {"gamma1", "tau1"}
+    assert optima[0]["loss"] == pytest.approx(rep["output_error"]["loss"])
+    d = json.loads(out.read_text())
+    assert d["format"] == "acid-declared-params" and d["model"] == "paper"
+    # without those options --model paper keeps its own stack and parameter file
+    old = tmp_path / "old.json"
+    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--out", str(old)])
+    assert res.exit_code == 0, res.output
+    assert "format" not in json.loads(old.read_text())
+    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--fit-starts", "3",
+                              "--method", "ls", "--out", str(tmp_path / "q.json")])
+    assert_one_line_error(res, "--fit-starts 3", "--method oe")
+
+
+def test_fix_takes_econ_through_its_declaration(record, tmp_path):
+    res = runner.invoke(app, ["fit", str(record), "--model", "econ", "--fix", "zz=1",
+                              "--out", str(tmp_path / "q.json")])
+    assert_one_line_error(res, "'zz'", "econ")

@@ -103,7 +103,7 @@ def _state_track(model: Model, data: ModelData, P: np.ndarray, first: np.ndarray
     if not latent:
         return X
     X[:, latent] = np.nan
-    for (a, b), s in zip(data.segments, first, strict=True):
+    for (_a, b), s in zip(data.segments, first, strict=True):
         if s >= b:
             continue
         x0 = data.initial_states(model, np.array([s]))
@@ -145,7 +145,7 @@ def predict_model(ds: Dataset, params=None, k: int | None = 1, *, model=None,
     cols = [c for c, _ in chans]
     meas = np.concatenate([data.x, data.y], axis=1)[:, cols]
     pred = np.full(meas.shape, np.nan)
-    for (a, b), s in zip(data.segments, first, strict=True):
+    for (_a, b), s in zip(data.segments, first, strict=True):
         steps = (b - s - 1) if k is None else int(k)
         if steps < 1 or b - s <= steps:
             continue
