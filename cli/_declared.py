@@ -190,6 +190,10 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
             say(f"  {y['description']}")
     for line in res.notes:
         note(line)
+    from acid_cli.validate import residual_section
+
+    residuals = residual_section(ds, (model, ps), lo, len(ds))
     write_summary(json_path, {"command": "validate", "acid_version": __version__,
                               "inputs": {"data": str(data), "model": str(model_file),
-                                         "params": params}, **res.to_json_dict()})
+                                         "params": params}, **res.to_json_dict(),
+                              "residuals": residuals})

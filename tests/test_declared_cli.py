@@ -58,6 +58,10 @@ def test_fit_and_validate_a_users_model_file(record, tmp_path):
     assert res.exit_code == 0, res.output
     assert "in-sample" in " ".join(res.output.split())
     v = json.loads(vjson.read_text())
+    assert "One-step residuals" in res.output        # resid for a declared model too
+    r = v["residuals"]
+    assert set(r["white"]) == {"T_cab"} and set(r["independent"]) == set()  # no inputs
+    assert 0.0 <= r["ljung_box"]["T_cab"]["p_value"] <= 1.0
     assert v["model"] == "mine" and v["n_starts"] == 5 and v["horizon"] == 100
     assert set(v["channels"]) == {"T_cab"} and v["channels"]["T_cab"]["unit"] == "K"
     assert np.isfinite(v["channels"]["T_cab"]["rmse"])

@@ -41,11 +41,12 @@ __all__ = ["compare_models", "is_declared", "predict_model", "resid_model", "res
 
 
 def is_declared(params) -> bool:
-    """Whether ``params`` belongs to a declared model: a ``DeclaredFitResult``, a
-    ``ParameterSet`` with its model, or the path of a declared parameter file."""
-    if isinstance(params, (DeclaredFitResult, tuple)):
-        return isinstance(params, DeclaredFitResult) or (
-            len(params) == 2 and isinstance(params[0], (Model, str)))
+    """Whether ``params`` belongs to a declared model: a ``DeclaredFitResult``,
+    ``(model, ParameterSet)``, or the path of a declared parameter file."""
+    if isinstance(params, DeclaredFitResult):
+        return True
+    if isinstance(params, tuple):
+        return len(params) == 2 and isinstance(params[1], ParameterSet)
     if isinstance(params, (str, Path)) and Path(params).suffix == ".json" and \
             Path(params).is_file():
         try:
