@@ -136,6 +136,12 @@ def test_fit_starts_take_the_built_in_families_through_the_declared_fitter(recor
     assert optima[0]["loss"] == pytest.approx(rep["output_error"]["loss"])
     d = json.loads(out.read_text())
     assert d["format"] == "acid-declared-params" and d["model"] == "paper"
+    vjson = tmp_path / "val.json"                    # validated through the declaration
+    res = runner.invoke(app, ["validate", str(record), "--model", "paper", "--params",
+                              str(out), "--starts", "3", "--horizon", "40", "--json",
+                              str(vjson), "--no-yardsticks"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(vjson.read_text())["model"] == "paper"
     # without those options --model paper keeps its own stack and parameter file
     old = tmp_path / "old.json"
     res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--out", str(old)])
