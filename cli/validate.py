@@ -224,9 +224,8 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
                          seed, held_out_fraction, exogenous, paper_options,
                          non_overlapping=False, yardsticks=True) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
-    from acid_cli._declared import is_model_file, validate_declared
-
     from acid.models.loader import BUILT_IN
+    from acid_cli._declared import is_model_file, validate_declared
 
     require(is_model_file(model) or model in BUILT_IN, "--model",
             f"must be a model file FILE.py or a built-in declaration ({', '.join(BUILT_IN)}), "
