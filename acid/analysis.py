@@ -13,7 +13,9 @@
 
 Predictions never cross an experiment boundary. Temperatures are kelvin inside the results;
 ``to_frame()`` and ``plot()`` show degC (the edge). Parameters are ``ModelParams`` or what
-``acid.fit`` returns.
+``acid.fit`` returns; a declared model's fit result or parameter file (``acid fit --model``)
+goes to :mod:`acid.ident.analysis`: every channel it measures, in its declared unit, and
+every declared input in ``resid``.
 """
 
 from __future__ import annotations
@@ -56,7 +58,8 @@ class PredictionResult:
     Ts : sample time, s.
     model : the parameters' name.
     source : the dataset's source.
-    channels : ``PREDICTED_CHANNELS``.
+    channels : ``PREDICTED_CHANNELS`` (a declared model: its measured channels).
+    units : the channels' units (empty: kelvin, the paper's model).
     """
 
     time: np.ndarray
@@ -67,6 +70,12 @@ class PredictionResult:
     model: str
     source: str
     channels: tuple[str, ...] = PREDICTED_CHANNELS
+    units: tuple[str, ...] = ()
+
+    @property
+    def channel_units(self) -> tuple[str, ...]:
+        """The unit of each channel inside the arrays."""
+        return self.units or ("K",) * len(self.channels)
 
     @property
     def valid(self) -> np.ndarray:
@@ -75,7 +84,7 @@ class PredictionResult:
 
     @property
     def errors(self) -> np.ndarray:
-        """(N, 3) measured - predicted, K (NaN where no prediction)."""
+        """(N, C) measured - predicted, channel units (NaN where no prediction)."""
         return self.measured - self.predicted
 
     @property
@@ -87,7 +96,7 @@ class PredictionResult:
 
     @property
     def rmse(self) -> dict[str, float]:
-        """Root-mean-square prediction error per channel, K."""
+        """Root-mean-square prediction error per channel, in its unit."""
         m = self.valid
         return {c: float(rmse(self.measured[m, i], self.predicted[m, i]))
                 for i, c in enumerate(self.channels)}
@@ -97,26 +106,33 @@ class PredictionResult:
         return "simulation" if self.horizon is None else f"{self.horizon}-step"
 
     def to_frame(self):
-        """DataFrame indexed by time (s): ``<channel>`` measured and ``<channel>_pred``, degC."""
+        """DataFrame indexed by time (s): ``<channel>`` measured and ``<channel>_pred``, degC
+        for temperatures (``attrs["units"]`` per channel)."""
         import pandas as pd
 
         cols = {}
-        for i, c in enumerate(self.channels):
-            cols[c] = K2C(self.measured[:, i])
-            cols[f"{c}_pred"] = K2C(self.predicted[:, i])
+        for i, (c, u) in enumerate(zip(self.channels, self.channel_units, strict=True)):
+            cols[c] = _edge(self.measured[:, i], u)
+            cols[f"{c}_pred"] = _edge(self.predicted[:, i], u)
         df = pd.DataFrame(cols, index=pd.Index(self.time, name="time_s"))
-        df.attrs.update(units="degC", horizon=self.label, model=self.model)
+        df.attrs.update(units="degC" if not self.units else dict(zip(
+            self.channels, map(_edge_unit, self.channel_units), strict=True)),
+            horizon=self.label, model=self.model)
         return df
 
     def plot(self, title: str | None = None):
         """Measured and predicted T_cab, T_evap, T_ain (degC) over time; returns the figure."""
         return _trace_figure(self.time, self.measured, {self.model: self}, self.channels,
-                             title or f"{self.label} prediction ({self.source})")
+                             title or f"{self.label} prediction ({self.source})",
+                             self.channel_units)
 
     def to_json_dict(self) -> dict:
         return json_safe({"horizon": self.horizon, "Ts_s": self.Ts, "model": self.model,
                           "source": self.source, "fit_percent": self.fit_percent,
-                          "rmse_K": self.rmse, "samples": int(self.valid.sum())})
+                          **({"rmse": self.rmse, "units": dict(zip(
+                              self.channels, self.units, strict=True))} if self.units
+                             else {"rmse_K": self.rmse}),
+                          "samples": int(self.valid.sum())})
 
 
 @dataclass(frozen=True)
@@ -152,7 +168,8 @@ class CompareResult:
         first = next(iter(self.predictions.values()))
         label = "simulation" if self.horizon is None else f"{self.horizon}-step prediction"
         return _trace_figure(first.time, first.measured, self.predictions, first.channels,
-                             title or f"compare: {label} ({first.source})")
+                             title or f"compare: {label} ({first.source})",
+                             first.channel_units)
 
     def to_json_dict(self) -> dict:
         return json_safe({"horizon": self.horizon, "fit_percent": self.fit_percent})
@@ -190,7 +207,7 @@ class ResidualResult:
 
     @property
     def residuals(self) -> np.ndarray:
-        """(N, 3) measured - predicted, K (NaN where no prediction)."""
+        """(N, C) measured - predicted, channel units (NaN where no prediction)."""
         return self.prediction.errors
 
     @property
@@ -293,7 +310,7 @@ class ResidualResult:
         import matplotlib.pyplot as plt
 
         fig, axes = plt.subplots(2, len(self.channels), figsize=(11, 5.5), sharey="row",
-                                 constrained_layout=True)
+                                 constrained_layout=True, squeeze=False)
         for i, c in enumerate(self.channels):
             ax = axes[0, i]
             ax.bar(self.lags, self.autocorrelation[:, i], width=0.6, color="tab:blue")
@@ -324,7 +341,7 @@ class ResidualResult:
 
 
 # ----------------------------------------------------------------------- functions
-def predict(data: Dataset, params, k: int | None = 1) -> PredictionResult:
+def predict(data: Dataset, params, k: int | None = 1, *, warmup: int = 0) -> PredictionResult:
     """k-step-ahead predictions of T_cab, T_evap, T_ain along ``data`` (eqs. 1-3).
 
     Parameters
@@ -337,7 +354,15 @@ def predict(data: Dataset, params, k: int | None = 1) -> PredictionResult:
     Returns
     -------
     PredictionResult (NaN predictions for the first k samples of each experiment).
+
+    A declared model's parameters (a ``DeclaredFitResult``, a parameter file written by
+    ``acid fit --model``) go to :func:`acid.ident.analysis.predict_model` (every measured
+    channel, ``warmup`` samples for latent states).
     """
+    if _declared(params):
+        from acid.ident.analysis import predict_model
+
+        return predict_model(data, params, k, warmup=warmup)
     p = as_params(params)
     data.validate(require=MODEL_CHANNELS)
     if not math.isclose(data.Ts, p.Ts, rel_tol=1e-6):
@@ -372,7 +397,7 @@ def predict(data: Dataset, params, k: int | None = 1) -> PredictionResult:
 
 
 def compare(data: Dataset, *models, k: int | None = None,
-            labels: list[str] | None = None) -> CompareResult:
+            labels: list[str] | None = None, warmup: int = 0) -> CompareResult:
     """Fit % per channel of one or more models on ``data`` (MATLAB ``compare``).
 
     ``models`` are ``ModelParams`` or fit results; ``k`` as in :func:`predict` (default None:
@@ -385,21 +410,27 @@ def compare(data: Dataset, *models, k: int | None = None,
         raise ConfigError(f"compare: {len(labels)} labels for {len(models)} models")
     preds: dict[str, PredictionResult] = {}
     for i, m in enumerate(models):
-        pr = predict(data, m, k)
+        pr = predict(data, m, k, warmup=warmup)
         label = labels[i] if labels is not None else pr.model
         if label in preds:
             label = f"{label} ({i + 1})"
+        if preds and next(iter(preds.values())).channels != pr.channels:
+            raise ConfigError(f"compare: {label} predicts {', '.join(pr.channels)}, the "
+                              f"first model {', '.join(next(iter(preds.values())).channels)}")
         preds[label] = pr
     return CompareResult(predictions=preds, horizon=None if k is None else int(k))
 
 
-def resid(data: Dataset, params, max_lag: int = 25, k: int = 1) -> ResidualResult:
+def resid(data: Dataset, params, max_lag: int = 25, k: int = 1, *,
+          warmup: int = 0) -> ResidualResult:
     """Residual tests of a model on ``data`` (MATLAB ``resid``).
 
     Parameters
     ----------
     data : dataset (``MODEL_CHANNELS``).
-    params : ``ModelParams`` or the result of ``acid.fit``.
+    params : ``ModelParams`` or the result of ``acid.fit``; a declared model's fit result
+        or parameter file (every measured channel, cross-correlated with every declared
+        input; ``warmup`` as in :func:`predict`).
     max_lag : M, the largest lag tested (samples).
     k : horizon of the prediction errors (1: the innovations MATLAB tests).
 
@@ -408,23 +439,37 @@ def resid(data: Dataset, params, max_lag: int = 25, k: int = 1) -> ResidualResul
     ResidualResult: autocorrelations (lags 0..M), cross-correlations with W_bl and T_evap_set
     (lags -M..M), the 99 % band 2.576/sqrt(N) and Ljung-Box tests.
     """
-    from scipy.stats import chi2
-
     if int(max_lag) < 1:
         raise ConfigError(f"resid: max_lag must be >= 1, got {max_lag}")
+    if _declared(params):
+        from acid.ident.analysis import resid_model
+
+        return resid_model(data, params, max_lag, k, warmup=warmup)
     M = int(max_lag)
     pr = predict(data, params, k)
+    u = np.stack([data.get("W_bl", "kg/s"), data.get("T_evap_set", "K")], axis=-1)
+    return residual_tests(pr, u, RESIDUAL_INPUTS, data.experiment, M,
+                          {"max_lag": M, "k": k}, data.source)
+
+
+def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
+                   exp: np.ndarray, M: int, settings: dict, source: str) -> ResidualResult:
+    """Whiteness and input independence of the errors of ``pr`` (any model): ``u`` (N, nu)
+    the inputs named ``inputs``, ``exp`` (N,) the experiment of each sample (no lag product
+    crosses one)."""
+    from scipy.stats import chi2
+
     e = pr.errors
     valid = pr.valid
     nv = int(valid.sum())
     if nv <= M + 1:
-        raise DataError(f"{data.source}: {nv} residual samples are too few for {M} lags")
-    exp = data.experiment
+        raise DataError(f"{source}: {nv} residual samples are too few for {M} lags")
     e = e - np.nanmean(e[valid], axis=0)
     e[~valid] = 0.0
-    u = np.stack([data.get("W_bl", "kg/s"), data.get("T_evap_set", "K")], axis=-1)
+    u = np.asarray(u, dtype=float).copy()
     u = u - u[valid].mean(axis=0)
     u[~valid] = 0.0
+    nc, nu = e.shape[1], u.shape[1]
 
     def pairs(lag: int) -> tuple[slice, slice, np.ndarray]:
         """Index slices (t, t + lag) and the mask of pairs inside one experiment."""
@@ -437,9 +482,9 @@ def resid(data: Dataset, params, max_lag: int = 25, k: int = 1) -> ResidualResul
 
     ee0 = np.sum(e * e, axis=0)
     uu0 = np.sum(u * u, axis=0)
-    acf = np.empty((M + 1, 3))
+    acf = np.empty((M + 1, nc))
     cross_lags = np.arange(-M, M + 1)
-    ccf = np.empty((cross_lags.size, 2, 3))
+    ccf = np.empty((cross_lags.size, nu, nc))
     norm = np.sqrt(uu0[:, None] * ee0[None, :])
     with np.errstate(divide="ignore", invalid="ignore"):  # zero residuals: NaN, "no test"
         for lag in range(M + 1):
@@ -455,21 +500,38 @@ def resid(data: Dataset, params, max_lag: int = 25, k: int = 1) -> ResidualResul
     return ResidualResult(prediction=pr, lags=lags, cross_lags=cross_lags,
                           autocorrelation=acf, cross_correlation=ccf,
                           band99=float(Z99 / math.sqrt(nv)), n=nv, ljung_box=ljung,
-                          settings={"max_lag": M, "k": k})
+                          inputs=tuple(inputs), channels=pr.channels, settings=settings)
+
+
+def _declared(params) -> bool:
+    """Whether ``params`` are a declared model's (routed to ``acid.ident.analysis``)."""
+    from acid.ident.analysis import is_declared
+
+    return is_declared(params)
+
+
+def _edge(values: np.ndarray, unit: str) -> np.ndarray:
+    """Values shown to the user: kelvin as degC, other units as they are."""
+    return K2C(values) if unit == "K" else values
+
+
+def _edge_unit(unit: str) -> str:
+    return "degC" if unit == "K" else unit
 
 
 # --------------------------------------------------------------------------- figures
-def _trace_figure(time, measured, predictions: dict, channels, title: str):
+def _trace_figure(time, measured, predictions: dict, channels, title: str, units=None):
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(len(channels), 1, figsize=(10, 2.3 * len(channels)), sharex=True,
                              constrained_layout=True)
+    units = units or ("K",) * len(channels)
     for i, (ax, c) in enumerate(zip(np.atleast_1d(axes), channels, strict=True)):
-        ax.plot(time, K2C(measured[:, i]), color="k", lw=1.0, label="measured")
+        ax.plot(time, _edge(measured[:, i], units[i]), color="k", lw=1.0, label="measured")
         for label, pr in predictions.items():
-            ax.plot(time, K2C(pr.predicted[:, i]), lw=1.0,
+            ax.plot(time, _edge(pr.predicted[:, i], units[i]), lw=1.0,
                     label=f"{label}: fit {pr.fit_percent[c]:.1f} %")
-        ax.set_ylabel(f"{c} (degC)")
+        ax.set_ylabel(f"{c} ({_edge_unit(units[i])})")
         ax.legend(fontsize=8, loc="upper right")
     np.atleast_1d(axes)[-1].set_xlabel("time (s)")
     fig.suptitle(title)

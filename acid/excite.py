@@ -288,8 +288,10 @@ def spec_for_model(model: str, **options) -> ExcitationSpec:
 
 
 def uses_exogenous_schedule(plant: Plant) -> bool:
-    """Whether the plant takes T_int / T_shell from the schedule (only the model plant)."""
-    return getattr(plant, "name", "") == "model"
+    """Whether the plant takes T_int / T_shell from the schedule: the model plant, and a
+    declared model (``acid.models.plant.DeclaredPlant``) with them among its disturbances."""
+    return getattr(plant, "name", "") == "model" or bool(
+        {"T_int", "T_shell"} & set(getattr(plant, "disturbance_names", ())))
 
 
 def excite(plant: Plant, spec: ExcitationSpec,
@@ -306,10 +308,13 @@ def excite(plant: Plant, spec: ExcitationSpec,
     schedule = make_schedule(spec)
     initial = None
     if uses_exogenous_schedule(plant):
-        if schedule.T_int is not None:
+        if schedule.T_int is not None and getattr(plant, "name", "") == "model":
             initial = {"T_int": float(schedule.T_int[0]), "T_shell": float(schedule.T_shell[0])}
     else:
         schedule.T_int = schedule.T_shell = None
         schedule.spec["exogenous"] = "computed by the plant"
+    check = getattr(plant, "check_schedule", None)
+    if check is not None:      # a declared model: every input it declares is driven
+        check(schedule)
     return plant.simulate(schedule, initial=initial, progress=progress,
                           metadata={"seed": int(spec.seed)})

@@ -99,11 +99,11 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
         say(f"output error: {oe['windows']} windows of <= {oe['window']} samples, loss "
             f"{oe['loss']:.6g}, {oe['status']}; simulation fit {sim}")
     if len(result.optima) > 0:
-        print_table(f"Distinct optima of {fit_starts} starts (best first)",
-                    ["loss", "starts", "parameters (spread over its starts)"],
-                    [[f"{o.loss:.6g}", str(o.n_starts),
-                      ", ".join(f"{k} {_num(v, 4)} (+/-{_num(o.spread[k], 2)})"
-                                for k, v in o.values.items())] for o in result.optima])
+        print_table(f"Distinct optima of {fit_starts} starts (best first): loss, starts that "
+                    "reached it, largest parameter spread among those starts, and the "
+                    "parameters farthest from the best optimum (relative)",
+                    ["loss", "starts", "spread", "differs most from the best in"],
+                    _optima_rows(result.optima))
     for c in result.combinations:
         say(f"identified combination: {c}")
     for line in result.notes:
@@ -115,6 +115,23 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                               "inputs": {"data": str(data), "model": str(model_file)},
                               "estimation_fraction": estimation_fraction, "out": str(out),
                               **result.to_json_dict()})
+
+
+def _optima_rows(optima, show: int = 3) -> list[list[str]]:
+    """Rows of the distinct-optima table: the full values and spreads are in the JSON."""
+    best = optima[0].values
+    rows = []
+    for o in optima:
+        rel = {k: abs(v - best[k]) / max(abs(best[k]), 1e-12) for k, v in o.values.items()}
+        far = sorted(rel, key=rel.get, reverse=True)[:show]
+        spread = max(o.spread.items(), key=lambda kv: kv[1] / max(abs(o.values[kv[0]]),
+                                                                   1e-12))
+        rows.append([f"{o.loss:.6g}", str(o.n_starts),
+                     f"{spread[0]} +/-{_num(spread[1], 2)}" if o.n_starts > 1 else "-",
+                     "(best)" if o is optima[0] else ", ".join(
+                         f"{k} {_num(o.values[k], 4)} (best {_num(best[k], 4)})"
+                         for k in far)])
+    return rows
 
 
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
@@ -173,6 +190,10 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
             say(f"  {y['description']}")
     for line in res.notes:
         note(line)
+    from acid_cli.validate import residual_section
+
+    residuals = residual_section(ds, (model, ps), lo, len(ds))
     write_summary(json_path, {"command": "validate", "acid_version": __version__,
                               "inputs": {"data": str(data), "model": str(model_file),
-                                         "params": params}, **res.to_json_dict()})
+                                         "params": params}, **res.to_json_dict(),
+                              "residuals": residuals})

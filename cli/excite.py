@@ -22,9 +22,11 @@ from acid_cli._common import (
     require_range,
     write_summary,
 )
-from acid_cli._plant import config_input, fmu_map_option, plant_choice, plant_option
+from acid_cli._plant import config_input, fmu_map_option, plant_choice
 
 PLANTS = ("hifi", "model")
+#: ``--plant model:FILE.py`` (or ``model:NAME``, a built-in declaration): a declared model.
+DECLARED_PREFIX = "model:"
 
 #: Ambient temperatures accepted here, degC: a kelvin value typed by mistake is refused; the
 #: plant refuses what its own tables do not cover.
@@ -39,6 +41,9 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
     A plant that is not available in this installation (``--plant hifi`` before the
     high-fidelity modules exist, or without their dependencies) is a one-line ``ConfigError``.
     """
+    if name.startswith(DECLARED_PREFIX):
+        return declared_plant(name[len(DECLARED_PREFIX):], spec, params, plant_config, T_amb,
+                              fmu_map)
     choice = plant_choice(name, fmu_map, allowed=PLANTS)
     if choice.kind != "model" and params is not None:
         raise ConfigError("--params applies to --plant model only (the high-fidelity plant "
@@ -62,6 +67,26 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
                           f"use --plant model") from None
 
 
+def declared_plant(model_spec: str, spec: ExcitationSpec, params: Path | None,
+                   plant_config: Path | None, T_amb: float | None, fmu_map: Path | None):
+    """``--plant model:FILE.py``: the declared model as a plant (``DeclaredPlant``), with the
+    values of ``--params`` (a parameter file of ``acid fit --model``) or its declared ones."""
+    from acid.ident.validate import read_parameters
+    from acid.models import load
+    from acid.models.plant import DeclaredPlant
+
+    for flag, given in (("--plant-config", plant_config), ("--fmu-map", fmu_map),
+                        ("--noise", spec.noise != 0.0)):
+        if given:
+            raise ConfigError(f"{flag} does not apply to --plant {DECLARED_PREFIX}"
+                              f"{model_spec} (a declared model)")
+    if not model_spec:
+        raise ConfigError(f"--plant {DECLARED_PREFIX}FILE.py: the model file is missing")
+    model = load(model_spec)
+    values = None if params is None else read_parameters(model, params).values
+    return DeclaredPlant(model, values, **({} if T_amb is None else {"T_amb": C2K(T_amb)}))
+
+
 def _summary_rows(ds: Dataset) -> list[list[str]]:
     rows = []
     for name, values in ds.channels.items():
@@ -73,7 +98,12 @@ def _summary_rows(ds: Dataset) -> list[list[str]]:
 @handle_errors
 def excite(
     out: Path = typer.Option(..., "--out", "-o", help="HDF5 dataset to write (atomically)."),
-    plant: str = plant_option("hifi", PLANTS),
+    plant: str = typer.Option(
+        "hifi", "--plant",
+        help="Plant: 'hifi' (high-fidelity), 'model' (paper eqs. 1-5), 'model:FILE.py' (a "
+             "declared model, or model:paper|econ|cabin3; its inputs and disturbances "
+             "driven by the schedule, --params a parameter file of acid fit --model) or "
+             "'fmu:PATH.fmu' (your FMI 2.0/3.0 co-simulation FMU, with --fmu-map)."),
     fmu_map: Path | None = fmu_map_option(),
     duration: float | None = typer.Option(
         None, "--duration", help="Record length, s (default 7200, 21600 for --model econ)."),
@@ -117,8 +147,10 @@ def excite(
 ) -> None:
     """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
     plant_config = config_input(plant_config)  # a named vehicle ('paper') -> its file
+    model_file = plant[len(DECLARED_PREFIX):] if plant.startswith(DECLARED_PREFIX) else ""
     check_paths(inputs={"--params": params, "--plant-config": plant_config,
-                        **plant_inputs(plant, fmu_map)},
+                        **plant_inputs(plant, fmu_map),
+                        **({"--plant": model_file} if model_file.endswith(".py") else {})},
                 outputs={"--out": out, "--json": json_out})
     if t_amb is not None:
         require_range(t_amb, "--t-amb", *T_AMB_RANGE_C, "degC")

@@ -94,14 +94,15 @@ def fit(
              "data from `acid excite --model econ`), or a model file FILE.py declaring "
              "`model = acid.models.Model(...)` (ARCHITECTURE.md, 'How to add a model')."),
     fix: list[str] | None = typer.Option(
-        None, "--fix", help="NAME=VALUE: hold a parameter of a model file at VALUE "
-                            "(repeatable)."),
+        None, "--fix", help="NAME=VALUE: hold a parameter of a declared model (a model "
+                            "file, paper or econ) at VALUE (repeatable)."),
     free: list[str] | None = typer.Option(
-        None, "--free", help="NAME: estimate a parameter the model file declares fixed "
-                             "(repeatable)."),
+        None, "--free", help="NAME: estimate a parameter the declared model (a model "
+                             "file, paper or econ) declares fixed (repeatable)."),
     fit_starts: int = typer.Option(
         1, "--fit-starts", help="Output-error starts spread inside the declared bounds "
-                                "(model file); the distinct optima are reported."),
+                                "(a model file, or paper/econ through their declarations); "
+                                "the distinct optima are reported."),
     seed: int = typer.Option(0, "--seed", help="Seed of the --fit-starts draws."),
     add_record: list[Path] | None = typer.Option(
         None, "--add-record", help="Another record fitted with DATA, as its own experiment "
@@ -112,12 +113,15 @@ def fit(
     Prints the parameter table with the reference (paper) values beside ours, the
     conditioning of each regression and the one-step and multi-step fit %.
     """
-    declared = is_model_file(model)
+    # A built-in family takes the declared path (acid.models.load(name)) when an option only
+    # the declared fitter has is given; without them it keeps its hand-written stack.
+    declared = is_model_file(model) or (model in MODEL_FAMILIES and bool(
+        fix or free or fit_starts != 1))
     require(declared or model in MODEL_FAMILIES, "--model",
             f"must be one of {', '.join(MODEL_FAMILIES)} or a model file FILE.py, got "
             f"{model!r}")
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
-                        "--model": model if declared else None,
+                        "--model": model if is_model_file(model) else None,
                         **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
                 outputs={"--out": out, "--json": json_path})
     if not declared:
@@ -125,7 +129,9 @@ def fit(
                                        ("--fit-starts", fit_starts != 1),
                                        ("--add-record", add_record)) if set_]
         if given:
-            raise ConfigError(f"{', '.join(given)}: only for --model FILE.py")
+            raise ConfigError(f"{', '.join(given)}: only for --model FILE.py (or with "
+                              "--fix, --free or --fit-starts, which fit paper and econ "
+                              "through the declared path)")
     method = method or ("auto" if declared else "ls")
     require_range(estimation_fraction, "--estimation-fraction", 0.0, 1.0, lo_open=True)
     require(declared or method in METHODS, "--method",
@@ -148,7 +154,8 @@ def fit(
             ("--strict", strict), ("--reference", reference != "paper"),
             ("--no-blower", no_blower)) if set_]
         if given:
-            raise ConfigError(f"{', '.join(given)}: only for --model paper")
+            raise ConfigError(f"{', '.join(given)}: only for --model paper without --fix, "
+                              "--free or --fit-starts")
         return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                             covariance=covariance, bandwidth=bandwidth,

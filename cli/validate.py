@@ -79,8 +79,9 @@ def validate(
              "beside (e.g. the paper's model beside the econ model)."),
     model: str | None = typer.Option(
         None, "--model",
-        help="A model file FILE.py (acid.models): validate that declared model, with "
-             "--params from `acid fit --model FILE.py` (default: its declared values)."),
+        help="A model file FILE.py or a built-in declaration (paper, econ, cabin3; "
+             "acid.models): validate that declared model, with --params from `acid fit "
+             "--model ...` (default: its declared values)."),
     warmup: int = typer.Option(
         60, "--warmup", help="Model file with latent states: samples before each start from "
                              "which they are estimated."),
@@ -223,12 +224,16 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
                          seed, held_out_fraction, exogenous, paper_options,
                          non_overlapping=False, yardsticks=True) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
+    from acid.models.loader import BUILT_IN
     from acid_cli._declared import is_model_file, validate_declared
 
-    require(is_model_file(model), "--model", f"must be a model file FILE.py, got {model!r}")
+    require(is_model_file(model) or model in BUILT_IN, "--model",
+            f"must be a model file FILE.py or a built-in declaration ({', '.join(BUILT_IN)}), "
+            f"got {model!r}")
     require(not paper_options, "--model",
             "--beside and --allow-unstable are for the paper/econ families")
-    check_paths(inputs={"DATA": data, "--model": model, "--params": params_input(params)},
+    check_paths(inputs={"DATA": data, "--model": model if is_model_file(model) else None,
+                        "--params": params_input(params)},
                 outputs={"--json": json_path})
     _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
                    held_out_fraction)

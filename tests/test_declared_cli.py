@@ -58,6 +58,10 @@ def test_fit_and_validate_a_users_model_file(record, tmp_path):
     assert res.exit_code == 0, res.output
     assert "in-sample" in " ".join(res.output.split())
     v = json.loads(vjson.read_text())
+    assert "One-step residuals" in res.output        # resid for a declared model too
+    r = v["residuals"]
+    assert set(r["white"]) == {"T_cab"} and set(r["independent"]) == set()  # no inputs
+    assert 0.0 <= r["ljung_box"]["T_cab"]["p_value"] <= 1.0
     assert v["model"] == "mine" and v["n_starts"] == 5 and v["horizon"] == 100
     assert set(v["channels"]) == {"T_cab"} and v["channels"]["T_cab"]["unit"] == "K"
     assert np.isfinite(v["channels"]["T_cab"]["rmse"])
@@ -115,3 +119,93 @@ def test_add_record_makes_experiments(record, tmp_path):
     res = runner.invoke(app, ["fit", str(record), "--add-record", str(second),
                               "--out", str(tmp_path / "q.json")])
     assert_one_line_error(res, "--add-record", "--model FILE.py")
+
+
+def test_fit_starts_take_the_built_in_families_through_the_declared_fitter(record, tmp_path):
+    out, summary = tmp_path / "p.json", tmp_path / "fit.json"
+    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--fit-starts", "3",
+                              "--oe-window", "150", "--out", str(out), "--json", str(summary)])
+    assert res.exit_code == 0, res.output
+    text = " ".join(res.output.split())
+    assert "Distinct optima of 3 starts" in text and "method oe" in text
+    rep = json.loads(summary.read_text())
+    optima = rep["optima"]
+    assert sum(o["n_starts"] for o in optima) == 3
+    assert [o["loss"] for o in optima] == sorted(o["loss"] for o in optima)
+    assert set(optima[0]["values"]) == set(optima[0]["spread"]) >= {"gamma1", "tau1"}
+    assert optima[0]["loss"] == pytest.approx(rep["output_error"]["loss"])
+    d = json.loads(out.read_text())
+    assert d["format"] == "acid-declared-params" and d["model"] == "paper"
+    vjson = tmp_path / "val.json"                    # validated through the declaration
+    res = runner.invoke(app, ["validate", str(record), "--model", "paper", "--params",
+                              str(out), "--starts", "3", "--horizon", "40", "--json",
+                              str(vjson), "--no-yardsticks"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(vjson.read_text())["model"] == "paper"
+    # without those options --model paper keeps its own stack and parameter file
+    old = tmp_path / "old.json"
+    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--out", str(old)])
+    assert res.exit_code == 0, res.output
+    assert "format" not in json.loads(old.read_text())
+    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--fit-starts", "3",
+                              "--method", "ls", "--out", str(tmp_path / "q.json")])
+    assert_one_line_error(res, "--fit-starts 3", "--method oe")
+
+
+def test_fix_takes_econ_through_its_declaration(record, tmp_path):
+    res = runner.invoke(app, ["fit", str(record), "--model", "econ", "--fix", "zz=1",
+                              "--out", str(tmp_path / "q.json")])
+    assert_one_line_error(res, "'zz'", "econ")
+
+
+def test_excite_drives_a_declared_model_as_the_plant(tmp_path):
+    from acid.data import Dataset
+
+    model = tmp_path / "my_cabin.py"
+    model.write_text(MODEL_FILE)
+    rec = tmp_path / "x.h5"
+    res = runner.invoke(app, ["excite", "--plant", f"model:{model}", "--duration", "1000",
+                              "--seed", "4", "--out", str(rec)])
+    assert res.exit_code == 0, res.output
+    ds = Dataset.from_hdf5(rec)
+    assert len(ds) == 200 and {"T_cab", "T_m", "T_shell"} <= set(ds.channels)
+    from acid.excite import make_schedule, spec_for_model
+
+    sched = make_schedule(spec_for_model("paper", seed=4, duration=1000.0))
+    np.testing.assert_allclose(ds.get("T_shell", "K"), sched.T_shell, rtol=1e-12)
+    assert abs(sched.T_shell[0] - 303.15) > 1.0               # not the constant fallback
+    assert ds.metadata["plant_config"]["model"] == "mine"
+    # its parameters from a fit of the declared model: the plant runs with those values
+    out = tmp_path / "p.json"
+    res = runner.invoke(app, ["fit", str(rec), "--model", str(model), "--fix", "a=300",
+                              "--fix", "b=20", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    rec2 = tmp_path / "y.h5"
+    res = runner.invoke(app, ["excite", "--plant", f"model:{model}", "--params", str(out),
+                              "--duration", "200", "--out", str(rec2)])
+    assert res.exit_code == 0, res.output
+    assert Dataset.from_hdf5(rec2).metadata["plant_config"]["parameters"] == {"a": 300.0,
+                                                                              "b": 20.0}
+
+
+def test_the_declared_fitter_gives_acid_fit_paper_results(record, tmp_path):
+    """What `acid fit --model paper` writes today (acid/fit.py's least squares, HAC) equals
+    the declared fitter on acid.models.paper: the condition for deleting that path."""
+    from acid.data import Dataset
+    from acid.fit import ModelFitter
+    from acid.ident.fit import fit_model
+    from acid.params import paper
+
+    out = tmp_path / "p.json"
+    res = runner.invoke(app, ["fit", str(record), "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    old = json.loads(out.read_text())
+    theta = np.concatenate([old["gamma"], old["tau"], old["beta"]])
+    ds = Dataset.from_hdf5(record)
+    new = fit_model("paper", ds, "ls")
+    np.testing.assert_allclose(new.values, theta, rtol=1e-9, atol=0)
+    ref = ModelFitter(method="ls", reference=paper()).fit(ds)
+    se = np.array([e.stderr for e in new.estimates])
+    sound = ref.stderr > 1e-8 * np.abs(theta)        # P_bl of the plant is exact: round-off
+    assert sound.sum() >= 10
+    np.testing.assert_allclose(se[sound], ref.stderr[sound], rtol=1e-6)

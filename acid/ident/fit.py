@@ -182,6 +182,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                           f"{', '.join(COVARIANCES)})")
     if int(fit_starts) < 1:
         raise ConfigError(f"fit_starts must be at least 1, got {fit_starts}")
+    if int(fit_starts) > 1 and method in ("ls", "cvx"):
+        raise ConfigError(f"--fit-starts {fit_starts}: the starts are output-error starts; "
+                          f"use --method oe (or auto), not {method}")
     if fix or free:
         model = model.with_parameters(fix, tuple(free))
     data = ModelData.of(model, ds)
@@ -259,9 +262,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     ls_reached = [s != "not fitted" for s in status]
     latent = [s.name for s in model.states if not s.measured]
     if method == "auto":
-        method = "ls" if all(ls_reached) and not latent else "oe"
+        method = "ls" if all(ls_reached) and not latent and fit_starts == 1 else "oe"
         notes.append(f"method auto: {method} (" + (
             "least squares reaches every free parameter" if method == "ls" else
+            f"{fit_starts} output-error starts asked for" if fit_starts > 1 else
             "latent states " + ", ".join(latent) if latent and all(ls_reached) else
             "not every parameter is in a linear, fully measured equation") + ")")
     lin = [f.name for f in forms if reports[f.name].method in ("ls", "cvx")]

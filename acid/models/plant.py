@@ -10,6 +10,8 @@ the disturbances and the outputs over the interval.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from acid.errors import ConfigError
@@ -74,6 +76,25 @@ class DeclaredPlant(Plant):
     def measure(self) -> Measurement:
         return {**dict(zip(self.model.state_names, map(float, self.x), strict=True)),
                 "T_amb": self.T_amb}
+
+    @property
+    def disturbance_names(self) -> tuple[str, ...]:
+        return tuple(r.name for r in self.model.disturbances)
+
+    def check_schedule(self, schedule) -> None:
+        """One line naming every declared input or disturbance that neither ``schedule``
+        (an ``acid.plant.base.InputSchedule``) nor ``constant`` gives."""
+        given = {"W_bl", "T_evap_set", "v_veh", "T_amb", *self.constant}
+        given |= {n for n in ("T_int", "T_shell") if getattr(schedule, n, None) is not None}
+        missing = [r.name for r in self.model.inputs + self.model.disturbances
+                   if r.name not in given]
+        if missing:
+            raise ConfigError(
+                f"{Path(self.model.source).name}: model {self.model.name!r} declares "
+                f"{', '.join(map(repr, missing))}, which no excitation schedule gives (it "
+                f"drives {', '.join(sorted(given))}"
+                + ("; T_int and T_shell with --vary-exogenous" if {"T_int", "T_shell"} &
+                   set(missing) else "") + ")")
 
     def _signal(self, name: str, given: dict) -> float:
         if name in given:
