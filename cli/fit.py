@@ -115,11 +115,14 @@ def fit(
     """
     # A built-in family takes the declared path (acid.models.load(name)) when an option only
     # the declared fitter has is given; without them it keeps its hand-written stack.
-    declared = is_model_file(model) or (model in MODEL_FAMILIES and bool(
-        fix or free or fit_starts != 1))
+    from acid.models.loader import BUILT_IN
+
+    # A built-in declaration without a hand-written stack (cabin3, ...) is always declared.
+    declared = is_model_file(model) or (model in BUILT_IN and model not in MODEL_FAMILIES) or (
+        model in MODEL_FAMILIES and bool(fix or free or fit_starts != 1))
     require(declared or model in MODEL_FAMILIES, "--model",
-            f"must be one of {', '.join(MODEL_FAMILIES)} or a model file FILE.py, got "
-            f"{model!r}")
+            f"must be one of {', '.join(dict.fromkeys([*MODEL_FAMILIES, *BUILT_IN]))} or a "
+            f"model file FILE.py, got {model!r}")
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
                         "--model": model if is_model_file(model) else None,
                         **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
