@@ -62,6 +62,10 @@ _API = {
     "ValidationResult": ("acid.validate", "ValidationResult"),
     "predict": ("acid.analysis", "predict"), "compare": ("acid.analysis", "compare"),
     "resid": ("acid.analysis", "resid"),
+    # declared models (acid.models) and the identification derived from them (acid.ident)
+    "Model": ("acid.models", "Model"), "load_model": ("acid.models", "load"),
+    "fit_model": ("acid.ident.fit", "fit_model"),
+    "validate_model": ("acid.ident.validate", "validate_model"),
     # control
     "NMPC": ("acid.mpc.nmpc", "NMPC"), "NMPCConfig": ("acid.mpc.nmpc", "NMPCConfig"),
     "closed_loop": ("acid.mpc.scenarios", "closed_loop"),

@@ -157,3 +157,95 @@ def kelvin(value: float) -> Temperature:
 def in_degC(value):
     """``value`` in degC: a :class:`Temperature` is converted, a plain number is degC."""
     return value.degC if isinstance(value, Temperature) else value
+
+
+# ------------------------------------------------------------------ compound units
+#: Atoms of a compound unit: name -> (factor to SI, {dimension: power}). Dimensions are
+#: kg, m, s, K (temperature differences) and "1"; ``degC`` is a scale, not an atom.
+_ATOMS: dict[str, tuple[float, dict[str, float]]] = {
+    "1": (1.0, {}), "%": (0.01, {}),
+    "kg": (1.0, {"kg": 1}), "g": (1e-3, {"kg": 1}),
+    "m": (1.0, {"m": 1}), "km": (1e3, {"m": 1}), "mm": (1e-3, {"m": 1}),
+    "s": (1.0, {"s": 1}), "min": (60.0, {"s": 1}), "h": (3600.0, {"s": 1}),
+    "K": (1.0, {"K": 1}),
+    "N": (1.0, {"kg": 1, "m": 1, "s": -2}),
+    "J": (1.0, {"kg": 1, "m": 2, "s": -2}), "kJ": (1e3, {"kg": 1, "m": 2, "s": -2}),
+    "MJ": (1e6, {"kg": 1, "m": 2, "s": -2}),
+    "W": (1.0, {"kg": 1, "m": 2, "s": -3}), "kW": (1e3, {"kg": 1, "m": 2, "s": -3}),
+    "Pa": (1.0, {"kg": 1, "m": -1, "s": -2}), "kPa": (1e3, {"kg": 1, "m": -1, "s": -2}),
+    "bar": (1e5, {"kg": 1, "m": -1, "s": -2}),
+    "rpm": (1.0 / 60.0, {"s": -1}),
+}
+
+
+def parse_unit(text: str) -> tuple[float, dict[str, float]]:
+    """A compound unit such as ``"W/K"``, ``"kJ/K"``, ``"K s/kg"``, ``"J/(kg K)"`` or
+    ``"W/K/(m/s)^0.8"`` as (factor to SI, {dimension: power}).
+
+    Grammar: factors separated by spaces, ``*`` or ``/`` (``/`` divides by the next factor
+    only); a factor is an atom of ``_ATOMS``, a number ``1`` or a parenthesised unit, with an
+    optional ``^power``. ``degC`` and ``degF`` are accepted alone (temperatures; kelvin inside).
+    Raises ``ValueError`` naming the part it cannot read.
+    """
+    text = str(text).strip()
+    if text in ("degC", "degF"):
+        return 1.0, {"K": 1}
+    tokens = _unit_tokens(text)
+    factor, dims, pos = _unit_product(tokens, 0, text)
+    if pos != len(tokens):
+        raise ValueError(f"cannot read unit {text!r} at {tokens[pos]!r}")
+    return factor, {k: v for k, v in dims.items() if v != 0}
+
+
+def _unit_tokens(text: str) -> list[str]:
+    import re
+
+    tokens = re.findall(r"[A-Za-z%]+|\d+(?:\.\d+)?|[()*/^·-]|\S", text)
+    if not tokens:
+        raise ValueError("empty unit (write '1' for a dimensionless quantity)")
+    return tokens
+
+
+def _unit_product(tokens, pos, text):
+    factor, dims = 1.0, {}
+    divide = False
+    expect = True
+    while pos < len(tokens) and tokens[pos] != ")":
+        tok = tokens[pos]
+        if tok in ("*", "·"):
+            pos += 1
+            continue
+        if tok == "/":
+            divide, pos = True, pos + 1
+            continue
+        if tok == "(":
+            f, d, pos = _unit_product(tokens, pos + 1, text)
+            if pos >= len(tokens) or tokens[pos] != ")":
+                raise ValueError(f"unit {text!r}: unbalanced parenthesis")
+            pos += 1
+        elif tok in _ATOMS:
+            f, d = _ATOMS[tok][0], dict(_ATOMS[tok][1])
+            pos += 1
+        else:
+            raise ValueError(f"unit {text!r}: unknown unit {tok!r} (known: "
+                             f"{', '.join(_ATOMS)}, degC alone)")
+        power = 1.0
+        if pos < len(tokens) and tokens[pos] == "^":
+            sign = 1.0
+            pos += 1
+            if pos < len(tokens) and tokens[pos] == "-":
+                sign, pos = -1.0, pos + 1
+            try:
+                power = sign * float(tokens[pos])
+            except (IndexError, ValueError):
+                raise ValueError(f"unit {text!r}: '^' needs a number") from None
+            pos += 1
+        if divide:
+            power, divide = -power, False
+        factor *= f ** power
+        for k, v in d.items():
+            dims[k] = dims.get(k, 0.0) + v * power
+        expect = False
+    if expect or divide:
+        raise ValueError(f"unit {text!r}: incomplete")
+    return factor, dims, pos

@@ -32,6 +32,7 @@ from acid_cli._common import (
     warn,
     write_summary,
 )
+from acid_cli._declared import fit_declared, is_model_file
 
 #: Largest output-error window and HAC lag accepted, samples.
 MAX_WINDOW = 100_000
@@ -51,10 +52,12 @@ def _lags(bandwidths: dict[str, int]) -> str:
 def fit(
     data: Path = typer.Argument(..., help="Dataset (HDF5, from `acid excite` or `acid import`)."),
     out: Path = typer.Option(Path("params.json"), "--out", help="Parameter file to write."),
-    method: str = typer.Option(
-        "ls", "--method",
-        help="'ls' equation-error least squares, 'cvx' constrained (CVXPY), 'oe' output "
-             "error (multi-step simulation error, started from the ls estimate)."),
+    method: str | None = typer.Option(
+        None, "--method",
+        help="'ls' equation-error least squares (the default for paper), 'cvx' constrained "
+             "(CVXPY), 'oe' output error (multi-step simulation error, started from the ls "
+             "estimate); for a model file also 'auto' (its default: ls where every "
+             "equation allows it, else oe)."),
     loss: str = typer.Option("squared", "--loss",
                              help="'squared' or 'huber' (robust to outliers; cvx or oe)."),
     estimation_fraction: float = typer.Option(
@@ -88,20 +91,45 @@ def fit(
         "paper", "--model",
         help="Model family: 'paper' (eqs. 1-5, the default) or 'econ' (cabin, interior, "
              "shell, evaporator and humidity with an identified compressor power map; needs "
-             "data from `acid excite --model econ`)."),
+             "data from `acid excite --model econ`), or a model file FILE.py declaring "
+             "`model = acid.models.Model(...)` (ARCHITECTURE.md, 'How to add a model')."),
+    fix: list[str] | None = typer.Option(
+        None, "--fix", help="NAME=VALUE: hold a parameter of a model file at VALUE "
+                            "(repeatable)."),
+    free: list[str] | None = typer.Option(
+        None, "--free", help="NAME: estimate a parameter the model file declares fixed "
+                             "(repeatable)."),
+    fit_starts: int = typer.Option(
+        1, "--fit-starts", help="Output-error starts spread inside the declared bounds "
+                                "(model file); the distinct optima are reported."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the --fit-starts draws."),
+    add_record: list[Path] | None = typer.Option(
+        None, "--add-record", help="Another record fitted with DATA, as its own experiment "
+                                   "(model file; repeatable)."),
 ) -> None:
     """Fit the control-oriented model and write params.json (kelvin convention).
 
     Prints the parameter table with the reference (paper) values beside ours, the
     conditioning of each regression and the one-step and multi-step fit %.
     """
-    require(model in MODEL_FAMILIES, "--model", f"must be one of {', '.join(MODEL_FAMILIES)}, "
-            f"got {model!r}")
-    check_paths(inputs={"DATA": data, "--reference": params_input(reference)},
+    declared = is_model_file(model)
+    require(declared or model in MODEL_FAMILIES, "--model",
+            f"must be one of {', '.join(MODEL_FAMILIES)} or a model file FILE.py, got "
+            f"{model!r}")
+    check_paths(inputs={"DATA": data, "--reference": params_input(reference),
+                        "--model": model if declared else None,
+                        **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
                 outputs={"--out": out, "--json": json_path})
+    if not declared:
+        given = [opt for opt, set_ in (("--fix", fix), ("--free", free),
+                                       ("--fit-starts", fit_starts != 1),
+                                       ("--add-record", add_record)) if set_]
+        if given:
+            raise ConfigError(f"{', '.join(given)}: only for --model FILE.py")
+    method = method or ("auto" if declared else "ls")
     require_range(estimation_fraction, "--estimation-fraction", 0.0, 1.0, lo_open=True)
-    require(method in METHODS, "--method", f"must be one of {', '.join(METHODS)}, "
-            f"got {method!r}")
+    require(declared or method in METHODS, "--method",
+            f"must be one of {', '.join(METHODS)}, got {method!r}")
     require(loss in LOSSES, "--loss", f"must be one of {', '.join(LOSSES)}, got {loss!r}")
     require_range(oe_window, "--oe-window", 5, MAX_WINDOW, "samples")
     bandwidth: str | int = hac_bandwidth
@@ -114,6 +142,18 @@ def fit(
     if covariance not in COVARIANCES:
         raise ConfigError(f"--covariance: unknown covariance {covariance!r} (choose from "
                           f"{', '.join(COVARIANCES)})")
+    if declared:
+        given = [opt for opt, set_ in (
+            ("--loss", loss != "squared"), ("--use-eta-cop", use_eta_cop),
+            ("--strict", strict), ("--reference", reference != "paper"),
+            ("--no-blower", no_blower)) if set_]
+        if given:
+            raise ConfigError(f"{', '.join(given)}: only for --model paper")
+        return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
+                            fit_starts=fit_starts, seed=seed, oe_window=oe_window,
+                            covariance=covariance, bandwidth=bandwidth,
+                            estimation_fraction=estimation_fraction,
+                            more=list(add_record or []))
     if model == "econ":
         paper_only = {"--method": method != "ls", "--loss": loss != "squared",
                       "--use-eta-cop": use_eta_cop, "--strict": strict,

@@ -66,6 +66,13 @@ def validate(
         None, "--beside",
         help="Another params.json (or 'paper') validated on the same data and starts, shown "
              "beside (e.g. the paper's model beside the econ model)."),
+    model: str | None = typer.Option(
+        None, "--model",
+        help="A model file FILE.py (acid.models): validate that declared model, with "
+             "--params from `acid fit --model FILE.py` (default: its declared values)."),
+    warmup: int = typer.Option(
+        60, "--warmup", help="Model file with latent states: samples before each start from "
+                             "which they are estimated."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -74,6 +81,11 @@ def validate(
     read from the parameter file.
     """
     from acid.report.validation import error_figure, prediction_figure
+
+    if model is not None:
+        return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
+                                    placement, seed, held_out_fraction,
+                                    exogenous != "hold" or beside is not None or allow_unstable)
 
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
@@ -169,3 +181,26 @@ def validate(
     if other is not None:
         summary["beside"] = {"params": beside, "channels": other.to_json_dict()["channels"]}
     write_summary(json_path, summary)
+
+
+def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
+                         seed, held_out_fraction, paper_options) -> None:
+    """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
+    from acid_cli._declared import is_model_file, validate_declared
+
+    require(is_model_file(model), "--model", f"must be a model file FILE.py, got {model!r}")
+    require(not paper_options, "--model",
+            "--exogenous, --beside and --allow-unstable are for the paper/econ families")
+    check_paths(inputs={"DATA": data, "--model": model, "--params": params_input(params)},
+                outputs={"--json": json_path})
+    require_range(starts, "--starts", 1, MAX_STARTS)
+    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
+    require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
+    require_range(seed, "--seed", 0, 2**63 - 1)
+    require(placement in PLACEMENTS, "--placement",
+            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
+    if held_out_fraction is not None:
+        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+    validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
+                      warmup=warmup, placement=placement, seed=seed,
+                      held_out_fraction=held_out_fraction)

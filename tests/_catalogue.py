@@ -203,6 +203,20 @@ V = ("validate", D, "--out", "{w}/figs", "--starts", "5", "--horizon", "50")
 IMP = ("import", "{w}/run.csv", "--map", "{w}/map.toml", "--out", "{w}/run.h5")
 EXC = ("excite", "--plant", "model", "--duration", "600")
 
+#: A user's model file (a cabin with a latent interior mass) for the --model FILE.py cases.
+MODEL_FILE = """from acid.models import Model, Parameter, Signal, State
+
+def ode(s):
+    return {"T_cab": (s.a * (s.T_m - s.T_cab) + s.b * (s.T_shell - s.T_cab)) / 1e4,
+            "T_m": s.a * (s.T_cab - s.T_m) / 1e5}
+
+model = Model("mine", states=[State("T_cab", "K"),
+                              State("T_m", "K", measured=False, initial=lambda m: m.T_cab)],
+              disturbances=[Signal("T_shell", "K")],
+              parameters=[Parameter("a", "W/K", 100.0, 0.0, 1e3),
+                          Parameter("b", "W/K", 50.0, 0.0, 1e3)], Ts=5.0, ode=ode)
+"""
+
 CASES: list[Case] = [
     # ---------------------------------------------------- outputs colliding with inputs
     Case("fit-out-is-data", "collision", ("fit", D, "--out", D), ("--out", "d.h5", "DATA")),
@@ -605,6 +619,27 @@ CASES: list[Case] = [
          _write("s.toml", "[grid]\nambient_C = [30.0]\n")),
     Case("markup-sweep-spec-path", "markup", ("sweep", "{w}/[red]s.toml", "--out", "{w}/o"),
          ("[red]s.toml",)),
+    # ------------------------------------------------ declared models (--model FILE.py)
+    Case("fit-model-file-missing", "params", ("fit", D, "--out", "{w}/q.json", "--model",
+                                              "{w}/nope.py"), ("--model", "nope.py")),
+    Case("fit-model-file-unknown-name", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"), ("m.py:", "'T_ambient'"),
+         _write("m.py", MODEL_FILE.replace("s.T_shell - s.T_cab", "s.T_ambient - s.T_cab"))),
+    Case("fit-model-file-symbolic-if", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"), ("m.py:", "if_else"),
+         _write("m.py", MODEL_FILE.replace("    return {", "    if s.T_cab > 300:\n"
+                                           "        pass\n    return {"))),
+    Case("fit-model-file-fix-malformed", "options",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py", "--fix", "a"),
+         ("--fix", "'a'"), _write("m.py", MODEL_FILE)),
+    Case("fit-model-file-fix-unknown", "options",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py", "--fix", "zz=1"),
+         ("'zz'",), _write("m.py", MODEL_FILE)),
+    Case("fit-fit-starts-for-paper", "options",
+         ("fit", D, "--out", "{w}/q.json", "--fit-starts", "3"), ("--fit-starts",)),
+    Case("validate-model-file-paper-params", "params",
+         (*V[:2], "--model", "{w}/m.py", "--params", P), ("p.json", "declared model"),
+         _write("m.py", MODEL_FILE)),
 ]
 
 

@@ -1,0 +1,435 @@
+"""Fit any declared model (``acid.models``) to a dataset: ``fit_model(model, ds, ...)``.
+
+Methods
+-------
+``"ls"``   equation-error least squares on every equation that allows it (``acid.ident.
+           linear``: target measured, no latent state read, linear in its free parameters,
+           detected with CasADi); the report names those equations. Parameters only other
+           equations read keep their declared values ("not fitted").
+``"cvx"``  the same regressions with the declared bounds (CVXPY) where the unconstrained
+           solution leaves them.
+``"oe"``   output error (``acid.ident.oe``) over all free parameters, latent initial states
+           included, started from the least-squares estimates where there are any.
+``"auto"`` (default) ``"ls"`` when least squares reaches every free parameter and no state is
+           latent, else ``"oe"``.
+
+Standard errors: ``"hac"`` (default, Newey-West sandwich, lags inside experiments) or
+``"white"``; 95 % t-intervals. ``fit_starts = N`` runs output error from N - 1 more starts
+drawn inside the bounds (a seeded ``numpy.random.Generator``) and reports the distinct
+optima with their loss and parameter spread. ``fix`` / ``free`` change the table for one
+fit; per-experiment parameters get one value per experiment.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.stats
+
+from acid import __version__
+from acid._io import file_sha256, json_safe, write_json
+from acid.data import Dataset
+from acid.errors import ConfigError
+from acid.ident import linear, oe
+from acid.ident.data import ModelData
+from acid.models.declaration import Model
+from acid.models.loader import load
+
+METHODS = ("auto", "ls", "cvx", "oe")
+COVARIANCES = ("hac", "white")
+PARAMS_FORMAT = "acid-declared-params"
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One row of the fitted table (a per-experiment parameter has a row per experiment,
+    ``name@experiment``)."""
+
+    name: str
+    unit: str
+    declared: float
+    value: float
+    stderr: float
+    ci95: tuple[float, float]
+    status: str      # estimated (ls | cvx | oe), fixed, not fitted, combination
+    experiment: int | None = None
+
+
+@dataclass(frozen=True)
+class EquationReport:
+    """How one equation was treated and what the data say about it."""
+
+    name: str
+    method: str                   # "ls", "cvx" or "oe"/"-" (not by equation error)
+    reason: str                   # why not least squares ("" when it was)
+    parameters: tuple[str, ...]
+    rank: int | None = None
+    n_columns: int | None = None
+    condition: float | None = None
+    residual_std: float | None = None
+    n_rows: int | None = None
+    fit_percent: float | None = None
+    combinations: tuple[str, ...] = ()
+    active_bounds: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """A distinct optimum of the multi-start output error."""
+
+    loss: float
+    n_starts: int
+    values: dict
+    spread: dict       # max - min of each parameter over the starts that reached it
+
+
+@dataclass(frozen=True)
+class DeclaredFitResult:
+    """What ``fit_model`` found (frozen; printing lives in the CLI)."""
+
+    model: str
+    model_source: str
+    method: str
+    estimates: tuple[Estimate, ...]
+    equations: tuple[EquationReport, ...]
+    values: np.ndarray                      # (np,) the fitted table (per-experiment: mean)
+    per_experiment: dict                    # {name: (E,) values}
+    experiment_ids: tuple[int, ...]
+    covariance: np.ndarray
+    covariance_names: tuple[str, ...]
+    covariance_kind: str
+    hac_bandwidth: dict
+    output_error: dict
+    optima: tuple[Optimum, ...]
+    combinations: tuple[str, ...]
+    notes: tuple[str, ...]
+    warnings: tuple[str, ...]
+    n_samples: int
+    data_source: str
+    elapsed_s: float = field(default=math.nan, compare=False)
+
+    def value(self, name: str, experiment: int | None = None) -> float:
+        """The fitted value of ``name``; a per-experiment one of the experiment index
+        ``experiment`` (default: its mean over the experiments)."""
+        if name in self.per_experiment:
+            vals = self.per_experiment[name]
+            return float(vals[experiment] if experiment is not None else np.mean(vals))
+        for e in self.estimates:
+            if e.name == name and e.experiment is None:
+                return e.value
+        raise KeyError(name)
+
+    def to_json_dict(self) -> dict:
+        return json_safe({
+            "model": self.model, "model_source": self.model_source, "method": self.method,
+            "n_samples": self.n_samples, "data": self.data_source,
+            "covariance_kind": self.covariance_kind, "hac_bandwidth": self.hac_bandwidth,
+            "parameters": [{"name": e.name, "unit": e.unit, "declared": e.declared,
+                            "estimate": e.value, "stderr": e.stderr, "ci95_low": e.ci95[0],
+                            "ci95_high": e.ci95[1], "status": e.status,
+                            "experiment": e.experiment} for e in self.estimates],
+            "equations": [vars(q) for q in self.equations],
+            "combinations": list(self.combinations),
+            "output_error": self.output_error,
+            "optima": [vars(o) for o in self.optima],
+            "covariance": {"names": list(self.covariance_names), "matrix": self.covariance},
+            "notes": list(self.notes), "warnings": list(self.warnings),
+            "elapsed_s": self.elapsed_s,
+        })
+
+    def write(self, path: str | Path, model: Model, provenance: dict | None = None) -> Path:
+        """The parameter file ``acid validate --model FILE --params`` reads."""
+        params = {}
+        for p, v in zip(model.parameters, self.values, strict=True):
+            est = next((e for e in self.estimates if e.name == p.name and e.experiment is None),
+                       None)
+            params[p.name] = {"value": float(v), "unit": p.unit,
+                              "stderr": est.stderr if est else None,
+                              "status": est.status if est else "per experiment"}
+        d = {"format": PARAMS_FORMAT, "model": self.model, "model_source": self.model_source,
+             "Ts": model.Ts, "parameters": params,
+             "per_experiment": {n: {"experiments": list(self.experiment_ids),
+                                    "values": list(map(float, v))}
+                                for n, v in self.per_experiment.items()},
+             "provenance": provenance or {}, "fit": self.to_json_dict()}
+        return write_json(path, json_safe(d))
+
+
+# -------------------------------------------------------------------------- fitter
+def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
+              fix: dict | None = None, free: tuple[str, ...] = (), fit_starts: int = 1,
+              seed: int = 0, oe_window: int = 300, covariance: str = "hac",
+              hac_bandwidth="auto", solver: str | None = None,
+              max_nfev: int = 100) -> DeclaredFitResult:
+    """Fit ``model`` (a ``Model`` or a name/path for :func:`acid.models.load`) to ``ds``.
+
+    See the module docstring for the methods. ``fix`` {name: value} and ``free`` (names)
+    change the declared table for this fit.
+    """
+    t0 = time.perf_counter()
+    model = load(model)
+    if method not in METHODS:
+        raise ConfigError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
+    if covariance not in COVARIANCES:
+        raise ConfigError(f"unknown covariance {covariance!r} (choose from "
+                          f"{', '.join(COVARIANCES)})")
+    if int(fit_starts) < 1:
+        raise ConfigError(f"fit_starts must be at least 1, got {fit_starts}")
+    if fix or free:
+        model = model.with_parameters(fix, tuple(free))
+    data = ModelData.of(model, ds)
+    E = data.n_experiments
+    names = model.parameter_names
+    free_idx = tuple(i for i, p in enumerate(model.parameters) if not p.fixed)
+    per_exp = {i for i, p in enumerate(model.parameters) if p.per_experiment}
+    columns = tuple(c for i in free_idx for c in (
+        [linear.Column(i, names[i], e) for e in range(E)] if i in per_exp
+        else [linear.Column(i, names[i])]))
+    declared = model.values
+    theta = np.array([declared[c.index] for c in columns])          # free columns
+    status = ["not fitted"] * len(columns)
+    stderr = np.full(len(columns), np.nan)
+    cov = np.full((len(columns), len(columns)), np.nan)
+    dof = np.ones(len(columns), dtype=int)
+    notes: list[str] = []
+    warn: list[str] = []
+    bandwidths: dict = {}
+    combos: list[str] = []
+    lo = np.array([model.parameters[c.index].min for c in columns])
+    hi = np.array([model.parameters[c.index].max for c in columns])
+
+    forms = linear.equation_forms(model, data, free_idx)
+    reports: dict[str, EquationReport] = {
+        f.name: EquationReport(f.name, "-", f.reason, tuple(names[i] for i in f.free))
+        for f in forms}
+    P = data.parameter_matrix(model, declared)
+    col_pos = {(c.index, c.experiment): k for k, c in enumerate(columns)}
+    ls_method = "cvx" if method == "cvx" else "ls"
+    outside: list[str] = []
+    for group in linear.groups(forms):
+        reg = linear.regression(model, data, group, P, per_exp)
+        if reg.X.shape[0] <= reg.X.shape[1]:
+            for f in group:
+                reports[f.name] = EquationReport(
+                    f.name, "-", f"{reg.X.shape[0]} rows for {reg.X.shape[1]} parameters",
+                    tuple(names[i] for i in f.free))
+            continue
+        pos = [col_pos[(c.index, c.experiment)] for c in reg.columns]
+        sol = linear.solve(reg, data, theta[pos], covariance, hac_bandwidth,
+                           bounds=(lo[pos], hi[pos]) if ls_method == "cvx" else None,
+                           solver=solver)
+        theta[pos] = sol.theta
+        stderr[pos] = sol.stderr
+        cov[np.ix_(pos, pos)] = sol.cov
+        dof[pos] = sol.dof
+        for k, ok in zip(pos, sol.identified, strict=True):
+            status[k] = f"estimated ({ls_method})" if ok else "combination"
+        if sol.bandwidth is not None:
+            bandwidths["+".join(reg.names)] = sol.bandwidth
+        combos += list(sol.combinations)
+        if sol.combinations:
+            lost = [c.label for c, ok in zip(reg.columns, sol.identified, strict=True)
+                    if not ok]
+            warn.append(f"{' + '.join(reg.names)}: the data do not separate "
+                        f"{', '.join(lost)}; they identify {'; '.join(sol.combinations)} "
+                        "(estimates closest to the declared values)")
+        outside += [f"{c.label} = {t:.4g}" for c, t, a, b in
+                    zip(reg.columns, sol.theta, lo[pos], hi[pos], strict=True)
+                    if not a <= t <= b]
+        for k, f in enumerate(group):
+            rows = reg.eq == k
+            r = reg.y[rows] - reg.X[rows] @ sol.theta
+            tgt = _target(model, data, f.name, reg.sample[rows])
+            den = np.linalg.norm(tgt - tgt.mean())
+            reports[f.name] = EquationReport(
+                name=f.name, method=ls_method, reason="", parameters=tuple(
+                    c.label for c in reg.columns if c.index in f.free),
+                rank=sol.rank, n_columns=len(reg.columns), condition=sol.condition,
+                residual_std=float(np.sqrt(np.mean(r ** 2))), n_rows=int(rows.sum()),
+                fit_percent=float(100 * (1 - np.linalg.norm(r) / den)) if den > 0 else None,
+                combinations=sol.combinations, active_bounds=sol.active)
+    ls_reached = [s != "not fitted" for s in status]
+    latent = [s.name for s in model.states if not s.measured]
+    if method == "auto":
+        method = "ls" if all(ls_reached) and not latent else "oe"
+        notes.append(f"method auto: {method} (" + (
+            "least squares reaches every free parameter" if method == "ls" else
+            "latent states " + ", ".join(latent) if latent and all(ls_reached) else
+            "not every parameter is in a linear, fully measured equation") + ")")
+    lin = [f.name for f in forms if reports[f.name].method in ("ls", "cvx")]
+    if lin:
+        notes.append(f"equation-error least squares on {', '.join(lin)} (linear in their "
+                     "free parameters, every signal measured)")
+    oe_summary: dict = {}
+    optima: list[Optimum] = []
+    if method == "oe" and columns:
+        base = data.parameter_matrix(model, declared)
+        prob = oe.OEProblem(model, data, columns, _window_base(base, columns, oe.Windows.of(
+            data.segments, oe_window)), oe_window)
+        start = np.where(np.isfinite(theta), theta, declared[[c.index for c in columns]])
+        res = oe.solve(prob, start, lo, hi, covariance=covariance,
+                       hac_bandwidth=hac_bandwidth, max_nfev=max_nfev)
+        runs = [(res.loss, res.theta)]
+        if fit_starts > 1:
+            rng = np.random.default_rng(seed)
+            for s0 in _starts(rng, fit_starts - 1, theta, lo, hi):
+                r = oe.solve(prob, s0, lo, hi, reweight=False, covariance=covariance,
+                             hac_bandwidth=hac_bandwidth, max_nfev=max_nfev)
+                runs.append((r.loss, r.theta))
+                if r.loss < res.loss * (1 - 1e-9):
+                    res = r
+            optima = _distinct(runs, columns, lo, hi)
+            notes.append(f"multi-start: {fit_starts} starts, {len(optima)} distinct optima; "
+                         f"the best (loss {optima[0].loss:.6g}) is reported")
+        theta = res.theta
+        stderr, cov = res.stderr, res.cov
+        dof[:] = res.dof
+        ident, oe_combos = linear.combinations(
+            res.jacobian_scaled, res.column_scale, tuple(c.label for c in columns), theta, cov)
+        status = ["estimated (oe)" if ok else "combination" for ok in ident]
+        stderr = np.where(np.array(ident), stderr, np.nan)
+        combos += oe_combos
+        if oe_combos:
+            warn.append("output error: the data do not separate some parameters; they "
+                        f"identify {'; '.join(oe_combos)}")
+        if res.bandwidth is not None:
+            bandwidths["oe"] = res.bandwidth
+        oe_summary = {"windows": res.n_windows, "window": oe_window, "loss": res.loss,
+                      "status": res.status, "converged": res.success, "nfev": res.nfev,
+                      "channel_rms": res.channel_rms, "channel_fit_percent": res.channel_fit,
+                      "weights": dict(zip(prob.chan_names, res.weights.tolist(),
+                                          strict=True)),
+                      "condition": res.condition, "rank": res.rank,
+                      "n_parameters": len(columns)}
+        if not res.success:
+            warn.append(f"output error did not converge ({res.status})")
+        notes.append(f"output error over {res.n_windows} windows of <= {oe_window} samples, "
+                     "each window's initial state estimated" + (
+                         f" (latent: {', '.join(latent)})" if latent else ""))
+        for f in forms:
+            q = reports[f.name]
+            if q.method == "-" and f.free:
+                reports[f.name] = EquationReport(f.name, "oe", f.reason,
+                                                 tuple(names[i] for i in f.free))
+            elif q.method in ("ls", "cvx"):
+                reports[f.name] = dataclasses.replace(q, method=f"{q.method} start, oe")
+        at = [f"{c.label} at its {w} {b:g}" for c, t, a, z in zip(columns, theta, lo, hi,
+                                                                  strict=True)
+              for b, w in ((a, "min"), (z, "max"))
+              if math.isfinite(b) and abs(t - b) <= 1e-8 * (1 + abs(b))]
+        if at:
+            notes.append("output error ends on declared bounds: " + "; ".join(at))
+    elif method in ("ls", "cvx"):
+        if outside and method == "ls":
+            warn.append(f"least squares leaves the declared bounds ({', '.join(outside)}); "
+                        "--method cvx keeps them")
+        left = sorted({c.name for c, ok in zip(columns, ls_reached, strict=True) if not ok})
+        if left:
+            notes.append(f"not fitted by equation error (kept at the declared values): "
+                         f"{', '.join(left)}; --method oe fits them")
+
+    # ------------------------------------------------------------------ the table
+    values = declared.copy()
+    per_experiment: dict[str, np.ndarray] = {}
+    for i in per_exp:
+        per_experiment[names[i]] = np.full(E, declared[i])
+    for k, c in enumerate(columns):
+        if c.experiment is None:
+            values[c.index] = theta[k]
+        else:
+            per_experiment[c.name][c.experiment] = theta[k]
+    for n, v in per_experiment.items():
+        values[names.index(n)] = float(np.mean(v))
+    estimates = []
+    for i, p in enumerate(model.parameters):
+        cols = [k for k, c in enumerate(columns) if c.index == i]
+        if not cols:
+            estimates.append(Estimate(p.name, p.unit, p.value, p.value, math.nan,
+                                      (math.nan, math.nan), "fixed"))
+            if i in per_exp:
+                for e in range(E):
+                    estimates.append(Estimate(p.name, p.unit, p.value, p.value, math.nan,
+                                              (math.nan, math.nan), "fixed", e))
+            continue
+        for k in cols:
+            q = scipy.stats.t.ppf(0.975, max(int(dof[k]), 1))
+            se = float(stderr[k])
+            ci = (theta[k] - q * se, theta[k] + q * se) if math.isfinite(se) else \
+                (math.nan, math.nan)
+            estimates.append(Estimate(p.name, p.unit, p.value, float(theta[k]), se, ci,
+                                      status[k], columns[k].experiment))
+    return DeclaredFitResult(
+        model=model.name, model_source=model.source, method=method,
+        estimates=tuple(estimates), equations=tuple(reports.values()), values=values,
+        per_experiment=per_experiment, experiment_ids=data.experiment_ids,
+        covariance=cov, covariance_names=tuple(c.label for c in columns),
+        covariance_kind=covariance, hac_bandwidth=bandwidths, output_error=oe_summary,
+        optima=tuple(optima), combinations=tuple(combos), notes=tuple(notes),
+        warnings=tuple(warn), n_samples=len(ds), data_source=ds.source,
+        elapsed_s=time.perf_counter() - t0)
+
+
+def _target(model: Model, data: ModelData, name: str, rows: np.ndarray) -> np.ndarray:
+    if name in model.state_names:
+        return data.x[rows + 1, model.state_names.index(name)]
+    return data.y[rows, model.output_names.index(name)]
+
+
+def _window_base(P: np.ndarray, columns, w: oe.Windows) -> np.ndarray:
+    """(nw, np) parameters of each window with the free entries zeroed (added back by E)."""
+    base = P[w.idx[:, 0]].copy()
+    for c in columns:
+        base[:, c.index] = 0.0
+    return base
+
+
+def _starts(rng: np.random.Generator, n: int, theta, lo, hi) -> list[np.ndarray]:
+    """``n`` starts uniform inside the bounds; an unbounded side spans the value +/- its
+    magnitude (at least 1)."""
+    span = np.maximum(np.abs(theta), 1.0)
+    a = np.where(np.isfinite(lo), lo, theta - span)
+    b = np.where(np.isfinite(hi), hi, theta + span)
+    a, b = np.maximum(a, lo), np.minimum(b, hi)
+    return [a + (b - a) * rng.random(theta.size) for _ in range(n)]
+
+
+def _distinct(runs, columns, lo, hi, rtol_loss: float = 1e-6,
+              rtol_theta: float = 1e-3) -> list[Optimum]:
+    """Runs grouped into optima: same loss (relative ``rtol_loss``, or round-off of the
+    largest loss) and parameters within
+    ``rtol_theta`` of their magnitude; best first."""
+    runs = sorted(runs, key=lambda r: r[0])
+    atol = 1e-12 * max(abs(r[0]) for r in runs)        # zero losses differ by round-off
+    groups: list[list] = []
+    for loss, th in runs:
+        for g in groups:
+            l0, t0 = g[0]
+            scale = np.maximum(np.abs(t0), 1e-9)
+            if abs(loss - l0) <= rtol_loss * abs(l0) + atol and \
+                    np.all(np.abs(th - t0) <= rtol_theta * scale):
+                g.append((loss, th))
+                break
+        else:
+            groups.append([(loss, th)])
+    out = []
+    for g in groups:
+        T = np.array([t for _, t in g])
+        out.append(Optimum(loss=float(g[0][0]), n_starts=len(g),
+                           values={c.label: float(v) for c, v in zip(columns, T[0],
+                                                                     strict=True)},
+                           spread={c.label: float(s) for c, s in
+                                   zip(columns, T.max(axis=0) - T.min(axis=0), strict=True)}))
+    return out
+
+
+def provenance(ds: Dataset, method: str) -> dict:
+    out = {"data_file": ds.source, "method": method, "n_samples": len(ds),
+           "acid_version": __version__}
+    if Path(ds.source).is_file():
+        out["data_sha256"] = file_sha256(ds.source)
+    return out

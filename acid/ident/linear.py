@@ -1,0 +1,330 @@
+"""Equation-error least squares derived from a declaration.
+
+An equation (a state's next value, an output) is fitted by linear least squares when
+
+* its target is measured, it reads no latent state and no output the data lack (an output
+  it reads is substituted by the measured channel), and
+* it is linear in its free parameters: CasADi's Jacobian with respect to them does not
+  depend on them.
+
+Then ``target - e(p_free = 0) = J p_free`` row by row (rows never span an experiment for a
+state equation). Equations that share a free parameter are stacked into one regression. A
+per-experiment parameter has one column per experiment. Collinear columns are not pinned:
+the estimate closest (in scaled units) to the declared values is returned and the
+combinations the data identify are reported (``"gamma1 + 0.98 gamma2 = 0.31"``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from acid.hac import hac_meat, resolve_bandwidth, segment_ids
+from acid.ident.data import ModelData
+from acid.models.declaration import Model
+
+_RANK_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Column:
+    """A free parameter column: declared parameter ``index``, experiment (or None)."""
+
+    index: int
+    name: str
+    experiment: int | None = None
+
+    @property
+    def label(self) -> str:
+        return self.name if self.experiment is None else f"{self.name}@{self.experiment}"
+
+
+@dataclass(frozen=True)
+class EquationForm:
+    """How one equation can be fitted: ``linear`` True when least squares applies, else
+    ``reason`` says why not."""
+
+    name: str
+    linear: bool
+    reason: str
+    free: tuple[int, ...]       # declared parameter indices it depends on (free ones)
+    expr: object = None         # CasADi SX (x, u, d, p, yr) with unmeasured outputs substituted
+
+
+def equation_forms(model: Model, data: ModelData, free: tuple[int, ...]) -> list[EquationForm]:
+    """Classify every equation of ``model`` on ``data`` (which channels exist)."""
+    x, u, d, p, yr = model._x, model._u, model._d, model._p, model._yr
+    h = model.h(x, u, d, p)
+    measured_y = [bool(np.isfinite(data.y[:, j]).any()) for j in range(model.ny)]
+    missing = [j for j in range(model.ny) if not measured_y[j]]
+    pf = ca.vertcat(*[p[i] for i in free]) if free else ca.SX(0, 1)
+    out = []
+    for name, expr in model.equations_raw.items():
+        if missing:
+            expr = ca.substitute(expr, ca.vertcat(*[yr[j] for j in missing]),
+                                 ca.vertcat(*[h[j] for j in missing]))
+        deps = tuple(i for i in free if ca.depends_on(expr, p[i]))
+        is_state = name in model.state_names
+        col = model.state_names.index(name) if is_state else model.output_names.index(name)
+        measured = (np.isfinite(data.x[:, col]).any() if is_state else measured_y[col])
+        latent = [s.name for i, s in enumerate(model.states)
+                  if not s.measured and ca.depends_on(expr, x[i])]
+        reason = ""
+        if not measured:
+            reason = f"{name} is not measured"
+        elif latent:
+            reason = f"reads the latent state {latent[0]}"
+        elif not deps:
+            reason = "no free parameter"
+        else:
+            J = ca.jacobian(expr, pf)
+            if ca.depends_on(J, pf):
+                reason = "nonlinear in its parameters"
+        out.append(EquationForm(name=name, linear=not reason, reason=reason, free=deps,
+                                expr=expr))
+    return out
+
+
+def groups(forms: list[EquationForm]) -> list[list[EquationForm]]:
+    """Linear equations joined when they share a free parameter (union-find)."""
+    lin = [f for f in forms if f.linear]
+    parent = list(range(len(lin)))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a in range(len(lin)):
+        for b in range(a + 1, len(lin)):
+            if set(lin[a].free) & set(lin[b].free):
+                parent[root(a)] = root(b)
+    out: dict[int, list[EquationForm]] = {}
+    for i, f in enumerate(lin):
+        out.setdefault(root(i), []).append(f)
+    return list(out.values())
+
+
+@dataclass(frozen=True)
+class Regression:
+    """``y = X theta`` over the free columns of a group of equations (rows: stacked
+    equations; ``sample`` the dataset index of each row, ``eq`` its equation)."""
+
+    names: tuple[str, ...]
+    columns: tuple[Column, ...]
+    X: np.ndarray
+    y: np.ndarray
+    sample: np.ndarray
+    eq: np.ndarray
+
+
+def regression(model: Model, data: ModelData, group: list[EquationForm], P: np.ndarray,
+               per_experiment: set[int]) -> Regression:
+    """The stacked regression of ``group`` at the parameter matrix ``P`` (N, np) whose free
+    entries are ignored (set to zero for the offset)."""
+    free = sorted({i for f in group for i in f.free})
+    columns = []
+    for i in free:
+        name = model.parameters[i].name
+        if i in per_experiment:
+            columns += [Column(i, name, e) for e in range(data.n_experiments)]
+        else:
+            columns.append(Column(i, name))
+    P0 = P.copy()
+    P0[:, free] = 0.0
+    Xs, ys, samples, eqs = [], [], [], []
+    x, u, d, p, yr = model._x, model._u, model._d, model._p, model._yr
+    for k, f in enumerate(group):
+        fn = ca.Function("e", [x, u, d, p, yr], [f.expr, ca.jacobian(f.expr, p)])
+        if f.name in model.state_names:
+            j = model.state_names.index(f.name)
+            rows = np.flatnonzero(data.transition & np.isfinite(data.x[1:, j]))
+            target = data.x[rows + 1, j]
+        else:
+            j = model.output_names.index(f.name)
+            rows = np.flatnonzero(np.isfinite(data.y[:, j]))
+            target = data.y[rows, j]
+        if rows.size == 0:
+            continue
+        args = [np.nan_to_num(a[rows]).T for a in (data.x, data.u, data.d)]
+        e0, J = fn.map(rows.size)(*args, P0[rows].T, np.nan_to_num(data.y[rows]).T)
+        e0 = np.asarray(e0).ravel()
+        J = np.asarray(J).reshape(rows.size, model.np) if model.np else np.zeros((rows.size, 0))
+        X = np.zeros((rows.size, len(columns)))
+        for c, col in enumerate(columns):
+            X[:, c] = J[:, col.index]
+            if col.experiment is not None:
+                X[:, c] *= data.experiment[rows] == col.experiment
+        Xs.append(X)
+        ys.append(target - e0)
+        samples.append(rows)
+        eqs.append(np.full(rows.size, k))
+    return Regression(names=tuple(f.name for f in group), columns=tuple(columns),
+                      X=np.vstack(Xs) if Xs else np.zeros((0, len(columns))),
+                      y=np.concatenate(ys) if ys else np.zeros(0),
+                      sample=np.concatenate(samples) if samples else np.zeros(0, int),
+                      eq=np.concatenate(eqs) if eqs else np.zeros(0, int))
+
+
+@dataclass(frozen=True)
+class Solution:
+    theta: np.ndarray
+    cov: np.ndarray
+    stderr: np.ndarray
+    rank: int
+    condition: float
+    residual_std: float
+    dof: int
+    identified: tuple[bool, ...]            # False for columns in a collinear set
+    combinations: tuple[str, ...]
+    bandwidth: int | None
+    active: tuple[str, ...] = ()
+    status: str = "optimal (lstsq)"
+
+
+def _svd(Z: np.ndarray):
+    _, s, Vt = np.linalg.svd(Z, full_matrices=False)
+    tol = _RANK_RTOL * (s[0] if s.size else 0.0)
+    return s, Vt, s > tol
+
+
+def combinations(Z: np.ndarray, scale: np.ndarray, labels: tuple[str, ...],
+                 theta: np.ndarray, cov: np.ndarray) -> tuple[tuple[bool, ...], list[str]]:
+    """Columns the data do not separate, and the combinations they identify.
+
+    ``Z`` has columns scaled by ``scale`` (``Z = X / scale``). A column is in a collinear set
+    when a null-space direction of ``Z`` involves it; for each set, the right singular
+    vectors of its own columns with nonzero singular values give combinations
+    ``sum_i c_i theta_i`` orthogonal to every null direction: the data fix their value.
+    """
+    s, Vt, keep = _svd(Z)
+    null = Vt[~keep]
+    if Z.shape[1] > Vt.shape[0]:
+        extra = np.linalg.svd(Z, full_matrices=True)[2][Vt.shape[0]:]
+        null = np.vstack([null, extra])
+    if null.size == 0:
+        return tuple(True for _ in labels), []
+    involved = np.flatnonzero(np.abs(null).max(axis=0) > 1e-6)
+    out = []
+    _, s_i, Vt_i = np.linalg.svd(Z[:, involved], full_matrices=False)
+    for v, si in zip(Vt_i, s_i, strict=True):
+        if si <= _RANK_RTOL * s_i[0]:
+            continue
+        c = np.zeros(Z.shape[1])
+        c[involved] = v / scale[involved]          # coefficient on theta (raw units)
+        c /= c[np.argmax(np.abs(c))]
+        value = float(c @ theta)
+        se = float(np.sqrt(max(c @ cov @ c, 0.0)))
+        terms = []
+        for j in np.flatnonzero(np.abs(c) > 1e-9 * np.abs(c).max()):
+            coef = c[j]
+            mag = "" if abs(abs(coef) - 1) < 1e-9 else f"{abs(coef):.4g} "
+            sign = "-" if coef < 0 else "+"
+            terms.append((sign, f"{mag}{labels[j]}"))
+        text = " ".join(f"{sg} {t}" for sg, t in terms).lstrip("+ ")
+        if text.startswith("- "):
+            text = "-" + text[2:]
+        out.append(f"{text} = {value:.6g} +/- {se:.2g}")
+    ident = tuple(j not in set(involved.tolist()) for j in range(Z.shape[1]))
+    return ident, out
+
+
+def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: str,
+          hac_bandwidth, bounds: tuple[np.ndarray, np.ndarray] | None = None,
+          solver: str | None = None) -> Solution:
+    """Least squares (CVXPY with ``bounds``), covariance (white or HAC), identifiability.
+
+    ``reference`` (columns) is where a rank-deficient regression stays closest to.
+    """
+    X, y = reg.X, reg.y
+    n, k = X.shape
+    scale = np.linalg.norm(X, axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    Z = X / scale
+    s, Vt, keep = _svd(Z)
+    rank = int(keep.sum())
+    cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else math.inf
+    # minimum-norm correction from the reference (scaled units): unique where identified
+    phi_ref = reference * scale
+    U = np.linalg.svd(Z, full_matrices=False)[0]
+    r0 = y - Z @ phi_ref
+    phi = phi_ref + Vt[keep].T @ ((U[:, keep].T @ r0) / s[keep])
+    status, active = "optimal (lstsq)", ()
+    if bounds is not None:
+        lo, hi = bounds
+        if np.any(phi / scale < lo - 1e-12) or np.any(phi / scale > hi + 1e-12):
+            phi, status, active = _solve_bounded(Z, y, scale, lo, hi, reg.columns, solver, phi)
+    theta = phi / scale
+    resid = y - X @ theta
+    dof = max(n - rank, 1)
+    bread = (Vt[keep].T / s[keep] ** 2) @ Vt[keep]
+    bandwidth = None
+    if covariance == "hac":
+        order = np.argsort(reg.sample, kind="stable")
+        scores = Z * resid[:, None]
+        # rows of one instant (several equations) make one score
+        uniq, inv = np.unique(reg.sample[order], return_inverse=True)
+        h = np.zeros((uniq.size, k))
+        np.add.at(h, inv, scores[order])
+        g = segment_ids(uniq, data.segments)
+        bandwidth = resolve_bandwidth(hac_bandwidth, _centred_scores(X, resid, reg.sample,
+                                                                     order, inv, uniq.size), g)
+        cov_phi = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread)
+    else:
+        cov_phi = float(resid @ resid) / dof * bread
+    cov = cov_phi / np.outer(scale, scale)
+    labels = tuple(c.label for c in reg.columns)
+    ident, combos = combinations(Z, scale, labels, theta, cov)
+    stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
+    stderr = np.where(np.array(ident), stderr, np.nan)
+    return Solution(theta=theta, cov=cov, stderr=stderr, rank=rank, condition=cond,
+                    residual_std=float(np.sqrt(resid @ resid / dof)), dof=dof,
+                    identified=ident, combinations=tuple(combos), bandwidth=bandwidth,
+                    active=active, status=status)
+
+
+def _centred_scores(X, resid, sample, order, inv, n_inst) -> np.ndarray:
+    """Scores with the regressors centred when the regression has a constant column (the
+    intercept then absorbs the means): what the automatic HAC lag is chosen from, so that
+    it does not depend on where a temperature's zero lies (kelvin or degC). The sandwich
+    itself is invariant to that reparametrisation."""
+    std = X.std(axis=0)
+    const = (std <= 1e-12 * np.maximum(np.abs(X).max(axis=0), 1e-300)) & (np.abs(X[0]) > 0)
+    Xc = X - np.where(const, 0.0, X.mean(axis=0)) if const.any() else X
+    h = np.zeros((n_inst, X.shape[1]))
+    np.add.at(h, inv, (Xc * resid[:, None])[order])
+    return h
+
+
+def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start):
+    """min ||Z phi - y||^2 with lo <= phi / scale <= hi (CVXPY); scaled by ||y||."""
+    import cvxpy as cp
+
+    ny = float(np.linalg.norm(y)) or 1.0
+    v = cp.Variable(Z.shape[1])
+    cons = []
+    for j in range(Z.shape[1]):
+        if math.isfinite(lo[j]):
+            cons.append(v[j] >= lo[j] * scale[j] / ny)
+        if math.isfinite(hi[j]):
+            cons.append(v[j] <= hi[j] * scale[j] / ny)
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(Z @ v - y / ny)), cons)
+    try:
+        prob.solve(solver=solver)
+    except cp.error.SolverError as exc:
+        return phi_start, f"CVXPY failed ({exc}); unconstrained estimate kept", ()
+    if v.value is None:
+        return phi_start, f"CVXPY {prob.status}; unconstrained estimate kept", ()
+    phi = np.asarray(v.value, dtype=float) * ny
+    theta = phi / scale
+    active = []
+    for j, c in enumerate(columns):
+        for bound, word in ((lo[j], "min"), (hi[j], "max")):
+            if math.isfinite(bound) and abs(theta[j] - bound) <= 1e-6 * (1 + abs(bound)):
+                active.append(f"{c.label} at its {word} {bound:g}")
+                theta[j] = bound
+    return theta * scale, f"{prob.status} (CVXPY, declared bounds)", tuple(active)

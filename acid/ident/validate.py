@@ -1,0 +1,250 @@
+"""Multi-start open-loop validation of any declared model: ``validate_model(model, ds, ...)``.
+
+From each start instant k the model predicts ``horizon`` samples open loop with the measured
+inputs and disturbances. The state at k: measured states as measured; latent ones
+estimated from the ``warmup`` samples before k (the whole state at k - warmup fitted to the
+measured channels of that stretch with the parameters held, then simulated to k), or their
+declared ``initial`` rule when ``warmup`` is 0. Errors are reported per measured channel,
+overall and at chosen horizons (RMSE, p90 of |e|), with ``acid.metrics``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.optimize
+
+from acid._io import json_safe
+from acid.data import Dataset
+from acid.errors import ConfigError, DataError
+from acid.ident.data import ModelData
+from acid.ident.fit import PARAMS_FORMAT
+from acid.ident.oe import simulate_windows
+from acid.metrics import fit_percent, max_abs_error, percentile_abs_error, rmse
+from acid.models.declaration import Model
+from acid.models.loader import load
+
+PLACEMENTS = ("even", "random")
+
+
+@dataclass(frozen=True)
+class ParameterSet:
+    """Values for a declared model: the table (np,) and per-experiment values by id."""
+
+    values: np.ndarray
+    per_experiment: dict = field(default_factory=dict)   # {name: {experiment id: value}}
+    source: str = "declared"
+    provenance: dict = field(default_factory=dict)
+
+
+def fitted_parameters(result) -> ParameterSet:
+    """The values of a ``DeclaredFitResult`` (per-experiment ones by experiment id)."""
+    per = {n: dict(zip(result.experiment_ids, map(float, v), strict=True))
+           for n, v in result.per_experiment.items()}
+    return ParameterSet(values=np.asarray(result.values, dtype=float), per_experiment=per,
+                        source=f"fit of {result.data_source}")
+
+
+def declared_parameters(model: Model) -> ParameterSet:
+    return ParameterSet(values=model.values, source="declared values")
+
+
+def read_parameters(model: Model, path: str | Path) -> ParameterSet:
+    """A parameter file written by ``acid fit --model FILE`` for this model (one-line
+    ``DataError`` when it is not one, or names parameters the model lacks)."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"{path}: parameter file not found")
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DataError(f"{path}: not valid JSON ({type(exc).__name__})") from None
+    if not isinstance(d, dict) or d.get("format") != PARAMS_FORMAT:
+        raise DataError(f"{path}: not a parameter file of a declared model (no \"format\": "
+                        f"\"{PARAMS_FORMAT}\"; write one with acid fit --model FILE.py)")
+    if d.get("model") != model.name:
+        raise DataError(f"{path}: parameters of model {d.get('model')!r}, not "
+                        f"{model.name!r}")
+    par = d.get("parameters")
+    if not isinstance(par, dict):
+        raise DataError(f"{path}: 'parameters' must be a JSON object")
+    values = model.values.copy()
+    names = model.parameter_names
+    for name, row in par.items():
+        if name not in names:
+            raise DataError(f"{path}: parameter {name!r} is not in model {model.name!r}")
+        v = row.get("value") if isinstance(row, dict) else None
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise DataError(f"{path}: parameter {name!r} needs a finite 'value'")
+        values[names.index(name)] = float(v)
+    per = {}
+    for name, row in (d.get("per_experiment") or {}).items():
+        if name not in names:
+            raise DataError(f"{path}: per-experiment parameter {name!r} is not in the model")
+        try:
+            per[name] = {int(e): float(v) for e, v in zip(row["experiments"], row["values"],
+                                                          strict=True)}
+        except (KeyError, TypeError, ValueError):
+            raise DataError(f"{path}: per_experiment {name!r} needs 'experiments' and "
+                            "'values' of equal length") from None
+    prov = d.get("provenance") if isinstance(d.get("provenance"), dict) else {}
+    return ParameterSet(values=values, per_experiment=per, source=str(path), provenance=prov)
+
+
+@dataclass(frozen=True)
+class DeclaredValidation:
+    """Open-loop errors of a declared model (frozen; printing lives in the CLI).
+
+    ``errors[channel]`` is (n_starts, horizon): prediction minus measurement at 1..horizon
+    steps ahead (NaN where the channel is not recorded).
+    """
+
+    model: str
+    channels: tuple[str, ...]
+    units: tuple[str, ...]
+    starts: np.ndarray
+    horizon: int
+    warmup: int
+    Ts: float
+    errors: dict
+    metrics: dict
+    by_horizon: tuple
+    notes: tuple[str, ...]
+
+    def to_json_dict(self) -> dict:
+        return json_safe({
+            "model": self.model, "horizon": self.horizon, "warmup": self.warmup,
+            "Ts": self.Ts, "n_starts": int(self.starts.size),
+            "starts": self.starts.tolist(),
+            "channels": {c: {"unit": u, **self.metrics[c]}
+                         for c, u in zip(self.channels, self.units, strict=True)},
+            "by_horizon": list(self.by_horizon), "notes": list(self.notes)})
+
+
+def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
+                   starts: int = 60, horizon: int = 300, warmup: int = 60,
+                   placement: str = "even", seed: int = 0,
+                   horizons: tuple[int, ...] | None = None) -> DeclaredValidation:
+    """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring)."""
+    model = load(model)
+    params = params or declared_parameters(model)
+    if placement not in PLACEMENTS:
+        raise ConfigError(f"placement must be one of {', '.join(PLACEMENTS)}, got "
+                          f"{placement!r}")
+    for name, v, lo in (("starts", starts, 1), ("horizon", horizon, 1), ("warmup", warmup, 0)):
+        if int(v) < lo:
+            raise ConfigError(f"{name} must be at least {lo}, got {v}")
+    data = ModelData.of(model, ds, min_samples=2)
+    latent = [i for i, s in enumerate(model.states) if not s.measured]
+    need_warm = warmup if latent else 0
+    cand = np.concatenate([np.arange(a + need_warm, b - horizon) for a, b in data.segments]
+                          + [np.zeros(0, int)]).astype(int)
+    if cand.size == 0:
+        raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
+                        f"({need_warm} + {horizon} + 1 samples)")
+    if placement == "even":
+        pick = np.unique(np.round(np.linspace(0, cand.size - 1, min(starts, cand.size))))
+        k0 = cand[pick.astype(int)]
+    else:
+        k0 = np.sort(np.random.default_rng(seed).choice(cand, min(starts, cand.size),
+                                                        replace=False))
+    notes = []
+    P = _parameters_at(model, data, params, k0, notes)
+    x0 = data.initial_states(model, k0)
+    if latent and need_warm > 0:
+        x0 = _warm_start(model, data, P, k0, need_warm, x0, latent)
+        notes.append(f"latent states ({', '.join(model.states[i].name for i in latent)}) "
+                     f"estimated from the {need_warm} samples ({need_warm * model.Ts:g} s) "
+                     "before each start")
+    elif latent:
+        notes.append("latent states started from their declared initial rule")
+    idx = k0[:, None] + np.arange(horizon + 1)[None, :]
+    Y = simulate_windows(model, data, idx, x0, P)
+    meas = np.concatenate([data.x, data.y], axis=1)[idx]
+    channels, units, errors, metrics = [], [], {}, {}
+    rows = [(c, n) for c, n in data.measured_channels(model)]
+    unit_of = {r.name: r.unit for r in model.states + model.outputs}
+    for c, name in rows:
+        e = (Y[:, 1:, c] - meas[:, 1:, c])
+        errors[name] = e
+        ok = np.isfinite(e)
+        m, p = meas[:, 1:, c][ok], Y[:, 1:, c][ok]
+        channels.append(name)
+        units.append(unit_of[name])
+        metrics[name] = {"rmse": float(rmse(m, p)),
+                         "p90_abs": float(percentile_abs_error(m, p, 90)),
+                         "max_abs": float(max_abs_error(m, p)),
+                         "fit_percent": float(fit_percent(m, p))}
+    steps = sorted({h for h in (horizons or _default_horizons(horizon)) if 1 <= h <= horizon})
+    by_h = []
+    for h in steps:
+        row = {"step": h, "time_s": h * model.Ts}
+        for name in channels:
+            e = errors[name][:, h - 1]
+            e = e[np.isfinite(e)]
+            row[name] = {"rmse": float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan,
+                         "p90_abs": float(np.percentile(np.abs(e), 90)) if e.size
+                         else math.nan}
+        by_h.append(row)
+    return DeclaredValidation(model=model.name, channels=tuple(channels), units=tuple(units),
+                              starts=k0, horizon=int(horizon), warmup=int(need_warm),
+                              Ts=model.Ts, errors=errors, metrics=metrics,
+                              by_horizon=tuple(by_h), notes=tuple(notes))
+
+
+def _default_horizons(H: int) -> tuple[int, ...]:
+    return tuple(sorted({1, max(H // 10, 1), max(H // 4, 1), max(H // 2, 1), H}))
+
+
+def _parameters_at(model: Model, data: ModelData, params: ParameterSet, k0, notes) -> np.ndarray:
+    P = np.tile(params.values, (k0.size, 1))
+    names = model.parameter_names
+    for i, p in enumerate(model.parameters):
+        if not p.per_experiment:
+            continue
+        table = params.per_experiment.get(p.name, {})
+        ids = np.array(data.experiment_ids)[data.experiment[k0]]
+        known = np.array([int(e) in table for e in ids])
+        P[known, i] = [table[int(e)] for e in ids[known]]
+        if not known.all():
+            notes.append(f"{p.name}: no fitted value for experiment(s) "
+                         f"{sorted(set(ids[~known].tolist()))}; the table value "
+                         f"{params.values[names.index(p.name)]:.6g} {p.unit} is used")
+    return P
+
+
+def _warm_start(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np.ndarray:
+    """The state at each start: fit the state at k - W to the measured channels over the
+    W samples before k (parameters held), simulate to k; measured states as measured."""
+    idx = (k0 - W)[:, None] + np.arange(W + 1)[None, :]
+    n, nx = k0.size, model.nx
+    chan = [c for c, _ in data.measured_channels(model)]
+    meas = np.concatenate([data.x, data.y], axis=1)[idx][:, :W][..., chan]
+    obs = np.isfinite(meas)
+    meas = np.nan_to_num(meas)
+    scale = np.array([max(float(np.std(meas[..., i][obs[..., i]])), 1e-6)
+                      for i in range(len(chan))])
+    z0 = data.initial_states(model, k0 - W).ravel()
+
+    def resid(z):
+        Y = simulate_windows(model, data, idx[:, :W], z.reshape(n, nx), P)[..., chan]
+        return ((Y - meas) / scale)[obs]
+
+    def jac(z):
+        _, J = simulate_windows(model, data, idx[:, :W], z.reshape(n, nx), P, free=())
+        J = J[:, :, chan, :] / scale[None, None, :, None]              # (n, W, C, nx)
+        full = np.zeros(J.shape[:3] + (n * nx,))
+        for s in range(n):
+            full[s, :, :, s * nx:(s + 1) * nx] = J[s]
+        return full[obs]
+
+    sol = scipy.optimize.least_squares(resid, z0, jac=jac, method="trf", x_scale="jac",
+                                       max_nfev=50)
+    X = simulate_windows(model, data, idx, sol.x.reshape(n, nx), P)[:, -1, :nx]
+    out = x_k.copy()
+    out[:, latent] = X[:, latent]
+    return out

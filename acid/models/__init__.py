@@ -1,0 +1,26 @@
+"""Declared models: one declaration gives the simulator, the fit and the validation.
+
+``Model`` (``acid/models/declaration.py``) with ``State``, ``Signal``, ``Parameter``,
+``Constant`` and ``RK4``; the built-in declarations ``paper`` (eqs. 1-5) and ``econ``; users'
+own files through :func:`load`. ``exp``, ``sqrt``, ``log``, ``sin``, ``cos``, ``fabs``,
+``fmax``, ``fmin`` and ``if_else`` work on the symbols the equations receive (CasADi's).
+"""
+
+from __future__ import annotations
+
+from casadi import cos, exp, fabs, fmax, fmin, if_else, log, sin, sqrt
+
+from acid.models.declaration import (
+    RK4,
+    Constant,
+    DeclarationError,
+    Model,
+    Parameter,
+    Signal,
+    State,
+)
+from acid.models.loader import BUILT_IN, load
+
+__all__ = ["RK4", "BUILT_IN", "Constant", "DeclarationError", "Model", "Parameter", "Signal",
+           "State", "cos", "exp", "fabs", "fmax", "fmin", "if_else", "load", "log", "sin",
+           "sqrt"]

@@ -1,0 +1,159 @@
+"""``acid fit|validate --model FILE.py``: the declared-model branches (``acid.models``,
+``acid.ident``): option parsing, tables, files."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+from acid import __version__
+from acid._io import file_sha256
+from acid.data import Dataset
+from acid.errors import ConfigError
+from acid_cli._common import note, print_table, require_range, say, warn, write_summary
+
+#: Largest --fit-starts accepted.
+MAX_STARTS = 1000
+
+
+def is_model_file(spec: str | None) -> bool:
+    """Whether ``--model`` names a model file (the declared path) rather than a family."""
+    return spec is not None and str(spec).endswith(".py")
+
+
+def _num(v, digits: int = 5) -> str:
+    return "-" if v is None or not math.isfinite(v) else f"{v:.{digits}g}"
+
+
+def parse_fix(items: list[str] | None) -> dict[str, float]:
+    """``--fix NAME=VALUE`` options as {name: value} (one line naming the bad one)."""
+    out: dict[str, float] = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        try:
+            v = float(value)
+        except ValueError:
+            v = math.nan
+        if not sep or not name.strip() or not math.isfinite(v):
+            raise ConfigError(f"--fix {item!r}: expected NAME=VALUE with a finite number")
+        out[name.strip()] = v
+    return out
+
+
+def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None, *,
+                 method: str, fix: list[str] | None, free: list[str] | None, fit_starts: int,
+                 seed: int, oe_window: int, covariance: str, bandwidth,
+                 estimation_fraction: float, more: list[Path] = ()) -> None:
+    """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``."""
+    from acid.ident.fit import METHODS, fit_model, provenance
+    from acid.models import load
+
+    if method not in METHODS:
+        raise ConfigError(f"--method must be one of {', '.join(METHODS)} for a model file, "
+                          f"got {method!r}")
+    require_range(fit_starts, "--fit-starts", 1, MAX_STARTS)
+    model = load(model_file)
+    fixes = parse_fix(fix)
+    ds = Dataset.from_hdf5(data, min_samples=20)
+    est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]
+    if more:
+        parts = [Dataset.from_hdf5(p, min_samples=20) for p in more]
+        parts = [p if estimation_fraction == 1.0 else p.split(estimation_fraction)[0]
+                 for p in parts]
+        est = Dataset.concatenate([est, *parts])
+        est.source = str(data)
+    result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
+                       fit_starts=fit_starts, seed=seed, oe_window=oe_window,
+                       covariance=covariance, hac_bandwidth=bandwidth)
+    prov = provenance(ds, result.method)
+    prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
+                records=[str(data), *map(str, more)])
+    fitted = model.with_parameters(fixes, tuple(free or ()))
+    result.write(out, fitted, prov)
+
+    say(f"{data}{' and ' + str(len(more)) + ' more record(s)' if more else ''}: "
+        f"{len(est)} samples, {len(result.experiment_ids)} experiment(s), model "
+        f"{model.name!r} ({model_file}), method {result.method}, covariance {covariance} "
+        f"({result.elapsed_s:.1f} s)")
+    ids = result.experiment_ids
+    rows = [[e.name if e.experiment is None else f"{e.name} [exp {ids[e.experiment]}]",
+             e.unit, _num(e.declared), _num(e.value), _num(e.stderr, 2),
+             "-" if not math.isfinite(e.ci95[0]) else f"[{_num(e.ci95[0])}, {_num(e.ci95[1])}]",
+             e.status] for e in result.estimates]
+    print_table(f"Parameters of {model.name!r}, declared beside fitted",
+                ["name", "unit", "declared", "estimate", "stderr", "95 % interval", "status"],
+                rows)
+    eq_rows = [[q.name, q.method, "-" if q.rank is None else f"{q.rank}/{q.n_columns}",
+                _num(q.condition, 3), _num(q.residual_std, 3), _num(q.fit_percent, 4),
+                q.reason or ", ".join(q.parameters)] for q in result.equations]
+    print_table("Equations: how each was fitted (ls: equation-error least squares), rank, "
+                "condition, residual std, one-step fit %",
+                ["equation", "fit", "rank", "cond", "resid", "fit %", "parameters / why not ls"],
+                eq_rows)
+    oe = result.output_error
+    if oe:
+        sim = ", ".join(f"{c} {v:.2f} %" for c, v in oe["channel_fit_percent"].items())
+        say(f"output error: {oe['windows']} windows of <= {oe['window']} samples, loss "
+            f"{oe['loss']:.6g}, {oe['status']}; simulation fit {sim}")
+    if len(result.optima) > 0:
+        print_table(f"Distinct optima of {fit_starts} starts (best first)",
+                    ["loss", "starts", "parameters (spread over its starts)"],
+                    [[f"{o.loss:.6g}", str(o.n_starts),
+                      ", ".join(f"{k} {_num(v, 4)} (+/-{_num(o.spread[k], 2)})"
+                                for k, v in o.values.items())] for o in result.optima])
+    for c in result.combinations:
+        say(f"identified combination: {c}")
+    for line in result.notes:
+        note(line)
+    for line in result.warnings:
+        warn(line)
+    say(f"parameters written to {out}")
+    write_summary(json_path, {"command": "fit", "acid_version": __version__,
+                              "inputs": {"data": str(data), "model": str(model_file)},
+                              "estimation_fraction": estimation_fraction, "out": str(out),
+                              **result.to_json_dict()})
+
+
+def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
+                      starts: int, horizon: int, warmup: int, placement: str, seed: int,
+                      held_out_fraction: float | None) -> None:
+    """Validate the model declared in ``model_file`` on ``data``; print the errors."""
+    from acid.ident.validate import declared_parameters, read_parameters, validate_model
+    from acid.models import load
+    from acid.validate import held_out_part
+
+    model = load(model_file)
+    ps = declared_parameters(model) if params == "paper" else read_parameters(model, params)
+    ds = Dataset.from_hdf5(data, min_samples=2)
+    sha = file_sha256(data)
+    part = held_out_part(ps.provenance, str(data), sha, held_out_fraction)
+    if part.warning:
+        warn(part.warning)
+    frac = part.fraction
+    if ps.per_experiment and ps.provenance.get("data_sha256") != sha:
+        ps = dataclasses.replace(ps, per_experiment={})
+        note("per-experiment parameters were fitted on another record: their mean is used")
+    if frac is not None and frac < 1.0:
+        ds = ds.split(1.0 - frac)[1]
+    res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
+                         placement=placement, seed=seed)
+    say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
+        f"{model.name!r}, parameters from {ps.source}"
+        + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
+           and frac < 1 else ""))
+    print_table("Open-loop prediction error, all starts and steps",
+                ["channel", "unit", "RMSE", "p90 |e|", "max |e|", "fit %"],
+                [[c, u, _num(res.metrics[c]["rmse"], 3), _num(res.metrics[c]["p90_abs"], 3),
+                  _num(res.metrics[c]["max_abs"], 3), _num(res.metrics[c]["fit_percent"], 4)]
+                 for c, u in zip(res.channels, res.units, strict=True)])
+    print_table("Error vs prediction time: RMSE / p90 |e|",
+                ["step", "time (s)", *res.channels],
+                [[str(r["step"]), f"{r['time_s']:g}",
+                  *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
+                    for c in res.channels]] for r in res.by_horizon])
+    for line in res.notes:
+        note(line)
+    write_summary(json_path, {"command": "validate", "acid_version": __version__,
+                              "inputs": {"data": str(data), "model": str(model_file),
+                                         "params": params}, **res.to_json_dict()})

@@ -1,0 +1,91 @@
+"""``acid fit --model FILE.py`` and ``acid validate --model FILE.py`` (typer's CliRunner) on a
+short ``acid excite`` record of the high-fidelity plant."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from _catalogue import MODEL_FILE
+from _cli import assert_one_line_error
+from typer.testing import CliRunner
+
+from acid.excite import ExcitationSpec, excite
+from acid.plant import make_plant
+from acid_cli.main import app
+
+runner = CliRunner()
+
+#: a user's file: the cabin with a latent interior mass and a per-experiment heat load
+USER_MODEL = MODEL_FILE.replace(
+    '"T_m": s.a * (s.T_cab - s.T_m) / 1e5}',
+    '"T_m": (s.a * (s.T_cab - s.T_m) + s.Q) / 1e5}').replace(
+    'Parameter("b", "W/K", 50.0, 0.0, 1e3)]',
+    'Parameter("b", "W/K", 50.0, 0.0, 1e3),\n'
+    '                          Parameter("Q", "W", 0.0, -2e3, 2e3, per_experiment=True)]')
+
+
+@pytest.fixture(scope="module")
+def record(tmp_path_factory):
+    """300 samples (1500 s) of ``acid excite`` on the high-fidelity plant."""
+    folder = tmp_path_factory.mktemp("declared")
+    ds = excite(make_plant("hifi"), ExcitationSpec(duration=1500.0, seed=2))
+    return ds.to_hdf5(folder / "d.h5")
+
+
+def test_fit_and_validate_a_users_model_file(record, tmp_path):
+    model = tmp_path / "my_cabin.py"
+    model.write_text(USER_MODEL)
+    out, summary = tmp_path / "p.json", tmp_path / "fit.json"
+    res = runner.invoke(app, ["fit", str(record), "--model", str(model), "--out", str(out),
+                              "--json", str(summary), "--oe-window", "150"])
+    assert res.exit_code == 0, res.output
+    assert "method oe" in res.output and "latent: T_m" in res.output
+    d = json.loads(out.read_text())
+    assert d["format"] == "acid-declared-params" and d["model"] == "mine"
+    assert set(d["parameters"]) == {"a", "b", "Q"} and d["per_experiment"]["Q"]["values"]
+    assert d["provenance"]["model_file"] == str(model)
+    rep = json.loads(summary.read_text())
+    assert rep["output_error"]["converged"] and rep["method"] == "oe"
+    assert {e["status"] for e in rep["parameters"]} == {"estimated (oe)"}
+    assert not list(tmp_path.glob("__pycache__"))          # loading leaves nothing behind
+
+    vjson = tmp_path / "val.json"
+    res = runner.invoke(app, ["validate", str(record), "--model", str(model), "--params",
+                              str(out), "--starts", "5", "--horizon", "100", "--warmup", "30",
+                              "--json", str(vjson)])
+    assert res.exit_code == 0, res.output
+    assert "in-sample" in " ".join(res.output.split())
+    v = json.loads(vjson.read_text())
+    assert v["model"] == "mine" and v["n_starts"] == 5 and v["horizon"] == 100
+    assert set(v["channels"]) == {"T_cab"} and v["channels"]["T_cab"]["unit"] == "K"
+    assert np.isfinite(v["channels"]["T_cab"]["rmse"])
+    assert [r["step"] for r in v["by_horizon"]] == [1, 10, 25, 50, 100]
+
+
+def test_fix_holds_a_parameter_and_the_table_says_so(record, tmp_path):
+    model = tmp_path / "my_cabin.py"
+    model.write_text(USER_MODEL)
+    out, summary = tmp_path / "p.json", tmp_path / "fit.json"
+    res = runner.invoke(app, ["fit", str(record), "--model", str(model), "--out", str(out),
+                              "--json", str(summary), "--oe-window", "150", "--fix", "b=80"])
+    assert res.exit_code == 0, res.output
+    rows = {e["name"]: e for e in json.loads(summary.read_text())["parameters"]}
+    assert rows["b"]["status"] == "fixed" and rows["b"]["estimate"] == 80.0
+    assert json.loads(out.read_text())["parameters"]["b"]["value"] == 80.0
+
+
+def test_paper_only_options_are_refused_for_a_model_file(record, tmp_path):
+    model = tmp_path / "my_cabin.py"
+    model.write_text(USER_MODEL)
+    res = runner.invoke(app, ["fit", str(record), "--model", str(model), "--out",
+                              str(tmp_path / "p.json"), "--no-blower"])
+    assert_one_line_error(res, "--no-blower", "--model paper")
+
+
+def test_the_default_model_is_unchanged(record, tmp_path):
+    res = runner.invoke(app, ["fit", str(record), "--out", str(tmp_path / "p.json")])
+    assert res.exit_code == 0, res.output
+    d = json.loads((tmp_path / "p.json").read_text())
+    assert d["provenance"]["method"] == "ls" and len(d["gamma"]) == 7

@@ -1,0 +1,97 @@
+"""acid.ident.validate: multi-start open-loop validation of declared models, the latent state
+estimated from a warm-up stretch, parameter files written by the fit."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from acid.data import Dataset
+from acid.errors import DataError
+from acid.ident.fit import fit_model
+from acid.ident.validate import (
+    ParameterSet,
+    declared_parameters,
+    fitted_parameters,
+    read_parameters,
+    validate_model,
+)
+from acid.models import load
+
+
+def _cabin3_record(p, rng, n=300, T_int0=315.0):
+    m = load("cabin3")
+    W = np.repeat(rng.uniform(0.04, 0.16, n // 20 + 1), 20)[:n]
+    Tset = np.repeat(rng.uniform(275.0, 284.0, n // 20 + 1), 20)[:n]
+    Ta = np.full(n, 306.0)
+    X, Y = m.simulate(np.array([306.0, T_int0, 281.0]), np.c_[W, Tset], Ta[:, None], p)
+    ch = {"T_cab": X[:-1, 0] - 273.15, "T_evap": X[:-1, 2] - 273.15,
+          "T_ain": Y[:, 0] - 273.15, "W_bl": W, "T_evap_set": Tset - 273.15,
+          "T_amb": Ta - 273.15}
+    return Dataset(np.arange(n) * 5.0, ch, {k: "kg/s" if k == "W_bl" else "degC" for k in ch},
+                   5.0)
+
+
+def test_the_true_parameters_predict_their_own_data(rng):
+    m = load("cabin3")
+    ds = _cabin3_record(m.values, rng)
+    res = validate_model(m, ds, starts=10, horizon=100, warmup=40)
+    assert res.channels == ("T_cab", "T_evap", "T_ain") and res.starts.size == 10
+    for c in res.channels:
+        assert res.metrics[c]["max_abs"] < 1e-6, c
+    assert "estimated from the 40 samples" in " ".join(res.notes)
+
+
+def test_the_warm_up_estimate_beats_the_declared_initial_rule(rng):
+    # the interior starts 9 K above the cabin: the rule (T_int = T_cab) is wrong early on
+    m = load("cabin3")
+    ds = _cabin3_record(m.values, rng, n=200, T_int0=320.0)
+    warm = validate_model(m, ds, starts=5, horizon=60, warmup=30)
+    rule = validate_model(m, ds, starts=5, horizon=60, warmup=0)
+    assert "latent states started from their declared initial rule" in rule.notes
+    assert warm.metrics["T_cab"]["rmse"] < 1e-6 < rule.metrics["T_cab"]["rmse"]
+    assert len(warm.by_horizon) == 5 and warm.by_horizon[-1]["step"] == 60
+
+
+def test_parameter_file_round_trip(rng, tmp_path):
+    m = load("cabin3")
+    ds = _cabin3_record(m.values, rng, n=160)
+    res = fit_model(m, ds, method="ls")          # only T_ain's parameters: quick
+    path = res.write(tmp_path / "p.json", m, {"data_sha256": "x"})
+    ps = read_parameters(m, path)
+    np.testing.assert_allclose(ps.values, res.values)
+    assert ps.per_experiment == {"Q_sol": {0: pytest.approx(m.parameter("Q_sol").value)}}
+    d = json.loads(path.read_text())
+    d["parameters"]["nope"] = {"value": 1.0}
+    path.write_text(json.dumps(d))
+    with pytest.raises(DataError, match="'nope' is not in model 'cabin3'"):
+        read_parameters(m, path)
+    with pytest.raises(DataError, match="not a parameter file of a declared model"):
+        bad = tmp_path / "b.json"
+        bad.write_text("{}")
+        read_parameters(m, bad)
+
+
+def test_per_experiment_values_are_used_per_start(rng):
+    m = load("cabin3")
+    p0, p1 = m.values.copy(), m.values.copy()
+    i = m.parameter_names.index("Q_sol")
+    p0[i], p1[i] = 100.0, 1200.0
+    ds = Dataset.concatenate([_cabin3_record(p0, rng, n=150), _cabin3_record(p1, rng, n=150)])
+    ps = ParameterSet(values=m.values, per_experiment={"Q_sol": {0: 100.0, 1: 1200.0}})
+    good = validate_model(m, ds, ps, starts=6, horizon=50, warmup=30)
+    assert good.metrics["T_cab"]["max_abs"] < 1e-6
+    fitted = fitted_parameters(fit_model(m, ds, method="ls"))     # Q_sol kept as declared
+    assert fitted.per_experiment == {"Q_sol": {0: 400.0, 1: 400.0}}
+    mean = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=30)
+    assert mean.metrics["T_cab"]["max_abs"] > 1e-2
+    assert any("no fitted value" in n for n in mean.notes)
+
+
+def test_too_short_a_record_is_one_line(rng):
+    m = load("cabin3")
+    ds = _cabin3_record(m.values, rng, n=50)
+    with pytest.raises(DataError, match="longer than warmup \\+ horizon"):
+        validate_model(m, ds, horizon=100)

@@ -1,0 +1,175 @@
+"""acid.models: declarations traced into CasADi Functions; one-line declaration errors; the
+built-in declarations step exactly as the hand-written models."""
+
+from __future__ import annotations
+
+import textwrap
+
+import numpy as np
+import pytest
+
+from acid.econ import model as econ_model
+from acid.econ.params import EconParams, PowerMap
+from acid.models import DeclarationError, Model, Parameter, Signal, State, load
+from acid.params import paper
+
+HEADER = "from acid.models import Model, Parameter, Signal, State, RK4\n"
+
+
+def _file(tmp_path, body: str, name: str = "my_model.py"):
+    path = tmp_path / name
+    path.write_text(HEADER + textwrap.dedent(body))
+    return path
+
+
+GOOD = """
+def step(s):
+    return {"T": s.T + s.a * (s.T_amb - s.T) + s.b * s.W}
+
+model = Model("toy", states=[State("T", "K")], inputs=[Signal("W", "kg/s")],
+              disturbances=[Signal("T_amb", "K")],
+              parameters=[Parameter("a", "1", 0.1, 0.0, 1.0), Parameter("b", "K s/kg", 2.0)],
+              Ts=5.0, step=step)
+"""
+
+
+def _error(tmp_path, body):
+    with pytest.raises(DeclarationError) as exc:
+        load(_file(tmp_path, body))
+    text = str(exc.value)
+    assert "\n" not in text and text.startswith("my_model.py")
+    return text
+
+
+def test_a_good_file_loads_and_steps(tmp_path):
+    m = load(_file(tmp_path, GOOD))
+    x, _ = m.step([300.0], [0.1], [310.0])
+    assert x[0] == pytest.approx(300.0 + 0.1 * 10.0 + 2.0 * 0.1)
+
+
+def test_unknown_name_names_file_line_and_name(tmp_path):
+    text = _error(tmp_path, GOOD.replace("s.T_amb - s.T)", "s.T_ambient - s.T)"))
+    assert "'T_ambient'" in text and "my_model.py:4" in text and "unknown name" in text
+
+
+def test_python_if_on_a_symbol(tmp_path):
+    body = GOOD.replace('    return {"T"', '    if s.T > 300:\n        pass\n    return {"T"')
+    text = _error(tmp_path, body)
+    assert "my_model.py:4" in text and "if" in text and "if_else" in text
+
+
+def test_state_without_equation(tmp_path):
+    body = GOOD.replace('states=[State("T", "K")]', 'states=[State("T", "K"), State("U", "K")]')
+    assert "state 'U' has no equation" in _error(tmp_path, body)
+
+
+def test_equation_for_undeclared_state(tmp_path):
+    body = GOOD.replace('"T": s.T +', '"T": s.T, "Q": s.T +')
+    text = _error(tmp_path, body)
+    assert "'Q'" in text and "not declared" in text
+
+
+def test_unit_that_cannot_be_parsed(tmp_path):
+    text = _error(tmp_path, GOOD.replace('"K s/kg"', '"K s/furlong"'))
+    assert "'b'" in text and "furlong" in text
+
+
+def test_temperature_signal_in_degC_is_refused(tmp_path):
+    text = _error(tmp_path, GOOD.replace('Signal("T_amb", "K")', 'Signal("T_amb", "degC")'))
+    assert "'T_amb'" in text and "kelvin" in text
+
+
+def test_latent_state_needs_an_initial_rule(tmp_path):
+    body = GOOD.replace('State("T", "K")', 'State("T", "K", measured=False)')
+    assert "latent state 'T' needs initial=" in _error(tmp_path, body)
+
+
+def test_value_outside_its_bounds(tmp_path):
+    text = _error(tmp_path, GOOD.replace('Parameter("a", "1", 0.1,', 'Parameter("a", "1", 2.0,'))
+    assert "'a'" in text and "[min, max]" in text
+
+
+def test_file_without_a_model(tmp_path):
+    with pytest.raises(DeclarationError, match="defines no model"):
+        load(_file(tmp_path, "x = 1\n"))
+
+
+def test_ode_with_rk4_integrates_the_declared_derivative():
+    def ode(s):
+        return {"x": -s.k * s.x}
+
+    m = Model("decay", states=[State("x", "1")], parameters=[Parameter("k", "1/s", 0.1)],
+              Ts=1.0, ode=ode, source="decay.py")
+    from acid.models import RK4  # noqa: F401 - default RK4(1)
+    x, _ = m.step([1.0], [], [])
+    h = -0.1
+    rk4 = 1 + h + h**2 / 2 + h**3 / 6 + h**4 / 24
+    assert x[0] == pytest.approx(rk4, rel=1e-14)
+
+
+def test_paper_declaration_steps_as_acid_model(rng):
+    from acid import model as pm
+
+    m = load("paper")
+    n = 200
+    x = np.c_[rng.uniform(285, 320, n), rng.uniform(270, 290, n)]
+    u = np.c_[rng.uniform(0.03, 0.2, n), rng.uniform(273, 288, n)]
+    d = np.c_[rng.uniform(285, 330, n), rng.uniform(285, 340, n)]
+    xn, y = m.step(x, u, d)
+    p = paper()
+    cab, evap, ain = pm.step(x[:, 0], x[:, 1], u[:, 0], u[:, 1], d[:, 0], d[:, 1], p)
+    np.testing.assert_allclose(xn[:, 0], cab, rtol=0, atol=1e-12 * 300)
+    np.testing.assert_allclose(xn[:, 1], evap, rtol=0, atol=1e-12 * 300)
+    np.testing.assert_allclose(y[:, 0], ain, rtol=1e-12)
+    np.testing.assert_allclose(y[:, 1], pm.blower_power(u[:, 0], p), rtol=1e-12)
+    assert m.parameter_names == tuple(p.as_dict())
+
+
+def test_econ_declaration_steps_as_acid_econ_model(rng):
+    from acid.models.econ import _MAP_START, _START
+
+    m = load("econ")
+    p = EconParams(values=dict(_START), C_ew=2000.0, power_map=PowerMap(coef=_MAP_START))
+    n = 100
+    x = np.c_[rng.uniform(290, 315, n), rng.uniform(290, 325, n), rng.uniform(290, 335, n),
+              rng.uniform(272, 288, n), rng.uniform(0.005, 0.016, n)]
+    u = np.c_[rng.uniform(0.04, 0.16, n), rng.uniform(274, 286, n)]
+    d = np.c_[rng.uniform(0, 30, n), rng.uniform(293, 315, n)]
+    xn, y = m.step(x, u, d)
+    r = econ_model.step(tuple(x.T), tuple(u.T), tuple(d.T), p, 5.0)
+    for i in range(5):
+        np.testing.assert_allclose(xn[:, i], r.x[i], rtol=1e-10)
+    np.testing.assert_allclose(y[:, 0], r.T_ain, rtol=1e-10)
+    F = econ_model.casadi_step(p, 5.0).map(n)
+    ref = F(x.T, u.T, d.T, np.zeros((5, n)))
+    np.testing.assert_allclose(y[:, 1], np.asarray(ref[3]).ravel(), rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(y[:, 2], np.asarray(ref[4]).ravel(), rtol=1e-10)
+
+
+def test_simulate_matches_repeated_steps(rng):
+    m = load("cabin3")
+    H = 20
+    u = np.c_[rng.uniform(0.05, 0.15, H), rng.uniform(275, 283, H)]
+    d = rng.uniform(300, 310, (H, 1))
+    X, Y = m.simulate(np.array([300.0, 305.0, 280.0]), u, d)
+    x = np.array([300.0, 305.0, 280.0])
+    for k in range(H):
+        x_next, y = m.step(x, u[k], d[k])
+        np.testing.assert_allclose(Y[k], y, rtol=1e-14)
+        x = x_next
+    np.testing.assert_allclose(X[-1], x, rtol=1e-14)
+
+
+def test_fix_and_free_change_the_table():
+    m = load("cabin3").with_parameters({"C_cab": 12.0}, ("Q_sol",))
+    assert m.parameter("C_cab").fixed and m.parameter("C_cab").value == 12.0
+    with pytest.raises(DeclarationError, match="outside the declared bounds"):
+        load("cabin3").with_parameters({"C_cab": 1e6})
+    with pytest.raises(DeclarationError, match="unknown parameter 'nope'"):
+        load("cabin3").with_parameters({"nope": 1.0})
+
+
+def test_signal_declared_twice():
+    with pytest.raises(DeclarationError, match="declared twice"):
+        Model("x", states=[State("T", "K")], inputs=[Signal("T", "K")], parameters=[],
+              Ts=1.0, step=lambda s: {"T": s.T}, source="x.py")
