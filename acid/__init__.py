@@ -38,6 +38,7 @@ _API = {
     "Dataset": ("acid.data", "Dataset"), "ChannelMap": ("acid.data", "ChannelMap"),
     "load_dataset": ("acid.data", "Dataset.from_hdf5"), "from_csv": ("acid.data", "from_csv"),
     "from_mat": ("acid.data", "from_mat"), "drive_cycle": ("acid.signals", "drive_cycle"),
+    "import_logs": ("acid.data", "import_logs"), "example": ("acid.examples", "resolve"),
     # parameters
     "ModelParams": ("acid.params", "ModelParams"), "paper_params": ("acid.params", "paper"),
     "load_params": ("acid.params", "load_params"),

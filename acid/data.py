@@ -21,6 +21,7 @@ import json
 import math
 import os
 import re
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -31,7 +32,18 @@ import numpy as np
 from acid import __version__
 from acid._io import atomic_path
 from acid.errors import DataError
-from acid.units import KNOWN_UNITS, convert, is_temperature, temperature_unit_consistent
+from acid.expr import Expression
+from acid.logcheck import censored_across, gaps, held_extremes, plausibility, quantisation
+from acid.units import (
+    KNOWN_UNITS,
+    UNIT_SCALES,
+    base_unit,
+    convert,
+    is_temperature,
+    storage_unit,
+    temperature_unit_consistent,
+    to_base,
+)
 
 FORMAT_NAME = "acid-dataset"
 FORMAT_VERSION = 1
@@ -263,7 +275,39 @@ class Dataset:
         df.attrs["Ts"] = self.Ts
         return df
 
+    @property
+    def assumed(self) -> dict[str, str]:
+        """Channels that were declared, not measured (a constant or an expression in the
+        import map): {name: how}. Fits and validations may refuse or flag them."""
+        declared = self.metadata.get("assumed") or {}
+        if not isinstance(declared, Mapping):
+            return {}
+        return {n: str(v.get("how", v) if isinstance(v, Mapping) else v)
+                for n, v in declared.items() if n in self.channels}
+
+    def experiment_names(self) -> list[str]:
+        """One name per experiment (the file names of an import; else ``"0"``, ``"1"``...)."""
+        ids = np.unique(self.experiment)
+        records = self.metadata.get("experiments")
+        if isinstance(records, list) and all(isinstance(r, Mapping) and "name" in r
+                                             for r in records) and \
+                all(0 <= i < len(records) for i in ids):
+            return [str(records[i]["name"]) for i in ids]
+        return [str(i) for i in ids]
+
     # ------------------------------------------------------------ validation
+    def require(self, names: Iterable[str]) -> Dataset:
+        """Refuse a dataset that lacks any of ``names``: one line naming every missing one."""
+        missing = [n for n in dict.fromkeys(names) if n not in self.channels]
+        if len(missing) == 1:
+            raise DataError(f"{self.source}: missing channel {missing[0]!r}")
+        if missing:
+            raise DataError(f"{self.source}: missing {len(missing)} channels "
+                            f"{', '.join(map(repr, missing))} (a log that does not measure "
+                            "one can declare it in the import map as a constant or an "
+                            "expression, recorded as assumed)")
+        return self
+
     def validate(self, require: Iterable[str] = (), min_samples: int = 2) -> Dataset:
         """Refuse data that cannot be trusted; returns ``self`` so calls chain.
 
@@ -272,9 +316,7 @@ class Dataset:
         """
         src = self.source
         check_sample_time(self.Ts, f"{src}: sample time Ts")
-        for name in require:
-            if name not in self.channels:
-                raise DataError(f"{src}: missing channel {name!r}")
+        self.require(require)
         n = len(self)
         if self.time.ndim != 1:
             raise DataError(f"{src}: time must be a vector, got shape {self.time.shape}")
@@ -532,43 +574,108 @@ def _fmt_bound(v: float | None, unbounded: str) -> str:
 
 # ------------------------------------------------------------------ importers
 #: How a channel map brings a record onto its ``Ts`` grid (``ChannelMap.resample``).
-RESAMPLE_MODES = ("mean", "sample", "none")
+RESAMPLE_MODES = ("mean", "centered", "sample", "none")
 
 #: Keys a channel map may have.
-MAP_KEYS = ("time", "Ts", "resample", "channels", "description")
+MAP_KEYS = ("time", "Ts", "resample", "channels", "description", "sep", "encoding", "decimal")
+
+#: Keys of one channel entry of a map.
+CHANNEL_KEYS = ("column", "unit", "constant", "expr", "note", "censored_above",
+                "censored_below")
+
+#: Suffix of the mask channel that marks censored samples of a channel (1 = censored).
+CENSORED_SUFFIX = "_censored"
+
+#: File types the import reads (``read_log``), by suffix.
+CSV_SUFFIXES = (".csv", ".txt", ".csv.gz", ".txt.gz")
+MAT_SUFFIXES = (".mat",)
+
+
+class PlausibilityWarning(UserWarning):
+    """An imported channel's values contradict its declared unit (a speed in km/h declared
+    as m/s, an A/C power in kW declared as W)."""
+
+
+@dataclass(frozen=True)
+class ChannelSource:
+    """Where one channel of a map comes from: a ``column`` of the file, a ``constant`` or an
+    ``expr`` of other channels (the last two are *assumed*, not measured); its ``unit``; the
+    levels at which its sensor clips (``censored_above`` / ``censored_below``, in ``unit``)."""
+
+    unit: str
+    column: str | None = None
+    constant: float | None = None
+    expr: Expression | None = None
+    note: str = ""
+    censored_above: float | None = None
+    censored_below: float | None = None
+
+    @property
+    def assumed(self) -> bool:
+        return self.column is None
+
+    def describe(self) -> str:
+        if self.constant is not None:
+            return f"constant {self.constant:g} {self.unit}"
+        if self.expr is not None:
+            return f"expr {self.expr.text} [{self.unit}]"
+        return f"column {self.column!r} [{self.unit}]"
 
 
 @dataclass(frozen=True)
 class ChannelMap:
     """How columns of a foreign file become acid channels.
 
-    ``time``: name of the time column (s); ``channels``: {acid name: (column, unit)};
-    ``Ts``: the sample time of the dataset, s (``None``: the file's own, which must be
-    uniform); ``resample``: how the record gets onto the ``Ts`` grid:
+    ``time``: name of the time column, in ``time_unit`` (s unless the map says
+    ``time = { column = "...", unit = "ms" }``); ``channels``: {acid name:
+    :class:`ChannelSource`}; ``Ts``: the sample time of the dataset, s (``None``: the file's
+    own, which must be uniform); ``sep``, ``encoding``, ``decimal``: how a CSV file is
+    written (default ``","``, ``"utf-8"``, ``"."``; ``.gz`` files are decompressed);
+    ``resample``: how the record gets onto the ``Ts`` grid:
 
     * ``"mean"``: the sample convention: states, inputs and exogenous channels sampled at
       t_k, outputs and powers averaged over [t_k, t_k + Ts) (energy kept);
+    * ``"centered"``: as ``"mean"``, but states, inputs and exogenous channels are their mean
+      over [t_k - Ts/2, t_k + Ts/2) (a quantised or noisy sensor's steps averaged out, still
+      aligned with t_k);
     * ``"sample"``: every channel sampled at t_k (linear interpolation);
     * ``"none"``: no resampling; the file must already be uniform at ``Ts``;
     * not given: ``"mean"``, unless the file is already sampled every ``Ts``: then it is
       taken as it is (averaging again would smear outputs and powers), with a note in
       ``metadata["resample"]``.
 
-    Loaded from TOML or JSON::
+    Units come from ``acid.units.UNIT_SCALES`` (the table FMU maps use): km/h, kW, kg/h,
+    degF, bar, W/m2, %RH, ...; the dataset stores each channel in acid's unit (degC, m/s, W,
+    kg/s, ...). Loaded from TOML or JSON::
 
         time = "t"
         Ts = 5.0             # optional
         resample = "mean"    # optional: "mean", "sample" or "none"
+        sep = ";"            # optional CSV format keys
+        encoding = "latin-1"
+        decimal = ","
         [channels]
-        T_cab = { column = "CabinAirTemp", unit = "degC" }
-        W_bl  = { column = "BlowerFlow", unit = "kg/s" }
+        T_cab = { column = "CabinAirTemp", unit = "degC", censored_above = 39.84 }
+        v_veh = { column = "Speed", unit = "km/h" }
+        W_bl  = { constant = 0.1, unit = "kg/s", note = "blower level 1" }    # assumed
+        T_ain = { expr = "T_evap + 2", unit = "degC" }                          # assumed
     """
 
     time: str
-    channels: Mapping[str, tuple[str, str]]
+    channels: Mapping[str, ChannelSource]
     Ts: float | None = None
     resample: str | None = None
     source: str = field(default="channel map", compare=False)
+    time_unit: str = "s"
+    sep: str = ","
+    encoding: str = "utf-8"
+    decimal: str = "."
+    description: str = ""
+
+    @property
+    def columns(self) -> list[str]:
+        """The file's columns the map reads: time first, then the measured channels."""
+        return [self.time] + [s.column for s in self.channels.values() if s.column is not None]
 
     @classmethod
     def from_file(cls, path: str | os.PathLike) -> ChannelMap:
@@ -599,36 +706,12 @@ class ChannelMap:
             raise DataError(f"{source}: unknown key {unknown[0]!r} (known: {', '.join(MAP_KEYS)})")
         if "time" not in d or "channels" not in d:
             raise DataError(f"{source}: needs 'time' and a [channels] table")
-        if not isinstance(d["time"], str) or not d["time"]:
-            raise DataError(f"{source}: 'time' must be the name of the time column, "
-                            f"got {d['time']!r}")
+        time_col, time_unit = _time_entry(d["time"], source)
         if not isinstance(d["channels"], Mapping):
             raise DataError(f"{source}: [channels] must be a table of channel = column entries")
-        chans = {}
-        for name, spec in d["channels"].items():
-            if not isinstance(name, str) or not CHANNEL_NAME.fullmatch(name):
-                raise DataError(f"{source}: channel name {name!r} must be a letter followed by "
-                                "letters, digits or underscores")
-            if isinstance(spec, str):
-                spec = {"column": spec}
-            if not isinstance(spec, Mapping):
-                raise DataError(f"{source}: channel {name!r} must be a column name or "
-                                f"{{ column = ..., unit = ... }}, got {spec!r}")
-            extra = [k for k in spec if k not in ("column", "unit")]
-            if extra:
-                raise DataError(f"{source}: channel {name!r} has unknown key {extra[0]!r} "
-                                "(known: column, unit)")
-            col = spec.get("column")
-            unit = spec.get("unit", CHANNELS[name].unit if name in CHANNELS else None)
-            if col is None or unit is None:
-                raise DataError(f"{source}: channel {name!r} needs 'column' and 'unit'")
-            if not isinstance(col, str) or not col:
-                raise DataError(f"{source}: channel {name!r}: 'column' must be a column name, "
-                                f"got {col!r}")
-            if not isinstance(unit, str) or unit not in KNOWN_UNITS:
-                raise DataError(f"{source}: channel {name!r} has unknown unit {unit!r} "
-                                f"(known: {', '.join(KNOWN_UNITS)})")
-            chans[name] = (col, unit)
+        chans = {name: _channel_entry(name, spec, source)
+                 for name, spec in d["channels"].items()}
+        _order_derived(chans, source)
         Ts = d.get("Ts")
         if Ts is not None:
             Ts = check_sample_time(Ts, f"{source}: Ts")
@@ -640,7 +723,138 @@ class ChannelMap:
             if Ts is None:
                 raise DataError(f"{source}: resample = {resample!r} needs Ts (the grid to "
                                 "resample onto)")
-        return cls(time=d["time"], channels=chans, Ts=Ts, resample=resample, source=source)
+        sep, decimal = (_one_char(d, k, default, source)
+                        for k, default in (("sep", ","), ("decimal", ".")))
+        if decimal not in (".", ","):
+            raise DataError(f"{source}: decimal must be '.' or ',', got {decimal!r}")
+        if sep == decimal or sep in ('"', "\n", "\r"):
+            raise DataError(f"{source}: sep {sep!r} cannot separate columns"
+                            + (" (it is also the decimal mark)" if sep == decimal else ""))
+        encoding = d.get("encoding", "utf-8")
+        if not isinstance(encoding, str) or not _known_encoding(encoding):
+            raise DataError(f"{source}: unknown encoding {encoding!r} (e.g. 'utf-8', "
+                            "'latin-1', 'cp1252')")
+        description = d.get("description", "")
+        if not isinstance(description, str):
+            raise DataError(f"{source}: description must be a text")
+        return cls(time=time_col, channels=chans, Ts=Ts, resample=resample, source=source,
+                   time_unit=time_unit, sep=sep, encoding=encoding, decimal=decimal,
+                   description=description)
+
+
+def _time_entry(value, source: str) -> tuple[str, str]:
+    """``time = "col"`` or ``time = { column = "col", unit = "ms" }``."""
+    unit = "s"
+    if isinstance(value, Mapping):
+        extra = [k for k in value if k not in ("column", "unit")]
+        if extra:
+            raise DataError(f"{source}: time has unknown key {extra[0]!r} (known: column, unit)")
+        unit = value.get("unit", "s")
+        value = value.get("column")
+        if not isinstance(unit, str) or unit not in UNIT_SCALES or base_unit(unit) != "s":
+            raise DataError(f"{source}: time unit must be a unit of time (s, ms, min, h), "
+                            f"got {unit!r}")
+    if not isinstance(value, str) or not value:
+        raise DataError(f"{source}: 'time' must be the name of the time column, got {value!r}")
+    return value, unit
+
+
+def _one_char(d: Mapping, key: str, default: str, source: str) -> str:
+    value = d.get(key, default)
+    if not isinstance(value, str) or len(value) != 1:
+        raise DataError(f"{source}: {key} must be one character, got {value!r}")
+    return value
+
+
+def _known_encoding(name: str) -> bool:
+    import codecs
+
+    try:
+        return codecs.lookup(name).name not in ("", None)
+    except (LookupError, ValueError, TypeError):
+        return False
+
+
+def _number(value, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            not math.isfinite(float(value)):
+        raise DataError(f"{where} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _channel_entry(name, spec, source: str) -> ChannelSource:
+    if not isinstance(name, str) or not CHANNEL_NAME.fullmatch(name):
+        raise DataError(f"{source}: channel name {name!r} must be a letter followed by "
+                        "letters, digits or underscores")
+    if isinstance(spec, str):
+        spec = {"column": spec}
+    if not isinstance(spec, Mapping):
+        raise DataError(f"{source}: channel {name!r} must be a column name or "
+                        f"{{ column = ..., unit = ... }}, got {spec!r}")
+    extra = [k for k in spec if k not in CHANNEL_KEYS]
+    if extra:
+        raise DataError(f"{source}: channel {name!r} has unknown key {extra[0]!r} "
+                        f"(known: {', '.join(CHANNEL_KEYS)})")
+    kinds = [k for k in ("column", "constant", "expr") if k in spec]
+    if len(kinds) != 1:
+        raise DataError(f"{source}: channel {name!r} needs exactly one of 'column', "
+                        f"'constant' or 'expr'" + (f", got {' and '.join(kinds)}" if kinds else ""))
+    where = f"{source}: channel {name!r}"
+    unit = spec.get("unit", CHANNELS[name].unit if name in CHANNELS else None)
+    if unit is None:
+        raise DataError(f"{where} needs 'column' and 'unit'" if "column" in spec
+                        else f"{where} needs a 'unit'")
+    if not isinstance(unit, str) or unit not in UNIT_SCALES:
+        raise DataError(f"{where} has unknown unit {unit!r} (known: {', '.join(UNIT_SCALES)})")
+    expected = CHANNELS[name].unit if name in CHANNELS else None
+    if expected is not None and storage_unit(unit) != expected:
+        raise DataError(f"{where} is declared in {unit!r}, which does not measure what "
+                        f"{name} is ({CHANNELS[name].description}, {expected})")
+    if name.endswith(CENSORED_SUFFIX) and name[:-len(CENSORED_SUFFIX)]:
+        raise DataError(f"{where}: names ending in {CENSORED_SUFFIX!r} are kept for the "
+                        "masks of censored channels")
+    note = spec.get("note", "")
+    if not isinstance(note, str):
+        raise DataError(f"{where}: 'note' must be a text")
+    levels = {k: _number(spec[k], f"{where}: {k!r}") for k in ("censored_above",
+                                                                  "censored_below") if k in spec}
+    if levels and "column" not in spec:
+        raise DataError(f"{where}: censored levels apply to measured columns only")
+    if "column" in spec:
+        col = spec["column"]
+        if not isinstance(col, str) or not col:
+            raise DataError(f"{where}: 'column' must be a column name, got {col!r}")
+        return ChannelSource(unit=unit, column=col, note=note, **levels)
+    if "constant" in spec:
+        return ChannelSource(unit=unit, constant=_number(spec["constant"],
+                                                         f"{where}: 'constant'"), note=note)
+    return ChannelSource(unit=unit, expr=Expression.parse(spec["expr"], where), note=note)
+
+
+def _order_derived(chans: dict[str, ChannelSource], source: str) -> None:
+    """Refuse expressions over unknown channels or in a cycle (reordering ``chans`` so that
+    every expression follows the channels it reads)."""
+    for name, s in chans.items():
+        if s.expr is not None:
+            unknown = sorted(s.expr.names - set(chans))
+            if unknown:
+                raise DataError(f"{source}: channel {name!r}: expression {s.expr.text!r} reads "
+                                f"{', '.join(map(repr, unknown))}, not a channel of the map "
+                                f"(known: {', '.join(chans)})")
+    done: list[str] = []
+    pending = dict(chans)
+    while pending:
+        ready = [n for n, s in pending.items()
+                 if s.expr is None or s.expr.names <= set(done)]
+        if not ready:
+            raise DataError(f"{source}: expressions of {', '.join(map(repr, pending))} read "
+                            "each other in a cycle")
+        for n in ready:
+            done.append(n)
+            del pending[n]
+    ordered = {n: chans[n] for n in done}
+    chans.clear()
+    chans.update(ordered)
 
 
 def _numeric_column(values, name: str, source: str) -> np.ndarray:
@@ -665,19 +879,71 @@ def _numeric_column(values, name: str, source: str) -> np.ndarray:
     return arr.astype(float).ravel()
 
 
+def _missing_columns(columns: Mapping[str, object], cmap: ChannelMap, source: str,
+                     hint: str = "") -> None:
+    """One error naming every column of the map the file lacks (and its channel)."""
+    wanted = [(cmap.time, "time")] + [(s.column, repr(n)) for n, s in cmap.channels.items()
+                                      if s.column is not None]
+    missing = [(c, n) for c, n in wanted if c not in columns]
+    if not missing:
+        return
+    import difflib
+
+    parts = []
+    for col, name in missing:
+        close = difflib.get_close_matches(col, [str(k) for k in columns], n=1)
+        parts.append(f"{col!r} (for {name}" + (f"; the file has {close[0]!r})" if close
+                                                else ")"))
+    what = "column" if len(missing) == 1 else f"{len(missing)} columns"
+    raise DataError(f"{source}: missing {what} {', '.join(parts)}{hint}")
+
+
 def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
-              metadata: dict) -> Dataset:
-    if cmap.time not in columns:
-        raise DataError(f"{source}: missing time column {cmap.time!r}")
-    time = _numeric_column(columns[cmap.time], cmap.time, source)
-    chans, units = {}, {}
-    for name, (col, unit) in cmap.channels.items():
-        if col not in columns:
-            raise DataError(f"{source}: missing column {col!r} (for channel {name!r})")
-        v = _numeric_column(columns[col], col, source)
+              metadata: dict, hint: str = "") -> Dataset:
+    """Columns of one file -> a checked dataset: units converted to acid's, assumed channels
+    evaluated, censored samples masked, sensors checked, the record resampled."""
+    _missing_columns(columns, cmap, source, hint)
+    time = to_base(_numeric_column(columns[cmap.time], cmap.time, source), cmap.time_unit)
+    raw: dict[str, np.ndarray] = {}
+    for name, s in cmap.channels.items():
+        if s.column is None:
+            continue
+        v = _numeric_column(columns[s.column], s.column, source)
         if v.shape != time.shape:
-            raise DataError(f"{source}: column {col!r} has {v.size} values, time has {time.size}")
-        chans[name], units[name] = v, unit
+            raise DataError(f"{source}: column {s.column!r} has {v.size} values, "
+                            f"time has {time.size}")
+        raw[name] = v
+    checks: list[dict] = []
+    chans, units, masks, censored = {}, {}, {}, {}
+    for name, s in cmap.channels.items():
+        stored = storage_unit(s.unit)
+        if s.column is not None:
+            v = raw[name]
+            if base_unit(s.unit) == "K" and np.isfinite(v).all() and v.size and \
+                    not temperature_unit_consistent(v, s.unit):
+                other = "K" if s.unit != "K" else "degC"
+                raise DataError(f"{source}: channel {name!r} is declared in {s.unit} but its "
+                                f"values ({v.min():.1f} .. {v.max():.1f}) look like {other}")
+            mask = _censor_mask(v, s)
+            if mask is not None:
+                masks[name + CENSORED_SUFFIX] = mask
+                censored[name] = {k: getattr(s, k) for k in ("censored_above",
+                                                              "censored_below")
+                                  if getattr(s, k) is not None}
+                censored[name].update(unit=s.unit, samples=int(mask.sum()))
+            for f in plausibility(name, v, s.unit, time):
+                checks.append(f)
+                warnings.warn(PlausibilityWarning(f"{source}: {f['message']}"), stacklevel=3)
+            chans[name] = convert(v, s.unit, stored) if stored != s.unit else v
+        elif s.constant is not None:
+            chans[name] = np.full(time.shape, convert(s.constant, s.unit, stored))
+        else:
+            values = s.expr.evaluate(chans, time.size)
+            chans[name] = convert(values, s.unit, stored) if stored != s.unit else values
+        units[name] = stored
+    extremes = _sensor_checks(cmap, chans, units, time, checks)
+    chans.update(masks)
+    units.update({m: "1" for m in masks})
     resample_record = None
     if cmap.Ts is not None:
         if not np.all(np.isfinite(time)) or np.any(np.diff(time) <= 0):
@@ -688,7 +954,8 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
         if note:
             resample_record["note"] = note
         if mode != "none":
-            chans = _resample(time, chans, cmap.Ts, source, mean=mode == "mean")
+            chans = _resample(time, chans, cmap.Ts, source, mean=mode in ("mean", "centered"),
+                              centered=mode == "centered")
             time = np.arange(len(next(iter(chans.values())))) * cmap.Ts + time[0]
         Ts = cmap.Ts
     else:
@@ -696,11 +963,54 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
         if not (math.isfinite(Ts) and Ts > 0):
             raise DataError(f"{source}: time column {cmap.time!r} is not strictly increasing "
                             "and finite")
-    meta = {"source": source, "channel_map": {k: list(v) for k, v in cmap.channels.items()}}
+    meta = {"source": source,
+            "channel_map": {k: s.describe() for k, s in cmap.channels.items()},
+            "checks": checks, "extremes": extremes}
+    assumed = {k: {"how": s.describe(), "note": s.note}
+               for k, s in cmap.channels.items() if s.assumed}
+    if assumed:
+        meta["assumed"] = assumed
+    if censored:
+        meta["censored"] = censored
     if resample_record is not None:
         meta["resample"] = resample_record
     meta.update(metadata)
     return Dataset(time=time, channels=chans, units=units, Ts=Ts, metadata=meta, source=source)
+
+
+def _sensor_checks(cmap: ChannelMap, chans: Mapping[str, np.ndarray],
+                   units: Mapping[str, str], time: np.ndarray, checks: list[dict]
+                   ) -> dict[str, tuple[float, float]]:
+    """Gaps in time, quantised sensors and channels held at an extreme (measured channels,
+    in the dataset's units, at the file's own rate) appended to ``checks``; returns each
+    measured channel's (min, max) for the censoring check across files."""
+    jump = gaps(time, cmap.Ts)
+    if jump is not None:
+        checks.append(jump)
+    extremes = {}
+    for name, s in cmap.channels.items():
+        if s.column is None:
+            continue
+        v = chans[name]
+        if v.size and np.isfinite(v).all():
+            extremes[name] = (float(v.min()), float(v.max()))
+        q = quantisation(name, v, units[name], time)
+        if q is not None:
+            checks.append(q)
+        checks.extend(held_extremes(name, v, units[name], time))
+    return extremes
+
+
+def _censor_mask(v: np.ndarray, s: ChannelSource) -> np.ndarray | None:
+    """1.0 where a measured value sits at or beyond a declared clipping level, else 0.0."""
+    if s.censored_above is None and s.censored_below is None:
+        return None
+    mask = np.zeros(v.shape, dtype=bool)
+    for level, above in ((s.censored_above, True), (s.censored_below, False)):
+        if level is not None:
+            tol = 1e-9 * max(1.0, abs(level))
+            mask |= (v >= level - tol) if above else (v <= level + tol)
+    return mask.astype(float)
 
 
 def _resample_mode(time: np.ndarray, cmap: ChannelMap, source: str) -> tuple[str, str | None]:
@@ -714,8 +1024,9 @@ def _resample_mode(time: np.ndarray, cmap: ChannelMap, source: str) -> tuple[str
     if cmap.resample == "none":
         return "none", None
     if at_Ts:
-        if cmap.resample == "mean":
-            raise DataError(f"{source}: resample = 'mean' in {cmap.source} on data already "
+        if cmap.resample in ("mean", "centered"):
+            raise DataError(f"{source}: resample = {cmap.resample!r} in {cmap.source} on data "
+                            f"already "
                             f"sampled every Ts = {Ts:g} s would average outputs and powers a "
                             "second time; set resample = 'none'")
         if cmap.resample is None:
@@ -737,13 +1048,17 @@ def _is_interval_mean(name: str) -> bool:
 
 
 def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
-              source: str, mean: bool = True) -> dict[str, np.ndarray]:
+              source: str, mean: bool = True, centered: bool = False
+              ) -> dict[str, np.ndarray]:
     """Resample a finely sampled record onto a Ts grid following the sample convention.
 
     States, inputs and exogenous signals are sampled at t_k (linear interpolation); with
     ``mean``, outputs and powers become their mean over [t_k, t_k + Ts), from the cumulative
     trapezoidal integral, so energies are preserved (a CoolSim export at 0.01 s keeps its
-    P * dt); without it they are sampled at t_k too.
+    P * dt); without it they are sampled at t_k too. With ``centered``, states, inputs and
+    exogenous signals are their mean over [t_k - Ts/2, t_k + Ts/2) instead (clipped to the
+    record at its ends): still aligned with t_k, with a quantised or noisy sensor's steps
+    averaged out. A censoring mask is 1 on every interval that holds a censored sample.
     """
     from scipy.integrate import cumulative_trapezoid
 
@@ -753,12 +1068,60 @@ def _resample(time: np.ndarray, chans: dict[str, np.ndarray], Ts: float,
     edges = time[0] + Ts * np.arange(n + 1)
     out = {}
     for name, v in chans.items():
-        if mean and _is_interval_mean(name):
+        if name.endswith(CENSORED_SUFFIX):
+            hits = np.concatenate(([0.0], np.cumsum(v)))
+            idx = np.searchsorted(time, edges, side="left")
+            out[name] = (np.diff(hits[idx]) > 0).astype(float)
+        elif mean and _is_interval_mean(name):
             integral = np.interp(edges, time, cumulative_trapezoid(v, time, initial=0.0))
             out[name] = np.diff(integral) / Ts
+        elif centered:
+            lo = np.maximum(edges[:-1] - Ts / 2, time[0])
+            hi = np.minimum(edges[:-1] + Ts / 2, time[-1])
+            integral = cumulative_trapezoid(v, time, initial=0.0)
+            out[name] = (np.interp(hi, time, integral) - np.interp(lo, time, integral)) / (hi - lo)
         else:
             out[name] = np.interp(edges[:-1], time, v)
     return out
+
+
+def _read_csv_columns(path: Path, cmap: ChannelMap) -> tuple[dict[str, object], str]:
+    """The columns of a CSV file (``.gz`` decompressed) as the map says it is written, and a
+    hint for a missing-column error (a separator or encoding that looks wrong)."""
+    import pandas as pd
+
+    try:
+        df = pd.read_csv(path, sep=cmap.sep, encoding=cmap.encoding, decimal=cmap.decimal,
+                         compression="gzip" if path.name.lower().endswith(".gz") else None,
+                         low_memory=False)
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: cannot parse CSV: not {cmap.encoding} text (byte "
+                        f"0x{exc.object[exc.start]:02x} at {exc.start}); set encoding in the "
+                        f"map (e.g. encoding = \"latin-1\")") from None
+    except Exception as exc:  # noqa: BLE001 - any parser failure is the file's fault
+        raise DataError(f"{path}: cannot parse CSV ({exc.__class__.__name__}: "
+                        f"{_first_line(exc)})") from None
+    wanted = set(cmap.columns)
+    cols: dict[str, object] = {}
+    for c in df.columns:
+        key = str(c).strip()
+        if key in cols and key in wanted:
+            raise DataError(f"{path}: column {key!r} appears more than once")
+        if key not in wanted:
+            cols.setdefault(key, None)
+            continue
+        try:
+            cols[key] = pd.to_numeric(df[c], errors="raise").to_numpy(dtype=float)
+        except (ValueError, TypeError):
+            cols[key] = df[c].to_numpy(dtype=object)  # refused by name if the map uses it
+    hint = ""
+    if len(df.columns) == 1:
+        header = str(df.columns[0])
+        for sep in (";", "\t", ",", "|"):
+            if sep != cmap.sep and sep in header:
+                hint = f" (the header holds {sep!r}: set sep = {sep!r} in the map)"
+                break
+    return cols, hint
 
 
 def _to_degC(ds: Dataset) -> Dataset:
@@ -771,30 +1134,14 @@ def _to_degC(ds: Dataset) -> Dataset:
 
 
 def from_csv(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
-    """Import a CSV file (header row of column names) through an explicit channel map."""
-    import pandas as pd
-
+    """Import a CSV file (header row of column names; ``.gz`` read transparently) through an
+    explicit channel map."""
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: CSV file not found")
-    try:
-        df = pd.read_csv(path)
-    except Exception as exc:  # noqa: BLE001 - any parser failure is the file's fault
-        raise DataError(f"{path}: cannot parse CSV ({exc.__class__.__name__}: "
-                        f"{_first_line(exc)})") from None
-    wanted = {cmap.time, *(c for c, _ in cmap.channels.values())}
-    cols: dict[str, object] = {}
-    for c in df.columns:
-        key = str(c).strip()
-        if key in cols and key in wanted:
-            raise DataError(f"{path}: column {key!r} appears more than once")
-        if key not in wanted:
-            continue
-        try:
-            cols[key] = pd.to_numeric(df[c], errors="raise").to_numpy(dtype=float)
-        except (ValueError, TypeError):
-            cols[key] = df[c].to_numpy(dtype=object)  # refused by name if the map uses it
-    return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "csv"}).validate())
+    cols, hint = _read_csv_columns(path, cmap)
+    cols = {k: v for k, v in cols.items() if v is not None}
+    return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "csv"}, hint).validate())
 
 
 def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
@@ -808,7 +1155,7 @@ def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
         raise DataError(f"{path}: MAT file not found")
     import scipy.io
 
-    wanted = [cmap.time] + [c for c, _ in cmap.channels.values()]
+    wanted = cmap.columns
     try:
         major, _ = scipy.io.matlab.matfile_version(path)
         cols = _read_mat73(path, wanted) if major == 2 else _read_mat5(path, wanted)
@@ -818,6 +1165,75 @@ def from_mat(path: str | os.PathLike, cmap: ChannelMap) -> Dataset:
         raise DataError(f"{path}: cannot read as a MAT file ({exc.__class__.__name__}: "
                         f"{_first_line(exc)})") from None
     return _to_degC(_assemble(cols, cmap, str(path), {"imported_from": "mat"}).validate())
+
+
+def log_kind(path: str | os.PathLike) -> str:
+    """``"csv"`` or ``"mat"`` from a file's suffix; ``DataError`` for anything else."""
+    name = Path(path).name.lower()
+    if name.endswith(CSV_SUFFIXES):
+        return "csv"
+    if name.endswith(MAT_SUFFIXES):
+        return "mat"
+    suffix = "".join(Path(path).suffixes[-2:]) or "(none)"
+    raise DataError(f"{path}: unknown file type {suffix!r} "
+                    f"(expected {', '.join(CSV_SUFFIXES + MAT_SUFFIXES)})")
+
+
+def experiment_name(path: str | os.PathLike) -> str:
+    """A file's name without its log suffixes (``TripA01.csv.gz`` -> ``TripA01``)."""
+    name = Path(path).name
+    for suffix in sorted(CSV_SUFFIXES + MAT_SUFFIXES, key=len, reverse=True):
+        if name.lower().endswith(suffix):
+            return name[:-len(suffix)] or name
+    return name
+
+
+def import_logs(paths: Iterable[str | os.PathLike], cmap: ChannelMap,
+                names: Iterable[str] | None = None) -> Dataset:
+    """Import several logs through one map as one dataset, one experiment per file.
+
+    Each experiment keeps its name (the file name without suffixes, or ``names``), source,
+    first time stamp and the findings of its checks in ``metadata["experiments"]``;
+    ``metadata["censoring"]`` holds the levels found censored across the files
+    (:func:`acid.logcheck.censored_across`). Regressors never cross an experiment.
+    """
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise DataError("no log to import")
+    names = list(names) if names is not None else [experiment_name(p) for p in paths]
+    if len(names) != len(paths):
+        raise DataError(f"{len(names)} names for {len(paths)} files")
+    for i, n in enumerate(names):  # the same file name in two folders: keep both apart
+        if n in names[:i]:
+            names[i] = f"{n}-{names[:i + 1].count(n)}"
+    parts, records = [], []
+    for name, path in zip(names, paths, strict=True):
+        ds = from_csv(path, cmap) if log_kind(path) == "csv" else from_mat(path, cmap)
+        parts.append(ds)
+        records.append({"name": name, "source": str(path), "samples": len(ds),
+                        "duration_s": ds.duration, "t_start_s": float(ds.time[0]),
+                        "imported_from": ds.metadata.get("imported_from"),
+                        "resample": ds.metadata.get("resample"),
+                        "censored": ds.metadata.get("censored", {}),
+                        "extremes": ds.metadata.get("extremes", {}),
+                        "checks": ds.metadata.get("checks", [])})
+    out = Dataset.concatenate(parts) if len(parts) > 1 else parts[0]
+    first = parts[0].metadata
+    meta = {k: first[k] for k in ("imported_from", "channel_map", "assumed", "resample")
+            if k in first}
+    meta.update(source=str(paths[0]) if len(paths) == 1 else f"{len(paths)} files",
+                experiments=records, censoring=censored_across(records))
+    declared = {n: {k: getattr(s, k) for k in ("censored_above", "censored_below")
+                    if getattr(s, k) is not None} | {"unit": s.unit}
+                for n, s in cmap.channels.items()
+                if s.censored_above is not None or s.censored_below is not None}
+    if declared:
+        meta["censored"] = declared
+    if cmap.description:
+        meta["description"] = cmap.description
+    out.metadata = meta
+    out.source = meta["source"]
+    return out
 
 
 def _read_mat5(path: Path, wanted: list[str]) -> dict[str, object]:

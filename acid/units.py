@@ -13,9 +13,6 @@ ZERO_CELSIUS = 273.15
 """Offset between the Celsius and Kelvin scales, K."""
 
 TEMPERATURE_UNITS = ("degC", "K")
-KNOWN_UNITS = (
-    "degC", "K", "kg/s", "m/s", "W", "J", "rpm", "1", "kg/kg", "Pa", "s", "%", "W/K",
-)
 
 # Plausible ranges used to catch a temperature whose values contradict its declared unit.
 _PLAUSIBLE = {"degC": (-60.0, 150.0), "K": (213.15, 423.15)}
@@ -52,36 +49,99 @@ def convert(values, from_unit: str, to_unit: str):
     return from_base(to_base(values, from_unit), to_unit)
 
 
-#: Units acid converts at its edges (FMU maps, imports): unit -> (base unit, factor, offset),
-#: with ``value_in_base = value * factor + offset``. The base units are acid's inside units:
-#: K, W, J, kg/s, m/s, rpm, 1, kg/kg, Pa, s, W/K.
+#: The one unit table of acid's edges (import maps, FMU maps, FMU export):
+#: unit -> (base unit, factor, offset), with ``value_in_base = value * factor + offset``.
+#: The base units are acid's inside units (K, W, kg/s, m/s, ...); datasets store every
+#: channel in its base unit, except temperatures, which they store in degC (``storage_unit``).
 UNIT_SCALES: dict[str, tuple[str, float, float]] = {
+    # temperature
     "K": ("K", 1.0, 0.0),
     "degC": ("K", 1.0, ZERO_CELSIUS),
+    "\u00b0C": ("K", 1.0, ZERO_CELSIUS),
     "degF": ("K", 5.0 / 9.0, ZERO_CELSIUS - 32.0 * 5.0 / 9.0),
+    "\u00b0F": ("K", 5.0 / 9.0, ZERO_CELSIUS - 32.0 * 5.0 / 9.0),
+    # power and energy
     "W": ("W", 1.0, 0.0),
     "kW": ("W", 1e3, 0.0),
     "J": ("J", 1.0, 0.0),
     "kJ": ("J", 1e3, 0.0),
     "MJ": ("J", 1e6, 0.0),
+    "Wh": ("J", 3600.0, 0.0),
+    "kWh": ("J", 3.6e6, 0.0),
+    # mass flow
     "kg/s": ("kg/s", 1.0, 0.0),
     "g/s": ("kg/s", 1e-3, 0.0),
+    "kg/min": ("kg/s", 1.0 / 60.0, 0.0),
     "kg/h": ("kg/s", 1.0 / 3600.0, 0.0),
+    # volume flow
+    "m3/s": ("m3/s", 1.0, 0.0),
+    "m3/h": ("m3/s", 1.0 / 3600.0, 0.0),
+    "l/min": ("m3/s", 1e-3 / 60.0, 0.0),
+    "l/h": ("m3/s", 1e-3 / 3600.0, 0.0),
+    # speed, acceleration, length
     "m/s": ("m/s", 1.0, 0.0),
     "km/h": ("m/s", 1.0 / 3.6, 0.0),
+    "mph": ("m/s", 0.44704, 0.0),
+    "m/s2": ("m/s2", 1.0, 0.0),
+    "m/s^2": ("m/s2", 1.0, 0.0),
+    "m": ("m", 1.0, 0.0),
+    "km": ("m", 1e3, 0.0),
+    # rotation, torque
     "rpm": ("rpm", 1.0, 0.0),
     "1/min": ("rpm", 1.0, 0.0),
     "rad/s": ("rpm", 30.0 / np.pi, 0.0),
+    "Nm": ("Nm", 1.0, 0.0),
+    # fractions and humidity
     "1": ("1", 1.0, 0.0),
     "%": ("1", 0.01, 0.0),
+    "%RH": ("1", 0.01, 0.0),
     "kg/kg": ("kg/kg", 1.0, 0.0),
     "g/kg": ("kg/kg", 1e-3, 0.0),
+    # pressure
     "Pa": ("Pa", 1.0, 0.0),
+    "hPa": ("Pa", 1e2, 0.0),
+    "mbar": ("Pa", 1e2, 0.0),
     "kPa": ("Pa", 1e3, 0.0),
     "bar": ("Pa", 1e5, 0.0),
+    # time
     "s": ("s", 1.0, 0.0),
+    "ms": ("s", 1e-3, 0.0),
+    "min": ("s", 60.0, 0.0),
+    "h": ("s", 3600.0, 0.0),
+    # heat transfer, heat capacity, irradiance
     "W/K": ("W/K", 1.0, 0.0),
+    "J/K": ("J/K", 1.0, 0.0),
+    "kJ/K": ("J/K", 1e3, 0.0),
+    "W/m2": ("W/m2", 1.0, 0.0),
+    "W/m^2": ("W/m2", 1.0, 0.0),
+    # electrical
+    "V": ("V", 1.0, 0.0),
+    "A": ("A", 1.0, 0.0),
 }
+
+#: SI dimensions of each base unit (FMI ``BaseUnit`` exponents; rpm counts as rad/s), so an
+#: exported FMU declares its units and an FMU's own unit definitions are understood.
+BASE_DIMENSIONS: dict[str, dict[str, int]] = {
+    "K": {"K": 1}, "W": {"kg": 1, "m": 2, "s": -3}, "J": {"kg": 1, "m": 2, "s": -2},
+    "kg/s": {"kg": 1, "s": -1}, "m3/s": {"m": 3, "s": -1}, "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2}, "m": {"m": 1}, "rpm": {"rad": 1, "s": -1},
+    "Nm": {"kg": 1, "m": 2, "s": -2}, "1": {}, "kg/kg": {}, "Pa": {"kg": 1, "m": -1, "s": -2},
+    "s": {"s": 1}, "W/K": {"kg": 1, "m": 2, "s": -3, "K": -1},
+    "J/K": {"kg": 1, "m": 2, "s": -2, "K": -1}, "W/m2": {"kg": 1, "s": -3},
+    "V": {"kg": 1, "m": 2, "s": -3, "A": -1}, "A": {"A": 1},
+}
+
+#: Units a stored dataset's channel may carry: degC (temperatures) and the base units; "%"
+#: is kept for datasets written before the table existed.
+KNOWN_UNITS: tuple[str, ...] = tuple(dict.fromkeys(
+    ["degC", "K", *(b for b, _, _ in UNIT_SCALES.values()), "%"]))
+
+
+def storage_unit(unit: str) -> str:
+    """The unit a dataset stores a channel declared in ``unit`` in: degC for temperatures,
+    else acid's base unit (``"km/h"`` -> ``"m/s"``, ``"kW"`` -> ``"W"``)."""
+    base = base_unit(unit)
+    return "degC" if base == "K" else base
 
 
 def base_unit(unit: str) -> str:
@@ -105,13 +165,17 @@ def from_base(values, unit: str):
 
 
 def temperature_unit_consistent(values: np.ndarray, unit: str) -> bool:
-    """True when every finite value lies in the plausible range of ``unit``.
+    """True when every finite value lies in the plausible range of ``unit`` (-60 .. 150 degC
+    in any temperature unit of ``UNIT_SCALES``).
 
     Catches the common slip of storing kelvin under a degC label or vice versa: a cabin at
     300 degC or at 25 K is not a cabin.
     """
-    lo, hi = _PLAUSIBLE[unit]
     v = np.asarray(values, dtype=float)
+    if unit not in _PLAUSIBLE:
+        v = K2C(to_base(v, unit))
+        unit = "degC"
+    lo, hi = _PLAUSIBLE[unit]
     return bool(np.all((v >= lo) & (v <= hi)))
 
 

@@ -86,6 +86,7 @@ def handle_errors(func: Callable) -> Callable:
     def wrapper(*args, **kwargs):
         with InterruptGuard() as guard:
             try:
+                kwargs = {k: resolve_examples(v) for k, v in kwargs.items()}
                 return func(*args, **kwargs)
             except AcidError as exc:
                 error_line(exc)
@@ -108,6 +109,21 @@ def handle_errors(func: Callable) -> Callable:
                 raise typer.Exit(code=1) from None
 
     return wrapper
+
+
+def resolve_examples(value):
+    """``example:NAME`` (a path or text option, or a list of them) as the bundled file it
+    names (``acid.examples``), the same type kept; anything else unchanged. Every command's
+    arguments pass through here (``handle_errors``), so a bundled file is addressable
+    wherever a file is read, from any folder."""
+    from acid import examples
+
+    if isinstance(value, (list, tuple)):
+        return type(value)(resolve_examples(v) for v in value)
+    if not examples.is_reference(value):
+        return value
+    path = examples.resolve(value)
+    return path if isinstance(value, Path) else str(path)
 
 
 def require(condition: bool, option: str, message: str) -> None:
@@ -188,6 +204,9 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
         written.extend((label, d / n) for n in names)
 
     for label, p in written:
+        if _bundled(p):
+            raise OutputError(f"{label} {p}: is a file bundled with acid; write elsewhere "
+                              "(`acid examples copy NAME` copies one to edit)")
         try:
             check_writable_file(p)
         except OutputError as exc:
@@ -202,6 +221,12 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
                 by = "twice" if other == label else f"also by {other} ({q})"
                 raise OutputError(f"{label} {p}: would be written {by}; give each output "
                                   "its own path")
+
+
+def _bundled(p: Path) -> bool:
+    from acid.examples import is_bundled
+
+    return is_bundled(p)
 
 
 def _check_folder_writable(label: str, d: Path) -> None:

@@ -54,3 +54,7 @@ app.command(name="export-c")(export_c.export_c_cmd)
 from acid_cli import sweep  # noqa: E402
 
 app.command(name="sweep")(sweep.sweep)
+
+from acid_cli import examples  # noqa: E402
+
+app.command(name="examples")(examples.examples)

@@ -107,6 +107,12 @@ def _write(name: str, text: str) -> Callable[[Path], None]:
     return make
 
 
+def _write_bytes(name: str, data: bytes) -> Callable[[Path], None]:
+    def make(w: Path) -> None:
+        (w / name).write_bytes(data)
+    return make
+
+
 def _params(name: str, **changes) -> Callable[[Path], None]:
     """A params.json from the paper preset with some keys replaced (raw JSON values)."""
     def make(w: Path) -> None:
@@ -431,6 +437,81 @@ CASES: list[Case] = [
     Case("import-unknown-suffix", "csv", ("import", "{w}/afile", *IMP[2:]), ("afile",)),
     Case("import-min-samples-zero", "options", (*IMP, "--min-samples", "0"),
          ("--min-samples",)),
+    # ------------------------------------------ real logs (issue 20), examples (issue 23)
+    Case("map-sep-two-chars", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "sep"), _write("m.toml", _map_toml('sep = ";;"'))),
+    Case("map-decimal-semicolon", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "decimal"), _write("m.toml", _map_toml('decimal = ";"'))),
+    Case("map-encoding-unknown", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "klingon-8"), _write("m.toml", _map_toml('encoding = "klingon-8"'))),
+    Case("map-time-unit-not-time", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "time unit", "km/h"),
+         _write("m.toml", _map_toml().replace('time = "t"',
+                                              'time = { column = "t", unit = "km/h" }'))),
+    Case("map-unit-other-quantity", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "W_bl", "kW"),
+         _write("m.toml", _map_toml().replace('"Wbl", unit = "kg/s"', '"Wbl", unit = "kW"'))),
+    Case("map-expr-python", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "T_ain", "__import__"),
+         _write("m.toml", _map_toml().replace('T_ain = { column = "Tain", unit = "degC" }',
+                                              "T_ain = { expr = \"__import__('os')\", "
+                                              'unit = "degC" }'))),
+    Case("map-expr-unknown-channel", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "T_ain", "T_nope"),
+         _write("m.toml", _map_toml().replace('T_ain = { column = "Tain", unit = "degC" }',
+                                              'T_ain = { expr = "T_nope + 1", unit = "degC" }'))),
+    Case("map-expr-cycle", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "cycle"),
+         _write("m.toml", _map_toml().replace(
+             'T_ain = { column = "Tain", unit = "degC" }',
+             'T_ain = { expr = "T_evap + 1", unit = "degC" }').replace(
+             'T_evap = { column = "Tevap", unit = "degC" }',
+             'T_evap = { expr = "T_ain - 1", unit = "degC" }'))),
+    Case("map-constant-text", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "W_bl", "constant"),
+         _write("m.toml", _map_toml().replace('W_bl = { column = "Wbl", unit = "kg/s" }',
+                                              'W_bl = { constant = "0.1", unit = "kg/s" }'))),
+    Case("map-censored-on-constant", "map", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("m.toml", "W_bl", "censored"),
+         _write("m.toml", _map_toml().replace(
+             'W_bl = { column = "Wbl", unit = "kg/s" }',
+             'W_bl = { constant = 0.1, unit = "kg/s", censored_above = 0.2 }'))),
+    Case("csv-latin1-read-as-utf8", "csv", ("import", "{w}/deg.csv", *IMP[2:]),
+         ("deg.csv", "encoding"),
+         _write_bytes("deg.csv", b"t,Tcab,Tevap,Tain,Wbl,Tset,Tint,Tshell,Note \xb0C\n"
+                                 b"0,20,5,8,0.1,5,25,30,1\n5,20,5,8,0.1,5,25,30,2\n")),
+    Case("csv-semicolons-read-with-commas", "csv", ("import", "{w}/semi.csv", *IMP[2:]),
+         ("semi.csv", "sep = ';'"),
+         _write("semi.csv", "t;Tcab;Tevap;Tain;Wbl;Tset;Tint;Tshell\n"
+                            "0;20;5;8;0.1;5;25;30\n5;20;5;8;0.1;5;25;30\n")),
+    Case("csv-missing-two-columns", "csv", (*IMP[:2], "--map", "{w}/m.toml", *IMP[4:]),
+         ("run.csv", "'Tint2'", "'Tshell2'", "T_int", "T_shell"),
+         _write("m.toml", _map_toml().replace('"Tint"', '"Tint2"').replace('"Tshell"',
+                                                                           '"Tshell2"'))),
+    Case("csv-gz-damaged", "csv", ("import", "{w}/bad.csv.gz", *IMP[2:]), ("bad.csv.gz",),
+         _write("bad.csv.gz", "not gzip at all\n")),
+    Case("import-same-file-twice", "csv", ("import", "{w}/run.csv", "{w}/run.csv", *IMP[2:]),
+         ("run.csv", "twice")),
+    Case("import-require-lacking-channels", "map", (*IMP, "--require", "econ"),
+         ("map.toml", "'w_cab'", "'v_veh'", "'T_amb'", "'P_comp'")),
+    Case("import-require-bad-name", "options", (*IMP, "--require", "T_cab,a/b"),
+         ("--require", "a/b")),
+    Case("import-unknown-example", "csv", ("import", "example:nope.csv.gz", *IMP[2:]),
+         ("example:nope.csv.gz", "acid examples")),
+    Case("import-out-is-bundled-example", "collision",
+         (*IMP[:4], "--out", "example:sample_log_map.toml"), ("--out", "bundled")),
+    Case("fit-missing-several-channels", "hdf5", ("fit", "{w}/b.h5", "--out", "{w}/q.json"),
+         ("b.h5", "'T_int'", "'T_shell'"),
+         _h5("b.h5", lambda f: (f["channels"].__delitem__("T_int"),
+                                f["channels"].__delitem__("T_shell")))),
+    Case("examples-unknown-action", "options", ("examples", "frob"), ("ACTION", "frob")),
+    Case("examples-copy-without-name", "options", ("examples", "copy"), ("NAME",)),
+    Case("examples-copy-unknown", "options", ("examples", "copy", "nope.toml", "{w}/n.toml"),
+         ("nope.toml",)),
+    Case("examples-copy-onto-existing", "output",
+         ("examples", "copy", "sweep_econ.toml", "{w}/prev.json"), ("prev.json", "--force")),
+    Case("examples-copy-under-a-file", "output",
+         ("examples", "copy", "sweep_econ.toml", "{w}/afile/x.toml"), ("DEST", "afile")),
     # ------------------------------------------------------------------- options
     Case("validate-seed-negative", "options", (*V, "--seed", "-1"), ("--seed",)),
     Case("validate-starts-zero", "options", (*V[:4], "--starts", "0"), ("--starts",)),

@@ -279,17 +279,39 @@ def csv_files(draw):
                 row.append(level[c])
         rows.append(",".join(row))
     text = ",".join(cols) + "\n" + "\n".join(rows) + "\n"
-    return _text_writer(text)
+    form = draw(st.sampled_from(["plain", "plain", "car", "gzip", "gzip-garbage"]))
+    if form == "plain":
+        return _text_writer(text)
+    # a car's log: ';' between columns, decimal comma, a Latin-1 degree sign, maybe gzip'd
+    car = text.replace(",", ";").replace(".", ",").replace("Tcab", "Tcab \u00b0C", 0)
+    data = car.encode("latin-1", errors="replace") if form == "car" else text.encode()
+    if form == "gzip":
+        import gzip
+
+        data = gzip.compress(car.encode("latin-1", errors="replace"), mtime=0)
+        if draw(st.booleans()):
+            data = data[:draw(st.integers(0, len(data)))]
+    elif form == "gzip-garbage":
+        data = b"\x1f\x8b" + draw(st.binary(max_size=60))
+    return _bytes_writer(data)
 
 
 csv_maps = st.builds(
-    lambda Ts, resample, tunit: {"time": "t", **({"Ts": Ts} if Ts is not None else {}),
-                                 **({"resample": resample} if resample and Ts else {}),
-                                 "channels": {"T_cab": {"column": "Tcab", "unit": tunit},
-                                              "W_bl": {"column": "Wbl", "unit": "kg/s"},
-                                              "T_evap": "Tevap"}},
+    lambda Ts, resample, tunit, fmt, extra: {
+        "time": "t", **({"Ts": Ts} if Ts is not None else {}),
+        **({"resample": resample} if resample and Ts else {}), **fmt,
+        "channels": {"T_cab": {"column": "Tcab", "unit": tunit},
+                     "W_bl": {"column": "Wbl", "unit": "kg/s"}, "T_evap": "Tevap", **extra}},
     st.sampled_from([None, 5.0, 1.0, 0.5, 100.0, 1e-3]),
-    st.sampled_from([None, "mean", "sample", "none"]), st.sampled_from(["degC", "degC", "K"]))
+    st.sampled_from([None, "mean", "centered", "sample", "none"]),
+    st.sampled_from(["degC", "degC", "K", "degF"]),
+    st.sampled_from([{}, {}, {"sep": ";", "decimal": ",", "encoding": "latin-1"},
+                     {"sep": ";", "encoding": "utf-8"}, {"decimal": ","}]),
+    st.sampled_from([{}, {"T_ain": {"expr": "T_evap + 1", "unit": "degC"}},
+                     {"T_ain": {"expr": "log(T_cab) / (T_evap - T_evap)", "unit": "degC"}},
+                     {"v_veh": {"constant": 10.0, "unit": "km/h"}},
+                     {"P_comp": {"column": "other", "unit": "kW", "censored_above": 1.0}},
+                     {"T_int": {"column": "other", "unit": "degC", "censored_below": 20}}]))
 
 
 @st.composite
@@ -406,8 +428,11 @@ def mat_with_map(draw):
 
 
 # ----------------------------------------------------------------------- channel map
-VALID_MAP = {"time": "t", "Ts": 5.0, "resample": "mean",
-             "channels": {"T_cab": {"column": "Tcab", "unit": "degC"}, "W_bl": "Wbl"}}
+VALID_MAP = {"time": "t", "Ts": 5.0, "resample": "mean", "sep": ";", "encoding": "latin-1",
+             "decimal": ",", "channels": {
+                 "T_cab": {"column": "Tcab", "unit": "degC", "censored_above": 39.84},
+                 "W_bl": "Wbl", "T_ain": {"expr": "min(T_cab, 30) - 2", "unit": "degC"},
+                 "v_veh": {"constant": 0.0, "unit": "km/h"}}}
 
 
 @st.composite
@@ -429,7 +454,10 @@ def mutated(draw, base: dict, keys: list[str], value: st.SearchStrategy):
 
 
 map_keys = ["time", "Ts", "resample", "channels", "channels.T_cab", "channels.T_cab.column",
-            "channels.T_cab.unit", "channels.W_bl", "extra", "channels.a/b"]
+            "channels.T_cab.unit", "channels.W_bl", "extra", "channels.a/b", "sep",
+            "encoding", "decimal", "description", "time.unit", "channels.T_ain.expr",
+            "channels.T_ain.unit", "channels.T_cab.censored_above", "channels.W_bl.constant",
+            "channels.T_cab.note"]
 
 
 @st.composite

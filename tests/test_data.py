@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -308,7 +309,8 @@ def test_channel_map_from_toml_and_errors(tmp_path):
 
     cmap = ChannelMap.from_file(datasets_dir() / "examples" / "coolsim_map.toml")
     assert cmap.time == "sim.time" and cmap.Ts == 5.0
-    assert cmap.channels["T_cab"] == ("sim.T_cabin_air", "K")
+    assert (cmap.channels["T_cab"].column, cmap.channels["T_cab"].unit) == ("sim.T_cabin_air",
+                                                                            "K")
     bad = tmp_path / "bad.toml"
     bad.write_text('time = "t"\n[channels]\nT_cab = { column = "x", unit = "furlong" }\n')
     with pytest.raises(DataError) as e:
@@ -463,3 +465,33 @@ def test_mat_struct_variable_names_its_fields(tmp_path):
     with pytest.raises(DataError) as e:
         from_mat(src, cmap)
     _assert_one_line(e, "'sim' is a struct", "'sim.")
+
+
+def test_every_map_key_is_read_and_documented(tmp_path):
+    from acid.data import CHANNEL_KEYS, MAP_KEYS, import_logs
+
+    d = {"description": "my car", "time": {"column": "t_ms", "unit": "ms"}, "Ts": 1.0,
+         "resample": "centered", "sep": ";", "encoding": "cp1252", "decimal": ",",
+         "channels": {
+             "T_cab": {"column": "Cabin °C", "unit": "degC", "censored_above": 39.0,
+                       "censored_below": 10.0, "note": "roof sensor"},
+             "W_bl": {"constant": 0.1, "unit": "kg/s"},
+             "T_ain": {"expr": "T_cab - 10", "unit": "degC"}}}
+    assert set(d) == set(MAP_KEYS)
+    assert set(d["channels"]["T_cab"]) | {"constant", "expr"} == set(CHANNEL_KEYS)
+    cmap = ChannelMap.from_dict(d)
+    assert (cmap.time, cmap.time_unit, cmap.sep, cmap.encoding, cmap.decimal) == (
+        "t_ms", "ms", ";", "cp1252", ",")
+    src = tmp_path / "log.csv"
+    rows = [f"{k * 100};{40 - k * 0.1:.2f}".replace(".", ",") for k in range(400)]
+    src.write_bytes(("t_ms;Cabin °C\r\n" + "\r\n".join(rows) + "\r\n").encode("cp1252"))
+    ds = import_logs([src], cmap)
+    assert ds.metadata["description"] == "my car" and ds.Ts == 1.0 and len(ds) == 39
+    assert ds.metadata["censored"]["T_cab"] == {"censored_above": 39.0,
+                                                "censored_below": 10.0, "unit": "degC"}
+    assert ds["T_cab_censored"][:3].tolist() == [1.0, 1.0, 0.0]   # 39.0 at t = 1.0 s
+    assert set(ds.assumed) == {"W_bl", "T_ain"}
+    doc = (Path(__file__).parents[1] / "datasets" / "FORMAT.md").read_text()
+    section = doc[doc.index("## Importing your own data"):doc.index("## FMU maps")]
+    for key in (*MAP_KEYS, *CHANNEL_KEYS):
+        assert f"{key} =" in section or f"`{key}`" in section or f"[{key}]" in section, key

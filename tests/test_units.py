@@ -1,10 +1,87 @@
-"""acid.units.parse_unit: compound units of declared models (factor to SI, dimensions)."""
+"""acid.units: the one unit table (``UNIT_SCALES``) that import maps and FMU maps share, and
+``parse_unit`` for the compound units of declared models (factor to SI, dimensions)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from acid.units import parse_unit
+from acid.data import ChannelMap
+from acid.plant.fmu import FmuMap, fmi_unit_definition
+from acid.units import (
+    BASE_DIMENSIONS,
+    KNOWN_UNITS,
+    UNIT_SCALES,
+    base_unit,
+    convert,
+    from_base,
+    parse_unit,
+    storage_unit,
+    temperature_unit_consistent,
+    to_base,
+)
+
+
+@pytest.mark.parametrize("unit", list(UNIT_SCALES))
+def test_every_unit_round_trips_and_has_dimensions(unit):
+    x = np.array([0.0, 1.5, -2.25, 300.0])
+    assert np.allclose(from_base(to_base(x, unit), unit), x)
+    assert base_unit(unit) in BASE_DIMENSIONS          # an exported FMU can declare it
+    assert storage_unit(unit) in KNOWN_UNITS          # a dataset can store it
+    exps, factor, offset = fmi_unit_definition(unit)
+    assert exps == BASE_DIMENSIONS[base_unit(unit)] and factor > 0
+
+
+@pytest.mark.parametrize(("value", "unit", "to", "expected"), [
+    (36.0, "km/h", "m/s", 10.0), (2.5, "kW", "W", 2500.0), (360.0, "kg/h", "kg/s", 0.1),
+    (100.0, "g/s", "kg/s", 0.1), (212.0, "degF", "degC", 100.0), (20.0, "°C", "K", 293.15),
+    (2.0, "bar", "kPa", 200.0), (1013.0, "mbar", "Pa", 101300.0), (50.0, "%RH", "1", 0.5),
+    (1.0, "kWh", "J", 3.6e6), (60.0, "mph", "km/h", 96.56064), (1.5, "min", "s", 90.0),
+    (250.0, "ms", "s", 0.25), (800.0, "W/m^2", "W/m2", 800.0), (3.0, "kJ/K", "J/K", 3000.0),
+    (60.0, "l/min", "m3/s", 1e-3), (60.0, "rpm", "rad/s", 2 * np.pi),
+])
+def test_conversions(value, unit, to, expected):
+    assert convert(value, unit, to) == pytest.approx(expected)
+
+
+def test_storage_units_are_degC_for_temperatures_and_base_units_otherwise():
+    assert storage_unit("K") == storage_unit("degF") == storage_unit("°C") == "degC"
+    assert (storage_unit("km/h"), storage_unit("kW"), storage_unit("kg/h"),
+            storage_unit("%RH")) == ("m/s", "W", "kg/s", "1")
+
+
+def test_different_quantities_and_unknown_units_are_refused():
+    with pytest.raises(ValueError, match="km/h"):
+        convert(1.0, "km/h", "W")
+    with pytest.raises(ValueError, match="furlong"):
+        base_unit("furlong")
+
+
+def test_temperature_plausibility_in_any_temperature_unit():
+    assert temperature_unit_consistent([70.0, 100.0], "degF")
+    assert not temperature_unit_consistent([300.0], "degC")
+    assert not temperature_unit_consistent([25.0], "K")
+    assert not temperature_unit_consistent([600.0], "degF")
+
+
+@pytest.mark.parametrize("unit", ["km/h", "kW", "kg/h", "g/s", "degF", "bar", "kPa", "W/m2",
+                                  "%RH"])
+def test_import_maps_and_fmu_maps_accept_the_same_units(unit):
+    ChannelMap.from_dict({"time": "t", "channels": {"x": {"column": "X", "unit": unit}}})
+    FmuMap.from_dict({"inputs": {"W_bl": {"name": "a"}, "T_evap_set": {"name": "b"}},
+                      "states": {"T_cab": {"name": "c"}, "T_evap": {"name": "d"},
+                                 "T_int": {"name": "e"}, "T_shell": {"name": "f"}},
+                      "outputs": {"T_ain": {"name": "g"}, "extra": {"name": "h",
+                                                                     "unit": unit}}})
+
+
+def test_a_map_unit_that_measures_another_quantity_than_the_channel_is_refused():
+    from acid.errors import DataError
+
+    with pytest.raises(DataError, match="v_veh.*kW"):
+        ChannelMap.from_dict({"time": "t", "channels": {"v_veh": {"column": "V",
+                                                                   "unit": "kW"}}})
+
 
 W = {"kg": 1, "m": 2, "s": -3}
 

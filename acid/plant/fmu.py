@@ -44,7 +44,7 @@ import numpy as np
 from acid.data import CHANNELS
 from acid.errors import AcidError, ConfigError
 from acid.plant.base import Measurement, Plant
-from acid.units import UNIT_SCALES, base_unit
+from acid.units import BASE_DIMENSIONS, UNIT_SCALES, base_unit
 
 __all__ = ["FmuError", "FmuMap", "FmuPlant", "VariableMap", "SAMPLINGS", "INPUT_CHANNELS",
            "fmi_unit_definition"]
@@ -74,12 +74,7 @@ _BOOLEAN_INPUTS = ("compressor_enabled",)
 # ------------------------------------------------------------------------------ units
 #: FMI ``BaseUnit`` exponents (and factor) of acid's inside units, for the units an exported
 #: FMU declares and for reading an FMU whose unit names acid does not know.
-_FMI_BASE = {
-    "K": {"K": 1}, "W": {"kg": 1, "m": 2, "s": -3}, "J": {"kg": 1, "m": 2, "s": -2},
-    "kg/s": {"kg": 1, "s": -1}, "m/s": {"m": 1, "s": -1}, "rpm": {"rad": 1, "s": -1},
-    "1": {}, "kg/kg": {}, "Pa": {"kg": 1, "m": -1, "s": -2}, "s": {"s": 1},
-    "W/K": {"kg": 1, "m": 2, "s": -3, "K": -1},
-}
+_FMI_BASE = BASE_DIMENSIONS  # the shared unit table's dimensions (acid.units)
 _RPM_IN_RAD_PER_S = 2.0 * math.pi / 60.0
 _DIMENSIONS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
 
