@@ -206,6 +206,71 @@ class ResidualResult:
         return {u: {c: bool(np.all(a[:, j, i] <= self.band99))
                     for i, c in enumerate(self.channels)} for j, u in enumerate(self.inputs)}
 
+    @property
+    def interpretation(self) -> dict[str, str]:
+        """{channel: what its whiteness and independence verdicts mean, in plain words}.
+
+        A model fitted for one step (least squares) and used for many (a controller's
+        horizon, the validation windows): autocorrelated one-step residuals mean the errors
+        do not average out over a horizon but drift in one direction, so the multi-step
+        validation, not the one-step fit, says what a controller gets; and standard errors
+        that assume white residuals are too small.
+        """
+        out = {}
+        M = int(self.lags[-1])
+        for i, c in enumerate(self.channels):
+            a = np.abs(self.autocorrelation[1:, i])
+            lag = int(np.argmax(a)) + 1
+            outside = int(np.sum(a > self.band99))
+            p = self.ljung_box[c]["p_value"]
+            if not np.all(np.isfinite(a)):
+                out[c] = ("no test: the one-step residuals are zero (the model reproduces "
+                          "the data exactly), so they have no correlation to test.")
+                continue
+            if outside == 0:
+                text = (f"white at one step: every autocorrelation at lags 1..{M} is inside "
+                        f"+-{self.band99:.3f} (largest {a.max():.2f}, lag {lag}; Ljung-Box "
+                        f"p = {p:.2g}); what the multi-step errors show then comes from "
+                        "information the model is not given (held disturbances), not from "
+                        "structure it missed.")
+            else:
+                r = self.autocorrelation[1:, i]
+                size = ("strong" if a.max() >= 0.5 else "moderate" if a.max() >= 0.2
+                        else "weak")
+                text = (f"not white: {outside} of {M} autocorrelations outside "
+                        f"+-{self.band99:.3f}, largest {r[lag - 1]:+.2f} at lag {lag} ({size}; "
+                        f"Ljung-Box p = {p:.2g}). ")
+                if lag == 1 and r[0] < 0 and a[1:].max(initial=0.0) < 0.5 * a[0]:
+                    text += ("A negative correlation at lag 1 alone is the mark of noise on "
+                             "the measured state each one-step prediction starts from (the "
+                             "same noise enters two consecutive residuals with opposite "
+                             "signs); it does not build up over a horizon, and the multi-step "
+                             "errors are the measure of the model.")
+                else:
+                    text += ("The one-step errors keep a pattern the model does not explain "
+                             "(dynamics or disturbances lasting several samples), so over a "
+                             "prediction horizon they add up in one direction instead of "
+                             "averaging out: judge the model for control by the multi-step "
+                             "errors, and use HAC standard errors (acid fit --covariance hac), not "
+                             "white ones.")
+                if size == "weak":
+                    text += (f" The correlation is small; with N = {self.n} samples the band "
+                             "is narrow enough to flag it.")
+            for j, u in enumerate(self.inputs):
+                cc = np.abs(self.cross_correlation[:, j, i])
+                pos = cc[self.cross_lags > 0].max(initial=0.0)
+                neg = cc[self.cross_lags < 0].max(initial=0.0)
+                if pos > self.band99:
+                    text += (f" Correlated with earlier {u} (up to {pos:.2f}): the model "
+                             f"misses part of {u}'s effect.")
+                elif neg > self.band99:
+                    text += (f" Correlated with later {u} only (up to {neg:.2f}): the "
+                             f"residual leads {u}, which points to feedback from {c} to {u} "
+                             "in the data (or chance, for a slowly switching input), not to "
+                             "a model error.")
+            out[c] = text
+        return out
+
     def to_frame(self):
         """DataFrame indexed by lag (-M..M): ``acf <channel>`` (lags >= 0) and
         ``ccf <input> <channel>``; ``attrs["band99"]`` the 99 % band."""
@@ -252,6 +317,7 @@ class ResidualResult:
         return json_safe({"horizon": self.prediction.horizon, "n": self.n,
                           "band99": self.band99, "white": self.white,
                           "independent": self.independent, "ljung_box": self.ljung_box,
+                          "interpretation": self.interpretation,
                           "lags": self.lags, "autocorrelation": self.autocorrelation,
                           "cross_lags": self.cross_lags,
                           "cross_correlation": self.cross_correlation})
@@ -372,15 +438,16 @@ def resid(data: Dataset, params, max_lag: int = 25, k: int = 1) -> ResidualResul
     ee0 = np.sum(e * e, axis=0)
     uu0 = np.sum(u * u, axis=0)
     acf = np.empty((M + 1, 3))
-    for lag in range(M + 1):
-        s0, s1, m = pairs(lag)
-        acf[lag] = np.sum(e[s0][m] * e[s1][m], axis=0) / ee0
     cross_lags = np.arange(-M, M + 1)
     ccf = np.empty((cross_lags.size, 2, 3))
     norm = np.sqrt(uu0[:, None] * ee0[None, :])
-    for i, lag in enumerate(cross_lags):
-        s0, s1, m = pairs(int(lag))
-        ccf[i] = np.einsum("tj,tc->jc", u[s0][m], e[s1][m]) / norm
+    with np.errstate(divide="ignore", invalid="ignore"):  # zero residuals: NaN, "no test"
+        for lag in range(M + 1):
+            s0, s1, m = pairs(lag)
+            acf[lag] = np.sum(e[s0][m] * e[s1][m], axis=0) / ee0
+        for i, lag in enumerate(cross_lags):
+            s0, s1, m = pairs(int(lag))
+            ccf[i] = np.einsum("tj,tc->jc", u[s0][m], e[s1][m]) / norm
     lags = np.arange(M + 1)
     q = nv * (nv + 2) * np.sum(acf[1:] ** 2 / (nv - lags[1:, None]), axis=0)
     ljung = {c: {"Q": float(q[i]), "p_value": float(chi2.sf(q[i], M)), "lags": M}

@@ -131,20 +131,25 @@ def stage_validate(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """60 starts x 300 steps on the held-out part (paper Figs. 5-6)."""
     from acid.data import MODEL_CHANNELS, Dataset
     from acid.params import ModelParams
-    from acid.report.validation import error_figure, prediction_figure
+    from acid.report.validation import error_figure, prediction_figure, yardstick_figure
     from acid.validate import validate
 
     ds = Dataset.from_hdf5(inputs["excite"] / "excitation.h5", require=MODEL_CHANNELS)
     params = ModelParams.from_json(inputs["fit"] / "params.json")
     held_out = 1.0 - config["estimation_fraction"]
     res = validate(ds, params, starts=config["starts"], horizon=config["horizon"],
-                   held_out_fraction=held_out)
+                   held_out_fraction=held_out, yardsticks=config.get("yardsticks", True))
     progress(1, 1)
-    write_figure_index(workdir, [
-        save_report_figure(prediction_figure(res), workdir, "fig5_prediction",
-                           f"Fig. 5: a {res.horizon}-step prediction against the plant"),
-        save_report_figure(error_figure(res), workdir, "fig6_errors",
-                           "Fig. 6: prediction errors of all starts vs time")])
+    figs = [save_report_figure(prediction_figure(res), workdir, "fig5_prediction",
+                               f"Fig. 5: a {res.horizon}-step prediction against the plant"),
+            save_report_figure(error_figure(res), workdir, "fig6_errors",
+                               "Fig. 6: prediction errors of all starts vs time")]
+    if res.yardsticks:
+        figs.append(save_report_figure(
+            yardstick_figure(res), workdir, "fig6b_yardsticks",
+            "Beyond the paper: the model's RMSE over the starts beside persistence, ARX and "
+            "subspace yardsticks fitted on the estimation part, same windows"))
+    write_figure_index(workdir, figs)
     write_json(workdir / "validation.json", res.to_json_dict())
     return ValidationStage.of(res).to_json_dict()
 
@@ -275,7 +280,8 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
               depends=("excite",)),
         Stage("validate", "validation, 300-step predictions (Figs. 5-6)", stage_validate,
               {"starts": opts.starts, "horizon": opts.horizon,
-               "estimation_fraction": opts.estimation_fraction}, depends=("excite", "fit")),
+               "estimation_fraction": opts.estimation_fraction, "yardsticks": True},
+              depends=("excite", "fit")),
         Stage("mpc", "NMPC checks (Figs. 7-10)", stage_mpc,
               {"timing_repeats": opts.timing_repeats}, depends=("fit",)),
         Stage("econ", "beyond the paper: econ model, identified and validated", stage_econ,

@@ -258,15 +258,32 @@ class ValidationStage(StageResult):
     horizon: int
     horizon_s: float
     channels: dict[str, ChannelErrors]
+    #: ``ValidationResult.window_design`` in words, and its overlap of consecutive windows
+    window_design: str = ""
+    overlap_fraction: float = math.nan
+    #: {"model" | yardstick: {channel: {horizon_s: {"rmse_K", "p90_K"}}}}
+    by_horizon: dict[str, dict[str, dict[str, dict[str, float]]]] = field(
+        default_factory=dict)
+    #: {yardstick: its description (orders and the rule that chose them)}
+    yardsticks: dict[str, str] = field(default_factory=dict)
+    yardsticks_fitted_on: tuple[int, ...] = ()
 
     @classmethod
     def of(cls, res) -> ValidationStage:
         """From an :class:`acid.validate.ValidationResult`."""
+        from acid.validate import window_design_text
+
         names = [f.name for f in dataclasses.fields(ChannelErrors)]
         ch = {c: ChannelErrors(**{n: float(res.metrics[c].get(n, math.nan)) for n in names})
               for c in res.channels}
+        design = res.window_design
         return cls(starts=int(res.n_starts), horizon=int(res.horizon),
-                   horizon_s=float(res.horizon_s[-1]), channels=ch)
+                   horizon_s=float(res.horizon_s[-1]), channels=ch,
+                   window_design=window_design_text(design),
+                   overlap_fraction=float(design["overlap_fraction"]),
+                   by_horizon=res.by_horizon(),
+                   yardsticks={k: y.description for k, y in res.yardsticks.items()},
+                   yardsticks_fitted_on=tuple(res.settings.get("yardsticks_fitted_on", ())))
 
 
 @dataclass(frozen=True)

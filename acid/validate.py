@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -142,6 +142,9 @@ class ValidationResult:
     extra_metrics : {channel: pooled |error| statistics with their unit} of channels beyond
         the three (the econ model's T_int, T_shell, w_cab, P_comp, window energy); empty for
         the paper's model.
+    yardsticks : {"persistence" | "arx" | "subspace": acid.yardsticks.YardstickPrediction}
+        predicted over the same windows (``predicted`` (S, H + 1, 3), K); empty unless asked
+        for (``validate(..., yardsticks=True)``). Yardsticks, never offered to a controller.
     """
 
     start_index: np.ndarray
@@ -158,6 +161,7 @@ class ValidationResult:
     settings: dict = field(default_factory=dict)
     channels: tuple[str, ...] = VALIDATED_CHANNELS
     extra_metrics: dict = field(default_factory=dict)
+    yardsticks: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------------ views
     @property
@@ -208,13 +212,66 @@ class ValidationResult:
                 rows.append(row)
         return rows
 
+    @property
+    def window_design(self) -> dict:
+        """How the windows lie: start spacing (s), horizon (s), overlap, what is held.
+
+        ``overlap_fraction``: the mean share of a window's ``H + 1`` samples that the next
+        window (in time) also holds; ``max_windows_per_sample``: the most windows one
+        sample lies in (one event enters that many starts' errors).
+        """
+        k0, H = self.start_index, self.horizon
+        Ts = float(self.settings.get("Ts_s", self.horizon_s[1] - self.horizon_s[0]
+                                     if H >= 1 else 1.0))
+        gaps = np.diff(k0)
+        shared = np.clip(H + 1 - gaps, 0, None) / (H + 1)
+        cover = np.zeros(int(k0.max()) + H + 2 if k0.size else 1, dtype=int)
+        np.add.at(cover, k0, 1)
+        np.add.at(cover, k0 + H + 1, -1)
+        spacing = ({"min": float(gaps.min() * Ts), "median": float(np.median(gaps) * Ts),
+                    "max": float(gaps.max() * Ts)} if gaps.size else None)
+        return {
+            "starts": self.n_starts,
+            "starts_requested": self.settings.get("starts_requested", self.n_starts),
+            "placement": self.settings.get("placement", "even"),
+            "non_overlapping": bool(self.settings.get("non_overlapping", False)),
+            "horizon_s": float(self.horizon_s[-1]),
+            "start_spacing_s": spacing,
+            "overlap_fraction": float(shared.mean()) if shared.size else 0.0,
+            "max_windows_per_sample": int(np.cumsum(cover).max()) if k0.size else 0,
+            "held_disturbances": held_meaning(self.settings.get("model", "paper"),
+                                              self.settings.get("exogenous", "hold")),
+        }
+
+    def by_horizon(self, times_s=(0.0, *REPORT_HORIZONS_S)) -> dict:
+        """{"model" | yardstick: {channel: {"<t>": {"rmse_K", "p90_K"}}}} at prediction
+        times ``t`` (s) inside the horizon: RMSE and p90 of |error| over the starts."""
+        from acid.yardsticks import by_horizon
+
+        times = sorted(set(times_s) | {float(self.horizon_s[-1])})
+        out = {"model": by_horizon(self.errors, self.horizon_s, self.channels, times)}
+        for name, y in self.yardsticks.items():
+            out[name] = by_horizon(y.predicted - self.measured, self.horizon_s,
+                                   self.channels, times)
+        return out
+
     def to_json_dict(self) -> dict:
         """JSON-ready summary (numbers in K, times in s; non-finite values become null).
 
-        Keys: ``settings``, ``channels`` ({T_cab, T_evap, T_ain} -> pooled metrics),
-        ``at_horizon``, ``vs_horizon`` (envelope per step), ``starts`` (indices, times and
-        per-start metrics).
+        Keys: ``settings``, ``window_design``, ``channels`` ({T_cab, T_evap, T_ain} -> pooled
+        metrics), ``at_horizon``, ``by_horizon`` (the model's RMSE and p90 |e| per channel
+        and prediction time), ``vs_horizon`` (envelope per step), ``starts`` (indices, times
+        and per-start metrics); with yardsticks also ``yardsticks`` ({persistence | arx |
+        subspace: {channel: {horizon_s: {rmse_K, p90_K}}}}) and ``yardstick_settings``.
         """
+        table = self.by_horizon()
+        marks = {}
+        if self.yardsticks:
+            marks = {"yardsticks": {k: v for k, v in table.items() if k != "model"},
+                     "yardstick_settings": {
+                         k: {"description": y.description, **y.settings,
+                             "note": "a yardstick: never offered to a controller"}
+                         for k, y in self.yardsticks.items()}}
         return json_safe({
             "settings": self.settings,
             "units": {"errors": "K", "time": "s"},
@@ -223,6 +280,9 @@ class ValidationResult:
                 "fit_percent = median over starts of 100 (1 - ||y - y_hat|| / ||y - mean(y)||) "
                 "per window; fit_percent_pooled = the same over all windows at once"),
             "at_horizon": self.at_horizon(),
+            "window_design": self.window_design,
+            "by_horizon": table["model"],
+            **marks,
             "vs_horizon": {"horizon_s": self.horizon_s,
                            **{name: env for name, env in self.envelope.items()}},
             "starts": {"index": self.start_index, "time_s": self.start_time,
@@ -235,7 +295,8 @@ class ValidationResult:
 def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
              exogenous: str = "hold", held_out_fraction: float | None = None,
              start_range: tuple[int, int] | None = None, placement: str = "even",
-             seed: int = 0) -> ValidationResult:
+             seed: int = 0, non_overlapping: bool = False,
+             yardsticks: bool = False) -> ValidationResult:
     """Multi-start open-loop validation of eqs. 1-3 on a dataset.
 
     Parameters
@@ -256,6 +317,13 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
         (deterministic); ``"random"`` draws them without replacement with
         ``numpy.random.default_rng(seed)``.
     seed : seed of the random placement.
+    non_overlapping : place the starts at least ``horizon + 1`` samples apart, so that no
+        sample lies in two windows (evenly spread, ``placement="even"`` only); fewer starts
+        than requested when the record is short (a ``UserWarning`` says how many).
+    yardsticks : also predict the windows with persistence, ARX and a subspace model
+        (:mod:`acid.yardsticks`), ARX and subspace fitted on the samples before the
+        validated range (the estimation part), or on the whole record when there are none
+        (then in-sample: ``settings["yardsticks_in_sample"]``).
 
     Returns
     -------
@@ -289,6 +357,9 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
         raise ConfigError(f"--horizon must be at least 1 step, got {horizon}")
     if not 0 <= int(seed) < 2**63:
         raise ConfigError(f"--seed must be an integer >= 0, got {seed}")
+    if non_overlapping and placement != "even":
+        raise ConfigError(f"--non-overlapping places the starts evenly: it cannot be combined "
+                          f"with --placement {placement}")
     starts, horizon = int(starts), int(horizon)
     src = ds.source
     econ = _is_econ(params)
@@ -310,12 +381,19 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
             f"({longest * ds.Ts:g} s){where}{range_note}, "
             f"the study needs {horizon + 1} consecutive samples ({horizon * ds.Ts:g} s) "
             f"for a {horizon}-step prediction")
-    k0 = _place_starts(admissible, min(starts, admissible.size), placement, seed)
+    if non_overlapping:
+        k0 = _place_non_overlapping(admissible, starts, horizon)
+        if k0.size < starts:
+            warnings.warn(f"{src}: --non-overlapping: {k0.size} windows of {horizon} steps "
+                          f"({horizon * ds.Ts:g} s) fit without overlap{range_note}; using "
+                          f"{k0.size} instead of {starts}", UserWarning, stacklevel=2)
+    else:
+        k0 = _place_starts(admissible, min(starts, admissible.size), placement, seed)
     if k0.size * (horizon + 1) > MAX_PREDICTION_SAMPLES:
         raise ConfigError(f"--starts {k0.size} x --horizon {horizon} steps is "
                           f"{k0.size * (horizon + 1):.3g} prediction samples, more than "
                           f"{MAX_PREDICTION_SAMPLES:.0e}: lower --starts or --horizon")
-    if k0.size < starts:
+    if k0.size < starts and not non_overlapping:
         warnings.warn(f"{src}: only {k0.size} distinct start instants fit a {horizon}-step "
                       f"window; using {k0.size} instead of {starts}", UserWarning,
                       stacklevel=2)
@@ -341,6 +419,9 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
     horizon_s = np.arange(horizon + 1) * ds.Ts
     with np.errstate(over="ignore", invalid="ignore"):  # --allow-unstable: huge errors
         envelope, metrics, per_start = _statistics(measured, predicted, errors)
+    marks, est = {}, (0, lo) if lo > 0 else (0, len(ds))
+    if yardsticks:
+        marks = _yardsticks(ds, k0, horizon, exogenous, econ, est)
     settings = {
         "exogenous": exogenous,
         "starts_requested": starts,
@@ -349,6 +430,7 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
         "horizon_s": horizon * ds.Ts,
         "Ts_s": ds.Ts,
         "placement": placement,
+        "non_overlapping": bool(non_overlapping),
         "seed": seed if placement == "random" else None,
         "sample_range": [lo, hi],
         "held_out_fraction": held_out_fraction,
@@ -360,14 +442,91 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
         "data_samples": len(ds),
         "metrics_over": "all starts, prediction steps i = 0 .. horizon",
     }
+    if yardsticks:
+        settings["yardsticks_fitted_on"] = list(est)
+        settings["yardsticks_in_sample"] = lo == 0
     return ValidationResult(
         start_index=k0, start_time=ds.time[k0].copy(), horizon_s=horizon_s,
         predicted=predicted, measured=measured, errors=errors, inputs=inputs, exogenous=exo,
         envelope=envelope, metrics=metrics, per_start=per_start, settings=settings,
-        extra_metrics=extra)
+        extra_metrics=extra, yardsticks=marks)
 
 
 # ------------------------------------------------------------------- helpers
+def held_meaning(family: str, exogenous: str) -> str:
+    """What the held (or measured) disturbances of a validation mean, in one sentence."""
+    if family == "econ":
+        held, pred = "v_veh and T_amb", "; T_int and T_shell are predicted from the start"
+    else:
+        held, pred = "T_int and T_shell", ""
+    if exogenous == "hold":
+        return (f"{held} are held at their value at each start over its window (the model "
+                f"is not told how they evolve); W_bl and T_evap_set are the measured inputs"
+                f"{pred}")
+    return (f"{held} follow their measurements over each window (a perfect preview of "
+            f"them); W_bl and T_evap_set are the measured inputs{pred}")
+
+
+def window_design_text(d: dict) -> str:
+    """``ValidationResult.window_design`` in one line: starts, spacing, horizon, overlap,
+    what is held (the CLI and the report print it)."""
+    sp = d["start_spacing_s"]
+    spacing = ("one start" if sp is None else
+               f"starts {sp['median']:g} s apart" if sp["min"] == sp["max"] else
+               f"starts {sp['min']:g}..{sp['max']:g} s apart (median {sp['median']:g} s)")
+    return (f"window design: {d['starts']} starts, {spacing}, horizon {d['horizon_s']:g} s; "
+            f"consecutive windows share {100 * d['overlap_fraction']:.0f} % of their samples, "
+            + ("no sample lies in two windows" if d["max_windows_per_sample"] <= 1 else
+               f"a sample lies in up to {d['max_windows_per_sample']} windows") +
+            f"{' (--non-overlapping)' if d['non_overlapping'] else ''}; "
+            f"{d['held_disturbances']}")
+
+
+#: Inputs the yardsticks are given, per model family (the model's own inputs and
+#: disturbances), and the outputs they predict (the validated channels first).
+YARDSTICK_SIGNALS = {
+    "paper": (("W_bl", "T_evap_set", "T_int", "T_shell"), VALIDATED_CHANNELS),
+    "econ": (("W_bl", "T_evap_set", "v_veh", "T_amb"),
+             (*VALIDATED_CHANNELS, "T_int", "T_shell")),
+}
+
+
+def _yardsticks(ds: Dataset, k0: np.ndarray, horizon: int, exogenous: str, econ: bool,
+                est: tuple[int, int]) -> dict:
+    """Persistence, ARX and subspace over the windows, given what the model is given: the
+    measured inputs, the disturbances held (or measured) as the model has them, and the
+    outputs measured up to each start (for the econ model also T_int and T_shell)."""
+    from acid.yardsticks import evaluate
+
+    inputs, outputs = YARDSTICK_SIGNALS["econ" if econ else "paper"]
+    unit = {"W_bl": "kg/s", "v_veh": "m/s"}
+    u = np.stack([ds.get(n, unit.get(n, "K")) for n in inputs], axis=-1)
+    y = np.stack([ds.get(n, "K") for n in outputs], axis=-1)
+    held = np.array([exogenous == "hold" and n not in ("W_bl", "T_evap_set") for n in inputs])
+    out = evaluate(y, u, ds.experiment, k0, horizon, held, est, input_names=inputs)
+    nc = len(VALIDATED_CHANNELS)
+    return {name: replace(p, predicted=p.predicted[..., :nc]) for name, p in out.items()}
+
+
+def _place_non_overlapping(admissible: np.ndarray, starts: int, horizon: int) -> np.ndarray:
+    """Up to ``starts`` start indices at least ``horizon + 1`` apart (no shared sample),
+    spread evenly over each run of consecutive admissible starts (one run per experiment),
+    shared among the runs in proportion to how many windows each holds."""
+    cut = np.flatnonzero(np.diff(admissible) != 1) + 1
+    runs = [(int(r[0]), int(r[-1])) for r in np.split(admissible, cut) if r.size]
+    cap = np.array([(b - a) // (horizon + 1) + 1 for a, b in runs])
+    n = min(int(starts), int(cap.sum()))
+    share = np.minimum(np.floor(cap * n / cap.sum()).astype(int), cap)
+    for i in np.argsort(-(cap * n / cap.sum() - share), kind="stable"):
+        if share.sum() >= n:
+            break
+        if share[i] < cap[i]:
+            share[i] += 1
+    picks = [np.round(a + np.arange(m) * ((b - a) / (m - 1) if m > 1 else 0)).astype(int)
+             for (a, b), m in zip(runs, share, strict=True) if m > 0]
+    return np.concatenate(picks).astype(int)
+
+
 def _is_econ(params) -> bool:
     """Whether ``params`` belong to the econ model family (:mod:`acid.econ`)."""
     return not isinstance(params, ModelParams) and getattr(params, "power_map", None) \

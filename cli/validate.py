@@ -7,17 +7,19 @@ import time
 import warnings
 from pathlib import Path
 
+import numpy as np
 import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.econ.params import load_any_params, model_family
-from acid.validate import EXOGENOUS_MODES, PLACEMENTS, held_out_part
+from acid.validate import EXOGENOUS_MODES, PLACEMENTS, held_out_part, window_design_text
 from acid.validate import validate as run_validation
 from acid_cli._common import (
     check_paths,
     handle_errors,
+    note,
     params_input,
     print_table,
     require,
@@ -27,7 +29,7 @@ from acid_cli._common import (
     write_summary,
 )
 
-FIGURES = ("fig5_prediction.png", "fig6_errors.png")
+FIGURES = ("fig5_prediction.png", "fig6_errors.png", "fig6b_yardsticks.png")
 #: Largest --starts and --horizon accepted.
 MAX_STARTS, MAX_HORIZON = 100_000, 1_000_000
 
@@ -55,9 +57,18 @@ def validate(
              "file, else the whole record."),
     placement: str = typer.Option("even", "--placement",
                                   help="Start instants 'even'ly spread or 'random'."),
+    non_overlapping: bool = typer.Option(
+        False, "--non-overlapping",
+        help="Space the starts by more than the horizon, so no sample lies in two windows "
+             "(fewer starts when the record is short)."),
+    yardsticks: bool = typer.Option(
+        True, "--yardsticks/--no-yardsticks",
+        help="Also predict the same windows with persistence, ARX and a subspace model "
+             "fitted on the estimation part (yardsticks, never used for control)."),
     seed: int = typer.Option(0, "--seed", help="Seed of --placement random."),
-    out: Path = typer.Option(Path("reports/validate"), "--out",
-                             help="Folder for the figures (fig5/fig6 PNG)."),
+    out: Path = typer.Option(
+        Path("reports/validate"), "--out",
+        help="Folder for the figures (fig5/fig6 PNG, fig6b with the yardsticks)."),
     allow_unstable: bool = typer.Option(
         False, "--allow-unstable",
         help="Validate parameters even if eqs. 1-3 are unstable or not in kelvin."),
@@ -80,7 +91,7 @@ def validate(
     all starts vs prediction time) go to --out. The model family (the paper's or econ) is
     read from the parameter file.
     """
-    from acid.report.validation import error_figure, prediction_figure
+    from acid.report.validation import error_figure, prediction_figure, yardstick_figure
 
     if model is not None:
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
@@ -97,6 +108,8 @@ def validate(
             f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
     require(placement in PLACEMENTS, "--placement",
             f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
+    require(not (non_overlapping and placement != "even"), "--non-overlapping",
+            f"places the starts evenly: it cannot be combined with --placement {placement}")
     if held_out_fraction is not None:
         require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
     p = load_any_params(params, allow_unstable=allow_unstable)
@@ -117,7 +130,8 @@ def validate(
         warnings.simplefilter("always")
         result = run_validation(ds, p, starts=starts, horizon=horizon, exogenous=exogenous,
                                 held_out_fraction=part.fraction, placement=placement,
-                                seed=seed)
+                                seed=seed, non_overlapping=non_overlapping,
+                                yardsticks=yardsticks)
     elapsed = time.perf_counter() - t0
     for w in caught:
         warn(w.message)
@@ -127,6 +141,7 @@ def validate(
     say(f"{data}: {result.n_starts} starts x {result.horizon} steps "
                   f"({result.horizon_s[-1]:g} s), samples {lo}..{hi - 1} ({fraction_source}), "
                   f"T_int/T_shell {exogenous}, parameters {p.name!r} ({elapsed * 1e3:.0f} ms)")
+    say(window_design_text(result.window_design))
     rows = []
     for name, m in result.metrics.items():
         rows.append([name, _fmt(m["rmse"]), _fmt(m["mean_abs"]), _fmt(m["median_abs"]),
@@ -147,6 +162,11 @@ def validate(
                     [[name, m["unit"], _fmt(m["median_abs"]), _fmt(m["p90_abs"]),
                       _fmt(m["max_abs"])]
                      for name, m in result.extra_metrics.items()])
+    if result.yardsticks:
+        yardstick_table(result)
+    residuals = None
+    if model_family(params) == "paper":
+        residuals = residual_section(ds, p, lo, hi)
     other = None
     if beside:
         q = load_any_params(beside, allow_unstable=allow_unstable)
@@ -154,7 +174,7 @@ def validate(
             warnings.simplefilter("ignore")  # the same windows: warned about above
             other = run_validation(ds, q, starts=starts, horizon=horizon, exogenous=exogenous,
                                    held_out_fraction=part.fraction, placement=placement,
-                                   seed=seed)
+                                   seed=seed, non_overlapping=non_overlapping)
         print_table(f"Beside: |e| median / p90 (K), {p.name!r} vs {q.name!r}, same starts",
                     ["channel", p.name, q.name],
                     [[c, f"{_fmt(result.metrics[c]['median_abs'])} / "
@@ -164,7 +184,11 @@ def validate(
 
     fig5 = save_figure(prediction_figure(result), out / "fig5_prediction.png")
     fig6 = save_figure(error_figure(result), out / "fig6_errors.png")
-    say(f"figures written to {fig5} and {fig6}")
+    figures = {"fig5_prediction": str(fig5), "fig6_errors": str(fig6)}
+    if result.yardsticks:
+        fig6b = save_figure(yardstick_figure(result), out / "fig6b_yardsticks.png")
+        figures["fig6b_yardsticks"] = str(fig6b)
+    say(f"figures written to {', '.join(figures.values())}")
 
     summary = {
         "command": "validate",
@@ -175,9 +199,11 @@ def validate(
         "held_out_fraction_source": fraction_source,
         "in_sample_warning": part.warning,
         "elapsed_s": elapsed,
-        "figures": {"fig5_prediction": str(fig5), "fig6_errors": str(fig6)},
+        "figures": figures,
         **result.to_json_dict(),
     }
+    if residuals is not None:
+        summary["residuals"] = residuals
     if other is not None:
         summary["beside"] = {"params": beside, "channels": other.to_json_dict()["channels"]}
     write_summary(json_path, summary)
@@ -204,3 +230,64 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
                       held_out_fraction=held_out_fraction)
+
+#: Prediction times (s) of the yardstick table, when inside the horizon.
+YARDSTICK_TIMES_S = (60.0, 300.0, 1500.0)
+
+
+def yardstick_table(result) -> None:
+    """The model beside persistence, ARX and subspace: RMSE / p90 |e| (K) per channel and
+    prediction time, and how each yardstick was fitted."""
+    horizon = float(result.horizon_s[-1])
+    times = [t for t in YARDSTICK_TIMES_S if t <= horizon]
+    if horizon not in times:
+        times.append(horizon)
+    table = result.by_horizon(times)
+    keys = [f"{result.horizon_s[int(round(t / result.settings['Ts_s']))]:g}" for t in times]
+    rows = []
+    for c in result.channels:
+        for name, by in table.items():
+            label = "model" if name == "model" else f"{name} (yardstick)"
+            rows.append([c, label] + [f"{_fmt(by[c][k]['rmse_K'], 2)} / "
+                                      f"{_fmt(by[c][k]['p90_K'], 2)}" for k in keys])
+    print_table("Model and yardsticks on the same windows: RMSE / p90 of |e| over the starts "
+                "(K)", ["_channel", "_predictor", *[f"{k} s" for k in keys]], rows)
+    lo, hi = result.settings["yardsticks_fitted_on"]
+    for y in result.yardsticks.values():
+        say(f"  {y.description}")
+    fitted = f"ARX and subspace fitted on samples {lo}..{hi - 1}"
+    if result.settings.get("yardsticks_in_sample"):
+        note(f"{fitted}, the validated samples themselves (no held-out part): in-sample, "
+             "they are favoured; yardsticks are never used for control")
+    else:
+        say(f"  {fitted} (the estimation part); yardsticks are never used for control")
+
+
+def residual_section(ds, params, lo: int, hi: int) -> dict | None:
+    """One-step residual tests (``acid.analysis.resid``) on the validated samples, with what
+    they mean; returns their JSON summary (None when the part is too short)."""
+    from acid.analysis import resid
+    from acid.errors import DataError
+
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            r = resid(ds.window(lo, hi), params)
+    except DataError as exc:
+        note(f"residual tests skipped: {exc}")
+        return None
+    rows = []
+    for i, c in enumerate(r.channels):
+        a = np.abs(r.autocorrelation[1:, i])
+        rows.append([c, "yes" if r.white[c] else "no",
+                     _fmt(float(a.max()) if np.all(np.isfinite(a)) else math.nan, 2),
+                     _fmt(r.ljung_box[c]["p_value"], 3),
+                     ", ".join(u for u in r.inputs if not r.independent[u][c]) or "none"])
+    print_table(f"One-step residuals on the validated samples (N = {r.n}, 99 % band "
+                f"+-{r.band99:.3f})", ["_channel", "white", "max |acf|", "Ljung-Box p",
+                                       "_correlated with"], rows)
+    for c, text in r.interpretation.items():
+        say(f"  {c}: {text}")
+    d = r.to_json_dict()
+    return {k: d[k] for k in ("n", "band99", "white", "independent", "ljung_box",
+                              "interpretation")}

@@ -524,6 +524,8 @@ CASES: list[Case] = [
     Case("validate-held-out-nan", "options", (*V, "--held-out-fraction", "nan"),
          ("--held-out-fraction",)),
     Case("validate-placement", "options", (*V, "--placement", "diagonal"), ("--placement",)),
+    Case("validate-non-overlapping-random", "options",
+         (*V, "--non-overlapping", "--placement", "random"), ("--non-overlapping",)),
     Case("validate-exogenous", "options", (*V, "--exogenous", "guess"), ("--exogenous",)),
     Case("fit-estimation-fraction-zero", "options",
          ("fit", D, "--out", "{w}/q.json", "--estimation-fraction", "0"),

@@ -127,3 +127,23 @@ def test_frames_are_degc_and_labelled(model_dataset):
     np.testing.assert_allclose(df["T_cab"], model_dataset["T_cab"][:50])
     with pytest.raises(ConfigError, match="horizon k"):
         predict(model_dataset, paper(), 0)
+
+
+def test_resid_interpretation_tells_noise_from_missed_dynamics(process_noise_dataset,
+                                                               model_dataset,
+                                                               noisy_model_dataset):
+    true = resid(process_noise_dataset, paper(), max_lag=20)
+    for c in true.channels:
+        if true.white[c]:
+            assert true.interpretation[c].startswith("white at one step")
+    wrong = paper().replace(gamma=(0.2, 0.0867, 1.2999, 1.0047, -0.5176, 0.4553, 34.9579))
+    bad = resid(process_noise_dataset, wrong, max_lag=20).interpretation["T_cab"]
+    assert bad.startswith("not white") and "add up in one direction" in bad
+    assert "misses part of W_bl's effect" in bad
+    # measurement noise on the state each one-step prediction starts from: lag 1, negative
+    noisy = resid(noisy_model_dataset, paper(), max_lag=20)
+    assert not noisy.white["T_cab"] and noisy.autocorrelation[1, 0] < -0.2
+    assert "noise on the measured state" in noisy.interpretation["T_cab"]
+    exact = resid(model_dataset, paper(), max_lag=20)
+    assert exact.interpretation["T_cab"].startswith("no test: the one-step residuals are zero")
+    assert set(noisy.to_json_dict()["interpretation"]) == set(noisy.channels)

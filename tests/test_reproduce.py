@@ -20,7 +20,8 @@ from acid_cli.main import app
 pytestmark = pytest.mark.slow
 
 FIGURES = ("stages/sweep/fig3_speed_sweep.png", "stages/validate/fig5_prediction.png",
-           "stages/validate/fig6_errors.png", "stages/mpc/fig7_model.png",
+           "stages/validate/fig6_errors.png", "stages/validate/fig6b_yardsticks.png",
+           "stages/mpc/fig7_model.png",
            "stages/mpc/fig8_plant.png", "stages/mpc/fig9_cav_bound.png",
            "stages/mpc/fig10_cav_comparison.png", "stages/econ/fig_econ_errors.png",
            "stages/cav/energy.png", "stages/cav/cav_udds.png", "stages/cav/cav_sc03.png",

@@ -254,3 +254,99 @@ def test_more_starts_than_admissible_allocates_nothing_large(varying):
         warnings.simplefilter("always")
         res = validate(varying, paper(), starts=10**9, horizon=50)
     assert res.n_starts <= len(varying)
+
+
+# --------------------------------------------------------- yardsticks and window design
+def test_yardsticks_leave_the_models_numbers_unchanged_and_join_the_json(varying):
+    plain = validate(varying, paper(), starts=12, horizon=300, held_out_fraction=0.5)
+    marked = validate(varying, paper(), starts=12, horizon=300, held_out_fraction=0.5,
+                      yardsticks=True)
+    np.testing.assert_array_equal(plain.start_index, marked.start_index)
+    np.testing.assert_array_equal(plain.errors, marked.errors)
+    assert plain.metrics == marked.metrics
+    assert "yardsticks" not in plain.to_json_dict()
+    d = json.loads(json.dumps(marked.to_json_dict(), allow_nan=False))
+    assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
+    for name, table in d["yardsticks"].items():
+        assert set(table) == set(VALIDATED_CHANNELS)
+        for c in VALIDATED_CHANNELS:
+            for t in ("0", "60", "300", "1500"):
+                assert set(table[c][t]) == {"rmse_K", "p90_K"}, (name, c, t)
+        assert "never offered to a controller" in d["yardstick_settings"][name]["note"]
+    for c in VALIDATED_CHANNELS:  # the model's numbers, beside them, in the same shape
+        assert set(d["by_horizon"][c]["1500"]) == {"rmse_K", "p90_K"}
+        i = 300
+        rmse = float(np.sqrt(np.mean(marked.errors[:, i, VALIDATED_CHANNELS.index(c)] ** 2)))
+        assert d["by_horizon"][c]["1500"]["rmse_K"] == pytest.approx(rmse)
+    assert d["yardstick_settings"]["arx"]["inputs"] == ["W_bl", "T_evap_set", "T_int",
+                                                        "T_shell"]
+    assert d["yardstick_settings"]["arx"]["held_inputs"] == ["T_int", "T_shell"]
+
+
+def test_window_design_of_the_default_study_says_the_windows_overlap(varying):
+    r = validate(varying, paper(), starts=60, horizon=300, held_out_fraction=0.5)
+    w = r.to_json_dict()["window_design"]
+    assert w["starts"] == 60 and w["horizon_s"] == 1500.0 and not w["non_overlapping"]
+    gaps = np.diff(r.start_index) * 5.0
+    assert w["start_spacing_s"] == {"min": gaps.min(), "median": float(np.median(gaps)),
+                                    "max": gaps.max()}
+    assert w["overlap_fraction"] == pytest.approx(np.mean(1 - np.diff(r.start_index) / 301))
+    assert w["overlap_fraction"] > 0.9 and w["max_windows_per_sample"] > 30
+    assert "held at their value at each start" in w["held_disturbances"]
+    measured = validate(varying, paper(), starts=5, horizon=100, exogenous="measured")
+    assert "follow their measurements" in measured.window_design["held_disturbances"]
+
+
+def test_non_overlapping_starts_share_no_sample(varying):
+    n = len(varying)
+    with pytest.warns(UserWarning, match=r"--non-overlapping: \d+ windows of 100 steps"):
+        r = validate(varying, paper(), starts=60, horizon=100, non_overlapping=True)
+    k0 = r.start_index
+    assert k0.size == (n - 101) // 101 + 1  # as many as fit
+    assert np.all(np.diff(k0) >= 101)
+    covered = np.concatenate([np.arange(k, k + 101) for k in k0])
+    assert np.unique(covered).size == covered.size  # no sample in two windows
+    w = r.window_design
+    assert w["overlap_fraction"] == 0.0 and w["max_windows_per_sample"] == 1
+    assert w["non_overlapping"] and r.settings["non_overlapping"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # enough room: no warning, spread evenly
+        few = validate(varying, paper(), starts=3, horizon=100, non_overlapping=True)
+    assert few.start_index[0] == 0 and few.start_index[-1] == n - 101
+    with pytest.raises(ConfigError, match="--non-overlapping"):
+        validate(varying, paper(), non_overlapping=True, placement="random")
+
+
+def test_non_overlapping_starts_respect_experiment_boundaries(varying):
+    ds = Dataset.concatenate([varying.window(0, 700), varying.window(700, 1500)])
+    with pytest.warns(UserWarning):
+        r = validate(ds, paper(), starts=100, horizon=100, non_overlapping=True)
+    exp = ds.experiment
+    for k in r.start_index:
+        assert exp[k] == exp[k + 100]
+    assert np.all(np.diff(r.start_index) >= 101)
+    assert r.n_starts == 600 // 101 + 1 + 700 // 101 + 1
+
+
+def test_reproduce_stage_result_and_report_section_carry_design_and_yardsticks(varying):
+    from acid.report.sections import SECTION_BUILDERS
+    from acid.stage_results import ValidationStage
+
+    r = validate(varying, paper(), starts=12, horizon=300, held_out_fraction=0.5,
+                 yardsticks=True)
+    stage = ValidationStage.from_json_dict(
+        json.loads(json.dumps(ValidationStage.of(r).to_json_dict())))
+    assert stage.channels["T_cab"].p90_abs == r.metrics["T_cab"]["p90_abs"]
+    assert stage.window_design.startswith("window design: 12 starts")
+    assert stage.overlap_fraction == r.window_design["overlap_fraction"]
+    assert set(stage.by_horizon) == {"model", "persistence", "arx", "subspace"}
+    assert stage.yardsticks_fitted_on == (0, len(varying) // 2)
+    sec = SECTION_BUILDERS[ValidationStage](stage)
+    assert "12 starts" in sec.paragraphs[0] and "never used for control" in sec.paragraphs[1]
+    assert len(sec.rows) == 3 * 4 and sec.header[2].startswith("60 s")
+    assert sec.rows[1][:2] == ("T_cab", "persistence (yardstick)")
+    # a stage record written before the yardsticks still reads (no design, no table)
+    old = ValidationStage.from_json_dict({k: v for k, v in stage.to_json_dict().items()
+                                          if k in ("starts", "horizon", "horizon_s",
+                                                   "channels")})
+    assert SECTION_BUILDERS[ValidationStage](old).rows == ()

@@ -96,3 +96,45 @@ def test_params_fitted_on_another_file_validate_the_whole_record(data_file, tmp_
     d = json.loads(summary.read_text())
     assert d["settings"]["sample_range"][0] == 0
     assert d["held_out_fraction_source"] == "whole record"
+
+
+def test_yardsticks_window_design_and_residuals_are_reported(noisy_model_dataset, tmp_path):
+    data = noisy_model_dataset.to_hdf5(tmp_path / "noisy.h5")
+    params = tmp_path / "params.json"
+    paper().replace(name="fitted", provenance={"estimation_fraction": 0.5}).to_json(params)
+    out, summary = tmp_path / "figs", tmp_path / "s.json"
+    res = _invoke(data, "--params", params, "--out", out, "--json", summary)
+    assert res.exit_code == 0, res.output
+    text = " ".join(res.output.split())
+    assert "window design: 60 starts, starts 35..40 s apart" in text
+    assert "horizon 1500 s; consecutive windows share 98 % of their samples" in text
+    for label in ("persistence (yardstick)", "arx (yardstick)", "subspace (yardstick)"):
+        assert label in text
+    assert "ARX and subspace fitted on samples 0..719 (the estimation part)" in text
+    assert "One-step residuals on the validated samples" in text
+    assert "noise on the measured state" in text
+    d = json.loads(summary.read_text())
+    assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
+    assert set(d["yardsticks"]["arx"]["T_cab"]["60"]) == {"rmse_K", "p90_K"}
+    assert d["window_design"]["max_windows_per_sample"] > 1
+    assert set(d["residuals"]["interpretation"]) == {"T_cab", "T_evap", "T_ain"}
+    assert (out / "fig6b_yardsticks.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # a model worse than persistence would show it: here the model (true parameters) wins
+    for c in ("T_cab", "T_evap", "T_ain"):
+        assert d["by_horizon"][c]["300"]["rmse_K"] < d["yardsticks"]["persistence"][c]["300"][
+            "rmse_K"]
+
+
+def test_non_overlapping_and_no_yardsticks(data_file, tmp_path):
+    summary = tmp_path / "s.json"
+    res = _invoke(data_file, "--non-overlapping", "--no-yardsticks", "--out", tmp_path / "o",
+                  "--json", summary)
+    assert res.exit_code == 0, res.output
+    text = " ".join(res.output.split())
+    assert "--non-overlapping: 4 windows of 300 steps (1500 s) fit without overlap" in text
+    assert "share 0 % of their samples, no sample lies in two windows (--non-overlapping)" in text
+    assert "yardstick" not in text
+    d = json.loads(summary.read_text())
+    assert "yardsticks" not in d and d["window_design"]["non_overlapping"]
+    assert d["settings"]["starts"] == 4
+    assert not (tmp_path / "o" / "fig6b_yardsticks.png").exists()

@@ -21,6 +21,7 @@ from acid.stage_results import (
     PlantCheckStage,
     StageResult,
     StudyResults,
+    ValidationStage,
 )
 
 SECTION_BUILDERS: dict[type[StageResult], Callable[[StageResult], ReportSection]] = {}
@@ -42,6 +43,42 @@ def sections_for(results: StudyResults) -> list[ReportSection]:
         if r is not None:
             out.append(builder(r))
     return out
+
+
+#: Prediction times (s) of the report's yardstick table.
+YARDSTICK_TIMES = ("60", "300", "1500")
+
+
+@report_section(ValidationStage)
+def _validation_design(r: ValidationStage) -> ReportSection:
+    if not r.window_design:  # a stage record from before the design was recorded
+        return ReportSection("Validation design and yardsticks", paragraphs=(
+            "The window design was not recorded with this stage (run it again).",))
+    paragraphs = [
+        f"Figs. 5-6, {r.window_design}. Overlapping windows are not "
+        "independent trials: one event in the data enters the errors of every window that "
+        "holds it (`acid validate --non-overlapping` spaces the starts by more than the "
+        "horizon)."]
+    rows: tuple = ()
+    if r.yardsticks:
+        lo, hi = (r.yardsticks_fitted_on + (0, 0))[:2]
+        paragraphs.append(
+            "Is the model better than black-box predictors fitted on the same data? On the "
+            f"same windows: {'; '.join(r.yardsticks.values())}. ARX and subspace were fitted "
+            f"on samples {lo}..{hi - 1}; they are yardsticks, never used for control.")
+        times = [t for t in YARDSTICK_TIMES if t in r.by_horizon.get("model", {}).get(
+            "T_cab", {})]
+
+        def cell(d: dict) -> str:
+            return f"{format_number(d['rmse_K'], '.2f')} / {format_number(d['p90_K'], '.2f')}"
+
+        rows = tuple((c, name if name == "model" else f"{name} (yardstick)",
+                      *(cell(by[c][t]) for t in times))
+                     for c in r.channels for name, by in r.by_horizon.items() if c in by)
+        header = ("channel", "predictor", *(f"{t} s: RMSE / p90 |e| (K)" for t in times))
+        return ReportSection("Validation design and yardsticks", paragraphs=tuple(paragraphs),
+                             header=header, rows=rows)
+    return ReportSection("Validation design and yardsticks", paragraphs=tuple(paragraphs))
 
 
 @report_section(EconStage)

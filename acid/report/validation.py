@@ -20,6 +20,8 @@ _LABELS = {
 }
 _TRUTH_COLOR = "black"
 _PRED_COLOR = "tab:red"
+#: Lighter lines of the yardsticks (``ValidationResult.yardsticks``).
+_YARDSTICK_COLOR = {"persistence": "tab:purple", "arx": "tab:green", "subspace": "tab:blue"}
 
 
 def representative_start(result: ValidationResult, channel: str = "T_cab") -> int:
@@ -110,4 +112,39 @@ def error_figure(result: ValidationResult) -> Figure:
     mode = result.settings.get("exogenous", "hold")
     fig.suptitle(f"Prediction errors from {result.n_starts} start instants "
                  f"(T_int/T_shell {mode})", fontsize=11)
+    return fig
+
+
+def yardstick_figure(result: ValidationResult) -> Figure:
+    """The model beside its yardsticks: RMSE over the starts vs prediction time (s, K, log
+    scale), the model in bold, persistence, ARX and subspace in lighter dashed lines, on the
+    same windows. Requires ``validate(..., yardsticks=True)``."""
+    if not result.yardsticks:
+        raise ValueError("no yardsticks in this validation (validate(..., yardsticks=True))")
+    t = result.horizon_s[1:]
+    fig = Figure(figsize=(8.0, 8.0), layout="constrained")
+    axes = fig.subplots(len(result.channels), 1, sharex=True)
+    floor = 1e-3  # K: an RMSE below this is drawn at it (log axis)
+
+    def rmse(pred: np.ndarray, c: int) -> np.ndarray:
+        e = pred[:, 1:, c] - result.measured[:, 1:, c]
+        return np.maximum(np.sqrt(np.mean(e**2, axis=0)), floor)
+
+    for c, name in enumerate(result.channels):
+        ax = axes[c]
+        ax.plot(t, rmse(result.predicted, c), color=_PRED_COLOR, lw=1.8,
+                label=f"model {result.settings.get('params_name', '')!r}")
+        for mark, y in result.yardsticks.items():
+            ax.plot(t, rmse(y.predicted, c), color=_YARDSTICK_COLOR.get(mark, "0.4"), lw=1.2,
+                    ls="--", alpha=0.65, label=f"{mark} (yardstick)")
+        ax.set_yscale("log")
+        ax.set_ylabel(f"{_LABELS[name]}\nRMSE over starts (K)")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(loc="lower right", fontsize=9)
+    axes[-1].set_xlabel("prediction time (s)")
+    axes[-1].set_xlim(t[0], t[-1])
+    d = result.window_design
+    fig.suptitle(f"Model and yardsticks on the same {d['starts']} windows "
+                 f"({100 * d['overlap_fraction']:.0f} % overlap of consecutive windows)",
+                 fontsize=11)
     return fig
