@@ -17,9 +17,20 @@ from acid_cli._common import note, print_table, require_range, say, warn, write_
 MAX_STARTS = 1000
 
 
+#: Built-in declarations that ``--model`` names directly (``paper`` and ``econ`` name the
+#: model families of ``acid fit``; their declarations are loaded by path or through Python).
+DECLARED_NAMES = ("cabin3", "car_cabin")
+
+
 def is_model_file(spec: str | None) -> bool:
-    """Whether ``--model`` names a model file (the declared path) rather than a family."""
-    return spec is not None and str(spec).endswith(".py")
+    """Whether ``--model`` names a declared model (a file FILE.py or a built-in declaration
+    such as ``car_cabin``: the declared path) rather than a family."""
+    return spec is not None and (str(spec).endswith(".py") or str(spec) in DECLARED_NAMES)
+
+
+def model_file_input(spec: str) -> str | None:
+    """The ``--model`` value as a file to check (None for a built-in name)."""
+    return spec if str(spec).endswith(".py") else None
 
 
 def _num(v, digits: int = 5) -> str:
@@ -117,7 +128,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
 
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
                       starts: int, horizon: int, warmup: int, placement: str, seed: int,
-                      held_out_fraction: float | None) -> None:
+                      held_out_fraction: float | None, to_end: bool = False,
+                      yardsticks: bool = True) -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors."""
     from acid.ident.validate import declared_parameters, read_parameters, validate_model
     from acid.models import load
@@ -136,8 +148,9 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         note("per-experiment parameters were fitted on another record: their mean is used")
     if frac is not None and frac < 1.0:
         ds = ds.split(1.0 - frac)[1]
+    est = _fit_records(ps, sha) if yardsticks else None
     res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
-                         placement=placement, seed=seed)
+                         placement=placement, seed=seed, to_end=to_end, yardsticks=est)
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
         f"{model.name!r}, parameters from {ps.source}"
         + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
@@ -152,8 +165,34 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                 [[str(r["step"]), f"{r['time_s']:g}",
                   *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
                     for c in res.channels]] for r in res.by_horizon])
+    if res.yardstick_errors:
+        table = res.table()
+        times = sorted({t for c in table["model"].values() for t in c}, key=float)
+        print_table("Model and yardsticks on the same windows: RMSE / p90 |e| (starts) at "
+                    "each prediction time",
+                    ["predictor", "channel", *[f"{t} s" for t in times]],
+                    [[("model" if name == "model" else f"{name} (yardstick)"), c,
+                      *[(f"{_num(row[t]['rmse_K'], 3)} / {_num(row[t]['p90_K'], 3)} "
+                         f"({row[t]['n']})") if t in row else "-" for t in times]]
+                     for name, chans in table.items() for c, row in chans.items()])
+    elif yardsticks:
+        note("no yardsticks: the parameter file names no fitted record other than DATA "
+             "that exists here (yardsticks are fitted on the estimation records)")
     for line in res.notes:
         note(line)
     write_summary(json_path, {"command": "validate", "acid_version": __version__,
                               "inputs": {"data": str(data), "model": str(model_file),
                                          "params": params}, **res.to_json_dict()})
+
+
+def _fit_records(ps, data_sha: str) -> Dataset | None:
+    """The records the parameters were fitted on (their provenance), when they are not the
+    validation data and are all here: the yardsticks' estimation data."""
+    records = [Path(r) for r in ps.provenance.get("records") or []]
+    if not records or not all(r.is_file() for r in records) \
+            or ps.provenance.get("data_sha256") == data_sha:
+        return None
+    parts = [Dataset.from_hdf5(r, min_samples=2) for r in records]
+    est = parts[0] if len(parts) == 1 else Dataset.concatenate(parts)
+    est.source = ", ".join(map(str, records))
+    return est

@@ -32,7 +32,7 @@ from acid_cli._common import (
     warn,
     write_summary,
 )
-from acid_cli._declared import fit_declared, is_model_file
+from acid_cli._declared import fit_declared, is_model_file, model_file_input
 
 #: Largest output-error window and HAC lag accepted, samples.
 MAX_WINDOW = 100_000
@@ -117,7 +117,7 @@ def fit(
             f"must be one of {', '.join(MODEL_FAMILIES)} or a model file FILE.py, got "
             f"{model!r}")
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
-                        "--model": model if declared else None,
+                        "--model": model_file_input(model) if declared else None,
                         **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
                 outputs={"--out": out, "--json": json_path})
     if not declared:

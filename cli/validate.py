@@ -84,6 +84,10 @@ def validate(
     warmup: int = typer.Option(
         60, "--warmup", help="Model file with latent states: samples before each start from "
                              "which they are estimated."),
+    to_end: bool = typer.Option(
+        False, "--to-end", help="Model file: also start where fewer than --horizon samples "
+                                "remain (short trips); those predictions stop at the "
+                                "experiment's end."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -96,8 +100,10 @@ def validate(
     if model is not None:
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
                                     placement, seed, held_out_fraction,
-                                    exogenous != "hold" or beside is not None or allow_unstable)
+                                    exogenous != "hold" or beside is not None or allow_unstable,
+                                    to_end, yardsticks)
 
+    require(not to_end, "--to-end", "is for a declared model (--model)")
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
@@ -210,14 +216,18 @@ def validate(
 
 
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
-                         seed, held_out_fraction, paper_options) -> None:
+                         seed, held_out_fraction, paper_options, to_end=False,
+                         yardsticks=True) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
-    from acid_cli._declared import is_model_file, validate_declared
+    from acid_cli._declared import (
+        DECLARED_NAMES, is_model_file, model_file_input, validate_declared)
 
-    require(is_model_file(model), "--model", f"must be a model file FILE.py, got {model!r}")
+    require(is_model_file(model), "--model", f"must be a model file FILE.py or one of "
+            f"{', '.join(DECLARED_NAMES)}, got {model!r}")
     require(not paper_options, "--model",
             "--exogenous, --beside and --allow-unstable are for the paper/econ families")
-    check_paths(inputs={"DATA": data, "--model": model, "--params": params_input(params)},
+    check_paths(inputs={"DATA": data, "--model": model_file_input(model),
+                        "--params": params_input(params)},
                 outputs={"--json": json_path})
     require_range(starts, "--starts", 1, MAX_STARTS)
     require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
@@ -229,7 +239,8 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
         require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
-                      held_out_fraction=held_out_fraction)
+                      held_out_fraction=held_out_fraction, to_end=to_end,
+                      yardsticks=yardsticks)
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.
 YARDSTICK_TIMES_S = (60.0, 300.0, 1500.0)

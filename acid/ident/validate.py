@@ -29,6 +29,8 @@ from acid.models.declaration import Model
 from acid.models.loader import load
 
 PLACEMENTS = ("even", "random")
+#: Prediction times (s) of the model-and-yardsticks table.
+YARDSTICK_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
 
 
 @dataclass(frozen=True)
@@ -114,22 +116,50 @@ class DeclaredValidation:
     metrics: dict
     by_horizon: tuple
     notes: tuple[str, ...]
+    #: {persistence | arx | subspace: {channel: (n_starts, horizon) errors}} on the same
+    #: windows (``validate_model(..., yardsticks=estimation data)``; NaN where the model's
+    #: are), and {name: {"description", settings...}} of each.
+    yardstick_errors: dict = field(default_factory=dict)
+    yardstick_settings: dict = field(default_factory=dict)
+
+    def table(self, times_s=YARDSTICK_TIMES_S) -> dict:
+        """{"model" | yardstick: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}}}: RMSE and
+        p90 of |error| over the starts that reach each prediction time ``t`` (s)."""
+        out = {"model": _by_time(self.errors, self.Ts, times_s)}
+        for name, errors in self.yardstick_errors.items():
+            out[name] = _by_time(errors, self.Ts, times_s)
+        return out
 
     def to_json_dict(self) -> dict:
+        table = self.table()
+        marks = {}
+        if self.yardstick_errors:
+            marks = {"model_by_time": table["model"],
+                     "yardsticks": {k: v for k, v in table.items() if k != "model"},
+                     "yardstick_settings": self.yardstick_settings}
         return json_safe({
             "model": self.model, "horizon": self.horizon, "warmup": self.warmup,
             "Ts": self.Ts, "n_starts": int(self.starts.size),
             "starts": self.starts.tolist(),
             "channels": {c: {"unit": u, **self.metrics[c]}
                          for c, u in zip(self.channels, self.units, strict=True)},
-            "by_horizon": list(self.by_horizon), "notes": list(self.notes)})
+            "by_horizon": list(self.by_horizon), "notes": list(self.notes), **marks})
 
 
 def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: int = 60,
                    placement: str = "even", seed: int = 0,
-                   horizons: tuple[int, ...] | None = None) -> DeclaredValidation:
-    """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring)."""
+                   horizons: tuple[int, ...] | None = None, to_end: bool = False,
+                   yardsticks: Dataset | None = None) -> DeclaredValidation:
+    """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
+
+    ``to_end``: a start may lie less than ``horizon`` samples before its experiment's end
+    (at least ``horizon // 25`` steps, 60 s of 300 x 5 s); its prediction stops there, and
+    the errors per horizon count only the starts that reach it (short trips). ``yardsticks``:
+    the estimation data (a dataset the model was fitted on) on which persistence, ARX and
+    subspace (:mod:`acid.yardsticks`) are fitted; they predict the same windows from the
+    same channels (the model's inputs and disturbances, measured; its measured channels up
+    to each start)."""
     model = load(model)
     params = params or declared_parameters(model)
     if placement not in PLACEMENTS:
@@ -141,11 +171,12 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     data = ModelData.of(model, ds, min_samples=2)
     latent = [i for i, s in enumerate(model.states) if not s.measured]
     need_warm = warmup if latent else 0
-    cand = np.concatenate([np.arange(a + need_warm, b - horizon) for a, b in data.segments]
+    reach = max(1, horizon // 25) if to_end else horizon
+    cand = np.concatenate([np.arange(a + need_warm, b - reach) for a, b in data.segments]
                           + [np.zeros(0, int)]).astype(int)
     if cand.size == 0:
         raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
-                        f"({need_warm} + {horizon} + 1 samples)")
+                        f"({need_warm} + {reach} + 1 samples)")
     if placement == "even":
         pick = np.unique(np.round(np.linspace(0, cand.size - 1, min(starts, cand.size))))
         k0 = cand[pick.astype(int)]
@@ -163,8 +194,18 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
+    last = np.array([b - 1 for a, b in data.segments])[
+        np.searchsorted([b for _, b in data.segments], k0, side="right")]
+    inside = idx <= last[:, None]
+    idx = np.minimum(idx, last[:, None])
+    if not inside.all():
+        notes.append(f"predictions stop at the end of their experiment: "
+                     f"{int((~inside[:, -1]).sum())} of {k0.size} starts lie less than "
+                     f"{horizon} steps before it (at least {reach} steps each)")
     Y = simulate_windows(model, data, idx, x0, P)
-    meas = np.concatenate([data.x, data.y], axis=1)[idx]
+    meas = np.where(inside[..., None], data.observed()[idx], np.nan)
+    if data.censored is not None:
+        notes.append("censored samples (a clipping sensor) are not scored")
     channels, units, errors, metrics = [], [], {}, {}
     rows = [(c, n) for c, n in data.measured_channels(model)]
     unit_of = {r.name: r.unit for r in model.states + model.outputs}
@@ -179,6 +220,11 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                          "p90_abs": float(percentile_abs_error(m, p, 90)),
                          "max_abs": float(max_abs_error(m, p)),
                          "fit_percent": float(fit_percent(m, p))}
+    y_err, y_set = {}, {}
+    if yardsticks is not None:
+        y_err, y_set = _yardsticks(model, yardsticks, data, k0, idx, meas, rows)
+        notes.append("yardsticks (persistence, ARX, subspace) fitted on "
+                     f"{yardsticks.source}, predicting the same windows")
     steps = sorted({h for h in (horizons or _default_horizons(horizon)) if 1 <= h <= horizon})
     by_h = []
     for h in steps:
@@ -188,12 +234,65 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
             e = e[np.isfinite(e)]
             row[name] = {"rmse": float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan,
                          "p90_abs": float(np.percentile(np.abs(e), 90)) if e.size
-                         else math.nan}
+                         else math.nan, "n": int(e.size)}
         by_h.append(row)
     return DeclaredValidation(model=model.name, channels=tuple(channels), units=tuple(units),
                               starts=k0, horizon=int(horizon), warmup=int(need_warm),
                               Ts=model.Ts, errors=errors, metrics=metrics,
-                              by_horizon=tuple(by_h), notes=tuple(notes))
+                              by_horizon=tuple(by_h), notes=tuple(notes),
+                              yardstick_errors=y_err, yardstick_settings=y_set)
+
+
+def _by_time(errors: dict, Ts: float, times_s) -> dict:
+    """{channel: {"<t>": {"rmse_K", "p90_K", "n"}}} at each time inside the horizon, over
+    the starts whose prediction reaches it (finite errors)."""
+    out = {}
+    for name, e in errors.items():
+        out[name] = {}
+        for t in times_s:
+            h = int(round(t / Ts))
+            if not 1 <= h <= e.shape[1]:
+                continue
+            v = e[:, h - 1]
+            v = v[np.isfinite(v)]
+            if v.size:
+                out[name][f"{h * Ts:g}"] = {"rmse_K": float(np.sqrt(np.mean(v ** 2))),
+                                            "p90_K": float(np.percentile(np.abs(v), 90)),
+                                            "n": int(v.size)}
+    return out
+
+
+def _yardsticks(model: Model, est: Dataset, data: ModelData, k0, idx, meas, rows):
+    """Persistence, ARX and subspace fitted on ``est`` and run over the validation windows
+    (``idx``, clipped at each experiment's end) from the same channels as the model: its
+    inputs and disturbances as measured, its measured channels up to each start."""
+    from acid.yardsticks import evaluate
+
+    ed = ModelData.of(model, est, min_samples=2)
+    chan = [c for c, _ in rows]
+    H = idx.shape[1] - 1
+
+    def stack(d: ModelData, pad: int):
+        y = np.concatenate([d.x, d.y], axis=1)[:, chan]
+        u = np.concatenate([d.u, d.d], axis=1)
+        # the sensor's limit where censored is kept (a start needs a value), as the model
+        y, u = np.concatenate([y, np.repeat(y[-1:], pad, 0)]), \
+            np.concatenate([u, np.repeat(u[-1:], pad, 0)])
+        return y, u, np.concatenate([d.experiment, np.full(pad, d.experiment[-1])])
+
+    ye, ue, xe = stack(ed, 0)
+    yv, uv, xv = stack(data, H + 1)
+    n_est = ye.shape[0]
+    names = tuple(r.name for r in (*model.inputs, *model.disturbances))
+    out = evaluate(np.concatenate([ye, yv]), np.concatenate([ue, uv]),
+                   np.concatenate([xe, xv + xe.max() + 1]), k0 + n_est, H,
+                   np.zeros(len(names), bool), (0, n_est), input_names=names)
+    errors = {name: {c: p.predicted[:, 1:, i] - meas[:, 1:, ci]
+                     for i, (ci, c) in enumerate(rows)} for name, p in out.items()}
+    settings = {name: {"description": p.description, **p.settings,
+                       "note": "a yardstick: never offered to a controller"}
+                for name, p in out.items()}
+    return errors, settings
 
 
 def _default_horizons(H: int) -> tuple[int, ...]:
@@ -223,7 +322,7 @@ def _warm_start(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np
     idx = (k0 - W)[:, None] + np.arange(W + 1)[None, :]
     n, nx = k0.size, model.nx
     chan = [c for c, _ in data.measured_channels(model)]
-    meas = np.concatenate([data.x, data.y], axis=1)[idx][:, :W][..., chan]
+    meas = data.observed()[idx][:, :W][..., chan]
     obs = np.isfinite(meas)
     meas = np.nan_to_num(meas)
     scale = np.array([max(float(np.std(meas[..., i][obs[..., i]])), 1e-6)
