@@ -220,7 +220,11 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
                          yardsticks=True) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
     from acid_cli._declared import (
-        DECLARED_NAMES, is_model_file, model_file_input, validate_declared)
+        DECLARED_NAMES,
+        is_model_file,
+        model_file_input,
+        validate_declared,
+    )
 
     require(is_model_file(model), "--model", f"must be a model file FILE.py or one of "
             f"{', '.join(DECLARED_NAMES)}, got {model!r}")

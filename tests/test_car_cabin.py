@@ -1,0 +1,139 @@
+"""The shipped cabin model for what a car logs (``acid/models/car_cabin.py``, issue 20): its
+declaration, recovery of its parameters by the declared fitter with latent interior and
+shell, and identification and held-out validation on real BMW i3 trips
+(``../shared/real-data``; skipped, with the reason, where that folder is absent)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from acid.data import ChannelMap, Dataset, import_logs
+from acid.examples import resolve
+from acid.ident.fit import fit_model
+from acid.ident.validate import fitted_parameters, validate_model
+from acid.models import load
+
+ROOT = Path(__file__).resolve().parents[1]
+REAL = ROOT.parent / "shared" / "real-data" / "bmw-i3"
+SOURCES = ROOT / "acid" / "models" / "SOURCES.md"
+
+
+def test_declaration_loads_by_name_with_latent_interior_and_shell_and_cited_ranges():
+    m = load("car_cabin")
+    assert m.name == "car_cabin"
+    assert [(s.name, s.measured) for s in m.states] == [
+        ("T_cab", True), ("T_int", False), ("T_shell", False)]
+    # only channels a car logs: no blower flow, no supply air
+    assert {r.name for r in (*m.inputs, *m.disturbances)} == {"T_evap", "T_amb", "v_veh"}
+    for p in m.parameters:
+        assert p.min < p.max and p.min <= p.value <= p.max, p.name
+    # every range is cited: the keys in the docstring are references in SOURCES.md
+    doc = __import__("acid.models.car_cabin", fromlist=["x"]).__doc__
+    keys = set(re.findall(r"\[([A-Za-z]+\d{4})", doc)) | set(re.findall(
+        r", ([A-Za-z]+\d{4})", doc))
+    text = SOURCES.read_text(encoding="utf-8")
+    assert keys and all(f"**{k}**" in text for k in keys), keys
+
+
+def _simulated(truth: dict, loads, rng, n=360) -> Dataset:
+    """Noise-free trips of car_cabin itself: latent interior and shell (not in the data),
+    the evaporator air switched between A/C on and off, speed and ambient varying."""
+    m = load("car_cabin")
+    names = m.parameter_names
+    parts = []
+    for i, q in enumerate(loads):
+        dwell = 30
+        T_ev = np.repeat(rng.uniform(278.0, 300.0, n // dwell + 1), dwell)[:n]
+        Ta = 300.0 + 2.0 * np.sin(np.arange(n) / 80.0 + i)
+        v = np.repeat(rng.uniform(0.0, 25.0, n // dwell + 1), dwell)[:n]
+        p = m.values.copy()
+        for k, val in truth.items():
+            p[names.index(k)] = val
+        p[names.index("Q_sol")] = q
+        X, _ = m.simulate(np.array([310.0, 315.0, 305.0]), T_ev[:, None], np.c_[Ta, v], p)
+        ch = {"T_cab": X[:-1, 0] - 273.15, "T_evap": T_ev - 273.15, "T_amb": Ta - 273.15,
+              "v_veh": v}
+        parts.append(Dataset(np.arange(n) * 5.0, ch, {k: "m/s" if k == "v_veh" else "degC"
+                                                    for k in ch}, 5.0))
+    return Dataset.concatenate(parts)
+
+
+def test_output_error_recovers_known_parameters_with_latent_states(rng):
+    truth = {"C_cab": 15.0, "G_sup": 70.0, "UA_int": 120.0}
+    ds = _simulated(truth, (200.0, 700.0), rng)
+    assert "T_int" not in ds and "T_shell" not in ds
+    # the capacities of the slow nodes and the shell's conductances held at their declared
+    # values (which generated the data); the fast ones, and the load per trip, estimated
+    fix = {n: load("car_cabin").parameter(n).value
+           for n in ("C_int", "C_shell", "UA_shell", "UA_out", "UA_out_v")}
+    res = fit_model("car_cabin", ds, "oe", fix=fix, oe_window=120)
+    assert res.method == "oe" and res.output_error["converged"]
+    for name, t in truth.items():
+        assert res.value(name) == pytest.approx(t, rel=1e-3), name
+    np.testing.assert_allclose(res.per_experiment["Q_sol"], [200.0, 700.0], rtol=1e-3)
+    assert "latent: T_int" in " ".join(res.notes)
+
+
+def test_validation_to_the_trips_end_scores_only_reached_horizons_and_yardsticks(rng):
+    truth = {"C_cab": 15.0, "G_sup": 70.0, "UA_int": 120.0}
+    est = _simulated(truth, (200.0, 700.0), rng, n=300)
+    val = _simulated(truth, (450.0,), rng, n=200)
+    m = load("car_cabin")
+    p = m.values.copy()
+    for k, v in truth.items():
+        p[m.parameter_names.index(k)] = v
+    from acid.ident.validate import ParameterSet
+
+    ps = ParameterSet(values=p, per_experiment={"Q_sol": {0: 450.0}})
+    with pytest.raises(Exception, match="longer than warmup"):
+        validate_model(m, val, ps, starts=10, horizon=300, warmup=30)
+    res = validate_model(m, val, ps, starts=10, horizon=300, warmup=30, to_end=True,
+                         yardsticks=est)
+    e = res.errors["T_cab"]
+    # every start reaches its trip's end and no further
+    reach = np.isfinite(e).sum(axis=1)
+    np.testing.assert_array_equal(reach, 200 - 1 - res.starts)
+    # the model that made the data predicts it (latent states from the warm-up stretch)
+    assert np.nanmax(np.abs(e)) < 0.05
+    table = res.table()
+    assert set(table) == {"model", "persistence", "arx", "subspace"}
+    assert table["model"]["T_cab"]["60"]["n"] == res.starts.size
+    assert "1500" not in table["model"]["T_cab"]        # no start reaches 1500 s
+    assert table["persistence"]["T_cab"]["300"]["p90_K"] > table["model"]["T_cab"]["300"][
+        "p90_K"]
+    d = res.to_json_dict()
+    assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
+    assert set(d["yardsticks"]["arx"]["T_cab"]["60"]) == {"rmse_K", "p90_K", "n"}
+
+
+# ------------------------------------------------------------------ real BMW i3 trips
+#: Fitted on two trips, validated on two others (a hot-soak pull-down each).
+EST_TRIPS, VAL_TRIPS = ("TripA07", "TripA12"), ("TripA08", "TripA11")
+#: Bound on the held-out p90 |error| of T_cab at 600 s (K): measured 2.6 K when this test
+#: was written (2026-11-25, fit with 20 evaluations), plus margin.
+P90_600_BOUND = 3.5
+
+
+def _trips(names) -> Dataset:
+    cmap = ChannelMap.from_file(resolve("example:bmw_i3_map.toml"))
+    return import_logs([REAL / f"{n}.csv.gz" for n in names], cmap)
+
+
+@pytest.mark.skipif(not REAL.is_dir(), reason=f"real vehicle data not found at {REAL} "
+                    "(../shared/real-data beside the repository; acid does not ship it)")
+def test_real_trips_fit_converges_and_held_out_error_is_bounded():
+    est, val = _trips(EST_TRIPS), _trips(VAL_TRIPS)
+    assert "T_cab_censored" in est       # the clipped hot-soak starts are masked
+    res = fit_model("car_cabin", est, "oe", oe_window=120, covariance="white", max_nfev=20)
+    assert res.output_error["channel_fit_percent"]["T_cab"] > 80.0
+    for e in res.estimates:
+        p = load("car_cabin").parameter(e.name)
+        assert p.min <= e.value <= p.max, e.name
+    v = validate_model("car_cabin", val, fitted_parameters(res), starts=20, horizon=300,
+                       warmup=60, to_end=True)
+    row = v.table()["model"]["T_cab"]
+    assert row["600"]["p90_K"] < P90_600_BOUND, row
