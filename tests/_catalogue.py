@@ -723,6 +723,10 @@ CASES: list[Case] = [
     Case("validate-model-file-paper-params", "params",
          (*V[:2], "--model", "{w}/m.py", "--params", P), ("p.json", "declared model"),
          _write("m.py", MODEL_FILE)),
+    Case("validate-to-end-without-model", "options", (*V, "--to-end"),
+         ("--to-end", "declared model")),
+    Case("validate-model-unknown-name", "options",
+         (*V[:2], "--model", "car_cabn"), ("--model", "car_cabin", "'car_cabn'")),
 ]
 
 
