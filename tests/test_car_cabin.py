@@ -5,6 +5,7 @@ shell, and identification and held-out validation on real BMW i3 trips
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -113,7 +114,7 @@ def test_validation_to_the_trips_end_scores_only_reached_horizons_and_yardsticks
 # ------------------------------------------------------------------ real BMW i3 trips
 #: Fitted on two trips, validated on two others (a hot-soak pull-down each).
 EST_TRIPS, VAL_TRIPS = ("TripA07", "TripA12"), ("TripA08", "TripA11")
-#: Bound on the held-out p90 |error| of T_cab at 600 s (K): 2.08 K measured when this test
+#: Bound on the held-out p90 |error| of T_cab at 600 s (K): 2.19 K measured when this test
 #: was written (2026-11-25, 20 evaluations; persistence 2.58 K on the same 14 starts), plus
 #: margin for another BLAS or CasADi.
 P90_600_BOUND = 3.5
@@ -134,8 +135,10 @@ def test_real_trips_fit_converges_and_held_out_error_is_bounded():
     for e in res.estimates:
         p = load("car_cabin").parameter(e.name)
         assert p.min <= e.value <= p.max, e.name
-    v = validate_model("car_cabin", val, fitted_parameters(res), starts=20, horizon=300,
-                       warmup=60, to_end=True)
+    # the held-out trips' experiment ids (0, 1) are the fitted trips' too: their loads are
+    # unknown, so the mean of the fitted trips' loads is used (as acid validate does)
+    ps = dataclasses.replace(fitted_parameters(res), per_experiment={})
+    v = validate_model("car_cabin", val, ps, starts=20, horizon=300, warmup=60, to_end=True)
     row = v.table()["model"]["T_cab"]
     assert row["600"]["p90_K"] < P90_600_BOUND, row
 
