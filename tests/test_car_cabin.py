@@ -169,3 +169,31 @@ def test_cli_fits_car_cabin_by_name_and_validates_to_the_trips_end_with_yardstic
     d = json.loads((tmp_path / "v.json").read_text())
     assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
     assert d["model_by_time"]["T_cab"]["60"]["p90_K"] < 0.05
+
+
+def test_censored_samples_are_neither_fitted_nor_scored(rng):
+    from acid.ident.data import ModelData
+
+    truth = {"C_cab": 15.0, "G_sup": 70.0, "UA_int": 120.0}
+    ds = _simulated(truth, (450.0,), rng, n=200)
+    clipped = ds["T_cab"] > np.percentile(ds["T_cab"], 90)
+    ch = {n: ds[n] for n in ("T_cab", "T_evap", "T_amb", "v_veh")}
+    ch["T_cab"] = np.where(clipped, 10.0, ch["T_cab"])        # a wrong value where clipped
+    ch["T_cab_censored"] = clipped.astype(float)
+    bad = Dataset(ds.time, ch, {**{n: ds.units[n] for n in ch if n in ds.units},
+                                "T_cab_censored": "1"}, 5.0)
+    m = load("car_cabin")
+    data = ModelData.of(m, bad)
+    assert np.isnan(data.observed()[clipped, 0]).all()
+    assert np.isfinite(data.observed()[~clipped, 0]).all()
+    p = m.values.copy()
+    for k, v in truth.items():
+        p[m.parameter_names.index(k)] = v
+    from acid.ident.validate import ParameterSet
+
+    res = validate_model(m, bad, ParameterSet(values=p, per_experiment={"Q_sol": {0: 450.0}}),
+                         starts=5, horizon=40, warmup=30)
+    e = res.errors["T_cab"]
+    scored = ~clipped[res.starts[:, None] + np.arange(1, 41)[None, :]]
+    assert np.isnan(e[~scored]).all() and np.nanmax(np.abs(e)) < 0.05
+    assert any("censored" in n for n in res.notes)
