@@ -3,7 +3,9 @@
 A real car logs the cabin air temperature, the ambient, the speed, the A/C's electric power
 and (on the BMW i3) the air temperature after the evaporator/heat exchanger; it logs no
 blower flow, no supply air, no interior or shell temperature and no solar load. This
-declaration uses only the first four kinds of channel:
+declaration reads the cabin air, the ambient, the speed and the evaporator air temperature
+(the A/C's effect on the cabin arrives as that air; the A/C power is what a controller
+spends to hold it, not a separate heat flow here):
 
 * ``T_cab`` (measured): the cabin air, with the fast trims that follow it.
 * ``T_int`` (latent): seats, dashboard, panels and the air they hold, lumped.
@@ -27,10 +29,12 @@ heat and duct gains). ``Q_sol``, the solar and occupant load absorbed by the int
 not logged: it is a per-trip parameter (weather and route differ); on a trip the fit never
 saw, its mean over the fitted trips is used.
 
-What the data identify: ``T_cab`` alone sees the network only through its response, so
-``C_cab`` with ``G_sup`` (the supply air's time constant), the slow interior and shell
-modes and the loads in combination; the fit reports the combinations it can resolve. The
-ranges are those of published cabin models and measurements (``acid/models/SOURCES.md``):
+What the data identify: ``T_cab`` alone sees the network only through its response. On
+13 BMW i3 trips (README, "Your car's logs") ``C_cab`` and ``G_sup`` come out as one time
+constant (both at a bound), the interior's and shell's capacities and conductances only in
+combinations, the speed slope ``UA_out_v`` at zero, and ``dT_sup`` is indistinguishable from
+the load (so it is fixed). The ranges are those of published cabin models and measurements
+(``acid/models/SOURCES.md``):
 
 * ``C_cab``: cabin air of a compact car (2.5-3 m^3, ~3 kg, ~3 kJ/K) plus the thin trims
   that follow it within a minute: 3-40 kJ/K [Marcos2014, TorregrosaJaime2015].
