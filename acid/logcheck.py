@@ -31,6 +31,10 @@ MAX_ACCELERATION = 6.0
 
 #: A channel is reported as held at an extreme when it sits exactly there for at least this
 #: share of the record and for one run at least ``HELD_RUN_S`` long.
+#: A channel with at most this many distinct values (and at least 3) over 100 samples or
+#: more is quantised, however often it changes.
+FEW_LEVELS = 16
+
 HELD_FRACTION = 0.02
 HELD_RUN_S = 60.0
 
@@ -116,8 +120,9 @@ def quantisation(name: str, values: np.ndarray, unit: str, time: np.ndarray) -> 
     logged faster than it reports, possibly with interpolation between levels).
 
     Held samples are those in runs of at least 3 equal values; the channel is quantised
-    when most samples (>= 50 %) are held, on at least 3 levels; the step is the lower
-    quartile of the spacing between neighbouring levels.
+    when most samples (>= 50 %) are held, on at least 3 levels, or when it takes 3 to
+    ``FEW_LEVELS`` distinct values only; the step is the lower quartile of the spacing
+    between neighbouring levels.
     """
     v = values[np.isfinite(values)]
     if v.size < 30:
@@ -128,11 +133,14 @@ def quantisation(name: str, values: np.ndarray, unit: str, time: np.ndarray) -> 
     long = run_len >= 3
     held = float(run_len[long].sum()) / v.size
     levels = np.unique(v[run_start[long]])
-    if held < 0.5 or levels.size < 3:
+    distinct = np.unique(v)
+    if 3 <= distinct.size <= FEW_LEVELS and v.size >= 100:
+        levels, held = distinct, max(held, 0.5)   # few distinct values: quantised whatever
+    if held < 0.5 or levels.size < 3:             # how long each is held
         return None
     step = float(np.percentile(np.diff(levels), 25))
     dt = float(np.median(np.diff(time))) if time.size > 1 else float("nan")
-    typical = float(np.median(run_len[long])) * dt
+    typical = float(np.median(run_len[long] if long.any() else run_len)) * dt
     return {"channel": name, "kind": "quantised", "step": step, "levels": int(levels.size),
             "held_fraction": held, "unit": unit,
             "message": f"channel {name!r}: quantised sensor, {held:.0%} of the samples held "

@@ -224,36 +224,40 @@ def in_degC(value):
 
 
 # ------------------------------------------------------------------ compound units
-#: Atoms of a compound unit: name -> (factor to SI, {dimension: power}). Dimensions are
-#: kg, m, s, K (temperature differences) and "1"; ``degC`` is a scale, not an atom.
-_ATOMS: dict[str, tuple[float, dict[str, float]]] = {
-    "1": (1.0, {}), "%": (0.01, {}),
-    "kg": (1.0, {"kg": 1}), "g": (1e-3, {"kg": 1}),
-    "m": (1.0, {"m": 1}), "km": (1e3, {"m": 1}), "mm": (1e-3, {"m": 1}),
-    "s": (1.0, {"s": 1}), "min": (60.0, {"s": 1}), "h": (3600.0, {"s": 1}),
-    "K": (1.0, {"K": 1}),
-    "N": (1.0, {"kg": 1, "m": 1, "s": -2}),
-    "J": (1.0, {"kg": 1, "m": 2, "s": -2}), "kJ": (1e3, {"kg": 1, "m": 2, "s": -2}),
-    "MJ": (1e6, {"kg": 1, "m": 2, "s": -2}),
-    "W": (1.0, {"kg": 1, "m": 2, "s": -3}), "kW": (1e3, {"kg": 1, "m": 2, "s": -3}),
-    "Pa": (1.0, {"kg": 1, "m": -1, "s": -2}), "kPa": (1e3, {"kg": 1, "m": -1, "s": -2}),
-    "bar": (1e5, {"kg": 1, "m": -1, "s": -2}),
-    "rpm": (1.0 / 60.0, {"s": -1}),
+#: Atoms of compound units beyond ``UNIT_SCALES`` (whose single-word, offset-free units are
+#: atoms too, with ``BASE_DIMENSIONS``): name -> (factor to SI, {dimension: power}).
+_EXTRA_ATOMS: dict[str, tuple[float, dict[str, float]]] = {
+    "kg": (1.0, {"kg": 1}), "g": (1e-3, {"kg": 1}), "mm": (1e-3, {"m": 1}),
+    "min": (60.0, {"s": 1}), "h": (3600.0, {"s": 1}), "N": (1.0, {"kg": 1, "m": 1, "s": -2}),
 }
+
+
+def _atom(name: str):
+    """(factor, dimensions) of one word of a compound unit, or None."""
+    if name in _EXTRA_ATOMS:
+        f, d = _EXTRA_ATOMS[name]
+        return f, dict(d)
+    row = UNIT_SCALES.get(name)
+    if row is None or "/" in name or row[2] != 0.0:
+        return None
+    base, factor, _ = row
+    return factor, dict(BASE_DIMENSIONS.get(base, {}))
 
 
 def parse_unit(text: str) -> tuple[float, dict[str, float]]:
     """A compound unit such as ``"W/K"``, ``"kJ/K"``, ``"K s/kg"``, ``"J/(kg K)"`` or
     ``"W/K/(m/s)^0.8"`` as (factor to SI, {dimension: power}).
 
-    Grammar: factors separated by spaces, ``*`` or ``/`` (``/`` divides by the next factor
-    only); a factor is an atom of ``_ATOMS``, a number ``1`` or a parenthesised unit, with an
-    optional ``^power``. ``degC`` and ``degF`` are accepted alone (temperatures; kelvin inside).
+    A unit of ``UNIT_SCALES`` is read from that one table (``degC`` and ``degF`` alone, as
+    temperatures). Otherwise: factors separated by spaces, ``*`` or ``/`` (``/`` divides by
+    the next factor only); a factor is a word (an offset-free unit of ``UNIT_SCALES`` or
+    kg, g, mm, min, h, N), ``1`` or a parenthesised unit, with an optional ``^power``.
     Raises ``ValueError`` naming the part it cannot read.
     """
     text = str(text).strip()
-    if text in ("degC", "degF"):
-        return 1.0, {"K": 1}
+    if text in UNIT_SCALES:
+        base, factor, _ = UNIT_SCALES[text]
+        return factor, {k: float(v) for k, v in BASE_DIMENSIONS.get(base, {}).items()}
     tokens = _unit_tokens(text)
     factor, dims, pos = _unit_product(tokens, 0, text)
     if pos != len(tokens):
@@ -287,12 +291,12 @@ def _unit_product(tokens, pos, text):
             if pos >= len(tokens) or tokens[pos] != ")":
                 raise ValueError(f"unit {text!r}: unbalanced parenthesis")
             pos += 1
-        elif tok in _ATOMS:
-            f, d = _ATOMS[tok][0], dict(_ATOMS[tok][1])
+        elif _atom(tok) is not None:
+            f, d = _atom(tok)
             pos += 1
         else:
-            raise ValueError(f"unit {text!r}: unknown unit {tok!r} (known: "
-                             f"{', '.join(_ATOMS)}, degC alone)")
+            raise ValueError(f"unit {text!r}: unknown unit {tok!r} (known: the units of "
+                             "acid.units.UNIT_SCALES, kg, g, mm, min, h, N; degC alone)")
         power = 1.0
         if pos < len(tokens) and tokens[pos] == "^":
             sign = 1.0

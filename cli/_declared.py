@@ -97,11 +97,13 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                 rows)
     eq_rows = [[q.name, q.method, "-" if q.rank is None else f"{q.rank}/{q.n_columns}",
                 _num(q.condition, 3), _num(q.residual_std, 3), _num(q.fit_percent, 4),
+                _num(q.residual_acf1, 2), _num(q.ljung_box_p, 2),
                 q.reason or ", ".join(q.parameters)] for q in result.equations]
     print_table("Equations: how each was fitted (ls: equation-error least squares), rank, "
-                "condition, residual std, one-step fit %",
-                ["equation", "fit", "rank", "cond", "resid", "fit %", "parameters / why not ls"],
-                eq_rows)
+                "condition, residual std, one-step fit %, residual lag-1 autocorrelation and "
+                "Ljung-Box p (20 lags)",
+                ["equation", "fit", "rank", "cond", "resid", "fit %", "acf1", "LB p",
+                 "parameters / why not ls"], eq_rows)
     oe = result.output_error
     if oe:
         sim = ", ".join(f"{c} {v:.2f} %" for c, v in oe["channel_fit_percent"].items())
@@ -128,8 +130,9 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
 
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
                       starts: int, horizon: int, warmup: int, placement: str, seed: int,
-                      held_out_fraction: float | None, to_end: bool = False,
-                      yardsticks: bool = True) -> None:
+                      held_out_fraction: float | None, hold_all: bool = False,
+                      non_overlapping: bool = False, yardsticks: bool = True,
+                      to_end: bool = False) -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors."""
     from acid.ident.validate import declared_parameters, read_parameters, validate_model
     from acid.models import load
@@ -146,11 +149,22 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
     if ps.per_experiment and ps.provenance.get("data_sha256") != sha:
         ps = dataclasses.replace(ps, per_experiment={})
         note("per-experiment parameters were fitted on another record: their mean is used")
-    if frac is not None and frac < 1.0:
-        ds = ds.split(1.0 - frac)[1]
+    lo = int(round(len(ds) * (1.0 - frac))) if frac is not None and frac < 1.0 else 0
+    hi, estimation = len(ds), ((0, lo) if lo > 0 else None)
     est = _fit_records(ps, sha) if yardsticks else None
+    if est is not None:
+        # the yardsticks are fitted on the records the parameters were fitted on, placed
+        # before DATA; the starts stay in DATA
+        n_est = len(est)
+        ds = Dataset.concatenate([est, ds])
+        lo, hi, estimation = n_est + lo, n_est + hi, (0, n_est)
     res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
-                         placement=placement, seed=seed, to_end=to_end, yardsticks=est)
+                         placement=placement, seed=seed, non_overlapping=non_overlapping,
+                         hold=tuple(d.name for d in model.disturbances) if hold_all else (),
+                         start_range=(lo, hi), yardsticks=yardsticks,
+                         estimation=estimation, to_end=to_end)
+    if est is not None:
+        note(f"yardsticks fitted on the parameters' records ({est.source})")
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
         f"{model.name!r}, parameters from {ps.source}"
         + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
@@ -165,19 +179,28 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                 [[str(r["step"]), f"{r['time_s']:g}",
                   *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
                     for c in res.channels]] for r in res.by_horizon])
-    if res.yardstick_errors:
-        table = res.table()
-        times = sorted({t for c in table["model"].values() for t in c}, key=float)
-        print_table("Model and yardsticks on the same windows: RMSE / p90 |e| (starts) at "
-                    "each prediction time",
-                    ["predictor", "channel", *[f"{t} s" for t in times]],
-                    [[("model" if name == "model" else f"{name} (yardstick)"), c,
-                      *[(f"{_num(row[t]['rmse_K'], 3)} / {_num(row[t]['p90_K'], 3)} "
-                         f"({row[t]['n']})") if t in row else "-" for t in times]]
-                     for name, chans in table.items() for c, row in chans.items()])
-    elif yardsticks:
-        note("no yardsticks: the parameter file names no fitted record other than DATA "
-             "that exists here (yardsticks are fitted on the estimation records)")
+    if res.yardsticks:
+        ch = [c for c in res.channels if c in next(iter(res.yardsticks.values()))["channels"]]
+        rows = [[c, "model", *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
+                               for r in res.by_horizon]] for c in ch]
+        for name, y in res.yardsticks.items():
+            rows += [[c, f"{name} (yardstick)",
+                      *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
+                        for r in y["by_horizon"]]] for c in ch]
+        rows.sort(key=lambda r: ch.index(r[0]))
+        print_table("Model and yardsticks on the same windows: RMSE / p90 |e| at each step",
+                    ["_channel", "_predictor", *[f"{r['time_s']:g} s" for r in res.by_horizon]],
+                    rows)
+        for y in res.yardsticks.values():
+            say(f"  {y['description']}")
+        times = sorted({t for c in res.by_time.values() for t in c}, key=float)
+        print_table("Model and yardsticks at prediction times: RMSE / p90 |e| (starts that "
+                    "reach it)", ["_predictor", "_channel", *[f"{t} s" for t in times]],
+                    [[name, c, *[(f"{_num(r[t]['rmse_K'], 3)} / {_num(r[t]['p90_K'], 3)} "
+                                  f"({r[t]['n']})") if t in r else "-" for t in times]]
+                     for name, table in [("model", res.by_time)] + [
+                         (f"{k} (yardstick)", y["by_time"]) for k, y in res.yardsticks.items()]
+                     for c, r in table.items()])
     for line in res.notes:
         note(line)
     write_summary(json_path, {"command": "validate", "acid_version": __version__,

@@ -27,13 +27,14 @@ from acid_cli._common import (
 
 @handle_errors
 def import_data(
-    srcs: list[Path] = typer.Argument(..., metavar="SRC...",
+    srcs: list[Path] = typer.Argument(..., metavar="SRC",
                                       help="CSV (header row; .csv.gz read as is) or MATLAB "
                                            ".mat files to import: one experiment per file."),
     map_path: Path = typer.Option(..., "--map", "-m",
                                   help="Channel map (TOML or JSON): time column, Ts, resample, "
                                        "sep/encoding/decimal and {channel: column, unit}; see "
-                                       "datasets/FORMAT.md."),
+                                       "datasets/FORMAT.md. example:NAME for a bundled one "
+                                       "(acid examples)."),
     out: Path = typer.Option(..., "--out", "-o", help="HDF5 dataset to write (atomically)."),
     min_samples: int = typer.Option(2, "--min-samples",
                                     help="Refuse records shorter than this many samples."),

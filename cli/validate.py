@@ -49,7 +49,7 @@ def validate(
     exogenous: str = typer.Option(
         "hold", "--exogenous",
         help="T_int/T_shell over a prediction: 'hold' at the start value (paper) or "
-             "'measured'."),
+             "'measured' (a model file: all its disturbances)."),
     held_out_fraction: float | None = typer.Option(
         None, "--held-out-fraction",
         help="Validate on the last F of the record only. Default: the part after "
@@ -99,25 +99,16 @@ def validate(
 
     if model is not None:
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
-                                    placement, seed, held_out_fraction,
-                                    exogenous != "hold" or beside is not None or allow_unstable,
-                                    to_end, yardsticks)
+                                    placement, seed, held_out_fraction, exogenous,
+                                    beside is not None or allow_unstable, non_overlapping,
+                                    yardsticks, to_end)
 
     require(not to_end, "--to-end", "is for a declared model (--model)")
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
-    require_range(starts, "--starts", 1, MAX_STARTS)
-    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
-    require_range(seed, "--seed", 0, 2**63 - 1)
-    require(exogenous in EXOGENOUS_MODES, "--exogenous",
-            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
-    require(placement in PLACEMENTS, "--placement",
-            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
-    require(not (non_overlapping and placement != "even"), "--non-overlapping",
-            f"places the starts evenly: it cannot be combined with --placement {placement}")
-    if held_out_fraction is not None:
-        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+    _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction)
     p = load_any_params(params, allow_unstable=allow_unstable)
     families = {model_family(params)} | ({model_family(beside)} if beside else set())
     channels = MODEL_CHANNELS
@@ -173,6 +164,8 @@ def validate(
     residuals = None
     if model_family(params) == "paper":
         residuals = residual_section(ds, p, lo, hi)
+    else:
+        note("residual tests (acid.analysis.resid) exist for the paper's model only")
     other = None
     if beside:
         q = load_any_params(beside, allow_unstable=allow_unstable)
@@ -215,9 +208,25 @@ def validate(
     write_summary(json_path, summary)
 
 
+def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction) -> None:
+    """The window options both branches share (one line naming the option)."""
+    require_range(starts, "--starts", 1, MAX_STARTS)
+    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
+    require_range(seed, "--seed", 0, 2**63 - 1)
+    require(exogenous in EXOGENOUS_MODES, "--exogenous",
+            f"must be one of {', '.join(EXOGENOUS_MODES)}, got {exogenous!r}")
+    require(placement in PLACEMENTS, "--placement",
+            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
+    require(not (non_overlapping and placement != "even"), "--non-overlapping",
+            f"places the starts evenly: it cannot be combined with --placement {placement}")
+    if held_out_fraction is not None:
+        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
+
+
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
-                         seed, held_out_fraction, paper_options, to_end=False,
-                         yardsticks=True) -> None:
+                         seed, held_out_fraction, exogenous, paper_options,
+                         non_overlapping=False, yardsticks=True, to_end=False) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
     from acid_cli._declared import (
         DECLARED_NAMES,
@@ -229,22 +238,19 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
     require(is_model_file(model), "--model", f"must be a model file FILE.py or one of "
             f"{', '.join(DECLARED_NAMES)}, got {model!r}")
     require(not paper_options, "--model",
-            "--exogenous, --beside and --allow-unstable are for the paper/econ families")
+            "--beside and --allow-unstable are for the paper/econ families")
     check_paths(inputs={"DATA": data, "--model": model_file_input(model),
                         "--params": params_input(params)},
                 outputs={"--json": json_path})
-    require_range(starts, "--starts", 1, MAX_STARTS)
-    require_range(horizon, "--horizon", 1, MAX_HORIZON, "steps")
+    _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
+                   held_out_fraction)
     require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
-    require_range(seed, "--seed", 0, 2**63 - 1)
-    require(placement in PLACEMENTS, "--placement",
-            f"must be one of {', '.join(PLACEMENTS)}, got {placement!r}")
-    if held_out_fraction is not None:
-        require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
-                      held_out_fraction=held_out_fraction, to_end=to_end,
-                      yardsticks=yardsticks)
+                      held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
+                      non_overlapping=non_overlapping, yardsticks=yardsticks,
+                      to_end=to_end)
+
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.
 YARDSTICK_TIMES_S = (60.0, 300.0, 1500.0)

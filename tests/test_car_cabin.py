@@ -87,28 +87,34 @@ def test_validation_to_the_trips_end_scores_only_reached_horizons_and_yardsticks
     p = m.values.copy()
     for k, v in truth.items():
         p[m.parameter_names.index(k)] = v
+    p[m.parameter_names.index("Q_sol")] = 450.0
     from acid.ident.validate import ParameterSet
 
-    ps = ParameterSet(values=p, per_experiment={"Q_sol": {0: 450.0}})
+    ps = ParameterSet(values=p)
     with pytest.raises(Exception, match="longer than warmup"):
         validate_model(m, val, ps, starts=10, horizon=300, warmup=30)
-    res = validate_model(m, val, ps, starts=10, horizon=300, warmup=30, to_end=True,
-                         yardsticks=est)
+    # the yardsticks fitted on the estimation trips, placed before the validation trip
+    both, n_est = Dataset.concatenate([est, val]), len(est)
+    res = validate_model(m, both, ps, starts=10, horizon=300, warmup=30, to_end=True,
+                         yardsticks=True, estimation=(0, n_est),
+                         start_range=(n_est, len(both)))
+    assert (res.starts >= n_est + 30).all()
     e = res.errors["T_cab"]
     # every start reaches its trip's end and no further
     reach = np.isfinite(e).sum(axis=1)
-    np.testing.assert_array_equal(reach, 200 - 1 - res.starts)
+    np.testing.assert_array_equal(reach, len(both) - 1 - res.starts)
     # the model that made the data predicts it (latent states from the warm-up stretch)
     assert np.nanmax(np.abs(e)) < 0.05
-    table = res.table()
-    assert set(table) == {"model", "persistence", "arx", "subspace"}
-    assert table["model"]["T_cab"]["60"]["n"] == res.starts.size
-    assert "1500" not in table["model"]["T_cab"]        # no start reaches 1500 s
-    assert table["persistence"]["T_cab"]["300"]["p90_K"] > table["model"]["T_cab"]["300"][
-        "p90_K"]
+    assert set(res.yardsticks) == {"persistence", "arx", "subspace"}
+    model = res.by_time["T_cab"]
+    assert model["60"]["n"] == res.starts.size
+    assert "1500" not in model                          # no start reaches 1500 s
+    pers = res.yardsticks["persistence"]["by_time"]["T_cab"]
+    assert pers["300"]["n"] == model["300"]["n"] < res.starts.size
+    assert pers["300"]["p90_K"] > model["300"]["p90_K"]
     d = res.to_json_dict()
-    assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
-    assert set(d["yardsticks"]["arx"]["T_cab"]["60"]) == {"rmse_K", "p90_K", "n"}
+    assert set(d["yardsticks_by_time"]) == {"persistence", "arx", "subspace"}
+    assert set(d["yardsticks_by_time"]["arx"]["T_cab"]["60"]) == {"rmse_K", "p90_K", "n"}
 
 
 # ------------------------------------------------------------------ real BMW i3 trips
@@ -139,7 +145,7 @@ def test_real_trips_fit_converges_and_held_out_error_is_bounded():
     # unknown, so the mean of the fitted trips' loads is used (as acid validate does)
     ps = dataclasses.replace(fitted_parameters(res), per_experiment={})
     v = validate_model("car_cabin", val, ps, starts=20, horizon=300, warmup=60, to_end=True)
-    row = v.table()["model"]["T_cab"]
+    row = v.by_time["T_cab"]
     assert row["600"]["p90_K"] < P90_600_BOUND, row
 
 
@@ -163,12 +169,13 @@ def test_cli_fits_car_cabin_by_name_and_validates_to_the_trips_end_with_yardstic
     assert res.exit_code == 0, res.output
     res = runner.invoke(app, ["validate", str(val), "--model", "car_cabin", "--params",
                               str(tmp_path / "p.json"), "--starts", "8", "--warmup", "30",
-                              "--to-end", "--json", str(tmp_path / "v.json")])
+                              "--to-end", "--exogenous", "measured",
+                              "--json", str(tmp_path / "v.json")])
     assert res.exit_code == 0, res.output
     assert "persistence" in res.output and "yardstick" in res.output
     d = json.loads((tmp_path / "v.json").read_text())
-    assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
-    assert d["model_by_time"]["T_cab"]["60"]["p90_K"] < 0.05
+    assert set(d["yardsticks_by_time"]) == {"persistence", "arx", "subspace"}
+    assert d["by_time"]["T_cab"]["60"]["p90_K"] < 0.05
 
 
 def test_censored_samples_are_neither_fitted_nor_scored(rng):

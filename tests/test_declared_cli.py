@@ -62,6 +62,9 @@ def test_fit_and_validate_a_users_model_file(record, tmp_path):
     assert set(v["channels"]) == {"T_cab"} and v["channels"]["T_cab"]["unit"] == "K"
     assert np.isfinite(v["channels"]["T_cab"]["rmse"])
     assert [r["step"] for r in v["by_horizon"]] == [1, 10, 25, 50, 100]
+    assert {"persistence", "arx", "subspace"} <= set(v["yardsticks"])
+    assert set(v["yardsticks"]["persistence"]["channels"]) == {"T_cab"}
+    assert "yardstick" in res.output
 
 
 def test_fix_holds_a_parameter_and_the_table_says_so(record, tmp_path):
@@ -89,3 +92,26 @@ def test_the_default_model_is_unchanged(record, tmp_path):
     assert res.exit_code == 0, res.output
     d = json.loads((tmp_path / "p.json").read_text())
     assert d["provenance"]["method"] == "ls" and len(d["gamma"]) == 7
+
+
+def test_add_record_makes_experiments(record, tmp_path):
+    import shutil
+
+    model = tmp_path / "my_cabin.py"
+    model.write_text(USER_MODEL)
+    second = tmp_path / "second.h5"
+    shutil.copy(record, second)
+    out = tmp_path / "p.json"
+    res = runner.invoke(app, ["fit", str(record), "--add-record", str(second), "--model",
+                              str(model), "--out", str(out), "--oe-window", "150"])
+    assert res.exit_code == 0, res.output
+    assert "2 experiment(s)" in res.output
+    d = json.loads(out.read_text())
+    q = d["per_experiment"]["Q"]
+    assert q["experiments"] == [0, 1] and len(q["values"]) == 2
+    # the same record twice: the same load in both experiments
+    assert q["values"][0] == pytest.approx(q["values"][1], rel=1e-6)
+    assert d["provenance"]["records"] == [str(record), str(second)]
+    res = runner.invoke(app, ["fit", str(record), "--add-record", str(second),
+                              "--out", str(tmp_path / "q.json")])
+    assert_one_line_error(res, "--add-record", "--model FILE.py")

@@ -4,14 +4,17 @@ fixed parameters, identified combinations)."""
 
 from __future__ import annotations
 
+from importlib import import_module
+
 import numpy as np
 import pytest
 
-import acid.fit as hand_fit
 from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.ident.fit import fit_model
 from acid.models import Model, Parameter, Signal, State, load, sin
+
+hand_fit = import_module("acid.fit")   # the module (acid.fit is also the function)
 
 
 def _dataset(channels: dict, units: dict, Ts: float, experiment=None) -> Dataset:
@@ -78,6 +81,19 @@ def test_collinear_parameters_report_the_identified_combination(rng):
     # closest to the declared values: the correction splits evenly between a and b
     assert res.value("a") - 1.0 == pytest.approx(res.value("b") - 0.0, rel=1e-9)
     assert res.value("a") + res.value("b") == pytest.approx(3.0, abs=0.01)
+
+
+def test_a_constant_input_identifies_the_scaled_combination(rng):
+    # u held at 0.1: y = g u + c identifies 0.1 g + c (acid.fit held g at a reference)
+    m = _toy(lambda s: {"y": s.g * s.u + s.c}, [Parameter("g", "1", 30.0),
+                                                 Parameter("c", "1", 150.0)])
+    u = np.full(300, 0.1)
+    res = fit_model(m, _toy_data(u, 0.1 * 35.0 + 154.5 + 0.01 * rng.standard_normal(300)),
+                    method="ls")
+    (combo,) = res.combinations
+    assert combo.startswith("0.1 g + c = "), combo
+    assert float(combo.split("= ")[1].split()[0]) == pytest.approx(158.0, abs=0.005)
+    assert 0.1 * res.value("g") + res.value("c") == pytest.approx(158.0, abs=0.005)
 
 
 def test_cvx_keeps_the_declared_bounds(rng):
@@ -231,3 +247,18 @@ def test_a_users_linear_model_file_equals_an_independent_lstsq(tmp_path, rng):
     theta = np.linalg.lstsq(X, T[1:], rcond=None)[0]
     for name, t in zip("abcd", theta, strict=True):
         assert res.value(name) == pytest.approx(t, rel=1e-6), name
+
+
+def test_residual_whiteness_per_equation(rng):
+    m = _toy(lambda s: {"y": s.g * s.u + s.c}, [Parameter("g", "1", 1.0),
+                                                 Parameter("c", "1", 0.0)])
+    u = rng.standard_normal(2000)
+    white = fit_model(m, _toy_data(u, 2 * u + rng.standard_normal(2000)), method="ls")
+    ar = np.zeros(2000)
+    for k in range(1, 2000):   # AR(1) errors: the equation misses dynamics
+        ar[k] = 0.8 * ar[k - 1] + rng.standard_normal()
+    coloured = fit_model(m, _toy_data(u, 2 * u + ar), method="ls")
+    (w,) = [q for q in white.equations if q.name == "y"]
+    (c,) = [q for q in coloured.equations if q.name == "y"]
+    assert abs(w.residual_acf1) < 0.1 and w.ljung_box_p > 0.01
+    assert c.residual_acf1 == pytest.approx(0.8, abs=0.05) and c.ljung_box_p < 1e-6

@@ -273,6 +273,9 @@ def test_quantised_sensor_is_detected_with_its_step():
     assert q is not None and q["step"] == pytest.approx(0.5) and q["levels"] >= 10
     assert quantisation("T_amb", true, "degC", t) is None
     assert quantisation("T_amb", np.full_like(t, 20.0), "degC", t) is None
+    toggling = np.tile([0.0, 0.5, 1.0, 0.5], t.size // 4)     # changes every sample
+    few = quantisation("fan_speed", toggling, "1", t)
+    assert few is not None and few["levels"] == 3 and few["step"] == pytest.approx(0.5)
 
 
 def test_a_paused_logger_is_reported(tmp_path):

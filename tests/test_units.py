@@ -1,5 +1,5 @@
-"""acid.units: the one unit table (``UNIT_SCALES``) that import maps and FMU maps share, and
-``parse_unit`` for the compound units of declared models (factor to SI, dimensions)."""
+"""The one unit table (``acid.units.UNIT_SCALES``) that import maps and FMU maps share; the
+compound units of declared models (``acid.units.parse_unit``)."""
 
 from __future__ import annotations
 
@@ -83,6 +83,7 @@ def test_a_map_unit_that_measures_another_quantity_than_the_channel_is_refused()
                                                                    "unit": "kW"}}})
 
 
+# ------------------------------------------------------------ compound units (declared models)
 W = {"kg": 1, "m": 2, "s": -3}
 
 

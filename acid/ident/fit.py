@@ -76,6 +76,8 @@ class EquationReport:
     fit_percent: float | None = None
     combinations: tuple[str, ...] = ()
     active_bounds: tuple[str, ...] = ()
+    residual_acf1: float | None = None      # lag-1 autocorrelation of the residuals
+    ljung_box_p: float | None = None        # whiteness test of the residuals (20 lags)
 
 
 @dataclass(frozen=True)
@@ -252,7 +254,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                 rank=sol.rank, n_columns=len(reg.columns), condition=sol.condition,
                 residual_std=float(np.sqrt(np.mean(r ** 2))), n_rows=int(rows.sum()),
                 fit_percent=float(100 * (1 - np.linalg.norm(r) / den)) if den > 0 else None,
-                combinations=sol.combinations, active_bounds=sol.active)
+                combinations=sol.combinations, active_bounds=sol.active,
+                **_whiteness(r, data.experiment[reg.sample[rows]]))
     ls_reached = [s != "not fitted" for s in status]
     latent = [s.name for s in model.states if not s.measured]
     if method == "auto":
@@ -372,6 +375,24 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         optima=tuple(optima), combinations=tuple(combos), notes=tuple(notes),
         warnings=tuple(warn), n_samples=len(ds), data_source=ds.source,
         elapsed_s=time.perf_counter() - t0)
+
+
+def _whiteness(r: np.ndarray, exp: np.ndarray, lags: int = 20) -> dict:
+    """Lag-1 autocorrelation and the Ljung-Box p-value of residuals in time order (lag
+    products inside one experiment): a small p says the residuals are not white, the
+    equation misses dynamics (and white standard errors would be too small)."""
+    n = r.size
+    if n <= lags + 2:
+        return {}
+    e = r - r.mean()
+    den = float(e @ e)
+    if den <= 0:
+        return {}
+    rho = np.array([float((e[k:] * e[:-k])[exp[k:] == exp[:-k]].sum()) / den
+                    for k in range(1, lags + 1)])
+    q = n * (n + 2) * float(np.sum(rho**2 / (n - np.arange(1, lags + 1))))
+    return {"residual_acf1": float(rho[0]),
+            "ljung_box_p": float(scipy.stats.chi2.sf(q, lags))}
 
 
 def _target(model: Model, data: ModelData, name: str, rows: np.ndarray) -> np.ndarray:

@@ -215,7 +215,7 @@ def combinations(Z: np.ndarray, scale: np.ndarray, labels: tuple[str, ...],
         if si <= _RANK_RTOL * s_i[0]:
             continue
         c = np.zeros(Z.shape[1])
-        c[involved] = v / scale[involved]          # coefficient on theta (raw units)
+        c[involved] = v * scale[involved]          # v . phi = sum v_j scale_j theta_j
         c /= c[np.argmax(np.abs(c))]
         value = float(c @ theta)
         se = float(np.sqrt(max(c @ cov @ c, 0.0)))

@@ -10,6 +10,7 @@ overall and at chosen horizons (RMSE, p90 of |e|), with ``acid.metrics``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
@@ -29,8 +30,8 @@ from acid.models.declaration import Model
 from acid.models.loader import load
 
 PLACEMENTS = ("even", "random")
-#: Prediction times (s) of the model-and-yardsticks table.
-YARDSTICK_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
+#: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
+REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
 
 
 @dataclass(frozen=True)
@@ -116,51 +117,51 @@ class DeclaredValidation:
     metrics: dict
     by_horizon: tuple
     notes: tuple[str, ...]
-    #: {persistence | arx | subspace: {channel: (n_starts, horizon) errors}} on the same
-    #: windows (``validate_model(..., yardsticks=estimation data)``; NaN where the model's
-    #: are), and {name: {"description", settings...}} of each.
-    yardstick_errors: dict = field(default_factory=dict)
-    yardstick_settings: dict = field(default_factory=dict)
-
-    def table(self, times_s=YARDSTICK_TIMES_S) -> dict:
-        """{"model" | yardstick: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}}}: RMSE and
-        p90 of |error| over the starts that reach each prediction time ``t`` (s)."""
-        out = {"model": _by_time(self.errors, self.Ts, times_s)}
-        for name, errors in self.yardstick_errors.items():
-            out[name] = _by_time(errors, self.Ts, times_s)
-        return out
+    yardsticks: dict = field(default_factory=dict)
+    #: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}} at ``REPORT_TIMES_S`` (the starts that
+    #: reach each time); each yardstick has its own under ``yardsticks[name]["by_time"]``.
+    by_time: dict = field(default_factory=dict)
 
     def to_json_dict(self) -> dict:
-        table = self.table()
-        marks = {}
-        if self.yardstick_errors:
-            marks = {"model_by_time": table["model"],
-                     "yardsticks": {k: v for k, v in table.items() if k != "model"},
-                     "yardstick_settings": self.yardstick_settings}
         return json_safe({
             "model": self.model, "horizon": self.horizon, "warmup": self.warmup,
             "Ts": self.Ts, "n_starts": int(self.starts.size),
             "starts": self.starts.tolist(),
             "channels": {c: {"unit": u, **self.metrics[c]}
                          for c, u in zip(self.channels, self.units, strict=True)},
-            "by_horizon": list(self.by_horizon), "notes": list(self.notes), **marks})
+            "by_horizon": list(self.by_horizon), "notes": list(self.notes),
+            "yardsticks": self.yardsticks, "by_time": self.by_time,
+            "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()}})
 
 
 def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: int = 60,
                    placement: str = "even", seed: int = 0,
-                   horizons: tuple[int, ...] | None = None, to_end: bool = False,
-                   yardsticks: Dataset | None = None) -> DeclaredValidation:
+                   horizons: tuple[int, ...] | None = None, hold: tuple[str, ...] = (),
+                   start_index=None, non_overlapping: bool = False,
+                   start_range: tuple[int, int] | None = None, yardsticks: bool = False,
+                   estimation: tuple[int, int] | None = None,
+                   to_end: bool = False) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
 
-    ``to_end``: a start may lie less than ``horizon`` samples before its experiment's end
-    (at least ``horizon // 25`` steps, 60 s of 300 x 5 s); its prediction stops there, and
-    the errors per horizon count only the starts that reach it (short trips). ``yardsticks``:
-    the estimation data (a dataset the model was fitted on) on which persistence, ARX and
-    subspace (:mod:`acid.yardsticks`) are fitted; they predict the same windows from the
-    same channels (the model's inputs and disturbances, measured; its measured channels up
-    to each start)."""
+    ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
+    and T_shell) instead of measured along the prediction. ``start_index``: these start
+    samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
+    ``non_overlapping``: starts at least ``horizon + 1`` samples apart (acid.validate's rule).
+    ``start_range`` (lo, hi): every window inside samples lo .. hi - 1 (e.g. the held-out
+    part). ``yardsticks``: persistence, ARX and subspace (``acid.yardsticks``) on the same
+    windows, given the same inputs and held disturbances, fitted on ``estimation`` (lo, hi)
+    samples (default: the whole record, in-sample). ``to_end``: a start may lie less than
+    ``horizon`` samples before its experiment's end (at least ``horizon // 25`` steps, 60 s
+    of 300 x 5 s); its prediction stops there, and the errors per prediction time count only
+    the starts that reach it (short trips). Censored samples (a ``<channel>_censored`` mask)
+    are neither scored nor used by the warm-up.
+    """
     model = load(model)
+    unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
+    if unknown:
+        raise ConfigError(f"hold: {unknown[0]!r} is not a disturbance of model "
+                          f"{model.name!r}")
     params = params or declared_parameters(model)
     if placement not in PLACEMENTS:
         raise ConfigError(f"placement must be one of {', '.join(PLACEMENTS)}, got "
@@ -171,19 +172,35 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     data = ModelData.of(model, ds, min_samples=2)
     latent = [i for i, s in enumerate(model.states) if not s.measured]
     need_warm = warmup if latent else 0
+    lo_r, hi_r = start_range or (0, len(data))
     reach = max(1, horizon // 25) if to_end else horizon
-    cand = np.concatenate([np.arange(a + need_warm, b - reach) for a, b in data.segments]
-                          + [np.zeros(0, int)]).astype(int)
+    cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - reach)
+                           for a, b in data.segments] + [np.zeros(0, int)]).astype(int)
     if cand.size == 0:
         raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
                         f"({need_warm} + {reach} + 1 samples)")
-    if placement == "even":
+    if start_index is not None:
+        k0 = np.asarray(start_index, dtype=int)
+        bad = k0[~np.isin(k0, cand)]
+        if bad.size:
+            raise DataError(f"{ds.source}: start {int(bad[0])} leaves no room for the "
+                            f"warm-up and {horizon} steps inside its experiment")
+    elif non_overlapping:
+        from acid.validate import _place_non_overlapping
+
+        k0 = _place_non_overlapping(cand, starts, horizon)
+    elif placement == "even":
         pick = np.unique(np.round(np.linspace(0, cand.size - 1, min(starts, cand.size))))
         k0 = cand[pick.astype(int)]
     else:
         k0 = np.sort(np.random.default_rng(seed).choice(cand, min(starts, cand.size),
                                                         replace=False))
-    notes = []
+    gaps = np.diff(np.sort(k0))
+    notes = [f"window design: {k0.size} starts, spacing "
+             + (f"{np.median(gaps) * model.Ts:g} s (median, min {gaps.min() * model.Ts:g} s)"
+                if gaps.size else "one start")
+             + f", horizon {horizon * model.Ts:g} s, "
+             + ("overlapping" if gaps.size and gaps.min() <= horizon else "no overlap")]
     P = _parameters_at(model, data, params, k0, notes)
     x0 = data.initial_states(model, k0)
     if latent and need_warm > 0:
@@ -194,18 +211,34 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
-    last = np.array([b - 1 for a, b in data.segments])[
-        np.searchsorted([b for _, b in data.segments], k0, side="right")]
+    ends = np.array([b for _, b in data.segments])
+    last = ends[np.searchsorted(ends, k0, side="right")] - 1
     inside = idx <= last[:, None]
     idx = np.minimum(idx, last[:, None])
     if not inside.all():
         notes.append(f"predictions stop at the end of their experiment: "
                      f"{int((~inside[:, -1]).sum())} of {k0.size} starts lie less than "
                      f"{horizon} steps before it (at least {reach} steps each)")
-    Y = simulate_windows(model, data, idx, x0, P)
-    meas = np.where(inside[..., None], data.observed()[idx], np.nan)
     if data.censored is not None:
         notes.append("censored samples (a clipping sensor) are not scored")
+    data0 = data
+    if hold:
+        held = [i for i, d in enumerate(model.disturbances) if d.name in hold]
+        dd = np.repeat(data.d[k0][:, None, :], horizon + 1, axis=1)   # (S, H + 1, nd)
+        # windows get their own rows: the held values differ per start
+        flat = np.arange(idx.size).reshape(idx.shape)
+        data = dataclasses.replace(
+            data, x=data.x[idx].reshape(idx.size, model.nx),
+            u=data.u[idx].reshape(idx.size, model.nu),
+            d=np.where(np.isin(np.arange(model.nd), held), dd,
+                       data.d[idx]).reshape(idx.size, model.nd),
+            y=data.y[idx].reshape(idx.size, model.ny),
+            censored=None if data.censored is None
+            else data.censored[idx].reshape(idx.size, -1))
+        idx = flat
+        notes.append(f"held at their start values: {', '.join(hold)}")
+    Y = simulate_windows(model, data, idx, x0, P)
+    meas = np.where(inside[..., None], data.observed()[idx], np.nan)
     channels, units, errors, metrics = [], [], {}, {}
     rows = [(c, n) for c, n in data.measured_channels(model)]
     unit_of = {r.name: r.unit for r in model.states + model.outputs}
@@ -220,11 +253,6 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                          "p90_abs": float(percentile_abs_error(m, p, 90)),
                          "max_abs": float(max_abs_error(m, p)),
                          "fit_percent": float(fit_percent(m, p))}
-    y_err, y_set = {}, {}
-    if yardsticks is not None:
-        y_err, y_set = _yardsticks(model, yardsticks, data, k0, idx, meas, rows)
-        notes.append("yardsticks (persistence, ARX, subspace) fitted on "
-                     f"{yardsticks.source}, predicting the same windows")
     steps = sorted({h for h in (horizons or _default_horizons(horizon)) if 1 <= h <= horizon})
     by_h = []
     for h in steps:
@@ -236,24 +264,28 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                          "p90_abs": float(np.percentile(np.abs(e), 90)) if e.size
                          else math.nan, "n": int(e.size)}
         by_h.append(row)
+    ys = {}
+    if yardsticks:
+        ys = _yardsticks(model, data0, rows, k0, horizon, hold, steps,
+                         estimation or (0, len(data0)), inside)
+        if estimation is None:
+            notes.append("yardsticks fitted on the whole record (in-sample: favoured)")
     return DeclaredValidation(model=model.name, channels=tuple(channels), units=tuple(units),
                               starts=k0, horizon=int(horizon), warmup=int(need_warm),
                               Ts=model.Ts, errors=errors, metrics=metrics,
-                              by_horizon=tuple(by_h), notes=tuple(notes),
-                              yardstick_errors=y_err, yardstick_settings=y_set)
+                              by_horizon=tuple(by_h), notes=tuple(notes), yardsticks=ys,
+                              by_time=by_time(errors, model.Ts))
 
 
-def _by_time(errors: dict, Ts: float, times_s) -> dict:
-    """{channel: {"<t>": {"rmse_K", "p90_K", "n"}}} at each time inside the horizon, over
-    the starts whose prediction reaches it (finite errors)."""
+def by_time(errors: dict, Ts: float, times_s=REPORT_TIMES_S) -> dict:
+    """{channel: {"<t>": {"rmse_K", "p90_K", "n"}}} at each prediction time ``t`` (s)
+    inside the horizon, over the starts whose prediction reaches it (finite errors)."""
     out = {}
     for name, e in errors.items():
         out[name] = {}
         for t in times_s:
             h = int(round(t / Ts))
-            if not 1 <= h <= e.shape[1]:
-                continue
-            v = e[:, h - 1]
+            v = e[:, h - 1] if 1 <= h <= e.shape[1] else np.zeros(0)
             v = v[np.isfinite(v)]
             if v.size:
                 out[name][f"{h * Ts:g}"] = {"rmse_K": float(np.sqrt(np.mean(v ** 2))),
@@ -262,37 +294,49 @@ def _by_time(errors: dict, Ts: float, times_s) -> dict:
     return out
 
 
-def _yardsticks(model: Model, est: Dataset, data: ModelData, k0, idx, meas, rows):
-    """Persistence, ARX and subspace fitted on ``est`` and run over the validation windows
-    (``idx``, clipped at each experiment's end) from the same channels as the model: its
-    inputs and disturbances as measured, its measured channels up to each start."""
+def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, steps,
+                estimation, inside) -> dict:
+    """Persistence, ARX and subspace (``acid.yardsticks``) on the model's windows: the same
+    inputs and disturbances (held as the model has them), predicting the measured channels
+    that are recorded throughout; RMSE and p90 |e| overall and at ``steps``."""
     from acid.yardsticks import evaluate
 
-    ed = ModelData.of(model, est, min_samples=2)
-    chan = [c for c, _ in rows]
-    H = idx.shape[1] - 1
+    meas = np.concatenate([data.x, data.y], axis=1)
+    use = [(c, n) for c, n in rows if np.all(np.isfinite(meas[:, c]))]
+    if not use:
+        return {}
+    y = meas[:, [c for c, _ in use]]
+    obs = data.observed()[:, [c for c, _ in use]]
+    u = np.concatenate([data.u, data.d], axis=1)
+    names = tuple(r.name for r in model.inputs + model.disturbances)
+    held = np.array([n in hold for n in names], dtype=bool)
+    out = {}
+    # windows that stop at their experiment's end (to_end) read past the record's last
+    # sample: it is repeated there, and those steps are not scored
+    pad = np.arange(len(data) + horizon + 1).clip(max=len(data) - 1)
+    for name, pred in evaluate(y[pad], u[pad], data.experiment[pad], k0, horizon, held,
+                               estimation, input_names=names).items():
+        idx = np.minimum(k0[:, None] + np.arange(1, horizon + 1)[None, :], len(data) - 1)
+        e = np.where(inside[:, 1:, None], pred.predicted[:, 1:, :] - obs[idx], np.nan)
+        out[name] = {
+            "description": pred.description,
+            "channels": {n: {"rmse": _nan_rms(e[..., j]), "p90_abs": _nan_p90(e[..., j])}
+                         for j, (_, n) in enumerate(use)},
+            "by_horizon": [{"step": h, **{n: {"rmse": _nan_rms(e[:, h - 1, j]),
+                                              "p90_abs": _nan_p90(e[:, h - 1, j])}
+                                          for j, (_, n) in enumerate(use)}} for h in steps],
+            "by_time": by_time({n: e[..., j] for j, (_, n) in enumerate(use)}, model.Ts)}
+    return out
 
-    def stack(d: ModelData, pad: int):
-        y = np.concatenate([d.x, d.y], axis=1)[:, chan]
-        u = np.concatenate([d.u, d.d], axis=1)
-        # the sensor's limit where censored is kept (a start needs a value), as the model
-        y, u = np.concatenate([y, np.repeat(y[-1:], pad, 0)]), \
-            np.concatenate([u, np.repeat(u[-1:], pad, 0)])
-        return y, u, np.concatenate([d.experiment, np.full(pad, d.experiment[-1])])
 
-    ye, ue, xe = stack(ed, 0)
-    yv, uv, xv = stack(data, H + 1)
-    n_est = ye.shape[0]
-    names = tuple(r.name for r in (*model.inputs, *model.disturbances))
-    out = evaluate(np.concatenate([ye, yv]), np.concatenate([ue, uv]),
-                   np.concatenate([xe, xv + xe.max() + 1]), k0 + n_est, H,
-                   np.zeros(len(names), bool), (0, n_est), input_names=names)
-    errors = {name: {c: p.predicted[:, 1:, i] - meas[:, 1:, ci]
-                     for i, (ci, c) in enumerate(rows)} for name, p in out.items()}
-    settings = {name: {"description": p.description, **p.settings,
-                       "note": "a yardstick: never offered to a controller"}
-                for name, p in out.items()}
-    return errors, settings
+def _nan_rms(e: np.ndarray) -> float:
+    e = e[np.isfinite(e)]
+    return float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan
+
+
+def _nan_p90(e: np.ndarray) -> float:
+    e = e[np.isfinite(e)]
+    return float(np.percentile(np.abs(e), 90)) if e.size else math.nan
 
 
 def _default_horizons(H: int) -> tuple[int, ...]:
