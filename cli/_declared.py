@@ -17,9 +17,20 @@ from acid_cli._common import note, print_table, require_range, say, warn, write_
 MAX_STARTS = 1000
 
 
+#: Built-in declarations that ``--model`` names directly (``paper`` and ``econ`` name the
+#: model families of ``acid fit``; their declarations are loaded by path or through Python).
+DECLARED_NAMES = ("cabin3", "car_cabin")
+
+
 def is_model_file(spec: str | None) -> bool:
-    """Whether ``--model`` names a model file (the declared path) rather than a family."""
-    return spec is not None and str(spec).endswith(".py")
+    """Whether ``--model`` names a declared model (a file FILE.py or a built-in declaration
+    such as ``car_cabin``: the declared path) rather than a family."""
+    return spec is not None and (str(spec).endswith(".py") or str(spec) in DECLARED_NAMES)
+
+
+def model_file_input(spec: str) -> str | None:
+    """The ``--model`` value as a file to check (None for a built-in name)."""
+    return spec if str(spec).endswith(".py") else None
 
 
 def _num(v, digits: int = 5) -> str:
@@ -137,7 +148,8 @@ def _optima_rows(optima, show: int = 3) -> list[list[str]]:
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
                       starts: int, horizon: int, warmup: int, placement: str, seed: int,
                       held_out_fraction: float | None, hold_all: bool = False,
-                      non_overlapping: bool = False, yardsticks: bool = True) -> None:
+                      non_overlapping: bool = False, yardsticks: bool = True,
+                      to_end: bool = False) -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors."""
     from acid.ident.validate import declared_parameters, read_parameters, validate_model
     from acid.models import load
@@ -155,11 +167,21 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         ps = dataclasses.replace(ps, per_experiment={})
         note("per-experiment parameters were fitted on another record: their mean is used")
     lo = int(round(len(ds) * (1.0 - frac))) if frac is not None and frac < 1.0 else 0
+    hi, estimation = len(ds), ((0, lo) if lo > 0 else None)
+    est = _fit_records(ps, sha) if yardsticks else None
+    if est is not None:
+        # the yardsticks are fitted on the records the parameters were fitted on, placed
+        # before DATA; the starts stay in DATA
+        n_est = len(est)
+        ds = Dataset.concatenate([est, ds])
+        lo, hi, estimation = n_est + lo, n_est + hi, (0, n_est)
     res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
                          placement=placement, seed=seed, non_overlapping=non_overlapping,
                          hold=tuple(d.name for d in model.disturbances) if hold_all else (),
-                         start_range=(lo, len(ds)), yardsticks=yardsticks,
-                         estimation=(0, lo) if lo > 0 else None)
+                         start_range=(lo, hi), yardsticks=yardsticks,
+                         estimation=estimation, to_end=to_end)
+    if est is not None:
+        note(f"yardsticks fitted on the parameters' records ({est.source})")
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
         f"{model.name!r}, parameters from {ps.source}"
         + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
@@ -188,6 +210,14 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                     rows)
         for y in res.yardsticks.values():
             say(f"  {y['description']}")
+        times = sorted({t for c in res.by_time.values() for t in c}, key=float)
+        print_table("Model and yardsticks at prediction times: RMSE / p90 |e| (starts that "
+                    "reach it)", ["_predictor", "_channel", *[f"{t} s" for t in times]],
+                    [[name, c, *[(f"{_num(r[t]['rmse_K'], 3)} / {_num(r[t]['p90_K'], 3)} "
+                                  f"({r[t]['n']})") if t in r else "-" for t in times]]
+                     for name, table in [("model", res.by_time)] + [
+                         (f"{k} (yardstick)", y["by_time"]) for k, y in res.yardsticks.items()]
+                     for c, r in table.items()])
     for line in res.notes:
         note(line)
     from acid_cli.validate import residual_section
@@ -197,3 +227,16 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                               "inputs": {"data": str(data), "model": str(model_file),
                                          "params": params}, **res.to_json_dict(),
                               "residuals": residuals})
+
+
+def _fit_records(ps, data_sha: str) -> Dataset | None:
+    """The records the parameters were fitted on (their provenance), when they are not the
+    validation data and are all here: the yardsticks' estimation data."""
+    records = [Path(r) for r in ps.provenance.get("records") or []]
+    if not records or not all(r.is_file() for r in records) \
+            or ps.provenance.get("data_sha256") == data_sha:
+        return None
+    parts = [Dataset.from_hdf5(r, min_samples=2) for r in records]
+    est = parts[0] if len(parts) == 1 else Dataset.concatenate(parts)
+    est.source = ", ".join(map(str, records))
+    return est

@@ -32,7 +32,7 @@ from acid_cli._common import (
     warn,
     write_summary,
 )
-from acid_cli._declared import fit_declared, is_model_file
+from acid_cli._declared import fit_declared, is_model_file, model_file_input
 
 #: Largest output-error window and HAC lag accepted, samples.
 MAX_WINDOW = 100_000
@@ -124,7 +124,7 @@ def fit(
             f"must be one of {', '.join(dict.fromkeys([*MODEL_FAMILIES, *BUILT_IN]))} or a "
             f"model file FILE.py, got {model!r}")
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
-                        "--model": model if is_model_file(model) else None,
+                        "--model": model_file_input(model) if declared else None,
                         **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
                 outputs={"--out": out, "--json": json_path})
     if not declared:

@@ -85,6 +85,10 @@ def validate(
     warmup: int = typer.Option(
         60, "--warmup", help="Model file with latent states: samples before each start from "
                              "which they are estimated."),
+    to_end: bool = typer.Option(
+        False, "--to-end", help="Model file: also start where fewer than --horizon samples "
+                                "remain (short trips); those predictions stop at the "
+                                "experiment's end."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -98,8 +102,9 @@ def validate(
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
                                     placement, seed, held_out_fraction, exogenous,
                                     beside is not None or allow_unstable, non_overlapping,
-                                    yardsticks)
+                                    yardsticks, to_end)
 
+    require(not to_end, "--to-end", "is for a declared model (--model)")
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
@@ -222,17 +227,17 @@ def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
 
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
                          seed, held_out_fraction, exogenous, paper_options,
-                         non_overlapping=False, yardsticks=True) -> None:
+                         non_overlapping=False, yardsticks=True, to_end=False) -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
     from acid.models.loader import BUILT_IN
-    from acid_cli._declared import is_model_file, validate_declared
+    from acid_cli._declared import is_model_file, model_file_input, validate_declared
 
     require(is_model_file(model) or model in BUILT_IN, "--model",
             f"must be a model file FILE.py or a built-in declaration ({', '.join(BUILT_IN)}), "
             f"got {model!r}")
     require(not paper_options, "--model",
             "--beside and --allow-unstable are for the paper/econ families")
-    check_paths(inputs={"DATA": data, "--model": model if is_model_file(model) else None,
+    check_paths(inputs={"DATA": data, "--model": model_file_input(model),
                         "--params": params_input(params)},
                 outputs={"--json": json_path})
     _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
@@ -241,7 +246,8 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
-                      non_overlapping=non_overlapping, yardsticks=yardsticks)
+                      non_overlapping=non_overlapping, yardsticks=yardsticks,
+                      to_end=to_end)
 
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.

@@ -872,6 +872,11 @@ CASES: list[Case] = [
          _summary("s.json", lambda d: d["claims"]["counts"].update(disagrees=-1))),
     Case("claims-summary-deep", "structure", ("claims", "{w}/s.json"), ("s.json", "nests"),
          _write("s.json", '{"claims": ' + "[" * 50000 + "]" * 50000 + "}")),
+
+    Case("validate-to-end-without-model", "options", (*V, "--to-end"),
+         ("--to-end", "declared model")),
+    Case("validate-model-unknown-name", "options",
+         (*V[:2], "--model", "car_cabn"), ("--model", "car_cabin", "'car_cabn'")),
 ]
 
 

@@ -35,6 +35,10 @@ class ModelData:
     segments: tuple[tuple[int, int], ...]
     Ts: float
     source: str
+    #: (N, nx + ny) True where a measured channel is censored (its ``<name>_censored`` mask
+    #: channel, written by ``acid import`` for a clipping sensor): not a measurement to fit
+    #: or score, though its value (the sensor's limit) still starts a simulation.
+    censored: np.ndarray | None = None
 
     @classmethod
     def of(cls, model: Model, ds: Dataset, min_samples: int = 8) -> ModelData:
@@ -66,9 +70,20 @@ class ModelData:
         d = stack([column(r, True, "disturbance") for r in model.disturbances])
         y = stack([column(r, False, "output") for r in model.outputs])
         ids, exp = np.unique(ds.experiment, return_inverse=True)
+        cens = np.column_stack([np.asarray(ds[f"{r.name}_censored"]) > 0.5
+                                if f"{r.name}_censored" in ds else np.zeros(n, bool)
+                                for r in (*model.states, *model.outputs)]) \
+            if model.nx + model.ny else np.zeros((n, 0), bool)
         return cls(x=x, u=u, d=d, y=y, experiment=exp.astype(int),
                    experiment_ids=tuple(int(i) for i in ids), segments=tuple(ds.segments()),
-                   Ts=float(ds.Ts), source=ds.source)
+                   Ts=float(ds.Ts), source=ds.source, censored=cens if cens.any() else None)
+
+    def observed(self) -> np.ndarray:
+        """(N, nx + ny) [x | y] with censored samples as NaN (what is fitted and scored)."""
+        xy = np.concatenate([self.x, self.y], axis=1)
+        if self.censored is not None:
+            xy = np.where(self.censored, np.nan, xy)
+        return xy
 
     def __len__(self) -> int:
         return self.x.shape[0]

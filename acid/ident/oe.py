@@ -129,7 +129,7 @@ class OEProblem:
         self.nw = nw
         self.win_exp = data.experiment[self.w.idx[:, 0]]
         self.base_P = base_P                                   # (nw, np) fixed values
-        meas = np.concatenate([data.x, data.y], axis=1)[self.w.idx]   # (nw, L, C)
+        meas = data.observed()[self.w.idx]                              # (nw, L, C)
         self.chan = [c for c, _ in data.measured_channels(model)]
         self.chan_names = [n for _, n in data.measured_channels(model)]
         if not self.chan:

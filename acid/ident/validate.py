@@ -30,6 +30,8 @@ from acid.models.declaration import Model
 from acid.models.loader import load
 
 PLACEMENTS = ("even", "random")
+#: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
+REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,9 @@ class DeclaredValidation:
     by_horizon: tuple
     notes: tuple[str, ...]
     yardsticks: dict = field(default_factory=dict)
+    #: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}} at ``REPORT_TIMES_S`` (the starts that
+    #: reach each time); each yardstick has its own under ``yardsticks[name]["by_time"]``.
+    by_time: dict = field(default_factory=dict)
 
     def to_json_dict(self) -> dict:
         return json_safe({
@@ -125,7 +130,8 @@ class DeclaredValidation:
             "channels": {c: {"unit": u, **self.metrics[c]}
                          for c, u in zip(self.channels, self.units, strict=True)},
             "by_horizon": list(self.by_horizon), "notes": list(self.notes),
-            "yardsticks": self.yardsticks})
+            "yardsticks": self.yardsticks, "by_time": self.by_time,
+            "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()}})
 
 
 def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
@@ -134,7 +140,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                    horizons: tuple[int, ...] | None = None, hold: tuple[str, ...] = (),
                    start_index=None, non_overlapping: bool = False,
                    start_range: tuple[int, int] | None = None, yardsticks: bool = False,
-                   estimation: tuple[int, int] | None = None) -> DeclaredValidation:
+                   estimation: tuple[int, int] | None = None,
+                   to_end: bool = False) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
 
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
@@ -144,7 +151,11 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     ``start_range`` (lo, hi): every window inside samples lo .. hi - 1 (e.g. the held-out
     part). ``yardsticks``: persistence, ARX and subspace (``acid.yardsticks``) on the same
     windows, given the same inputs and held disturbances, fitted on ``estimation`` (lo, hi)
-    samples (default: the whole record, in-sample).
+    samples (default: the whole record, in-sample). ``to_end``: a start may lie less than
+    ``horizon`` samples before its experiment's end (at least ``horizon // 25`` steps, 60 s
+    of 300 x 5 s); its prediction stops there, and the errors per prediction time count only
+    the starts that reach it (short trips). Censored samples (a ``<channel>_censored`` mask)
+    are neither scored nor used by the warm-up.
     """
     model = load(model)
     unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
@@ -162,11 +173,12 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     latent = [i for i, s in enumerate(model.states) if not s.measured]
     need_warm = warmup if latent else 0
     lo_r, hi_r = start_range or (0, len(data))
-    cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - horizon)
+    reach = max(1, horizon // 25) if to_end else horizon
+    cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - reach)
                            for a, b in data.segments] + [np.zeros(0, int)]).astype(int)
     if cand.size == 0:
         raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
-                        f"({need_warm} + {horizon} + 1 samples)")
+                        f"({need_warm} + {reach} + 1 samples)")
     if start_index is not None:
         k0 = np.asarray(start_index, dtype=int)
         bad = k0[~np.isin(k0, cand)]
@@ -199,6 +211,16 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
+    ends = np.array([b for _, b in data.segments])
+    last = ends[np.searchsorted(ends, k0, side="right")] - 1
+    inside = idx <= last[:, None]
+    idx = np.minimum(idx, last[:, None])
+    if not inside.all():
+        notes.append(f"predictions stop at the end of their experiment: "
+                     f"{int((~inside[:, -1]).sum())} of {k0.size} starts lie less than "
+                     f"{horizon} steps before it (at least {reach} steps each)")
+    if data.censored is not None:
+        notes.append("censored samples (a clipping sensor) are not scored")
     data0 = data
     if hold:
         held = [i for i, d in enumerate(model.disturbances) if d.name in hold]
@@ -210,11 +232,13 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
             u=data.u[idx].reshape(idx.size, model.nu),
             d=np.where(np.isin(np.arange(model.nd), held), dd,
                        data.d[idx]).reshape(idx.size, model.nd),
-            y=data.y[idx].reshape(idx.size, model.ny))
+            y=data.y[idx].reshape(idx.size, model.ny),
+            censored=None if data.censored is None
+            else data.censored[idx].reshape(idx.size, -1))
         idx = flat
         notes.append(f"held at their start values: {', '.join(hold)}")
     Y = simulate_windows(model, data, idx, x0, P)
-    meas = np.concatenate([data.x, data.y], axis=1)[idx]
+    meas = np.where(inside[..., None], data.observed()[idx], np.nan)
     channels, units, errors, metrics = [], [], {}, {}
     rows = [(c, n) for c, n in data.measured_channels(model)]
     unit_of = {r.name: r.unit for r in model.states + model.outputs}
@@ -238,22 +262,40 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
             e = e[np.isfinite(e)]
             row[name] = {"rmse": float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan,
                          "p90_abs": float(np.percentile(np.abs(e), 90)) if e.size
-                         else math.nan}
+                         else math.nan, "n": int(e.size)}
         by_h.append(row)
     ys = {}
     if yardsticks:
         ys = _yardsticks(model, data0, rows, k0, horizon, hold, steps,
-                         estimation or (0, len(data0)))
+                         estimation or (0, len(data0)), inside)
         if estimation is None:
             notes.append("yardsticks fitted on the whole record (in-sample: favoured)")
     return DeclaredValidation(model=model.name, channels=tuple(channels), units=tuple(units),
                               starts=k0, horizon=int(horizon), warmup=int(need_warm),
                               Ts=model.Ts, errors=errors, metrics=metrics,
-                              by_horizon=tuple(by_h), notes=tuple(notes), yardsticks=ys)
+                              by_horizon=tuple(by_h), notes=tuple(notes), yardsticks=ys,
+                              by_time=by_time(errors, model.Ts))
+
+
+def by_time(errors: dict, Ts: float, times_s=REPORT_TIMES_S) -> dict:
+    """{channel: {"<t>": {"rmse_K", "p90_K", "n"}}} at each prediction time ``t`` (s)
+    inside the horizon, over the starts whose prediction reaches it (finite errors)."""
+    out = {}
+    for name, e in errors.items():
+        out[name] = {}
+        for t in times_s:
+            h = int(round(t / Ts))
+            v = e[:, h - 1] if 1 <= h <= e.shape[1] else np.zeros(0)
+            v = v[np.isfinite(v)]
+            if v.size:
+                out[name][f"{h * Ts:g}"] = {"rmse_K": float(np.sqrt(np.mean(v ** 2))),
+                                            "p90_K": float(np.percentile(np.abs(v), 90)),
+                                            "n": int(v.size)}
+    return out
 
 
 def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, steps,
-                estimation) -> dict:
+                estimation, inside) -> dict:
     """Persistence, ARX and subspace (``acid.yardsticks``) on the model's windows: the same
     inputs and disturbances (held as the model has them), predicting the measured channels
     that are recorded throughout; RMSE and p90 |e| overall and at ``steps``."""
@@ -264,24 +306,37 @@ def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, ste
     if not use:
         return {}
     y = meas[:, [c for c, _ in use]]
+    obs = data.observed()[:, [c for c, _ in use]]
     u = np.concatenate([data.u, data.d], axis=1)
     names = tuple(r.name for r in model.inputs + model.disturbances)
     held = np.array([n in hold for n in names], dtype=bool)
     out = {}
-    for name, pred in evaluate(y, u, data.experiment, k0, horizon, held, estimation,
-                               input_names=names).items():
-        idx = k0[:, None] + np.arange(1, horizon + 1)[None, :]
-        e = pred.predicted[:, 1:, :] - y[idx]
+    # windows that stop at their experiment's end (to_end) read past the record's last
+    # sample: it is repeated there, and those steps are not scored
+    pad = np.arange(len(data) + horizon + 1).clip(max=len(data) - 1)
+    for name, pred in evaluate(y[pad], u[pad], data.experiment[pad], k0, horizon, held,
+                               estimation, input_names=names).items():
+        idx = np.minimum(k0[:, None] + np.arange(1, horizon + 1)[None, :], len(data) - 1)
+        e = np.where(inside[:, 1:, None], pred.predicted[:, 1:, :] - obs[idx], np.nan)
         out[name] = {
             "description": pred.description,
-            "channels": {n: {"rmse": float(np.sqrt(np.mean(e[..., j] ** 2))),
-                             "p90_abs": float(np.percentile(np.abs(e[..., j]), 90))}
+            "channels": {n: {"rmse": _nan_rms(e[..., j]), "p90_abs": _nan_p90(e[..., j])}
                          for j, (_, n) in enumerate(use)},
-            "by_horizon": [{"step": h, **{n: {"rmse": float(np.sqrt(np.mean(e[:, h - 1, j] ** 2))),
-                                              "p90_abs": float(np.percentile(
-                                                  np.abs(e[:, h - 1, j]), 90))}
-                                          for j, (_, n) in enumerate(use)}} for h in steps]}
+            "by_horizon": [{"step": h, **{n: {"rmse": _nan_rms(e[:, h - 1, j]),
+                                              "p90_abs": _nan_p90(e[:, h - 1, j])}
+                                          for j, (_, n) in enumerate(use)}} for h in steps],
+            "by_time": by_time({n: e[..., j] for j, (_, n) in enumerate(use)}, model.Ts)}
     return out
+
+
+def _nan_rms(e: np.ndarray) -> float:
+    e = e[np.isfinite(e)]
+    return float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan
+
+
+def _nan_p90(e: np.ndarray) -> float:
+    e = e[np.isfinite(e)]
+    return float(np.percentile(np.abs(e), 90)) if e.size else math.nan
 
 
 def _default_horizons(H: int) -> tuple[int, ...]:
@@ -311,7 +366,7 @@ def _warm_start(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np
     idx = (k0 - W)[:, None] + np.arange(W + 1)[None, :]
     n, nx = k0.size, model.nx
     chan = [c for c, _ in data.measured_channels(model)]
-    meas = np.concatenate([data.x, data.y], axis=1)[idx][:, :W][..., chan]
+    meas = data.observed()[idx][:, :W][..., chan]
     obs = np.isfinite(meas)
     meas = np.nan_to_num(meas)
     scale = np.array([max(float(np.std(meas[..., i][obs[..., i]])), 1e-6)

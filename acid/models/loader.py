@@ -15,13 +15,13 @@ from acid.models.declaration import DeclarationError, Model
 
 #: Built-in declarations: name -> module defining ``model``.
 BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
-            "cabin3": "acid.models.examples.cabin3"}
+            "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin"}
 
 
 def load(spec: str | Path | Model) -> Model:
     """The declared model ``spec``: a ``Model`` as is, a built-in name (``paper``, ``econ``,
-    ``cabin3``) or the path of a ``.py`` file defining ``model``. Errors are one line
-    (``DeclarationError``) naming the file."""
+    ``cabin3``, ``car_cabin``) or the path of a ``.py`` file defining ``model``. Errors are
+    one line (``DeclarationError``) naming the file."""
     if isinstance(spec, Model):
         return spec
     text = str(spec)

@@ -1,0 +1,105 @@
+"""A cabin model for what a car records: ``--model car_cabin``.
+
+A real car logs the cabin air temperature, the ambient, the speed, the A/C's electric power
+and (on the BMW i3) the air temperature after the evaporator/heat exchanger; it logs no
+blower flow, no supply air, no interior or shell temperature and no solar load. This
+declaration reads the cabin air, the ambient, the speed and the evaporator air temperature
+(the A/C's effect on the cabin arrives as that air; the A/C power is what a controller
+spends to hold it, not a separate heat flow here):
+
+* ``T_cab`` (measured): the cabin air, with the fast trims that follow it.
+* ``T_int`` (latent): seats, dashboard, panels and the air they hold, lumped.
+* ``T_shell`` (latent): roof, doors, pillars and glazing, lumped.
+
+Heat flows (W), a three-resistance, three-capacitance network::
+
+    Q_sup   = G_sup (T_evap + dT_sup - T_cab)          supply air (blower at a fixed level)
+    Q_int   = UA_int (T_int - T_cab)                    interior surfaces -> cabin air
+    Q_shell = UA_shell (T_shell - T_cab)                inner shell surface -> cabin air
+    Q_out   = (UA_out + UA_out_v v) (T_amb - T_shell)   ambient -> shell (forced convection)
+
+    C_cab dT_cab/dt     = Q_sup + Q_int + Q_shell
+    C_int dT_int/dt     = Q_sol - Q_int
+    C_shell dT_shell/dt = Q_out - Q_shell
+
+``G_sup`` is the blower's mass flow times c_p: the log has no flow, so the model assumes the
+blower level constant (the i3 trips ran in "Automatic, level 1") and identifies the product.
+The supply air is the logged evaporator air temperature ``T_evap`` plus ``dT_sup`` (blower
+heat and duct gains). ``Q_sol``, the solar and occupant load absorbed by the interior, is
+not logged: it is a per-trip parameter (weather and route differ); on a trip the fit never
+saw, its mean over the fitted trips is used.
+
+What the data identify: ``T_cab`` alone sees the network only through its response. On
+13 BMW i3 trips (README, "Your car's logs") ``C_cab`` and ``G_sup`` come out as one time
+constant (both at a bound), the interior's and shell's capacities and conductances only in
+combinations, the speed slope ``UA_out_v`` at zero, and ``dT_sup`` is indistinguishable from
+the load (so it is fixed). The ranges are those of published cabin models and measurements
+(``acid/models/SOURCES.md``):
+
+* ``C_cab``: cabin air of a compact car (2.5-3 m^3, ~3 kg, ~3 kJ/K) plus the thin trims
+  that follow it within a minute: 3-40 kJ/K [Marcos2014, TorregrosaJaime2015].
+* ``C_int``: seats, dashboard and panels, 40-100 kg at 1-1.5 kJ/(kg K): 20-200 kJ/K
+  [Fayazbakhsh2013, Marcos2014].
+* ``C_shell``: steel/CFRP and glass body shell, 100-300 kg at 0.5-1 kJ/(kg K) (of which
+  the part in thermal contact with the cabin): 20-300 kJ/K [TorregrosaJaime2015].
+* ``G_sup``: 0.03-0.15 kg/s of supply air (low blower levels to full) times 1.008
+  kJ/(kg K): 25-160 W/K [Fayazbakhsh2013, Wang2018 Table II].
+* ``UA_int``: interior surfaces of 4-8 m^2 with 3-10 W/(m^2 K) film coefficients:
+  10-300 W/K; ``UA_shell``: 8-12 m^2 of inner shell and glazing: 20-300 W/K
+  [Fayazbakhsh2013, TorregrosaJaime2015].
+* ``UA_out`` + ``UA_out_v v``: outer surface of ~10 m^2 with a still-air coefficient of
+  5-15 W/(m^2 K) and a speed slope of 2-5 W/(m^2 K) per m/s (forced convection):
+  20-300 W/K and 0-80 W/K per m/s [Fayazbakhsh2013].
+* ``Q_sol``: 0-1000 W/m^2 on ~2 m^2 of glazing, part transmitted and absorbed, plus
+  occupants (~100 W each): -300-1500 W [Fayazbakhsh2013, Marcos2014].
+"""
+
+from acid.models import RK4, Model, Parameter, Signal, State
+
+
+def ode(s):
+    q_sup = s.G_sup * (s.T_evap + s.dT_sup - s.T_cab)
+    q_int = s.UA_int * (s.T_int - s.T_cab)
+    q_shell = s.UA_shell * (s.T_shell - s.T_cab)
+    q_out = (s.UA_out + s.UA_out_v * s.v_veh) * (s.T_amb - s.T_shell)
+    return {
+        "T_cab": (q_sup + q_int + q_shell) / (1e3 * s.C_cab),
+        "T_int": (s.Q_sol - q_int) / (1e3 * s.C_int),
+        "T_shell": (q_out - q_shell) / (1e3 * s.C_shell),
+    }
+
+
+def _between_cabin_and_ambient(m):
+    return 0.5 * (m.T_cab + m.T_amb)
+
+
+model = Model(
+    "car_cabin",
+    states=[State("T_cab", "K", description="cabin air (logged)"),
+            State("T_int", "K", measured=False, initial=lambda m: m.T_cab,
+                  description="interior (seats, dashboard, panels), lumped; not logged"),
+            State("T_shell", "K", measured=False, initial=_between_cabin_and_ambient,
+                  description="body shell and glazing, lumped; not logged")],
+    inputs=[Signal("T_evap", "K", "air after the evaporator / heat exchanger (logged)")],
+    disturbances=[Signal("T_amb", "K", "ambient air (logged)"),
+                  Signal("v_veh", "m/s", "vehicle speed (logged)")],
+    parameters=[
+        Parameter("C_cab", "kJ/K", 12.0, 3.0, 40.0, description="cabin air and trims"),
+        Parameter("C_int", "kJ/K", 60.0, 20.0, 200.0, description="interior, lumped"),
+        Parameter("C_shell", "kJ/K", 80.0, 20.0, 300.0, description="shell and glazing"),
+        Parameter("G_sup", "W/K", 60.0, 25.0, 160.0,
+                  description="supply air flow x c_p (blower level held)"),
+        Parameter("dT_sup", "K", 1.0, 0.0, 3.0, fixed=True,
+                  description="supply air above the evaporator air (blower heat, ducts)"),
+        Parameter("UA_int", "W/K", 80.0, 10.0, 300.0, description="interior <-> cabin air"),
+        Parameter("UA_shell", "W/K", 80.0, 20.0, 300.0,
+                  description="inner shell surface <-> cabin air"),
+        Parameter("UA_out", "W/K", 80.0, 20.0, 300.0, description="ambient <-> shell, still"),
+        Parameter("UA_out_v", "W s/(K m)", 20.0, 0.0, 80.0,
+                  description="ambient <-> shell, per m/s of speed"),
+        Parameter("Q_sol", "W", 300.0, -300.0, 1500.0, per_experiment=True,
+                  description="solar and occupant load into the interior, per trip"),
+    ],
+    Ts=5.0, ode=ode, integrator=RK4(substeps=2),
+    description="car cabin from logged channels: cabin air, latent interior and shell",
+)
