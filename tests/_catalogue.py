@@ -57,7 +57,9 @@ class Case:
 def _tampered_summary(w: Path, stages: dict | None) -> None:
     """A ``summary.json`` of acid reproduce whose stage values were edited (``acid claims``
     judges them again and must name the key)."""
-    d = {"claims": {"items": []}, "options": {}}
+    from acid.claims.core import Verdict
+
+    d = {"claims": {"items": [], "counts": {v.value: 0 for v in Verdict}}, "options": {}}
     if stages is not None:
         d["stages"] = stages
     (w / "tampered.json").write_text(json.dumps(d))

@@ -104,7 +104,8 @@ def test_a_non_finite_value_is_one_line_naming_the_key(tmp_path):
     res = CliRunner().invoke(app, ["claims", str(path)])
     assert res.exit_code == 2
     assert_one_line_error(res, "tampered.json", "stages.sweep.summary.ratio_last_first",
-                          "not a finite number")
+                          "non-finite number")
+
 
 def test_a_tampered_summary_is_one_line_naming_the_key(tmp_path):
     s = _summary(tmp_path)
