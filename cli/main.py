@@ -6,7 +6,14 @@ from acid_cli import _signals
 
 _signals.begin_startup()  # Ctrl-C or SIGTERM while the modules below import: exit quietly
 
+import os  # noqa: E402
 import sys  # noqa: E402
+
+# multiprocessing's resource tracker (a child of every run that starts local Dask processes)
+# reads this when it starts: after a signal has ended the run and its workers, it would warn on
+# its way out about the semaphores of the killed workers (noise after the one-line exit).
+os.environ["PYTHONWARNINGS"] = ",".join(
+    w for w in (os.environ.get("PYTHONWARNINGS"), "ignore:resource_tracker:UserWarning") if w)
 
 import typer  # noqa: E402
 from typer.core import TyperGroup  # noqa: E402
