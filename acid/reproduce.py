@@ -11,7 +11,8 @@ Stages (cached by their inputs, see :mod:`acid.pipeline`):
     econ      beyond the paper: the econ model family identified from an `acid excite
               --model econ` record and validated beside the paper's model on the same data
     cav       beyond the paper, "where the energy is": acid cav-study on drive cycles
-              (A paper NMPC, B ICM, D/E economic NMPC without/with preview, the bound)
+              (A paper NMPC, B ICM, D/E economic NMPC without/with preview, P/F PI baselines,
+              the best known plan)
     plant_check  the high-fidelity plant's credentials against published references
 
 ``sweep`` and the chain excite -> fit -> (validate, mpc) are independent, so ``--jobs 2``
@@ -283,7 +284,7 @@ def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
                                "mean cabin temperature, end state charged back")]
     figs += [save_report_figure(trajectory_figure(st), workdir, f"cav_{name}",
                                 f"Where the energy is, {name.upper()}: paper NMPC (A), "
-                                "economic NMPC with preview (E), the bound replayed")
+                                "economic NMPC with preview (E), the best known plan replayed")
              for name, st in res.cycles.items()]
     write_figure_index(workdir, figs)
     d = res.to_json_dict()
