@@ -404,13 +404,20 @@ def compare(data: Dataset, *models, k: int | None = None,
     simulation, as MATLAB's default); ``labels`` name them (default: the parameters' names,
     made unique).
     """
+    return compare_predictions(models, lambda m: predict(data, m, k, warmup=warmup), k, labels)
+
+
+def compare_predictions(models, predict_one, k: int | None,
+                        labels: list[str] | None = None) -> CompareResult:
+    """``CompareResult`` of ``predict_one(m)`` for each of ``models``: labelled by ``labels``
+    or the predictions' model names (made unique), every model predicting the same channels."""
     if not models:
         raise ConfigError("compare: give at least one model")
     if labels is not None and len(labels) != len(models):
         raise ConfigError(f"compare: {len(labels)} labels for {len(models)} models")
     preds: dict[str, PredictionResult] = {}
     for i, m in enumerate(models):
-        pr = predict(data, m, k, warmup=warmup)
+        pr = predict_one(m)
         label = labels[i] if labels is not None else pr.model
         if label in preds:
             label = f"{label} ({i + 1})"

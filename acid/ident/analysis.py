@@ -20,7 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from acid.analysis import CompareResult, PredictionResult, ResidualResult, residual_tests
+from acid.analysis import (
+    CompareResult,
+    PredictionResult,
+    ResidualResult,
+    compare_predictions,
+    residual_tests,
+)
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.ident.data import ModelData
@@ -169,22 +175,8 @@ def compare_models(ds: Dataset, *params, k: int | None = None, labels=None, mode
                    warmup: int = 0) -> CompareResult:
     """Fit % per channel of one or more declared parameter sets on ``ds`` (MATLAB
     ``compare``; ``k`` None: simulation)."""
-    if not params:
-        raise ConfigError("compare: give at least one model")
-    if labels is not None and len(labels) != len(params):
-        raise ConfigError(f"compare: {len(labels)} labels for {len(params)} models")
-    preds: dict[str, PredictionResult] = {}
-    for i, p in enumerate(params):
-        pr = predict_model(ds, p, k, model=model, warmup=warmup)
-        label = labels[i] if labels is not None else pr.model
-        if label in preds:
-            label = f"{label} ({i + 1})"
-        if preds and next(iter(preds.values())).channels != pr.channels:
-            raise ConfigError(f"compare: {label} predicts {', '.join(pr.channels)}, the "
-                              f"first model {', '.join(next(iter(preds.values())).channels)}")
-        preds[label] = pr
-    return CompareResult(predictions=preds, horizon=None if k is None else int(k))
-
+    return compare_predictions(
+        params, lambda p: predict_model(ds, p, k, model=model, warmup=warmup), k, labels)
 
 def resid_model(ds: Dataset, params=None, max_lag: int = 25, k: int = 1, *, model=None,
                 warmup: int = 0) -> ResidualResult:
