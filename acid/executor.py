@@ -362,7 +362,7 @@ class DaskExecutor(Executor):
 
             from distributed.deploy.spec import SpecCluster
 
-            before = {c.pid for c in multiprocessing.active_children()}
+            before = {c.pid for c in multiprocessing.active_children()} | _os_children()
             clusters = set(SpecCluster._instances)
             try:
                 with dask.config.set({"distributed.scheduler.allowed-failures": 1,
@@ -456,11 +456,27 @@ class DaskExecutor(Executor):
 
         self._pids |= {c.pid for c in multiprocessing.active_children()} - before
         self._kill_workers()
+        new = set(SpecCluster._instances) - clusters
+        for cluster in new:  # its event loop would go on starting workers from its own thread
+            with contextlib.suppress(Exception):
+                cluster._loop_runner.stop()
+        # a worker whose start was under way is not in multiprocessing's list yet: left alive,
+        # it fails to rebuild its semaphore once this process exits and prints a traceback. The
+        # starts already queued finish within a few scans; 10 s bounds a starved machine.
+        quiet_since, deadline = time.monotonic(), time.monotonic() + 10.0
+        while time.monotonic() - quiet_since < 0.5 and time.monotonic() < deadline:
+            stray = _os_children() - before - {_resource_tracker_pid()}
+            for pid in stray:
+                with contextlib.suppress(OSError):
+                    os.kill(pid, signal.SIGKILL)
+            if stray:
+                quiet_since = time.monotonic()
+            time.sleep(0.05)
         client = getattr(self, "client", None)
         if client is not None:
             with contextlib.suppress(Exception):
                 client.close(timeout=2)
-        for cluster in set(SpecCluster._instances) - clusters:
+        for cluster in new:
             SpecCluster._instances.discard(cluster)
             with contextlib.suppress(Exception):
                 cluster.shutdown_on_close = False
@@ -473,6 +489,27 @@ class DaskExecutor(Executor):
             if child.pid in self._pids:
                 with contextlib.suppress(Exception):
                     child.kill()
+
+
+def _os_children() -> set[int]:
+    """PIDs of this process's live children as the OS sees them (psutil, which Dask
+    requires); a killed child not yet reaped is not one."""
+    import psutil
+
+    live = set()
+    with contextlib.suppress(psutil.Error):
+        for child in psutil.Process().children():
+            with contextlib.suppress(psutil.Error):
+                if child.status() != psutil.STATUS_ZOMBIE:
+                    live.add(child.pid)
+    return live
+
+
+def _resource_tracker_pid() -> int | None:
+    """multiprocessing's resource tracker, a child that must outlive the workers it tracks."""
+    from multiprocessing import resource_tracker
+
+    return getattr(resource_tracker._resource_tracker, "_pid", None)
 
 
 def _silence_dask_logs() -> None:
