@@ -629,7 +629,7 @@ def build_plant(name: str = "hifi", config_path=None, T_amb: float | None = None
     from acid.plant import make_plant
 
     if T_amb is not None and not 233.15 <= T_amb <= 330.15:
-        raise ConfigError(f"--ambient {K2C(T_amb):g} degC is outside the refrigerant property "
+        raise ConfigError(f"--t-amb {K2C(T_amb):g} degC is outside the refrigerant property "
                           "tables (-40 to 57 degC)")
     return make_plant(name, config_path=config_path, T_amb=T_amb, **kwargs)
 
