@@ -49,10 +49,10 @@ def test_ambient_outside_the_tables_is_one_line_error(tmp_path):
 
 def test_ambient_in_a_config_outside_the_tables_is_one_line_error(tmp_path):
     cfg = tmp_path / "a.toml"
-    cfg.write_text("T_amb = 340.0\n")
+    cfg.write_text("T_amb = 66.85\n")
     result = runner.invoke(app, ["plant-check", "--plant-config", str(cfg), "--out", str(tmp_path)])
     assert result.exit_code == 2
-    assert_one_line_error(result, "T_amb", "property tables", str(cfg))
+    assert_one_line_error(result, "T_amb = 66.85 degC", "property tables", str(cfg))
 
 
 def test_plant_check_through_an_exported_fmu(tmp_path, exported_fmu):
