@@ -9,6 +9,7 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure
+from acid.units import json_in_degC
 from acid_cli._common import (
     check_paths,
     console,
@@ -114,7 +115,7 @@ def plant_check(
     summary["figures"] = figures
     from acid._io import write_json
 
-    write_json(out / "plant_check.json", summary)
+    write_json(out / "plant_check.json", json_in_degC(summary))
     say(f"figures written to {out}")
     write_summary(json_path, summary)
     console.print("[bold green]PASS[/]" if result.passed else "[bold red]FAIL[/]")

@@ -10,6 +10,7 @@ import typer
 from acid import __version__
 from acid._io import file_sha256, save_figure, write_json
 from acid.errors import ConfigError
+from acid.units import json_in_degC
 from acid_cli._common import (
     check_paths,
     handle_errors,
@@ -151,6 +152,6 @@ def speed_sweep(
     figure_path = save_figure(sweep_figure(result, other, (name, f"{DEFAULT_VEHICLE} vehicle")),
                               out / "speed_sweep.png")
     summary["figure"] = str(figure_path)
-    write_json(out / "speed_sweep.json", summary)
+    write_json(out / "speed_sweep.json", json_in_degC(summary))
     say(f"figure written to {figure_path}")
     write_summary(json_path, summary)
