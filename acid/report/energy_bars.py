@@ -121,7 +121,7 @@ def cav_energy_bars(result, baselines: Sequence[str] = ("F", "P", "A")) -> Energ
         flagged[name] = tuple(k for k in st.results if not st.in_rh_band(k))
     return EnergyBars(groups=groups, baseline=base, energy_MJ=energy, flagged=flagged,
                       title="A/C energy (compressor + blower, end state charged back) at equal "
-                            "mean cabin temperature, against the best simple controller of "
+                            "mean cabin temperature,\nagainst the best simple controller of "
                             "each cycle (named under it)",
                       flag_meaning="outside the RH band",
                       labels={g: g.upper() for g in groups})

@@ -123,8 +123,9 @@ _SUMMARY_COLUMNS = (Verdict.AGREES, Verdict.DIRECTION, Verdict.DISAGREES)
 
 def _summary(report: Report) -> list[str]:
     """The short summary that opens the page: the verdict counts, any contradiction, and one
-    row per section of the paper (how many of its claims agree, agree in direction only or
-    disagree, which ones disagree); the full table of claims is further down."""
+    row per section of the paper (how many of its claims agree, agree in direction only,
+    disagree or have no verdict (not comparable, not measured, not judged), which ones
+    disagree); the full table of claims is further down."""
     e = html.escape
     n = counts(report.verdicts)
     out = ["<h2 id=summary>Summary</h2><p class=counts id=counts>" + "".join(
@@ -140,7 +141,7 @@ def _summary(report: Report) -> list[str]:
             by_section.setdefault(v.claim.section, []).append(v)
     out.append("<table class=summary><tr><th>section of the paper</th>"
                + "".join(f"<th>{e(c.value)}</th>" for c in _SUMMARY_COLUMNS)
-               + "<th>not judged</th><th>what disagrees</th></tr>")
+               + "<th>no verdict</th><th>what disagrees</th></tr>")
     for section, vs in by_section.items():
         tally = [sum(v.verdict is c for v in vs) for c in _SUMMARY_COLUMNS]
         other = len(vs) - sum(tally)
