@@ -19,6 +19,7 @@ CANONICAL: dict[str, str] = {
     "ambient range": "--t-amb-range",
     "plant configuration": "--plant-config",  # a TOML file or a vehicle name ('paper')
     "refrigerant": "--refrigerant",
+    "FMU map": "--fmu-map",           # read by --plant fmu:..., written by export-fmu
     "parameters": "--params",
     "cycle": "--cycle",
     "seed": "--seed",
@@ -33,6 +34,7 @@ ALIASES: dict[str, str] = {
     "--ambient": "--t-amb",
     "--config": "--plant-config",
     "--workers": "--jobs",
+    "--map": "--fmu-map",             # export-fmu (import's --map is its channel map)
 }
 
 

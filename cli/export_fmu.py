@@ -30,7 +30,7 @@ def export_fmu(
     fmi_version: int = typer.Option(2, "--fmi-version",
                                     help="FMI version: 2 (pythonfmu) or 3 (pythonfmu3)."),
     map_out: Path | None = typer.Option(
-        None, "--map", help="Where to write the FMU map for --fmu-map (default: the FMU's "
+        None, "--fmu-map", help="Where to write the FMU map that drives it (default: the FMU's "
                             "name with .toml)."),
     json_out: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
@@ -54,9 +54,9 @@ def export_fmu(
         raise ConfigError(f"--out: an FMU file name ends in .fmu, got {out}")
     map_out = map_out if map_out is not None else out.with_suffix(".toml")
     check_paths(inputs={"--plant-config": plant_config},
-                outputs={"--out": out, "--map": map_out, "--json": json_out})
+                outputs={"--out": out, "--fmu-map": map_out, "--json": json_out})
     if map_out.resolve() == out.resolve():
-        raise ConfigError("--map must differ from --out")
+        raise ConfigError("--fmu-map must differ from --out")
     cfg = PlantConfig.from_toml(plant_config) if plant_config is not None else PlantConfig()
     cfg = cfg.replace(**plant_overrides(refrigerant=refrigerant))
     identity = plant_identity(cfg, label)

@@ -20,6 +20,7 @@ SPELLINGS: dict[str, tuple[str, set[str]]] = {
     "ambient": (r"amb", {CANONICAL["ambient"], CANONICAL["ambient range"]}),
     "plant configuration": (r"config|vehicle|\bcar\b", {CANONICAL["plant configuration"]}),
     "refrigerant": (r"refrig|fluid|r134|r1234", {CANONICAL["refrigerant"]}),
+    "FMU map": (r"fmu", {CANONICAL["FMU map"]}),
     # --econ-params: the econ model's parameters beside the paper model's (cav-study takes both)
     "parameters": (r"param", {CANONICAL["parameters"], "--econ-params"}),
     "cycle": (r"cycle|drive", {CANONICAL["cycle"]}),

@@ -580,9 +580,17 @@ class PlantConfig:
     def to_file_dict(self) -> dict:
         """Flat dict of all parameters as a plant file gives them (what a user reads): absolute
         temperatures in degC, everything else as ``to_dict``; ``from_file_dict`` reads it back."""
-        return {name: (round(float(K2C(v)), 9) if _UNITS.get(name) == "K"
-                       and name not in TEMPERATURE_DIFFERENCES else v)
-                for name, v in self.to_dict().items()}
+        return self.in_file_units(self.to_dict())
+
+    @classmethod
+    def in_file_units(cls, d: dict) -> dict:
+        """A copy of a flat dict keyed by parameter names (``to_dict``, a plant's
+        ``config()``) with the absolute temperatures in degC; other keys as they are."""
+        units = {f.name: f.metadata["unit"] for f in dataclasses.fields(cls)}
+        return {name: (round(float(K2C(v)), 9) if units.get(name) == "K"
+                       and name not in TEMPERATURE_DIFFERENCES
+                       and isinstance(v, (int, float)) and not isinstance(v, bool) else v)
+                for name, v in d.items()}
 
     @classmethod
     def parameter_table(cls) -> list[tuple[str, str, str, str]]:
