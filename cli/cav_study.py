@@ -190,6 +190,8 @@ def cav_study(
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     require(plant_config is None or choice.kind == "hifi", "--plant-config",
             "applies to --plant hifi only")
+    require(refrigerant is None or choice.kind == "hifi", "--refrigerant",
+            "applies to --plant hifi only")
     p = load_params(params, allow_unstable=allow_unstable)
     econ_cfg = EconNMPCConfig(intervals=_econ_intervals(econ_horizon, p.Ts),
                               solver=econ_solver, terminal=econ_terminal,

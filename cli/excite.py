@@ -51,6 +51,8 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
     A plant that is not available in this installation (``--plant hifi`` before the
     high-fidelity modules exist, or without their dependencies) is a one-line ``ConfigError``.
     """
+    if refrigerant is not None and name != "hifi":
+        raise ConfigError(f"--refrigerant applies to --plant hifi only, not {name!r}")
     if name.startswith(DECLARED_PREFIX):
         return declared_plant(name[len(DECLARED_PREFIX):], spec, params, plant_config, T_amb,
                               fmu_map)
