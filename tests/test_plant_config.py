@@ -205,6 +205,9 @@ def test_file_temperature_differences_are_K_plain_or_tagged(tmp_path):
     ('T_amb = "warm degC"\n', "temperature unit"),
     ('T_amb = "35 W"\n', "temperature unit"),
     ("T_amb = 60.0\n", "T_amb = 60 degC is outside the refrigerant property tables"),
+    ("T_amb = nan\n", "T_amb must be a finite number, got nan"),
+    ("T_amb = 1" + "0" * 400 + "\n", "T_amb must be a finite number, got an integer too large"),
+    ("[cabin]\nC_cab = 1" + "0" * 400 + "\n", "C_cab must be a finite number"),
 ])
 def test_file_temperatures_refused_with_one_line_naming_key(tmp_path, text, message):
     path = tmp_path / "p.toml"

@@ -209,12 +209,26 @@ def _file_temperature(key: str, value, source: str):
         return x * scale[1] + scale[2]
     if difference or isinstance(value, bool) or not isinstance(value, (int, float)):
         return value
+    x = _finite(key, value, source)
     lo, hi = FILE_DEGC_RANGE
-    if not lo <= value <= hi:
-        raise ConfigError(f"{source}: {key} = {value:g} is read in degC (plant files give "
+    if not lo <= x <= hi:
+        raise ConfigError(f"{source}: {key} = {x:g} is read in degC (plant files give "
                           f"temperatures in degC) and lies outside {lo:g}..{hi:g} degC; if "
-                          f"kelvin is meant, write {key} = \"{value:g} K\"")
-    return C2K(float(value))
+                          f"kelvin is meant, write {key} = \"{x:g} K\"")
+    return C2K(x)
+
+
+def _finite(key: str, value, source: str) -> float:
+    """``value`` as a finite float, else one line naming ``key`` (an integer too large for a
+    float included)."""
+    try:
+        x = float(value)
+    except OverflowError:
+        x = math.inf
+    if not math.isfinite(x):
+        shown = "an integer too large" if isinstance(value, int) else repr(value)
+        raise ConfigError(f"{source}: {key} must be a finite number, got {shown}")
+    return x
 
 
 @dataclass(frozen=True)
@@ -539,7 +553,7 @@ class PlantConfig:
             elif isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise ConfigError(f"{source}: {key} must be a number, got {v!r}")
             else:
-                flat[key] = float(v)
+                flat[key] = float(v) if isinstance(v, float) else _finite(key, v, source)
         try:
             return cls(**flat)
         except ConfigError as exc:
