@@ -8,6 +8,7 @@ formula in degC gives 160 degC. Conversion therefore happens once, where data en
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -327,6 +328,10 @@ def _unit_product(tokens, pos, text):
 _KELVIN_RANGE = (150.0, 450.0)
 
 
+#: keys whose ``_K`` is part of a derived unit (W/K, J/(kg K), ...), never a temperature
+_DERIVED_K = re.compile(r"(per|_W|_kW|_J|_kJ|_MJ|_kg|_s|_m2|_m)_K$")
+
+
 def _absolute_kelvin(value) -> bool:
     """True when ``value`` is a number or a (nested) list of numbers, at least one finite,
     every finite one inside ``_KELVIN_RANGE``."""
@@ -360,7 +365,8 @@ def json_in_degC(obj):
     if isinstance(obj, dict):
         out = {}
         for key, value in obj.items():
-            if isinstance(key, str) and key.endswith("_K") and _absolute_kelvin(value):
+            if (isinstance(key, str) and key.endswith("_K") and not _DERIVED_K.search(key)
+                    and _absolute_kelvin(value)):
                 out[key[:-2] + "_C"] = _to_degC(value)
             else:
                 out[key] = json_in_degC(value)
