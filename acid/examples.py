@@ -32,7 +32,7 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "sweep_prediction.toml": ("sweep spec", "where prediction pays: economic NMPC against the "
                                             "best fixed-coil PI across climates and cycles"),
     "table_i_20cc.toml": ("plant config", "the paper vehicle: a 20 cc electric scroll "
-                                          "calibrated to Table I (--config paper)"),
+                                          "calibrated to Table I (--plant-config paper)"),
 }
 
 

@@ -386,8 +386,7 @@ class DaskExecutor(Executor):
                 first = str(exc).splitlines()[0] if str(exc) else ""
                 raise AcidError(f"the local Dask cluster of {n} worker"
                                 f"{'s' * (n != 1)} did not start ({type(exc).__name__}"
-                                f"{': ' + first[:200] if first else ''}); try --workers 1 "
-                                "or --jobs 1") from None
+                                f"{': ' + first[:200] if first else ''}); try --jobs 1") from None
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
 
     def _check_versions(self) -> None:

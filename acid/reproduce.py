@@ -265,10 +265,12 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
 def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """Beyond the paper, where the energy is: ``acid cav-study`` on drive cycles."""
     from acid.econ.params import EconParams
-    from acid.mpc.cav_study import StudyConfig, cav_study
+    from acid.mpc.cav_study import CONTROLLERS, StudyConfig, cav_study
     from acid.mpc.econ_nmpc import EconNMPCConfig
     from acid.params import ModelParams
-    from acid.report.cav import energy_figure, trajectory_figure
+    from acid.report.cav import _COLORS as CONTROLLER_COLORS  # the trajectories' colours
+    from acid.report.cav import trajectory_figure
+    from acid.report.energy_bars import cav_energy_bars, difference_figure
 
     params = ModelParams.from_json(inputs["fit"] / "params.json")
     econ = EconParams.from_json(inputs["econ"] / "econ_params.json")
@@ -279,9 +281,12 @@ def stage_cav(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     res = cav_study(params, list(config["cycles"]), cfg, econ=econ,
                     econ_summary={"source": "stage econ", "power_map": econ.power_map.quality},
                     progress=progress)
-    figs = [save_report_figure(energy_figure(res), workdir, "energy",
-                               "Where the energy is: energy per controller and cycle at equal "
-                               "mean cabin temperature, end state charged back")]
+    figs = [save_report_figure(
+        difference_figure(cav_energy_bars(res), CONTROLLERS, CONTROLLER_COLORS), workdir,
+        "energy", "Where the energy is: each controller's energy against the best simple "
+                  "controller of each cycle (the fixed-coil PI F, the reset PI P or the paper "
+                  "NMPC A, named under the cycle), %, at equal mean cabin temperature, end "
+                  "state charged back")]
     figs += [save_report_figure(trajectory_figure(st), workdir, f"cav_{name}",
                                 f"Where the energy is, {name.upper()}: paper NMPC (A), "
                                 "economic NMPC with preview (E), the best known plan replayed")

@@ -7,6 +7,9 @@ formula in degC gives 160 degC. Conversion therefore happens once, where data en
 
 from __future__ import annotations
 
+import math
+import re
+
 import numpy as np
 
 ZERO_CELSIUS = 273.15
@@ -317,3 +320,57 @@ def _unit_product(tokens, pos, text):
     if expect or divide:
         raise ValueError(f"unit {text!r}: incomplete")
     return factor, dims, pos
+
+
+#: an absolute temperature in kelvin (what a result object may carry inside): the values a
+#: key ending ``_K`` holds when it is a temperature and not a difference (a difference of
+#: 150 K or more is no difference acid ever reports)
+_KELVIN_RANGE = (150.0, 450.0)
+
+
+#: keys whose ``_K`` is part of a derived unit (W/K, J/(kg K), ...), never a temperature
+_DERIVED_K = re.compile(r"(per|_W|_kW|_J|_kJ|_MJ|_kg|_s|_m2|_m)_K$")
+
+
+def _absolute_kelvin(value) -> bool:
+    """True when ``value`` is a number or a (nested) list of numbers, at least one finite,
+    every finite one inside ``_KELVIN_RANGE``."""
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, (int, float)):
+        return math.isfinite(value) and _KELVIN_RANGE[0] <= value <= _KELVIN_RANGE[1]
+    if isinstance(value, (list, tuple)) and value:
+        finite = [v for v in value if not (isinstance(v, float) and not math.isfinite(v))
+                  and v is not None]
+        return bool(finite) and all(_absolute_kelvin(v) for v in finite)
+    return False
+
+
+def _to_degC(value):
+    if isinstance(value, (list, tuple)):
+        return [_to_degC(v) for v in value]
+    if value is None or not math.isfinite(value):
+        return value
+    return round(value - ZERO_CELSIUS, 9)
+
+
+def json_in_degC(obj):
+    """A JSON-ready copy of ``obj`` for the user: every absolute temperature in degC.
+
+    Result objects speak kelvin inside (``T_amb_K``, ``final_T_cab_K``); a key ending ``_K``
+    whose numbers are absolute temperatures (``_KELVIN_RANGE``) becomes ``..._C`` with its
+    values in degC. Temperature differences (``max_violation_K``, ``rmse_K``: a kelvin and a
+    degC of difference are the same) keep their names.
+    """
+    if isinstance(obj, dict):
+        out = {}
+        for key, value in obj.items():
+            if (isinstance(key, str) and key.endswith("_K") and not _DERIVED_K.search(key)
+                    and _absolute_kelvin(value)):
+                out[key[:-2] + "_C"] = _to_degC(value)
+            else:
+                out[key] = json_in_degC(value)
+        return out
+    if isinstance(obj, (list, tuple)):
+        return [json_in_degC(v) for v in obj]
+    return obj

@@ -31,6 +31,7 @@ from rich.text import Text
 
 from acid._io import check_writable_file, write_json
 from acid.errors import AcidError, ConfigError, DataError, OutputError
+from acid.units import json_in_degC
 from acid_cli._signals import InterruptGuard
 
 try:  # typer >= 0.2x vendors click
@@ -273,9 +274,10 @@ def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator
 
 
 def write_summary(path: Path | None, summary: dict) -> None:
-    """Write the machine-readable summary when ``--json`` was given."""
+    """Write the machine-readable summary when ``--json`` was given (absolute temperatures
+    in degC, ``acid.units.json_in_degC``)."""
     if path is not None:
-        write_json(path, summary)
+        write_json(path, json_in_degC(summary))
         say(f"summary written to {path}")
 
 

@@ -84,12 +84,69 @@ class PlantChoice:
                 "fmu_map": None if self.fmu_map is None else str(self.fmu_map)}
 
 
-def config_option(flag: str = "--config"):
-    """The plant configuration option: a TOML file or a named vehicle (``acid.plant.vehicles``)."""
-    return typer.Option(None, flag,
-                        help="Plant configuration: a TOML file (SI units, K), or a named "
-                             "vehicle: 'paper' (the Table I calibration, "
-                             "datasets/plant/table_i_20cc.toml) or 'default'.")
+def config_option():
+    """The ``--plant-config`` option: a TOML file or a named vehicle (``acid.plant.vehicles``)."""
+    return typer.Option(None, "--plant-config",
+                        help="Plant configuration: a TOML file (temperatures in degC, or "
+                             "tagged \"308.15 K\"), or a named vehicle: 'paper' (the Table I "
+                             "calibration, example:table_i_20cc.toml) or 'default'.")
+
+
+def ambient_option(default_text: str = "the plant configuration's"):
+    """The ``--t-amb`` option: the ambient temperature, degC."""
+    return typer.Option(None, "--t-amb",
+                        help=f"Ambient temperature, degC (default: {default_text}).")
+
+
+def refrigerant_option():
+    """The ``--refrigerant`` option of acid's high-fidelity plant."""
+    from acid.plant.config import REFRIGERANTS
+
+    return typer.Option(None, "--refrigerant",
+                        help=f"Refrigerant of the high-fidelity plant: {' or '.join(REFRIGERANTS)} "
+                             "(default: the plant configuration's).")
+
+
+def plant_overrides(t_amb: float | None = None, refrigerant: str | None = None) -> dict:
+    """``--t-amb`` (degC) and ``--refrigerant`` as ``PlantConfig`` changes (kelvin inside);
+    a refrigerant acid has no tables for is one line naming the option."""
+    from acid.plant.config import RANGES, REFRIGERANTS
+    from acid.units import C2K, K2C
+
+    changes: dict = {}
+    if t_amb is not None:
+        lo, hi, why = RANGES["T_amb"]
+        if not K2C(lo) <= float(t_amb) <= K2C(hi):
+            raise ConfigError(f"--t-amb {t_amb:g} degC is outside {K2C(lo):.0f} to "
+                              f"{K2C(hi):.0f} degC ({why})")
+        changes["T_amb"] = C2K(float(t_amb))
+    if refrigerant is not None:
+        if refrigerant not in REFRIGERANTS:
+            raise ConfigError(f"--refrigerant {refrigerant!r}: choose "
+                              f"{' or '.join(REFRIGERANTS)}")
+        changes["refrigerant"] = refrigerant
+    return changes
+
+
+def plant_identity(config, label: str) -> dict:
+    """What a run says about the plant it drove (its table line and its JSON): the vehicle
+    (a name or the configuration file), the refrigerant and the ambient in degC. ``config``
+    is the ``PlantConfig`` run, or None for a plant without acid's refrigerant cycle (an FMU,
+    the model plant): its refrigerant is then None."""
+    from acid.units import K2C
+
+    if config is None:
+        return {"vehicle": label, "refrigerant": None, "T_amb_C": None}
+    return {"vehicle": label, "refrigerant": config.refrigerant,
+            "T_amb_C": round(float(K2C(config.T_amb)), 6)}
+
+
+def identity_line(identity: dict) -> str:
+    """``plant_identity`` as one line for the run's output."""
+    amb = identity["T_amb_C"]
+    refrigerant = identity["refrigerant"] or "not modelled by this plant"
+    return (f"vehicle {identity['vehicle']}, refrigerant {refrigerant}"
+            + ("" if amb is None else f", ambient {amb:g} degC"))
 
 
 def config_input(spec) -> Path | None:

@@ -33,7 +33,16 @@ from acid_cli._common import (
     warn,
     write_summary,
 )
-from acid_cli._plant import config_input, fmu_map_option, plant_choice, plant_option
+from acid_cli._plant import (
+    config_input,
+    fmu_map_option,
+    identity_line,
+    plant_choice,
+    plant_identity,
+    plant_option,
+    plant_overrides,
+    refrigerant_option,
+)
 
 #: Longest paper-NMPC horizon (steps) and warm-up / tail / identification record accepted.
 MAX_HORIZON = 200
@@ -110,6 +119,7 @@ def cav_study(
     jobs: int = typer.Option(2, "--jobs", min=1, help="Cycles run in parallel (--cycle all)."),
     plant_config: Path | None = typer.Option(None, "--plant-config",
                                              help="TOML configuration of the plant."),
+    refrigerant: str | None = refrigerant_option(),
     out: Path = typer.Option(Path("reports/cav-study"), "--out",
                              help="Folder for the figures."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
@@ -143,6 +153,7 @@ def cav_study(
     from acid.mpc.cav_study import cav_study as run_study
     from acid.mpc.econ_nmpc import TERMINALS, EconNMPCConfig
     from acid.plant import make_plant
+    from acid.plant.vehicles import vehicle_config, vehicle_label
 
     names = available_cycles()
     if cycle != "all" and cycle not in names:
@@ -151,6 +162,7 @@ def cav_study(
     stem = "all" if cycle == "all" else cycle
     figure_names = [f"energy_{stem}.png"] + [f"cav_{n}.png"
                                              for n in (names if cycle == "all" else [cycle])]
+    plant_config_given = plant_config
     plant_config = config_input(plant_config)  # a named vehicle ('paper') -> its file
     check_paths(inputs={"--params": params_input(params), "--econ-params": econ_params,
                         "--plant-config": plant_config, **plant_inputs(plant, fmu_map)},
@@ -178,6 +190,8 @@ def cav_study(
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     require(plant_config is None or choice.kind == "hifi", "--plant-config",
             "applies to --plant hifi only")
+    require(refrigerant is None or choice.kind == "hifi", "--refrigerant",
+            "applies to --plant hifi only")
     p = load_params(params, allow_unstable=allow_unstable)
     econ_cfg = EconNMPCConfig(intervals=_econ_intervals(econ_horizon, p.Ts),
                               solver=econ_solver, terminal=econ_terminal,
@@ -199,7 +213,13 @@ def cav_study(
         choice.check()
         factory = choice.factory()
     else:
-        factory = partial(make_plant, "hifi", config_path=plant_config)
+        factory = partial(make_plant, "hifi", config_path=plant_config,
+                          **plant_overrides(refrigerant=refrigerant))
+    identity = plant_identity(
+        vehicle_config(plant_config).replace(**plant_overrides(t_amb, refrigerant))
+        if choice.kind == "hifi" else None,
+        vehicle_label(plant_config_given) if choice.kind == "hifi" else choice.spec)
+    say(identity_line(identity))
     if econ_params is not None:
         econ = EconParams.from_json(econ_params)
         econ_summary = {"source": str(econ_params), "power_map": econ.power_map.quality}
@@ -285,6 +305,6 @@ def cav_study(
                    "params_sha256": None if params == "paper" else file_sha256(params),
                    "econ_params": None if econ_params is None else str(econ_params),
                    **choice.to_json_dict()},
-        "figures": fig_paths, **result.to_json_dict(),
+        **identity, "figures": fig_paths, **result.to_json_dict(),
     }
     write_summary(json_path, summary)

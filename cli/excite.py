@@ -12,6 +12,7 @@ from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.excite import MODEL_PRESETS, SIGNAL_TYPES, ExcitationSpec, spec_for_model
 from acid.excite import excite as run_excitation
+from acid.plant.vehicles import vehicle_label
 from acid.units import C2K
 from acid_cli._common import (
     check_paths,
@@ -22,7 +23,15 @@ from acid_cli._common import (
     require_range,
     write_summary,
 )
-from acid_cli._plant import config_input, fmu_map_option, plant_choice
+from acid_cli._plant import (
+    config_input,
+    fmu_map_option,
+    identity_line,
+    plant_choice,
+    plant_identity,
+    plant_overrides,
+    refrigerant_option,
+)
 
 PLANTS = ("hifi", "model")
 #: ``--plant model:FILE.py`` (or ``model:NAME``, a built-in declaration): a declared model.
@@ -35,12 +44,15 @@ T_AMB_RANGE_C = (-60.0, 150.0)
 
 def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
                 plant_config: Path | None, T_amb: float | None,
-                fmu_map: Path | None = None, allow_unstable: bool = False):
+                fmu_map: Path | None = None, allow_unstable: bool = False,
+                refrigerant: str | None = None):
     """The plant chosen by ``--plant``, with the spec's noise and the noise stream's seed.
 
     A plant that is not available in this installation (``--plant hifi`` before the
     high-fidelity modules exist, or without their dependencies) is a one-line ``ConfigError``.
     """
+    if refrigerant is not None and name != "hifi":
+        raise ConfigError(f"--refrigerant applies to --plant hifi only, not {name!r}")
     if name.startswith(DECLARED_PREFIX):
         return declared_plant(name[len(DECLARED_PREFIX):], spec, params, plant_config, T_amb,
                               fmu_map)
@@ -58,10 +70,11 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
         from acid.params import load_params
 
         model_params = load_params(params, allow_unstable=allow_unstable)
+    extra = {} if refrigerant is None else plant_overrides(refrigerant=refrigerant)
     try:
         return choice.make(config_path=plant_config, params=model_params,
                            meas_noise_std=spec.noise, rng=spec.rng("noise"),
-                           T_amb=None if T_amb is None else C2K(T_amb))
+                           T_amb=None if T_amb is None else C2K(T_amb), **extra)
     except ImportError as exc:
         raise ConfigError(f"--plant {name}: not available in this installation ({exc}); "
                           f"use --plant model") from None
@@ -139,6 +152,7 @@ def excite(
              "holds, 6 h)."),
     speed_range: tuple[float, float] | None = typer.Option(
         None, "--speed-range", help="Random vehicle speed between LOW HIGH m/s (APRBS)."),
+    refrigerant: str | None = refrigerant_option(),
     t_amb_range: tuple[float, float] | None = typer.Option(
         None, "--t-amb-range", help="Slowly varying ambient between LOW HIGH degC."),
     steady_fraction: float | None = typer.Option(
@@ -146,6 +160,7 @@ def excite(
         help="Share of input steps held 600-1200 s (near-steady operating points)."),
 ) -> None:
     """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
+    plant_config_given = plant_config
     plant_config = config_input(plant_config)  # a named vehicle ('paper') -> its file
     model_file = plant[len(DECLARED_PREFIX):] if plant.startswith(DECLARED_PREFIX) else ""
     check_paths(inputs={"--params": params, "--plant-config": plant_config,
@@ -173,7 +188,10 @@ def excite(
         from acid.signals import drive_cycle
 
         drive_cycle(cycle, n=1, Ts=spec.Ts)  # unknown names fail before the plant is built
-    the_plant = build_plant(plant, spec, params, plant_config, t_amb, fmu_map, allow_unstable)
+    the_plant = build_plant(plant, spec, params, plant_config, t_amb, fmu_map, allow_unstable,
+                            refrigerant)
+    identity = plant_identity(getattr(the_plant, "cfg", None),
+                              vehicle_label(plant_config_given) if plant == "hifi" else plant)
     t0 = time.perf_counter()
     with progress_bar(f"exciting {plant} plant", spec.n_samples) as update:
         ds = run_excitation(the_plant, spec, progress=update)
@@ -181,10 +199,10 @@ def excite(
     ds.validate()
     ds.to_hdf5(out)
     print_table(f"{out}: {len(ds)} samples, {ds.duration:g} s at Ts = {ds.Ts:g} s, "
-                f"plant {plant}, seed {seed}",
+                f"plant {plant} ({identity_line(identity)}), seed {seed}",
                 ["channel", "unit", "min", "mean", "max"], _summary_rows(ds))
     write_summary(json_out, {
-        "command": "excite", "out": str(out), "plant": plant, "samples": len(ds),
+        "command": "excite", "out": str(out), "plant": plant, **identity, "samples": len(ds),
         "duration_s": ds.duration, "Ts_s": ds.Ts, "seed": seed, "elapsed_s": elapsed,
         "excitation": spec.to_dict(),
         "ranges": {n: {"unit": ds.units[n], "min": float(np.min(v)), "max": float(np.max(v))}

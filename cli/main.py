@@ -16,10 +16,27 @@ os.environ["PYTHONWARNINGS"] = ",".join(
     w for w in (os.environ.get("PYTHONWARNINGS"), "ignore:resource_tracker:UserWarning") if w)
 
 import typer  # noqa: E402
-from typer.core import TyperGroup  # noqa: E402
+from typer.core import TyperCommand, TyperGroup  # noqa: E402
 
 from acid import __version__  # noqa: E402
 from acid_cli._common import ClickException, error_line  # noqa: E402
+from acid_cli._options import canonical_args  # noqa: E402
+
+
+class AcidCommand(TyperCommand):
+    """A command that also accepts the retired option names of ``acid_cli._options.ALIASES``
+    (hidden: rewritten to their canonical names before parsing, absent from ``--help``)."""
+
+    def parse_args(self, ctx, args):
+        known = {name for p in self.params for name in (*p.opts, *p.secondary_opts)}
+        return super().parse_args(ctx, canonical_args(args, known))
+
+
+class AcidTyper(typer.Typer):
+    """Typer whose commands are ``AcidCommand`` unless told otherwise."""
+
+    def command(self, *args, cls=None, **kwargs):
+        return super().command(*args, cls=cls or AcidCommand, **kwargs)
 
 
 class AcidGroup(TyperGroup):
@@ -46,7 +63,7 @@ class AcidGroup(TyperGroup):
         sys.exit(rv if isinstance(rv, int) else 0)
 
 
-app = typer.Typer(
+app = AcidTyper(
     name="acid",
     cls=AcidGroup,
     help="A/C system identification, model validation and predictive climate control "

@@ -17,6 +17,7 @@ from acid.mpc.nmpc import SOLVERS, NMPCConfig
 from acid.mpc.scenarios import PLANT_BACKOFF
 from acid.mpc.scenarios import mpc_check as run_check
 from acid.params import load_params
+from acid.units import K2C
 from acid_cli._common import (
     check_paths,
     console,
@@ -28,7 +29,15 @@ from acid_cli._common import (
     say,
     write_summary,
 )
-from acid_cli._plant import fmu_map_option, plant_choice, plant_option
+from acid_cli._plant import (
+    ambient_option,
+    fmu_map_option,
+    identity_line,
+    plant_choice,
+    plant_identity,
+    plant_option,
+    plant_overrides,
+)
 
 FIGURES = ("fig7_model.png", "fig8_plant.png", "fig9_cav_bound.png",
            "fig10_cav_comparison.png")
@@ -84,6 +93,8 @@ def mpc_check(
         help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
     plant: str = plant_option("hifi", ("hifi",)),
     fmu_map: Path | None = fmu_map_option(),
+    t_amb: float | None = ambient_option("the paper's, 30 degC (Table II); the NMPC's eq. 4 "
+                                         "and the plant"),
 ) -> None:
     """Run the NMPC scenarios: (a) on the model, (b) on the plant, (c) CAV case.
 
@@ -101,13 +112,15 @@ def mpc_check(
         raise ConfigError(f"--backoff-prior must be a number >= 0 (K), got {backoff_prior}")
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     p = load_params(params, allow_unstable=allow_unstable)
+    ambient = plant_overrides(t_amb).get("T_amb")
     config = NMPCConfig(first_move=first_move, solver=solver, compiled="auto" if compiled
-                        else False, offset_free=offset_free)
+                        else False, offset_free=offset_free,
+                        **({} if ambient is None else {"T_amb": ambient}))
     plant_backoff = dataclasses.replace(PLANT_BACKOFF, sigma0=backoff_prior) if backoff else None
     factory = None
     if choice.kind == "fmu" and not skip_plant:
         choice.check()
-        factory = choice.factory()
+        factory = choice.factory(**({} if ambient is None else {"T_amb": ambient}))
 
     t0 = time.perf_counter()
     with progress_bar("mpc-check", total=1) as update:
@@ -116,6 +129,13 @@ def mpc_check(
     elapsed = time.perf_counter() - t0
 
     tm = result.timing
+    from acid.plant.config import PlantConfig
+
+    identity = plant_identity(PlantConfig().replace(T_amb=config.T_amb)
+                              if choice.kind == "hifi" else None,
+                              "default" if choice.kind == "hifi" else choice.spec)
+    identity["T_amb_C"] = round(float(K2C(config.T_amb)), 6)
+    say(identity_line(identity))
     onoff = {True: "on", False: "off"}
     say(f"NMPC: N = {config.N}, solver {solver} ({tm.get('backend')}), first move "
         f"{first_move}, offset-free {onoff[offset_free]}, back-off on the plant "
@@ -182,6 +202,7 @@ def mpc_check(
         "inputs": {"params": params,
                    "params_sha256": None if params == "paper" else file_sha256(params),
                    **choice.to_json_dict()},
+        **identity,
         "elapsed_s": elapsed,
         "figures": fig_paths,
         **result.to_json_dict(),

@@ -9,6 +9,7 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure
+from acid.units import json_in_degC
 from acid_cli._common import (
     check_paths,
     console,
@@ -21,11 +22,16 @@ from acid_cli._common import (
     write_summary,
 )
 from acid_cli._plant import (
+    ambient_option,
     config_input,
     config_option,
     fmu_map_option,
+    identity_line,
     plant_choice,
+    plant_identity,
     plant_option,
+    plant_overrides,
+    refrigerant_option,
 )
 
 
@@ -48,9 +54,8 @@ def plant_check(
     plant: str = plant_option(),
     fmu_map: Path | None = fmu_map_option(),
     config: Path | None = config_option(),
-    ambient: float | None = typer.Option(None, "--ambient",
-                                         help="Ambient for checks (a)-(c), degC "
-                                              "(default: the configuration's, 30 degC)."),
+    ambient: float | None = ambient_option("the configuration's, 30 degC; checks (a)-(c)"),
+    refrigerant: str | None = refrigerant_option(),
     out: Path = typer.Option(Path("reports/plant-check"), "--out",
                              help="Folder for the figures and the result JSON."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
@@ -67,17 +72,19 @@ def plant_check(
     from acid.report.plant import plant_check_figures
     from acid.units import C2K
 
-    check_paths(inputs={"--config": config_input(config), **plant_inputs(plant, fmu_map)},
+    check_paths(inputs={"--plant-config": config_input(config), **plant_inputs(plant, fmu_map)},
                 outputs={"--json": json_path},
                 folders={"--out": (out, ("plant_check_energy.png", "plant_check_service.png",
                                          "plant_check.json"))})
     if ambient is not None:
-        require_range(ambient, "--ambient", -60.0, 150.0, "degC")  # kelvin typed by mistake
+        require_range(ambient, "--t-amb", -60.0, 150.0, "degC")  # kelvin typed by mistake
     choice = plant_choice(plant, fmu_map)
     if config is not None and choice.kind != "hifi":
-        raise ConfigError("--config applies to --plant hifi only")
+        raise ConfigError("--plant-config applies to --plant hifi only")
     T_amb = None if ambient is None else C2K(ambient)
     extra = {"fmu_map": choice.fmu_map} if choice.kind == "fmu" else {}
+    if refrigerant is not None:
+        extra["refrigerant"] = plant_overrides(refrigerant=refrigerant)["refrigerant"]
     the_plant = build_plant(choice.spec, config, T_amb, **extra)
     nominal = (choice.factory(mode="nominal", T_amb=T_amb) if choice.kind == "fmu" else None)
     with progress_bar("plant check", total=13) as update:
@@ -85,6 +92,10 @@ def plant_check(
 
     rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r)]
             for r in result.rows]
+    identity = plant_identity(getattr(the_plant, "cfg", None),
+                              choice.spec if choice.kind != "hifi"
+                              else "default" if config is None else str(config))
+    say(identity_line(identity))
     print_table(f"acid plant-check: {result.plant}",
                 ["_", "_check", "value", "_unit", "_reference", "_verdict"], rows)
     from acid.plant.check import SEARCH_NOTE
@@ -94,8 +105,7 @@ def plant_check(
                   f"cop_gain_25_vs_0_equal_load_pct = "
                   f"{_fmt(result.cop_gain_25_vs_0_equal_load_pct)} %")
     summary = result.to_json_dict()
-    summary.update(acid_version=__version__, **choice.to_json_dict(),
-                   vehicle=None if config is None else str(config),
+    summary.update(acid_version=__version__, **choice.to_json_dict(), **identity,
                    config_path=None if config_input(config) is None else str(config_input(config)),
                    config_sha256=(file_sha256(config_input(config))
                                   if config_input(config) is not None else None))
@@ -105,7 +115,7 @@ def plant_check(
     summary["figures"] = figures
     from acid._io import write_json
 
-    write_json(out / "plant_check.json", summary)
+    write_json(out / "plant_check.json", json_in_degC(summary))
     say(f"figures written to {out}")
     write_summary(json_path, summary)
     console.print("[bold green]PASS[/]" if result.passed else "[bold red]FAIL[/]")

@@ -10,6 +10,7 @@ import typer
 from acid import __version__
 from acid._io import file_sha256, save_figure, write_json
 from acid.errors import ConfigError
+from acid.units import json_in_degC
 from acid_cli._common import (
     check_paths,
     handle_errors,
@@ -21,11 +22,16 @@ from acid_cli._common import (
     write_summary,
 )
 from acid_cli._plant import (
+    ambient_option,
     config_input,
     config_option,
     fmu_map_option,
+    identity_line,
     plant_choice,
+    plant_identity,
     plant_option,
+    plant_overrides,
+    refrigerant_option,
 )
 
 #: Longest simulated time per speed accepted, s (one day).
@@ -39,6 +45,9 @@ def _fmt(v, digits: int = 3) -> str:
 @handle_errors
 def speed_sweep(
     config: Path | None = config_option(),
+    t_amb: float | None = ambient_option("the configuration's, 30 degC as in Table I's "
+                                         "test"),
+    refrigerant: str | None = refrigerant_option(),
     duration: float = typer.Option(600.0, "--duration", help="Simulated time per speed, s."),
     out: Path = typer.Option(Path("reports/speed-sweep"), "--out",
                              help="Folder for the figure and the result JSON."),
@@ -48,10 +57,10 @@ def speed_sweep(
 ) -> None:
     """Run the nominal controller at 0-25 m/s for --duration s and judge the paper's Table I.
 
-    The high-fidelity plant runs the paper vehicle (--config paper, the default: the Table I
-    calibration) with acid's default vehicle beside it; another --config runs that vehicle
-    with the default beside it. Energy is compressor + blower (as in the paper), in MJ and
-    MJ/km; verdicts by the claims registry's rules (600 s runs only).
+    The high-fidelity plant runs the paper vehicle (--plant-config paper, the default: the
+    Table I calibration) with acid's default vehicle beside it; another --plant-config runs
+    that vehicle with the default beside it. Energy is compressor + blower (as in the
+    paper), in MJ and MJ/km; verdicts by the claims registry's rules (600 s runs only).
     """
     from acid.claims import TABLE_I, judge_value
     from acid.plant.sweep import speed_sweep as run_sweep
@@ -65,20 +74,24 @@ def speed_sweep(
     )
     from acid.report.plant import sweep_figure
 
-    check_paths(inputs={"--config": config_input(config), **plant_inputs(plant, fmu_map)},
+    check_paths(inputs={"--plant-config": config_input(config), **plant_inputs(plant, fmu_map)},
                 outputs={"--json": json_path},
                 folders={"--out": (out, ("speed_sweep.png", "speed_sweep.json"))})
     require_range(duration, "--duration", 0.0, MAX_DURATION_S, "s", lo_open=True)
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     if config is not None and choice.kind != "hifi":
-        raise ConfigError("--config applies to --plant hifi only (an FMU plant is configured "
-                          "through --fmu-map)")
+        raise ConfigError("--plant-config applies to --plant hifi only (an FMU plant is "
+                          "configured through --fmu-map)")
+    changes = plant_overrides(t_amb, refrigerant)
+    if changes and choice.kind != "hifi":
+        raise ConfigError("--t-amb and --refrigerant apply to --plant hifi only (an FMU plant "
+                          "is configured through --fmu-map)")
     factory = None
     if choice.kind == "fmu":
         choice.check(mode="nominal")
         factory = choice.factory(mode="nominal")
     spec = (config if config is not None else PAPER_VEHICLE) if factory is None else None
-    cfg = vehicle_config(spec)
+    cfg = vehicle_config(spec).replace(**changes)
     label = vehicle_label(spec) if factory is None else choice.spec
     # acid's default vehicle beside any other configuration of acid's plant
     beside = factory is None and resolve_config(spec) is not None
@@ -86,8 +99,8 @@ def speed_sweep(
     with progress_bar("speed sweep", total=len(speeds) * (2 if beside else 1)) as update:
         result = run_sweep(cfg, speeds=speeds, duration=duration, progress=update,
                            plant_factory=factory)
-        other = (run_sweep(vehicle_config(None), speeds=speeds, duration=duration,
-                           progress=lambda i, n: update(len(speeds) + i, 2 * n))
+        other = (run_sweep(vehicle_config(None).replace(**changes), speeds=speeds,
+                           duration=duration, progress=lambda i, n: update(len(speeds) + i, 2 * n))
                  if beside else None)
 
     full = abs(result.duration_s - TABLE_I.duration_s) < 1e-9
@@ -106,6 +119,8 @@ def speed_sweep(
             row.append(_fmt(other.energy_MJ[i]))
         rows.append(row + [_fmt(ek), _fmt(pk)])
     name = f"{label} vehicle" if is_vehicle(label) else label
+    identity = plant_identity(cfg if factory is None else None, label)
+    say(identity_line(identity))
     head = ["m/s", name, "Table I", "verdict"]
     if other is not None:
         head.append(f"{DEFAULT_VEHICLE} vehicle")
@@ -120,7 +135,7 @@ def speed_sweep(
         + ("" if full else f"  [paper values are for {TABLE_I.duration_s:g} s: no verdicts]"))
 
     summary = result.to_json_dict()
-    summary.update(acid_version=__version__, **choice.to_json_dict(), vehicle=label,
+    summary.update(acid_version=__version__, **choice.to_json_dict(), **identity,
                    config_path=None if config_input(spec) is None else str(config_input(spec)),
                    config_sha256=(file_sha256(config_input(spec))
                                   if config_input(spec) is not None else None))
@@ -137,6 +152,6 @@ def speed_sweep(
     figure_path = save_figure(sweep_figure(result, other, (name, f"{DEFAULT_VEHICLE} vehicle")),
                               out / "speed_sweep.png")
     summary["figure"] = str(figure_path)
-    write_json(out / "speed_sweep.json", summary)
+    write_json(out / "speed_sweep.json", json_in_degC(summary))
     say(f"figure written to {figure_path}")
     write_summary(json_path, summary)

@@ -45,7 +45,7 @@ def sweep(
     out: Path | None = typer.Option(None, "--out",
                                     help="Output folder (default: reports/sweep/NAME for "
                                          "NAME.toml)."),
-    workers: int | None = typer.Option(None, "--workers",
+    workers: int | None = typer.Option(None, "--jobs",
                                        help="Worker processes of the local Dask cluster "
                                             "(default: one per core)."),
     scheduler: str | None = typer.Option(None, "--scheduler",
@@ -93,9 +93,9 @@ def sweep(
         raise ConfigError(f"--json {json_path}: inside {out / 'scenarios'}, where acid sweep "
                           "keeps its records")
     if workers is not None and scheduler is not None:
-        raise ConfigError("--workers and --scheduler: give one (the cluster has its workers)")
+        raise ConfigError("--jobs and --scheduler: give one (the cluster has its workers)")
     if workers is not None and not 1 <= workers <= 256:
-        raise ConfigError(f"--workers {workers}: must lie in 1..256")
+        raise ConfigError(f"--jobs {workers}: must lie in 1..256")
     if scheduler is not None:
         check_scheduler_address(scheduler)
     spec = load_spec(spec_path, allow_unstable=allow_unstable)

@@ -528,9 +528,11 @@ def plant_config_files(draw):
     if kind == "bytes":
         return draw(raw_bytes())
     keys = _plant_keys() + ["warp", "ambient", "cabin"]
-    value = st.one_of(toml_any, odd_float, st.sampled_from(["R134a", "R1234yf", "water"]))
+    value = st.one_of(toml_any, odd_float, st.sampled_from(
+        ["R134a", "R1234yf", "water", "35 degC", "308.15 K", "95 degF", "5 W", "nan K", "K"]))
     if kind == "damaged":
-        return draw(damaged('[ambient]\nT_amb = 303.15\n[cabin]\nC_cab = 3877.0\n'))
+        return draw(damaged('[ambient]\nT_amb = 30.0\n[initial]\nT_cab0 = "313.15 K"\n'
+                            '[cabin]\nC_cab = 3877.0\n'))
     d: dict = {}
     for key in draw(st.lists(st.sampled_from(keys), max_size=6, unique=True)):
         v = draw(value)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -100,3 +102,5 @@ def test_power_map_names_what_it_extrapolates(econ_truth):
     assert pm.outside(v_veh=np.array([0.0, 20.0]), T_amb=np.array([C2K(30.0)])) == []
     msg = pm.outside(v_veh=np.array([40.0]))
     assert len(msg) == 1 and "v_veh up to 40" in msg[0]
+    hot = pm.outside(T_amb=np.array([C2K(70.0)]))   # what the user reads is in degC
+    assert len(hot) == 1 and re.search(r"T_amb up to 70 degC \(data [\d.]+-[\d.]+\)", hot[0])

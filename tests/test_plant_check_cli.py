@@ -27,7 +27,7 @@ def test_plant_check_writes_json_and_figures(tmp_path):
 def test_unknown_refrigerant_is_one_line_error(tmp_path):
     cfg = tmp_path / "r.toml"
     cfg.write_text('refrigerant = "R12"\n')
-    result = runner.invoke(app, ["plant-check", "--config", str(cfg), "--out", str(tmp_path)])
+    result = runner.invoke(app, ["plant-check", "--plant-config", str(cfg), "--out", str(tmp_path)])
     assert result.exit_code == 2
     assert_one_line_error(result, "refrigerant 'R12' not supported", str(cfg))
 
@@ -35,24 +35,24 @@ def test_unknown_refrigerant_is_one_line_error(tmp_path):
 def test_negative_capacity_is_one_line_error(tmp_path):
     cfg = tmp_path / "c.toml"
     cfg.write_text("[cabin]\nC_int = -35000.0\n")
-    result = runner.invoke(app, ["plant-check", "--config", str(cfg), "--out", str(tmp_path)])
+    result = runner.invoke(app, ["plant-check", "--plant-config", str(cfg), "--out", str(tmp_path)])
     assert result.exit_code == 2
     assert_one_line_error(result, "C_int must be positive", str(cfg))
     assert not (tmp_path / "plant_check.json").exists()
 
 
 def test_ambient_outside_the_tables_is_one_line_error(tmp_path):
-    result = runner.invoke(app, ["plant-check", "--ambient", "80", "--out", str(tmp_path)])
+    result = runner.invoke(app, ["plant-check", "--t-amb", "80", "--out", str(tmp_path)])
     assert result.exit_code == 2
-    assert_one_line_error(result, "--ambient 80", "property tables")
+    assert_one_line_error(result, "--t-amb 80", "property tables")
 
 
 def test_ambient_in_a_config_outside_the_tables_is_one_line_error(tmp_path):
     cfg = tmp_path / "a.toml"
-    cfg.write_text("T_amb = 340.0\n")
-    result = runner.invoke(app, ["plant-check", "--config", str(cfg), "--out", str(tmp_path)])
+    cfg.write_text("T_amb = 66.85\n")
+    result = runner.invoke(app, ["plant-check", "--plant-config", str(cfg), "--out", str(tmp_path)])
     assert result.exit_code == 2
-    assert_one_line_error(result, "T_amb", "property tables", str(cfg))
+    assert_one_line_error(result, "T_amb = 66.85 degC", "property tables", str(cfg))
 
 
 def test_plant_check_through_an_exported_fmu(tmp_path, exported_fmu):

@@ -74,7 +74,7 @@ def test_refrigerant_options():
 
 def test_from_toml_flat_and_sectioned(tmp_path):
     path = tmp_path / "plant.toml"
-    path.write_text('refrigerant = "R1234yf"\nT_amb = 308.15\n'
+    path.write_text('refrigerant = "R1234yf"\nT_amb = 35.0\n'
                     "[cabin]\nC_int = 70000\n[condenser]\nC_ram = 0.45\n")
     cfg = PlantConfig.from_toml(path)
     assert (cfg.refrigerant, cfg.T_amb, cfg.C_int, cfg.C_ram) == ("R1234yf", 308.15, 70000.0,
@@ -86,7 +86,7 @@ def test_from_toml_flat_and_sectioned(tmp_path):
     ("T_ambient = 300.0\n", "unknown key 'T_ambient'"),
     ("[cabin]\nC_kab = 1.0\n", "unknown key 'C_kab' in \\[cabin\\]"),
     ("[cabinet]\nC_cab = 1.0\n", "unknown section \\[cabinet\\]"),
-    ("[cabin]\nT_amb = 300.0\n", "'T_amb' belongs in \\[ambient\\]"),
+    ("[cabin]\nT_amb = 30.0\n", "'T_amb' belongs in \\[ambient\\]"),
     ("[cabin]\nC_cab = -3877.0\n", "C_cab must be positive"),
     ("C_cab = \"big\"\n", "C_cab must be a number"),
     ("anti_windup = 1\n", "anti_windup must be true or false"),
@@ -175,3 +175,59 @@ def test_a_plant_toml_with_absurd_or_deep_values_is_one_line(tmp_path):
     f.write_text("[compressor]\nV_disp = { a = 1 }\n")
     with pytest.raises(ConfigError, match="p.toml: V_disp must be a number"):
         PlantConfig.from_toml(f)
+
+
+# ------------------------------------------------------------- units in a plant file (issue 23)
+@pytest.mark.parametrize("text, expected_K", [
+    ("T_amb = 35.0\n", 308.15),                # a plain number is degC
+    ('T_amb = "35 degC"\n', 308.15),
+    ('T_amb = "308.15 K"\n', 308.15),          # kelvin only when tagged
+    ('T_amb = "95 degF"\n', 308.15),
+    ("T_amb = -5\n", 268.15),
+])
+def test_file_temperatures_are_degC_or_tagged(tmp_path, text, expected_K):
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    assert PlantConfig.from_toml(path).T_amb == pytest.approx(expected_K, abs=1e-9)
+
+
+def test_file_temperature_differences_are_K_plain_or_tagged(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_text('[compressor]\nsuperheat = 6.0\nsubcool = "4 K"\n')
+    cfg = PlantConfig.from_toml(path)
+    assert (cfg.superheat, cfg.subcool) == (6.0, 4.0)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("T_amb = 308.15\n", 'read in degC .* write T_amb = "308.15 K"'),   # untagged kelvin
+    ("[initial]\nT_cab0 = 328.15\n", 'T_cab0 = 328.15 is read in degC'),
+    ('T_amb = "35 C"\n', "T_amb = '35 C': give a number or \"NUMBER UNIT\""),
+    ('T_amb = "warm degC"\n', "temperature unit"),
+    ('T_amb = "35 W"\n', "temperature unit"),
+    ("T_amb = 60.0\n", "T_amb = 60 degC is outside the refrigerant property tables"),
+    ("T_amb = nan\n", "T_amb must be a finite number, got nan"),
+    ("T_amb = 1" + "0" * 400 + "\n", "T_amb must be a finite number, got an integer too large"),
+    ("[cabin]\nC_cab = 1" + "0" * 400 + "\n", "C_cab must be a finite number"),
+])
+def test_file_temperatures_refused_with_one_line_naming_key(tmp_path, text, message):
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message) as exc:
+        PlantConfig.from_toml(path)
+    assert str(exc.value).startswith(str(path)) and "\n" not in str(exc.value)
+
+
+def test_file_dict_round_trips_and_speaks_degC():
+    cfg = PlantConfig().replace(T_amb=313.15, superheat=6.0)
+    d = cfg.to_file_dict()
+    assert d["T_amb"] == pytest.approx(40.0) and d["T_cab0"] == pytest.approx(40.0)
+    assert d["superheat"] == 6.0                      # a difference stays K
+    assert PlantConfig.from_file_dict(d) == cfg
+
+
+def test_the_shipped_paper_vehicle_is_written_in_degC():
+    from acid.plant.vehicles import vehicle_config, vehicle_file
+
+    text = vehicle_file("paper").read_text()
+    assert "T_cab0 = 55.0" in text
+    assert vehicle_config("paper").T_cab0 == pytest.approx(328.15)

@@ -37,7 +37,7 @@ def test_speed_sweep_judges_table_i_on_the_paper_vehicle_beside_the_default(tmp_
 
 def test_speed_sweep_on_the_default_vehicle_has_nothing_beside_it(tmp_path):
     js = tmp_path / "s.json"
-    result = runner.invoke(app, ["speed-sweep", "--config", "default", "--out",
+    result = runner.invoke(app, ["speed-sweep", "--plant-config", "default", "--out",
                                  str(tmp_path / "o"), "--json", str(js)])
     assert result.exit_code == 0, result.output
     d = json.loads(js.read_text())
@@ -48,7 +48,7 @@ def test_speed_sweep_on_the_default_vehicle_has_nothing_beside_it(tmp_path):
 def test_speed_sweep_with_config_and_duration(tmp_path):
     cfg = tmp_path / "plant.toml"
     cfg.write_text('refrigerant = "R1234yf"\n')
-    result = runner.invoke(app, ["speed-sweep", "--config", str(cfg), "--duration", "60",
+    result = runner.invoke(app, ["speed-sweep", "--plant-config", str(cfg), "--duration", "60",
                                  "--out", str(tmp_path / "o"), "--json", str(tmp_path / "s.json")])
     assert result.exit_code == 0, result.output
     d = json.loads((tmp_path / "s.json").read_text())
@@ -59,7 +59,7 @@ def test_speed_sweep_with_config_and_duration(tmp_path):
 def test_speed_sweep_bad_config_is_one_line_error(tmp_path):
     cfg = tmp_path / "bad.toml"
     cfg.write_text("[cabin]\nC_cab = -1.0\n")
-    result = runner.invoke(app, ["speed-sweep", "--config", str(cfg), "--out", str(tmp_path)])
+    result = runner.invoke(app, ["speed-sweep", "--plant-config", str(cfg), "--out", str(tmp_path)])
     assert result.exit_code == 2
     assert_one_line_error(result, "C_cab must be positive", str(cfg))
     assert not (tmp_path / "speed_sweep.png").exists()

@@ -62,8 +62,8 @@ def test_dry_run_lists_scenarios_and_runs_nothing(tmp_path, no_workers):
 
 
 @pytest.mark.parametrize("args, fragment", [
-    (["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers and --scheduler"),
-    (["--workers", "0"], "--workers 0"),
+    (["--jobs", "2", "--scheduler", "tcp://127.0.0.1:1"], "--jobs and --scheduler"),
+    (["--jobs", "0"], "--jobs 0"),
     (["--json", "SPEC"], "--json"),
 ])
 def test_conflicting_options(tmp_path, no_workers, args, fragment):
@@ -81,7 +81,7 @@ def test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes(tmp_path):
                     '[grid]\nambient_C = [26.0, 29.0, 32.0, 35.0, 38.0, 41.0]\n'
                     'humidity_pct = [30.0, 60.0]\n')
     out = tmp_path / "out"
-    p = start("sweep", str(spec), "--out", str(out), "--workers", "2")
+    p = start("sweep", str(spec), "--out", str(out), "--jobs", "2")
 
     def finished():
         return len(list((out / "scenarios").glob("*.json"))) if (out / "scenarios").is_dir() \
@@ -99,7 +99,7 @@ def test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes(tmp_path):
     assert 1 <= kept < 12
     for f in (out / "scenarios").glob("*.json"):
         assert json.loads(f.read_text())["status"] == "ok"
-    res = runner.invoke(app, ["sweep", str(spec), "--out", str(out), "--workers", "1",
+    res = runner.invoke(app, ["sweep", str(spec), "--out", str(out), "--jobs", "1",
                               "--no-figures", "--json", str(tmp_path / "s.json")])
     assert res.exit_code == 0, res.output
     s = json.loads((tmp_path / "s.json").read_text())
@@ -200,11 +200,11 @@ def test_a_worker_that_dies_while_the_cluster_starts_is_one_line(tmp_path):
     spec.write_text(TINY)
     env = {**os.environ, "DASK_DISTRIBUTED__WORKER__PRELOAD": json.dumps([str(die)])}
     exe = os.path.join(os.path.dirname(sys.executable), "acid")
-    r = subprocess.run([exe, "sweep", str(spec), "--out", str(tmp_path / "o"), "--workers",
+    r = subprocess.run([exe, "sweep", str(spec), "--out", str(tmp_path / "o"), "--jobs",
                         "2"], capture_output=True, text=True, env=env, timeout=600)
     text = r.stdout + r.stderr
     assert r.returncode == 2, text
     lines = [ln for ln in text.splitlines() if ln.strip()]
     assert len(lines) == 1 and lines[0].startswith("error: the local Dask cluster"), text
-    assert "did not start" in lines[0] and "--workers 1" in lines[0]
+    assert "did not start" in lines[0] and "--jobs 1" in lines[0]
     assert not (tmp_path / "o" / "results.csv").exists()

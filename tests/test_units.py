@@ -111,3 +111,23 @@ def test_compound_units(text, factor, dims):
 def test_unreadable_units_say_why(text, fragment):
     with pytest.raises(ValueError, match=fragment.replace("^", "\\^").replace("(", "\\(")):
         parse_unit(text)
+
+
+def test_json_in_degC_converts_absolute_temperatures_and_keeps_differences():
+    from acid.units import json_in_degC
+
+    d = {"T_amb_K": 303.15, "nmpc": {"T_cab_min_K": 293.15, "bounds_K": [276.15, 283.15]},
+         "max_violation_K": 0.3, "rmse_K": 1.2, "slack_penalty_W_per_K": 1e5,
+         "final_T_cab_K": float("nan"), "runs": [{"T_int_K": 315.15, "T_cab_floor_K": None}],
+         "flag_K": True, "T_cab": 22.0, "UA_W_per_K": 300.0, "hA_W_K": 250.0}
+    out = json_in_degC(d)
+    assert out["T_amb_C"] == pytest.approx(30.0) and "T_amb_K" not in out
+    assert out["nmpc"] == {"T_cab_min_C": pytest.approx(20.0),
+                           "bounds_C": [pytest.approx(3.0), pytest.approx(10.0)]}
+    assert out["runs"][0]["T_int_C"] == pytest.approx(42.0)
+    # differences (a degC and a kelvin of difference are one), derived units, no number
+    for key in ("max_violation_K", "rmse_K", "slack_penalty_W_per_K", "T_cab_floor_K",
+                "flag_K", "T_cab", "UA_W_per_K", "hA_W_K"):   # W/K in 150-450: not a temperature
+        assert key in out or key in out["runs"][0], key
+    assert out["final_T_cab_K"] != out["final_T_cab_K"]  # a lone NaN says nothing: kept
+    assert d["T_amb_K"] == 303.15  # the input is not changed

@@ -118,11 +118,13 @@ class PowerMap:
             v = np.asarray(vals, dtype=float)
             if v.size == 0:
                 continue
+            # what the user reads is in degC (the map works in K)
+            shift, unit = (273.15, "degC") if units[name] == "K" else (0.0, units[name])
+            data = f"(data {lo - shift:.4g}-{hi - shift:.4g})"
             if v.max() > hi + tol:
-                out.append(f"{name} up to {v.max():.4g} {units[name]} (data {lo:.4g}-{hi:.4g})")
+                out.append(f"{name} up to {v.max() - shift:.4g} {unit} {data}")
             if v.min() < lo - tol:
-                out.append(f"{name} down to {v.min():.4g} {units[name]} "
-                           f"(data {lo:.4g}-{hi:.4g})")
+                out.append(f"{name} down to {v.min() - shift:.4g} {unit} {data}")
         return out
 
     def to_json_dict(self) -> dict:

@@ -502,10 +502,21 @@ def hifi_available() -> str | None:
     return None
 
 
-def _make_hifi(**kw) -> Plant:
+def _hifi_config(T_amb: float | None = None, **changes):
+    """acid's default vehicle at the NMPC's ambient ``T_amb`` (K; None or the default's own
+    value: the default configuration untouched)."""
+    from acid.plant.config import PlantConfig
+
+    cfg = PlantConfig()
+    if T_amb is not None and abs(float(T_amb) - cfg.T_amb) > 1e-9:
+        changes["T_amb"] = float(T_amb)
+    return cfg.replace(**changes) if changes else cfg
+
+
+def _make_hifi(T_amb: float | None = None, **kw) -> Plant:
     from acid.plant.hifi import HifiPlant
 
-    return HifiPlant(**kw)
+    return HifiPlant(_hifi_config(T_amb), **kw)
 
 
 def run_plant_scenario(params: ModelParams, config: NMPCConfig | None = None,
@@ -534,7 +545,7 @@ def run_plant_scenario(params: ModelParams, config: NMPCConfig | None = None,
         reason = hifi_available()
         if reason is not None:
             return ScenarioResult(name="plant", title=title, skipped=reason)
-        plant_factory = _make_hifi
+        plant_factory = functools.partial(_make_hifi, config.T_amb)
     mpc = NMPC(params, config)
     Ts = params.Ts
     n = _n_steps(duration_s, Ts)
@@ -562,14 +573,13 @@ def run_plant_scenario(params: ModelParams, config: NMPCConfig | None = None,
                  "offset_free": config.offset_free})
 
 
-def _speed_blind_hifi() -> Plant:
+def _speed_blind_hifi(T_amb: float | None = None) -> Plant:
     """The high-fidelity plant with vehicle speed removed from its physics (no ram air
     through the condenser, no speed-dependent shell convection): the counterfactual that
     isolates how much of the CAV saving comes from speed-dependent efficiency."""
-    from acid.plant.config import PlantConfig
     from acid.plant.hifi import HifiPlant
 
-    return HifiPlant(PlantConfig().replace(k_ram=0.0, hA_ext_v=0.0))
+    return HifiPlant(_hifi_config(T_amb, k_ram=0.0, hA_ext_v=0.0))
 
 
 def stop_and_go_cycle(time_s, period_s: float = 80.0) -> np.ndarray:
@@ -776,8 +786,9 @@ def run_cav_scenario(params: ModelParams, config: NMPCConfig | None = None, *,
         reason = hifi_available()
         if reason is not None:
             return ScenarioResult(name="cav", title=title, skipped=reason)
-        plant_factory = _make_hifi
-        counterfactual_factory = counterfactual_factory or _speed_blind_hifi
+        plant_factory = functools.partial(_make_hifi, scenario.config.T_amb)
+        counterfactual_factory = (counterfactual_factory
+                                  or functools.partial(_speed_blind_hifi, scenario.config.T_amb))
     results = {}
     for spec in scenario.comparisons:
         main = run_cav_comparison(scenario, spec, plant_factory, progress)

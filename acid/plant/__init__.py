@@ -17,7 +17,7 @@ FMU_PREFIX = "fmu:"
 
 def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: float = 0.0,
                process_noise_std: float = 0.0, rng=None, T_amb: float | None = None,
-               fmu_map=None, mode: str = "direct") -> Plant:
+               fmu_map=None, mode: str = "direct", refrigerant: str | None = None) -> Plant:
     """The plant chosen by ``--plant``: ``"hifi"`` (high-fidelity, default), ``"model"`` or
     ``"fmu:PATH.fmu"`` (an FMI co-simulation FMU driven through the map ``fmu_map``).
 
@@ -25,13 +25,15 @@ def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: floa
     Table I calibration, or ``"default"``, see ``acid.plant.vehicles``); ``params`` the model
     parameters (model plant); noise levels in K; ``T_amb`` in K overrides the ambient temperature;
     ``mode`` is "direct" (inputs commanded) or "nominal" (the plant's own controller; hifi
-    and FMU plants).
+    and FMU plants); ``refrigerant`` overrides the configuration's (hifi only).
     """
     from acid.errors import ConfigError
 
     if T_amb is not None and not 200.0 < float(T_amb) < 400.0:
         raise ConfigError(f"ambient temperature T_amb = {T_amb} is not plausible in kelvin "
                           "(give kelvin, or acid.degC(...))")
+    if refrigerant is not None and name != "hifi":
+        raise ConfigError(f"--refrigerant applies to --plant hifi only, not {name!r}")
     if name.startswith(FMU_PREFIX):
         from acid.plant.fmu import FmuPlant
 
@@ -55,6 +57,8 @@ def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: floa
         cfg = vehicle_config(config_path or None)
         if T_amb is not None:
             cfg = cfg.replace(T_amb=T_amb)
+        if refrigerant is not None:
+            cfg = cfg.replace(refrigerant=refrigerant)
         return HifiPlant(cfg, mode=mode, meas_noise_std=meas_noise_std, rng=rng)
     raise ConfigError(f"--plant: unknown plant {name!r} (choose 'hifi', 'model' or "
                       "'fmu:PATH.fmu')")

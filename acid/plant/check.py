@@ -39,6 +39,7 @@ import numpy as np
 from acid.claims import TABLE_I, Verdict, claim, judge_value
 from acid.errors import ConfigError
 from acid.plant.base import Plant
+from acid.plant.config import PlantConfig
 from acid.units import C2K, K2C
 
 #: Paper Table I (600 s, compressor + blower), MJ at 0, 5, ..., 25 m/s (``acid.claims``).
@@ -107,7 +108,9 @@ class CheckRow:
 
 @dataclass(frozen=True)
 class PlantCheckResult:
-    """All rows plus the data behind the figures (temperatures in degC, powers W, MJ)."""
+    """All rows plus the data behind the figures (temperatures in degC, powers W, MJ);
+    ``config``: the plant's configuration (``Plant.config()``) with its absolute temperatures
+    in degC (``PlantConfig.in_file_units``)."""
 
     plant: str
     rows: tuple
@@ -166,8 +169,6 @@ class ExternalNominal(Plant):
 
     def __init__(self, plant: Plant, T_cab_set: float = C2K(22.0),
                  T_evap_set: float = C2K(3.0)):
-        from acid.plant.config import PlantConfig
-
         c = PlantConfig()
         self.plant, self.Ts, self.name = plant, plant.Ts, f"{plant.name}+nominal"
         self.T_cab_set, self.T_evap_set = T_cab_set, T_evap_set
@@ -619,7 +620,7 @@ def plant_check(plant: Plant, progress: Callable[[int, int], None] | None = None
                             cop_gain_25_vs_0_equal_load_pct=gain, table_i=table,
                             service=service, pulldown=pull, cop_map=cop_map,
                             cycle_check=cycle_check,
-                            config=plant.config())
+                            config=PlantConfig.in_file_units(plant.config()))
 
 
 def build_plant(name: str = "hifi", config_path=None, T_amb: float | None = None,
@@ -629,7 +630,7 @@ def build_plant(name: str = "hifi", config_path=None, T_amb: float | None = None
     from acid.plant import make_plant
 
     if T_amb is not None and not 233.15 <= T_amb <= 330.15:
-        raise ConfigError(f"--ambient {K2C(T_amb):g} degC is outside the refrigerant property "
+        raise ConfigError(f"--t-amb {K2C(T_amb):g} degC is outside the refrigerant property "
                           "tables (-40 to 57 degC)")
     return make_plant(name, config_path=config_path, T_amb=T_amb, **kwargs)
 

@@ -7,15 +7,21 @@ ones (UA_ca0) stay inside a stated range. The calibration targets E(0) of the pa
 and the idle service chart of ``acid plant-check``; with the cited physics Table I falls
 further with speed than the paper's (SOURCES.md says by how much and why).
 
-Units are SI with **temperatures in kelvin** (the library's inside), also in TOML files::
+Units are SI with **temperatures in kelvin** inside (``PlantConfig``, ``from_dict``,
+``to_dict``); a TOML file a user writes gives **temperatures in degC**, like every other file
+and option of acid, or tagged with a unit of ``acid.units.UNIT_SCALES``; kelvin is accepted
+only when tagged (``from_toml``, ``to_file_dict``)::
 
     # my_plant.toml -- flat keys or grouped by section, units as in ``parameter_table()``
     refrigerant = "R1234yf"
     [ambient]
-    T_amb = 308.15      # K (35 degC)
+    T_amb = 35.0            # degC (or "35 degC", or "308.15 K")
     RH_amb = 0.4
+    [compressor]
+    superheat = 5.0         # K: a temperature difference (or "5 K")
 
-A temperature below 150 K is refused (it was almost certainly written in degC).
+An untagged temperature outside -60..150 degC is refused with a hint (it was almost certainly
+written in kelvin); inside, a temperature below 150 K is refused (written in degC).
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from pathlib import Path
 from acid.claims import MODEL as _PAPER_MODEL
 from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import ConfigError
+from acid.units import C2K, K2C, UNIT_SCALES
 
 REFRIGERANTS = ("R134a", "R1234yf")
 
@@ -44,6 +51,14 @@ K_AIR, NU_AIR, PR_AIR = 0.0263, 15.89e-6, 0.707
 _LEGACY_ZERO = {"k_ram": ("front_end_speed", "no ram air"),
                 "hA_ext_v": ("cabin_speed", "no speed-dependent shell convection")}
 
+
+#: fields in K that are temperature *differences* (a number in a file is K, the same as a degC
+#: difference); every other field in K is an absolute temperature, degC in a file
+TEMPERATURE_DIFFERENCES = ("superheat", "subcool", "dT_suc0", "dT_recirc", "hyst_off",
+                           "hyst_on")
+
+#: an untagged temperature in a plant file, degC: outside this it was written in kelvin
+FILE_DEGC_RANGE = (-60.0, 150.0)
 
 _FRACTION = "a fraction"
 _CAR_TO_BUS = "a city car to a bus"
@@ -170,6 +185,50 @@ def _p(default, unit: str, section: str, source: str):
 
 
 _ASSUMED = "assumption"
+
+
+def _file_temperature(key: str, value, source: str):
+    """A temperature field of a plant file in K: a plain number is degC (a difference: K), a
+    string is ``"NUMBER UNIT"`` with a temperature unit of ``acid.units.UNIT_SCALES``. Anything
+    else is returned as is (``from_dict`` names its type)."""
+    difference = key in TEMPERATURE_DIFFERENCES
+    if isinstance(value, str):
+        number, _, unit = value.strip().partition(" ")
+        unit = unit.strip()
+        try:
+            x = float(number)
+        except ValueError:
+            x = math.nan
+        scale = UNIT_SCALES.get(unit)
+        if not math.isfinite(x) or scale is None or scale[0] != "K":
+            temperature_units = ", ".join(u for u, (b, _, _) in UNIT_SCALES.items() if b == "K")
+            raise ConfigError(f"{source}: {key} = {value!r}: give a number or \"NUMBER UNIT\" "
+                              f"with a temperature unit ({temperature_units})")
+        if difference:
+            return x * scale[1]          # a difference: the unit's size, no offset
+        return x * scale[1] + scale[2]
+    if difference or isinstance(value, bool) or not isinstance(value, (int, float)):
+        return value
+    x = _finite(key, value, source)
+    lo, hi = FILE_DEGC_RANGE
+    if not lo <= x <= hi:
+        raise ConfigError(f"{source}: {key} = {x:g} is read in degC (plant files give "
+                          f"temperatures in degC) and lies outside {lo:g}..{hi:g} degC; if "
+                          f"kelvin is meant, write {key} = \"{x:g} K\"")
+    return C2K(x)
+
+
+def _finite(key: str, value, source: str) -> float:
+    """``value`` as a finite float, else one line naming ``key`` (an integer too large for a
+    float included)."""
+    try:
+        x = float(value)
+    except OverflowError:
+        x = math.inf
+    if not math.isfinite(x):
+        shown = "an integer too large" if isinstance(value, int) else repr(value)
+        raise ConfigError(f"{source}: {key} must be a finite number, got {shown}")
+    return x
 
 
 @dataclass(frozen=True)
@@ -494,7 +553,7 @@ class PlantConfig:
             elif isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise ConfigError(f"{source}: {key} must be a number, got {v!r}")
             else:
-                flat[key] = float(v)
+                flat[key] = float(v) if isinstance(v, float) else _finite(key, v, source)
         try:
             return cls(**flat)
         except ConfigError as exc:
@@ -502,16 +561,50 @@ class PlantConfig:
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> PlantConfig:
-        """Read a TOML plant configuration (keys as in ``parameter_table()``, SI units, K)."""
+        """Read a TOML plant configuration (keys as in ``parameter_table()``; temperatures in
+        degC or unit-tagged, see ``from_file_dict``)."""
         from acid._readers import load_toml
 
         path = Path(path)
         d = load_toml(path, "plant configuration", ConfigError)
-        return cls.from_dict(d, str(path))
+        return cls.from_file_dict(d, str(path))
+
+    @classmethod
+    def from_file_dict(cls, d: dict, source: str = "plant config") -> PlantConfig:
+        """Build from a dict as a user's file gives it (flat or by section): absolute
+        temperatures in degC as plain numbers, or tagged strings (``"35 degC"``,
+        ``"308.15 K"``, any temperature unit of ``acid.units.UNIT_SCALES``); temperature
+        differences (``TEMPERATURE_DIFFERENCES``) in K, plain or ``"5 K"``."""
+        units = {f.name: f.metadata["unit"] for f in dataclasses.fields(cls)}
+
+        def convert(key: str, value):
+            if units.get(key) != "K":
+                return value
+            return _file_temperature(key, value, source)
+
+        si = {key: ({sub: convert(sub, v) for sub, v in value.items()}
+                    if isinstance(value, dict) else convert(key, value))
+              for key, value in d.items()}
+        return cls.from_dict(si, source)
 
     def to_dict(self) -> dict:
         """Flat, JSON-serialisable dict of all parameters (SI units, K)."""
         return {name: getattr(self, name) for name in self.field_names()}
+
+    def to_file_dict(self) -> dict:
+        """Flat dict of all parameters as a plant file gives them (what a user reads): absolute
+        temperatures in degC, everything else as ``to_dict``; ``from_file_dict`` reads it back."""
+        return self.in_file_units(self.to_dict())
+
+    @classmethod
+    def in_file_units(cls, d: dict) -> dict:
+        """A copy of a flat dict keyed by parameter names (``to_dict``, a plant's
+        ``config()``) with the absolute temperatures in degC; other keys as they are."""
+        units = {f.name: f.metadata["unit"] for f in dataclasses.fields(cls)}
+        return {name: (round(float(K2C(v)), 9) if units.get(name) == "K"
+                       and name not in TEMPERATURE_DIFFERENCES
+                       and isinstance(v, (int, float)) and not isinstance(v, bool) else v)
+                for name, v in d.items()}
 
     @classmethod
     def parameter_table(cls) -> list[tuple[str, str, str, str]]:
@@ -530,14 +623,12 @@ class PlantConfig:
                 continue
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
                 bad(f"{f.name} must be a finite number, got {v!r}")
-            if f.metadata["unit"] == "K" and f.name not in ("superheat", "subcool", "dT_suc0",
-                                                             "dT_recirc", "hyst_off",
-                                                             "hyst_on"):
+            if f.metadata["unit"] == "K" and f.name not in TEMPERATURE_DIFFERENCES:
                 if not 150.0 < v < 450.0:
                     bad(f"{f.name} = {v} K is implausible (temperatures are in kelvin)")
         if not 233.15 <= self.T_amb <= 330.15:
-            bad(f"T_amb = {self.T_amb} K is outside the refrigerant property tables "
-                "(233.15-330.15 K, -40 to 57 degC)")
+            bad(f"T_amb = {K2C(self.T_amb):.6g} degC is outside the refrigerant property "
+                "tables (-40 to 57 degC)")
         if self.refrigerant not in REFRIGERANTS:
             bad(f"refrigerant {self.refrigerant!r} not supported (choose "
                 f"{' or '.join(REFRIGERANTS)})")
@@ -577,9 +668,11 @@ class PlantConfig:
             v = getattr(self, name)
             if not lo <= v <= hi:
                 unit = _UNITS.get(name, "")
+                if unit == "K" and name not in TEMPERATURE_DIFFERENCES:  # degC, as in files
+                    v, lo, hi, unit = K2C(v), K2C(lo), K2C(hi), "degC"
                 unit = "" if unit in ("1", "") else " " + unit
-                bad(f"{name} = {v:g}{unit} is outside its physical range {lo:g}..{hi:g}{unit} "
-                    f"({why})")
+                bad(f"{name} = {v:.6g}{unit} is outside its physical range "
+                    f"{lo:.6g}..{hi:.6g}{unit} ({why})")
         ratio = self.Ts / self.dt_int
         if ratio > MAX_SUBSTEPS:
             bad(f"dt_int = {self.dt_int:g} s gives {ratio:.0f} internal steps per Ts = "

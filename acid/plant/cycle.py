@@ -225,7 +225,8 @@ def _warn_not_converged(N, Tew, Tcw) -> None:
     import warnings
 
     warnings.warn(f"cycle Newton solve did not converge at N = {N:.0f} rpm, "
-                  f"T_ew = {Tew:.2f} K, T_cw = {Tcw:.2f} K; using the last iterate",
+                  f"T_ew = {Tew - 273.15:.2f} degC, T_cw = {Tcw - 273.15:.2f} degC; using the "
+                  "last iterate",
                   SolverWarning, stacklevel=3)
 
 

@@ -58,7 +58,8 @@ class SweepResult:
         ``energy_MJ``; ``energy_with_fan_MJ`` adds it).
     time : (n,) sample instants of the traces, s.
     traces : {channel: (S, n) array}, temperatures in K, powers in W (``TRACE_CHANNELS``).
-    config : the plant configuration used (flat dict).
+    config : the plant configuration used (flat dict, as a plant file gives it: temperatures
+        in degC, ``PlantConfig.to_file_dict``).
     """
 
     speeds_mps: np.ndarray
@@ -163,4 +164,4 @@ def speed_sweep(config: PlantConfig | None = None,
     return SweepResult(speeds_mps=speeds, duration_s=n * Ts, energy_MJ=energy,
                        energy_MJ_per_km=per_km, energy_comp_MJ=E_c, energy_bl_MJ=E_b,
                        energy_fan_MJ=E_f, time=np.arange(n) * Ts, traces=traces,
-                       config=config.to_dict())
+                       config=config.to_file_dict())

@@ -1,5 +1,5 @@
 """Named vehicles: plant configurations passed by name wherever a plant configuration is
-accepted (``--config paper``, ``--plant-config paper``, ``make_plant("hifi",
+accepted (``--plant-config paper``, ``make_plant("hifi",
 config_path="paper")``).
 
 ``paper``

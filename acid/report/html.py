@@ -1,4 +1,5 @@
-"""A self-contained HTML report: the paper's claims with acid's verdicts, sections, figures.
+"""A self-contained HTML report: a short summary and the figures first, then the studies'
+sections and the paper's claims with acid's verdicts.
 
 The page needs no server and no network: figures are embedded as base64 PNG data URIs.
 Every verdict comes from :mod:`acid.claims` (the report does not judge anything itself);
@@ -116,26 +117,79 @@ def _claims_table(verdicts: Sequence[ClaimVerdict]) -> list[str]:
     return out
 
 
-def render_report(report: Report) -> str:
-    """The HTML text of the report."""
+#: the columns of the summary: verdicts counted per section of the paper
+_SUMMARY_COLUMNS = (Verdict.AGREES, Verdict.DIRECTION, Verdict.DISAGREES)
+
+
+def _summary(report: Report) -> list[str]:
+    """The short summary that opens the page: the verdict counts, any contradiction, and one
+    row per section of the paper (how many of its claims agree, agree in direction only,
+    disagree or have no verdict (not comparable, not measured, not judged), which ones
+    disagree); the full table of claims is further down."""
     e = html.escape
-    out = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>{e(report.title)}"
-           f"</title><style>{_CSS}</style></head><body>", f"<h1>{e(report.title)}</h1>"]
-    out.append("<p class=meta>" + " &middot; ".join(f"{e(k)}: {e(str(v))}"
-                                                     for k, v in report.meta.items()) + "</p>")
-    paper = [v for v in report.verdicts if v.claim.paper is not None]
-    beyond = [v for v in report.verdicts if v.claim.paper is None]
     n = counts(report.verdicts)
-    out.append("<h2>Paper vs acid</h2><p class=counts id=counts>" + "".join(
+    out = ["<h2 id=summary>Summary</h2><p class=counts id=counts>" + "".join(
         f'<span data-verdict="{e(k)}" data-count="{c}"><b>{c}</b> {e(k)}</span>'
-        for k, c in n.items() if k != Verdict.BEYOND.value) + "</p>")
-    out.append("<p class=small>Every verdict below is computed from the claims registry "
-               "(<code>acid.claims</code>): the paper's value, where acid measures it, and the "
-               "rule named in each row.</p>")
+        for k, c in n.items() if k != Verdict.BEYOND.value) + "</p>"]
     bad = contradictions(report.verdicts)
     if bad:
         out.append("<p class=alert id=contradictions>Contradictory verdicts: "
                    + "; ".join(e(b) for b in bad) + "</p>")
+    by_section: dict[str, list[ClaimVerdict]] = {}
+    for v in report.verdicts:
+        if v.claim.paper is not None:
+            by_section.setdefault(v.claim.section, []).append(v)
+    out.append("<table class=summary><tr><th>section of the paper</th>"
+               + "".join(f"<th>{e(c.value)}</th>" for c in _SUMMARY_COLUMNS)
+               + "<th>no verdict</th><th>what disagrees</th></tr>")
+    for section, vs in by_section.items():
+        tally = [sum(v.verdict is c for v in vs) for c in _SUMMARY_COLUMNS]
+        other = len(vs) - sum(tally)
+        worst = "; ".join(e(v.claim.quantity) for v in vs if v.verdict is Verdict.DISAGREES)
+        out.append(f"<tr><td>{e(section)}</td>"
+                   + "".join(f"<td class=num>{t}</td>" for t in tally)
+                   + f"<td class=num>{other}</td><td>{worst}</td></tr>")
+    out.append("</table>")
+    n_paper = sum(len(vs) for vs in by_section.values())
+    out.append(f"<p class=small>The figures follow; then the studies' own sections, and "
+               f'<a href="#claims">every claim of the paper</a> ({n_paper} rows) with its '
+               "value, acid's measurement and the rule of its verdict.</p>")
+    return out
+
+
+def _figures(report: Report) -> list[str]:
+    e = html.escape
+    out = ["<h2 id=figures>Figures</h2>"]
+    for f in report.figures:
+        r = f.record
+        warn = (f"<div class=alert>hidden lines: {e('; '.join(r.hidden))}</div>"
+                if r.hidden else "")
+        out.append(f'<figure data-lines="{r.labelled_lines}" data-hidden="{len(r.hidden)}">'
+                   f"{_img_tag(f.path)}<figcaption>{e(r.caption)}</figcaption>{warn}</figure>")
+    return out
+
+
+def _sections(report: Report) -> list[str]:
+    e = html.escape
+    out = []
+    for s in report.sections:
+        out.append(f"<h2>{e(s.title)}</h2>")
+        out += [f"<p>{e(p)}</p>" for p in s.paragraphs]
+        if s.header:
+            out.append("<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in s.header) + "</tr>")
+            out += ["<tr>" + "".join(f"<td>{e(c)}</td>" for c in r) + "</tr>" for r in s.rows]
+            out.append("</table>")
+    return out
+
+
+def _claims(report: Report) -> list[str]:
+    e = html.escape
+    paper = [v for v in report.verdicts if v.claim.paper is not None]
+    beyond = [v for v in report.verdicts if v.claim.paper is None]
+    out = ["<h2 id=claims>Paper vs acid: every claim</h2>",
+           "<p class=small>Every verdict below is computed from the claims registry "
+           "(<code>acid.claims</code>): the paper's value, where acid measures it, and the "
+           "rule named in each row.</p>"]
     out += _claims_table(paper)
     if beyond:
         out.append("<h2>Beyond the paper</h2><table class=claims><tr><th>quantity</th>"
@@ -149,20 +203,19 @@ def render_report(report: Report) -> str:
                        f'data-implies=""><td>{e(c.quantity)}{where}</td>'
                        f"<td class=num>{e(v.acid_text)}</td><td>{judged}{e(c.note)}</td></tr>")
         out.append("</table>")
-    for s in report.sections:
-        out.append(f"<h2>{e(s.title)}</h2>")
-        out += [f"<p>{e(p)}</p>" for p in s.paragraphs]
-        if s.header:
-            out.append("<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in s.header) + "</tr>")
-            out += ["<tr>" + "".join(f"<td>{e(c)}</td>" for c in r) + "</tr>" for r in s.rows]
-            out.append("</table>")
-    out.append("<h2>Figures</h2>")
-    for f in report.figures:
-        r = f.record
-        warn = (f"<div class=alert>hidden lines: {e('; '.join(r.hidden))}</div>"
-                if r.hidden else "")
-        out.append(f'<figure data-lines="{r.labelled_lines}" data-hidden="{len(r.hidden)}">'
-                   f"{_img_tag(f.path)}<figcaption>{e(r.caption)}</figcaption>{warn}</figure>")
+    return out
+
+
+def render_report(report: Report) -> str:
+    """The HTML text of the report, in reading order: a short summary (verdict counts and
+    the headline rows), the figures, the studies' sections, then every claim with its rule,
+    and the stages' times."""
+    e = html.escape
+    out = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>{e(report.title)}"
+           f"</title><style>{_CSS}</style></head><body>", f"<h1>{e(report.title)}</h1>"]
+    out.append("<p class=meta>" + " &middot; ".join(f"{e(k)}: {e(str(v))}"
+                                                     for k, v in report.meta.items()) + "</p>")
+    out += _summary(report) + _figures(report) + _sections(report) + _claims(report)
     out.append("<h2>Stages</h2><table><tr><th>stage</th><th>time (s)</th><th>cache</th></tr>")
     for s in report.stages:
         out.append(f"<tr><td>{e(s.title)}</td><td class=num>{s.seconds:.1f}</td>"

@@ -1,12 +1,12 @@
 """Summary figures of a scenario sweep (``acid sweep``) from its results table.
 
 Builds ``matplotlib.figure.Figure`` objects directly (no pyplot state, Agg-safe); save them
-with ``acid._io.save_figure``. Temperatures in degC, energy in MJ, savings in %.
+with ``acid._io.save_figure``. Temperatures in degC, energy in MJ, savings and energy
+differences in %.
 """
 
 from __future__ import annotations
 
-import numpy as np
 from matplotlib.figure import Figure
 
 
@@ -49,31 +49,16 @@ def saving_figure(df, baseline: str) -> Figure:
 
 
 def energy_figure(df) -> Figure:
-    """A/C energy per drive cycle and controller: mean over the other conditions (bars) with
-    the range over them (whiskers), MJ."""
-    fig = Figure(figsize=(7.5, 4.5), layout="constrained")
-    ax = fig.add_subplot()
+    """A/C energy per drive cycle and controller against the sweep's baseline controller
+    (the table's ``baseline`` column): the mean over the other conditions as a difference in
+    % of the baseline's (``acid.report.energy_bars``), so that a 5 % difference can be read."""
+    from acid.report.energy_bars import difference_figure, sweep_energy_bars
+
     ok = _ok(df)
-    cycles = list(dict.fromkeys(ok["cycle"]))
-    controllers = list(dict.fromkeys(ok["controller"]))
-    width = 0.8 / max(len(controllers), 1)
-    cmap = _colors(len(controllers))
-    x = np.arange(len(cycles))
-    for i, label in enumerate(controllers):
-        g = ok[ok["controller"] == label].groupby("cycle")["energy_MJ"]
-        mean, lo, hi = (g.agg(f).reindex(cycles).to_numpy(float) for f in ("mean", "min", "max"))
-        pos = x - 0.4 + width * (i + 0.5)
-        ax.bar(pos, mean, width, color=cmap[i], label=label)
-        ax.errorbar(pos, mean, yerr=[mean - lo, hi - mean], fmt="none", ecolor="0.2", lw=0.8,
-                    capsize=2)
-    ax.set_xticks(x, cycles)
-    ax.set_xlabel("drive cycle")
-    ax.set_ylabel("A/C energy (MJ)")
-    ax.set_title("Energy per cycle (mean and range over the other conditions)")
-    if controllers:
-        ax.legend(fontsize=8)
-    ax.grid(alpha=0.3, axis="y")
-    return fig
+    baseline = str(ok["baseline"].iloc[0]) if len(ok) and "baseline" in ok else ""
+    controllers = [str(c) for c in dict.fromkeys(ok["controller"])]
+    cmap = dict(zip(controllers, _colors(len(controllers)), strict=True))
+    return difference_figure(sweep_energy_bars(df, baseline), controllers, cmap)
 
 
 def _colors(n: int) -> list:

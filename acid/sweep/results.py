@@ -165,7 +165,14 @@ def results_table(records: list[dict]):
 
 
 def write_table(df, out: Path) -> dict[str, Path]:
-    """``results.parquet`` (pyarrow) and ``results.csv``, atomically."""
+    """``results.parquet`` (pyarrow) and ``results.csv``, atomically; the controllers'
+    ``info`` in degC (``acid.units.json_in_degC``: ``bound_C``, not ``bound_K``)."""
+    from acid.units import json_in_degC
+
+    if "info" in df.columns:
+        df = df.assign(info=df["info"].map(
+            lambda s: json.dumps(json_in_degC(json.loads(s)), sort_keys=True)
+            if isinstance(s, str) else s))
     files = {}
     parquet = out / "results.parquet"
     with atomic_path(parquet) as tmp:
