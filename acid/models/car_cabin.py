@@ -66,7 +66,13 @@ def ode(s):
         "T_cab": (q_sup + q_int + q_shell) / (1e3 * s.C_cab),
         "T_int": (s.Q_sol - q_int) / (1e3 * s.C_int),
         "T_shell": (q_out - q_shell) / (1e3 * s.C_shell),
+        "Q_sol": 0.0 * s.Q_sol,             # a random walk (noise sigma_Q): the filter follows it
     }
+
+
+#: The load a filter or an output-error window starts from, and its spread (W): the middle
+#: and the half-width of the per-trip loads fitted on the 13 estimation trips (91-1500 W).
+Q_SOL_PRIOR, Q_SOL_SPREAD = 500.0, 400.0
 
 
 def _between_cabin_and_ambient(m):
@@ -75,11 +81,16 @@ def _between_cabin_and_ambient(m):
 
 model = Model(
     "car_cabin",
-    states=[State("T_cab", "K", description="cabin air (logged)"),
+    states=[State("T_cab", "K", description="cabin air (logged)", noise="sigma_cab",
+                  sensor="sigma_y", spread=0.1),
             State("T_int", "K", measured=False, initial=lambda m: m.T_cab,
                   description="interior (seats, dashboard, panels), lumped; not logged"),
             State("T_shell", "K", measured=False, initial=_between_cabin_and_ambient,
-                  description="body shell and glazing, lumped; not logged")],
+                  description="body shell and glazing, lumped; not logged"),
+            State("Q_sol", "W", measured=False, initial=Q_SOL_PRIOR, noise="sigma_Q",
+                  spread=Q_SOL_SPREAD,
+                  description="solar and occupant load into the interior (not logged): a "
+                  "random walk, per window for output error, followed by the filter")],
     inputs=[Signal("T_evap", "K", "air after the evaporator / heat exchanger (logged)")],
     disturbances=[Signal("T_amb", "K", "ambient air (logged)"),
                   Signal("v_veh", "m/s", "vehicle speed (logged)")],
@@ -97,8 +108,13 @@ model = Model(
         Parameter("UA_out", "W/K", 80.0, 20.0, 300.0, description="ambient <-> shell, still"),
         Parameter("UA_out_v", "W s/(K m)", 20.0, 0.0, 80.0,
                   description="ambient <-> shell, per m/s of speed"),
-        Parameter("Q_sol", "W", 300.0, -300.0, 1500.0, per_experiment=True,
-                  description="solar and occupant load into the interior, per trip"),
+        Parameter("sigma_cab", "K", 0.02, 1e-4, 0.5, fixed=True,
+                  description="cabin air's random increment per sample (model error)"),
+        Parameter("sigma_y", "K", 0.05, 0.005, 0.5, fixed=True,
+                  description="cabin sensor noise (0.01 K resolution, 0.5 K steps of "
+                  "ambient/evaporator inputs)"),
+        Parameter("sigma_Q", "W", 10.0, 0.1, 200.0, fixed=True,
+                  description="load's random-walk step per sample"),
     ],
     Ts=5.0, ode=ode, integrator=RK4(substeps=2),
     description="car cabin from logged channels: cabin air, latent interior and shell",
