@@ -13,28 +13,38 @@ from acid.ident.data import ModelData
 from acid.ident.fit import fit_model
 from acid.ident.pem import filter_states, noise_parameters
 from acid.ident.validate import ParameterSet, validate_model
-from acid.models import RK4, Model, Parameter, Signal, State
+from acid.models import Model, load
 
 TRUTH = {"C": 30.0, "UA": 60.0, "sigma_T": 0.01, "sigma_y": 0.05, "sigma_Q": 15.0}
 
 
-def _room() -> Model:
-    """One air node against ambient, heated by an unmeasured random-walk load."""
-    def ode(s):
-        return {"T": (s.UA * (s.T_amb - s.T) + s.Q) / (1e3 * s.C), "Q": 0.0 * s.Q}
+#: One air node against ambient, heated by an unmeasured random-walk load (a model file).
+ROOM = """
+from acid.models import RK4, Model, Parameter, Signal, State
 
-    return Model(
-        "room",
-        states=[State("T", "K", noise="sigma_T", sensor="sigma_y", spread=0.1),
-                State("Q", "W", measured=False, initial=300.0, noise="sigma_Q",
-                      spread=300.0)],
-        disturbances=[Signal("T_amb", "K")],
-        parameters=[Parameter("C", "kJ/K", 20.0, 5.0, 100.0),
-                    Parameter("UA", "W/K", 100.0, 10.0, 300.0),
-                    Parameter("sigma_T", "K", 0.05, 1e-3, 1.0, fixed=True),
-                    Parameter("sigma_y", "K", 0.1, 1e-3, 1.0, fixed=True),
-                    Parameter("sigma_Q", "W", 5.0, 0.1, 100.0, fixed=True)],
-        Ts=5.0, ode=ode, integrator=RK4(2))
+
+def ode(s):
+    return {"T": (s.UA * (s.T_amb - s.T) + s.Q) / (1e3 * s.C), "Q": 0.0 * s.Q}
+
+
+model = Model(
+    "room",
+    states=[State("T", "K", noise="sigma_T", sensor="sigma_y", spread=0.1),
+            State("Q", "W", measured=False, initial=300.0, noise="sigma_Q", spread=300.0)],
+    disturbances=[Signal("T_amb", "K")],
+    parameters=[Parameter("C", "kJ/K", 20.0, 5.0, 100.0),
+                Parameter("UA", "W/K", 100.0, 10.0, 300.0),
+                Parameter("sigma_T", "K", 0.05, 1e-3, 1.0, fixed=True),
+                Parameter("sigma_y", "K", 0.1, 1e-3, 1.0, fixed=True),
+                Parameter("sigma_Q", "W", 5.0, 0.1, 100.0, fixed=True)],
+    Ts=5.0, ode=ode, integrator=RK4(2))
+"""
+
+
+def _room(folder) -> Model:
+    path = folder / "room.py"
+    path.write_text(ROOM, encoding="utf-8")
+    return load(str(path))
 
 
 def _record(model: Model, rng, n: int, q0: float):
@@ -54,8 +64,9 @@ def _record(model: Model, rng, n: int, q0: float):
     return ds, Q
 
 
-def test_recovers_parameters_and_noise_levels_with_an_unmeasured_random_walk_load(rng):
-    m = _room()
+def test_recovers_parameters_and_noise_levels_with_an_unmeasured_random_walk_load(rng,
+                                                                                  tmp_path):
+    m = _room(tmp_path)
     assert noise_parameters(m) == ("sigma_T", "sigma_y", "sigma_Q")
     parts = [_record(m, rng, 1500, q0) for q0 in (200.0, 600.0)]
     ds = Dataset.concatenate([p for p, _ in parts])
@@ -73,8 +84,8 @@ def test_recovers_parameters_and_noise_levels_with_an_unmeasured_random_walk_loa
     assert "random walks: Q" in res.notes[0]
 
 
-def test_filter_at_validation_starts_follows_the_unmeasured_load(rng):
-    m = _room()
+def test_filter_at_validation_starts_follows_the_unmeasured_load(rng, tmp_path):
+    m = _room(tmp_path)
     ds, Q = _record(m, rng, 1200, 700.0)
     p = np.array([TRUTH[k] for k in m.parameter_names])
     data = ModelData.of(m, ds)
@@ -92,3 +103,36 @@ def test_filter_at_validation_starts_follows_the_unmeasured_load(rng):
     assert ekf.metrics["T"]["rmse"] < 0.3
     with pytest.raises(Exception, match="warm_start"):
         validate_model(m, ds, ps, warm_start="kalman", **kw)
+
+
+def test_cli_fits_by_prediction_error_with_an_evaluation_cap_and_validates_with_the_filter(
+        rng, tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    m = _room(tmp_path)
+    src = tmp_path / "room.py"
+    path = tmp_path / "d.h5"
+    _record(m, rng, 600, 400.0)[0].to_hdf5(path)
+    runner = CliRunner()
+    res = runner.invoke(app, ["fit", str(path), "--model", str(src), "--method", "pem",
+                              "--max-evals", "3", "--out", str(tmp_path / "p.json"),
+                              "--json", str(tmp_path / "f.json")])
+    assert res.exit_code == 0, res.output
+    fit = json.loads((tmp_path / "f.json").read_text())
+    assert fit["method"] == "pem" and fit["output_error"]["nfev"] <= 4
+    assert not fit["output_error"]["converged"] and "did not converge" in res.output
+    res = runner.invoke(app, ["validate", str(path), "--model", str(src), "--params",
+                              str(tmp_path / "p.json"), "--starts", "4", "--warmup", "100",
+                              "--horizon", "50", "--warm-start", "ekf", "--no-yardsticks"])
+    assert res.exit_code == 0, res.output
+    assert "extended Kalman filter" in res.output
+    for args, opt in ((["fit", str(path), "--max-evals", "0"], "--max-evals"),
+                      (["fit", str(path), "--max-evals", "50"], "--max-evals"),
+                      (["validate", str(path), "--model", str(src), "--warm-start", "x"],
+                       "--warm-start")):
+        res = runner.invoke(app, args)
+        assert res.exit_code == 2 and opt in res.output, res.output

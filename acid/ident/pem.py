@@ -173,6 +173,10 @@ def _measured(model: Model, data: ModelData) -> tuple[int, ...]:
 
 
 # ----------------------------------------------------------------------- the fit
+class _Cap(Exception):
+    """The evaluation cap is reached."""
+
+
 @dataclass(frozen=True)
 class PEMResult:
     """What :func:`solve` found (the free columns' values and the filter's summary)."""
@@ -228,19 +232,31 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
     fg = ca.Function("pem_cost", [Z], [J, ca.gradient(J, Z)])
     ev = ca.Function("pem_out", [Z], [out[3], out[4]])
     count = {"n": 0}
+    best = [math.inf, None]
 
     def fun(z):
+        if count["n"] >= max_nfev:        # the cap holds inside a line search too
+            raise _Cap
         count["n"] += 1
         f, g = fg(z)
         f = float(f)
-        return (f, np.asarray(g).ravel()) if math.isfinite(f) else (1e30, np.zeros(z.size))
+        if not math.isfinite(f):
+            return 1e30, np.zeros(z.size)
+        if f < best[0]:
+            best[:] = [f, z.copy()]
+        return f, np.asarray(g).ravel()
 
     z0 = np.clip((np.asarray(theta0, float) - a) / b, zlo, zhi)
-    res = scipy.optimize.minimize(fun, z0, jac=True, method="L-BFGS-B",
-                                  bounds=list(zip(zlo, zhi, strict=True)),
-                                  options={"maxfun": int(max_nfev), "maxiter": int(max_nfev),
-                                           "ftol": 1e-12, "gtol": 1e-8})
-    z = res.x
+    try:
+        res = scipy.optimize.minimize(fun, z0, jac=True, method="L-BFGS-B",
+                                      bounds=list(zip(zlo, zhi, strict=True)),
+                                      options={"maxfun": int(max_nfev),
+                                               "maxiter": int(max_nfev), "ftol": 1e-12,
+                                               "gtol": 1e-8})
+        z, status, success, loss = res.x, str(res.message), bool(res.success), float(res.fun)
+    except _Cap:
+        z, loss = (best[1], best[0]) if best[1] is not None else (z0, math.nan)
+        status, success = f"stopped at the cap of {max_nfev} evaluations", False
     # covariance: 2 H^-1 (J is -2 log L + const), H by differences of the exact gradient
     H = np.zeros((z.size, z.size))
     for i in range(z.size):
@@ -265,7 +281,7 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
         fit[name] = float(100 * (1 - np.linalg.norm(ei) / den)) if den > 0 else math.nan
     innov = (e / np.sqrt(np.maximum(s2, 1e-300)))[obs]
     return PEMResult(theta=a + b * z, cov=cov, stderr=np.sqrt(np.clip(np.diag(cov), 0, None)),
-                     loss=float(res.fun), status=str(res.message), success=bool(res.success),
+                     loss=loss, status=status, success=success,
                      nfev=count["n"], channel_rms=rms, channel_fit=fit, innovations=innov,
                      n_records=n, condition=float(w.max() / w.min()) if w.size and w.min() > 0
                      else math.inf)
