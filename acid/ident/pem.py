@@ -240,8 +240,9 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
         count["n"] += 1
         f, g = fg(z)
         f = float(f)
-        if not math.isfinite(f):
-            return 1e30, np.zeros(z.size)
+        if not math.isfinite(f):   # the filter diverged (e.g. an unstable step): far uphill,
+            ref, zb = (best[0], best[1]) if best[1] is not None else (0.0, z0)
+            return ref + 1e6 * (1 + abs(ref)), 1e6 * (1 + abs(ref)) * (z - zb)  # back
         if f < best[0]:
             best[:] = [f, z.copy()]
         return f, np.asarray(g).ravel()
