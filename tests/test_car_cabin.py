@@ -68,9 +68,10 @@ def test_output_error_recovers_known_parameters_with_latent_states(rng):
     ds = _simulated(truth, (200.0, 700.0), rng)
     assert "T_int" not in ds and "T_shell" not in ds
     # the capacities of the slow nodes and the shell's conductances held at their declared
-    # values (which generated the data); the fast ones, and the load per trip, estimated
+    # values (which generated the data), and the load's dynamics; the fast ones, and the
+    # load at each window's start, estimated
     fix = {n: load("car_cabin").parameter(n).value
-           for n in ("C_int", "C_shell", "UA_shell", "UA_out", "UA_out_v")}
+           for n in ("C_int", "C_shell", "UA_shell", "UA_out", "UA_out_v", "Q_bar", "tau_Q")}
     res = fit_model("car_cabin", ds, "oe", fix=fix, oe_window=120)
     assert res.method == "oe" and res.output_error["converged"]
     for name, t in truth.items():
@@ -148,10 +149,13 @@ def test_real_trips_prediction_error_fit_beats_persistence_on_held_out_trips():
                        start_range=(n, len(both)), warm_start="ekf")
     model, pers = v.by_time["T_cab"], v.yardsticks["persistence"]["by_time"]["T_cab"]
     assert model["60"]["n"] == pers["60"]["n"] == v.starts.size
-    # a minute ahead the filter's state and the cabin's response beat holding the value
-    assert model["60"]["p90_K"] < pers["60"]["p90_K"], (model, pers)
-    # ten minutes ahead: 2.64 K measured (persistence 2.50 K, 15 starts; 2026-11-26, 40
-    # evaluations), bounded with margin for another BLAS or CasADi
+    # the filter's state and the cabin's response beat holding the value: measured
+    # 2026-11-26 (40 evaluations; model / persistence, p90 K): 0.42 / 0.67 at 60 s (24
+    # starts), 1.47 / 1.87 at 300 s (19), RMSE 1.56 / 2.39 K at 600 s (15)
+    for t in ("60", "300"):
+        assert model[t]["p90_K"] < pers[t]["p90_K"], (t, model, pers)
+    assert model["600"]["rmse_K"] < pers["600"]["rmse_K"], (model, pers)
+    # p90 2.35 K at 600 s, bounded with margin for another BLAS or CasADi
     assert model["600"]["p90_K"] < P90_600_BOUND, (model, pers)
 
 
@@ -168,7 +172,7 @@ def test_cli_fits_car_cabin_by_name_and_validates_to_the_trips_end_with_yardstic
     _simulated(truth, (200.0, 700.0), rng, n=300).to_hdf5(est)
     _simulated(truth, (450.0,), rng, n=200).to_hdf5(val)
     fixes = [f"--fix={n}={load('car_cabin').parameter(n).value}"
-             for n in ("C_int", "C_shell", "UA_shell", "UA_out", "UA_out_v")]
+             for n in ("C_int", "C_shell", "UA_shell", "UA_out", "UA_out_v", "Q_bar", "tau_Q")]
     runner = CliRunner()
     res = runner.invoke(app, ["fit", str(est), "--model", "car_cabin", "--method", "oe",
                               "--oe-window", "120", *fixes, "--out", str(tmp_path / "p.json")])
