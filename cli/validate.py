@@ -91,9 +91,11 @@ def validate(
                                 "experiment's end."),
     warm_start: str = typer.Option(
         "fit", "--warm-start",
-        help="Model file with latent states: how the --warmup stretch gives them: 'fit' "
-             "(least squares, parameters held) or 'ekf' (the extended Kalman filter with "
-             "the declared noises, as `acid fit --method pem` uses)."),
+        help="Model file with latent states: how they are estimated at each start: 'fit' "
+             "(least squares over the --warmup stretch, parameters held), 'ekf' (the "
+             "extended Kalman filter with the declared noises, as `acid fit --method pem` "
+             "uses, over that stretch) or 'ekf-trip' (the filter from the start of the "
+             "trip, as it would run in the car)."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 

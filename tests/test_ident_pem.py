@@ -101,6 +101,13 @@ def test_filter_at_validation_starts_follows_the_unmeasured_load(rng, tmp_path):
     ekf = validate_model(m, ds, ps, warm_start="ekf", **kw)
     assert any("extended Kalman filter" in n for n in ekf.notes)
     assert ekf.metrics["T"]["rmse"] < 0.3
+    # the filter from the start of the record: each start's own stretch, its last sample
+    trip = validate_model(m, ds, ps, warm_start="ekf-trip", **kw)
+    assert any("from the start of each experiment" in n for n in trip.notes)
+    x_var = filter_states(m, data, np.tile(p, (3, 1)), k0[:3], k0[:3])
+    x_one = np.vstack([filter_states(m, data, p[None], [k], k) for k in k0[:3]])
+    np.testing.assert_allclose(x_var, x_one, rtol=1e-9)
+    assert trip.metrics["T"]["rmse"] < 0.3
     with pytest.raises(Exception, match="warm_start"):
         validate_model(m, ds, ps, warm_start="kalman", **kw)
 

@@ -306,17 +306,20 @@ def columns_for(model: Model, data: ModelData, fix: dict | None = None):
 
 # ---------------------------------------------------------------- validation starts
 def filter_states(model: Model, data: ModelData, P: np.ndarray, k0: np.ndarray,
-                  W: int) -> np.ndarray:
+                  W) -> np.ndarray:
     """(len(k0), nx): the filter's estimate of the state at each start ``k0`` (the
-    measurement at ``k0`` included), run over the ``W`` samples before it from the
-    declared initial rules; ``P`` (len(k0), np) the parameters of each start."""
+    measurement at ``k0`` included), run over the ``W`` samples before it (a number, or one
+    per start) from the declared initial rules; ``P`` (len(k0), np) the parameters of each
+    start."""
     chan = _measured(model, data)
     k0 = np.asarray(k0, dtype=int)
-    rec = _Records.of(model, data, chan, [(k - W, k + 1) for k in k0])
+    W = np.broadcast_to(np.asarray(W, dtype=int), k0.shape)
+    rec = _Records.of(model, data, chan, [(k - w, k + 1) for k, w in zip(k0, W,
+                                                                        strict=True)])
     n, L = rec.idx.shape
     out = rec.call(_run(model, chan, L, n), P)
     xf = np.asarray(out[5]).reshape(model.nx, n, L)
-    return xf[:, :, -1].T
+    return xf[:, np.arange(n), W].T          # each stretch's last real sample
 
 
 def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,

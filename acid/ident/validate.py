@@ -32,8 +32,10 @@ from acid.models.loader import load
 PLACEMENTS = ("even", "random")
 #: How latent states at a start are estimated from the warm-up stretch: ``"fit"`` (the
 #: state at its beginning fitted by least squares, then simulated) or ``"ekf"`` (the
-#: extended Kalman filter of ``acid.ident.pem`` run along it, with the declared noises).
-WARM_STARTS = ("fit", "ekf")
+#: extended Kalman filter of ``acid.ident.pem`` run along it, with the declared noises) or
+#: ``"ekf-trip"`` (the filter run from the start of the experiment, as in a car it runs
+#: from the start of the trip; the starts still need ``warmup`` samples before them).
+WARM_STARTS = ("fit", "ekf", "ekf-trip")
 #: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
 REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
 
@@ -211,16 +213,21 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     P = _parameters_at(model, data, params, k0, notes)
     x0 = data.initial_states(model, k0)
     if latent and need_warm > 0:
-        if warm_start == "ekf":
+        if warm_start in ("ekf", "ekf-trip"):
             from acid.ident.pem import filter_states
 
-            x0[:, latent] = filter_states(model, data, P, k0, need_warm)[:, latent]
+            first = np.array([a for a, _ in data.segments])
+            W = k0 - first[np.searchsorted(first, k0, side="right") - 1] \
+                if warm_start == "ekf-trip" else need_warm
+            x0[:, latent] = filter_states(model, data, P, k0, W)[:, latent]
         else:
             x0 = _warm_start(model, data, P, k0, need_warm, x0, latent)
         notes.append(f"latent states ({', '.join(model.states[i].name for i in latent)}) "
-                     f"estimated from the {need_warm} samples ({need_warm * model.Ts:g} s) "
-                     "before each start" + (" by the extended Kalman filter"
-                                            if warm_start == "ekf" else ""))
+                     + ("estimated by the extended Kalman filter run from the start of "
+                        "each experiment" if warm_start == "ekf-trip" else
+                        f"estimated from the {need_warm} samples ({need_warm * model.Ts:g} s) "
+                        "before each start" + (" by the extended Kalman filter"
+                                               if warm_start == "ekf" else "")))
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
