@@ -81,7 +81,7 @@ def test_recovers_parameters_and_noise_levels_with_an_unmeasured_random_walk_loa
             assert abs(e.value - TRUTH[e.name]) < 3 * e.stderr + 1e-9, e
     # consistent filter: normalised innovations of unit spread
     assert res.output_error["normalised_innovation_std"] == pytest.approx(1.0, abs=0.1)
-    assert "random walks: Q" in res.notes[0]
+    assert "states with process noise: T, Q" in res.notes[0]
 
 
 def test_filter_at_validation_starts_follows_the_unmeasured_load(rng, tmp_path):

@@ -192,7 +192,29 @@ class PEMResult:
     channel_fit: dict            # one-step fit % per channel
     innovations: np.ndarray      # (n_obs,) normalised innovations e / sqrt(s2), time order
     n_records: int
-    condition: float
+    condition: float             # of the curvature over the parameters inside their bounds
+    identified: np.ndarray       # (n,) False: on a bound, or in a direction of no curvature
+
+
+def _curvature_covariance(H: np.ndarray, z, zlo, zhi, rtol: float = 1e-8):
+    """Covariance 2 H^-1 (J is -2 log L + const) over the parameters inside their bounds;
+    NaN for a parameter on a bound or with weight in a direction the loss does not curve
+    (the data do not fix it)."""
+    k = z.size
+    cov = np.full((k, k), np.nan)
+    inner = ~(np.isclose(z, zlo, rtol=0, atol=1e-6) | np.isclose(z, zhi, rtol=0, atol=1e-6))
+    ident = inner.copy()
+    if not inner.any():
+        return cov, ident, math.nan
+    w, V = np.linalg.eigh(H[np.ix_(inner, inner)])
+    keep = w > rtol * max(w.max(), 0.0)
+    flat = (np.abs(V[:, ~keep]) > 1e-3).any(axis=1)
+    sub = 2.0 * (V[:, keep] / w[keep]) @ V[:, keep].T
+    sub[flat, :] = np.nan
+    sub[:, flat] = np.nan
+    cov[np.ix_(inner, inner)] = sub
+    ident[np.flatnonzero(inner)[flat]] = False
+    return cov, ident, float(w.max() / w[keep].min()) if keep.any() else math.inf
 
 
 def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.ndarray,
@@ -267,9 +289,8 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
         zm[i] -= h
         H[:, i] = (np.asarray(fg(zp)[1]).ravel() - np.asarray(fg(zm)[1]).ravel()) / (2 * h)
     H = 0.5 * (H + H.T)
-    w = np.linalg.eigvalsh(H) if z.size else np.zeros(0)
-    cov_z = 2.0 * np.linalg.pinv(H, rcond=1e-12) if z.size else np.zeros((0, 0))
-    cov = cov_z * np.outer(b, b)
+    cov, identified, cond = _curvature_covariance(H, z, zlo, zhi)
+    cov = cov * np.outer(b, b)
     e, s2 = (np.asarray(v).reshape(len(chan), n, L) for v in ev(z))
     obs = rec.o.transpose(2, 0, 1) > 0
     rms, fit = {}, {}
@@ -281,11 +302,10 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
         den = np.linalg.norm(mi - mi.mean()) if mi.size else 0.0
         fit[name] = float(100 * (1 - np.linalg.norm(ei) / den)) if den > 0 else math.nan
     innov = (e / np.sqrt(np.maximum(s2, 1e-300)))[obs]
-    return PEMResult(theta=a + b * z, cov=cov, stderr=np.sqrt(np.clip(np.diag(cov), 0, None)),
+    return PEMResult(theta=a + b * z, cov=cov, stderr=np.sqrt(np.diag(cov)),
                      loss=loss, status=status, success=success,
                      nfev=count["n"], channel_rms=rms, channel_fit=fit, innovations=innov,
-                     n_records=n, condition=float(w.max() / w.min()) if w.size and w.min() > 0
-                     else math.inf)
+                     n_records=n, condition=cond, identified=identified)
 
 
 def columns_for(model: Model, data: ModelData, fix: dict | None = None):
@@ -365,14 +385,15 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
             se = float(res.stderr[k])
             ci = (res.theta[k] - 1.96 * se, res.theta[k] + 1.96 * se)
             estimates.append(Estimate(p.name, p.unit, p.value, float(res.theta[k]), se, ci,
-                                      "estimated (pem)", columns[k].experiment))
+                                      "estimated (pem)" if res.identified[k] else
+                                      "not fixed by the data", columns[k].experiment))
     latent = [s.name for s in model.states if not s.measured]
-    walks = [s.name for s in model.states if s.noise is not None and not s.measured]
+    walks = [s.name for s in model.states if s.noise is not None]
     notes = [f"prediction-error method: an extended Kalman filter over {res.n_records} "
              "whole experiments, the innovations' negative log-likelihood minimised "
              "(L-BFGS-B, CasADi gradient)" + (f"; latent: {', '.join(latent)}" if latent
                                               else "")
-             + (f"; followed as random walks: {', '.join(walks)}" if walks else "")]
+             + (f"; states with process noise: {', '.join(walks)}" if walks else "")]
     at = [f"{c.label} at its {w} {bd:g}" for c, t, a, z in zip(columns, res.theta, lo, hi,
                                                                 strict=True)
           for bd, w in ((a, "min"), (z, "max"))
@@ -380,6 +401,10 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
     if at:
         notes.append("the prediction-error fit ends on declared bounds: " + "; ".join(at))
     warn = [] if res.success else [f"prediction-error fit did not converge ({res.status})"]
+    loose = [c.label for c, ok in zip(columns, res.identified, strict=True) if not ok]
+    if loose:
+        warn.append("prediction error: on a bound or not fixed by the data (no standard "
+                    f"error): {', '.join(loose)}")
     summary = {"records": res.n_records, "loss": res.loss, "status": res.status,
                "converged": res.success, "nfev": res.nfev,
                "innovation_rms": res.channel_rms, "one_step_fit_percent": res.channel_fit,
