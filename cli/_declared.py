@@ -55,7 +55,8 @@ def parse_fix(items: list[str] | None) -> dict[str, float]:
 def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None, *,
                  method: str, fix: list[str] | None, free: list[str] | None, fit_starts: int,
                  seed: int, oe_window: int, covariance: str, bandwidth,
-                 estimation_fraction: float, more: list[Path] = ()) -> None:
+                 estimation_fraction: float, more: list[Path] = (),
+                 max_evals: int = 100) -> None:
     """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``."""
     from acid.ident.fit import METHODS, fit_model, provenance
     from acid.models import load
@@ -76,7 +77,7 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
         est.source = str(data)
     result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
                        fit_starts=fit_starts, seed=seed, oe_window=oe_window,
-                       covariance=covariance, hac_bandwidth=bandwidth)
+                       covariance=covariance, hac_bandwidth=bandwidth, max_nfev=max_evals)
     prov = provenance(ds, result.method)
     prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
                 records=[str(data), *map(str, more)])
@@ -85,7 +86,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
 
     say(f"{data}{' and ' + str(len(more)) + ' more record(s)' if more else ''}: "
         f"{len(est)} samples, {len(result.experiment_ids)} experiment(s), model "
-        f"{model.name!r} ({model_file}), method {result.method}, covariance {covariance} "
+        f"{model.name!r} ({model_file}), method {result.method}, covariance "
+        f"{result.covariance_kind} "
         f"({result.elapsed_s:.1f} s)")
     ids = result.experiment_ids
     rows = [[e.name if e.experiment is None else f"{e.name} [exp {ids[e.experiment]}]",
@@ -99,13 +101,20 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                 _num(q.condition, 3), _num(q.residual_std, 3), _num(q.fit_percent, 4),
                 _num(q.residual_acf1, 2), _num(q.ljung_box_p, 2),
                 q.reason or ", ".join(q.parameters)] for q in result.equations]
-    print_table("Equations: how each was fitted (ls: equation-error least squares), rank, "
-                "condition, residual std, one-step fit %, residual lag-1 autocorrelation and "
-                "Ljung-Box p (20 lags)",
-                ["equation", "fit", "rank", "cond", "resid", "fit %", "acf1", "LB p",
-                 "parameters / why not ls"], eq_rows)
+    if eq_rows:
+        print_table("Equations: how each was fitted (ls: equation-error least squares), rank, "
+                    "condition, residual std, one-step fit %, residual lag-1 autocorrelation "
+                    "and Ljung-Box p (20 lags)",
+                    ["equation", "fit", "rank", "cond", "resid", "fit %", "acf1", "LB p",
+                     "parameters / why not ls"], eq_rows)
     oe = result.output_error
-    if oe:
+    if oe and result.method == "pem":
+        one = ", ".join(f"{c} {v:.2f} %" for c, v in oe["one_step_fit_percent"].items())
+        say(f"prediction error: {oe['records']} records, loss {oe['loss']:.6g}, "
+            f"{oe['nfev']} evaluations, {oe['status']}; one-step fit {one}, normalised "
+            f"innovations' std {oe['normalised_innovation_std']:.3f} (1 when the filter's "
+            "noises are consistent)")
+    elif oe:
         sim = ", ".join(f"{c} {v:.2f} %" for c, v in oe["channel_fit_percent"].items())
         say(f"output error: {oe['windows']} windows of <= {oe['window']} samples, loss "
             f"{oe['loss']:.6g}, {oe['status']}; simulation fit {sim}")
@@ -149,7 +158,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                       starts: int, horizon: int, warmup: int, placement: str, seed: int,
                       held_out_fraction: float | None, hold_all: bool = False,
                       non_overlapping: bool = False, yardsticks: bool = True,
-                      to_end: bool = False) -> None:
+                      to_end: bool = False, warm_start: str = "fit") -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors."""
     from acid.ident.validate import declared_parameters, read_parameters, validate_model
     from acid.models import load
@@ -179,7 +188,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                          placement=placement, seed=seed, non_overlapping=non_overlapping,
                          hold=tuple(d.name for d in model.disturbances) if hold_all else (),
                          start_range=(lo, hi), yardsticks=yardsticks,
-                         estimation=estimation, to_end=to_end)
+                         estimation=estimation, to_end=to_end, warm_start=warm_start)
     if est is not None:
         note(f"yardsticks fitted on the parameters' records ({est.source})")
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "

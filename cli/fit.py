@@ -36,6 +36,7 @@ from acid_cli._declared import fit_declared, is_model_file, model_file_input
 
 #: Largest output-error window and HAC lag accepted, samples.
 MAX_WINDOW = 100_000
+MAX_EVALS = 100_000
 
 MODEL_FAMILIES = ("paper", "econ")
 
@@ -57,7 +58,8 @@ def fit(
         help="'ls' equation-error least squares (the default for paper), 'cvx' constrained "
              "(CVXPY), 'oe' output error (multi-step simulation error, started from the ls "
              "estimate); for a model file also 'auto' (its default: ls where every "
-             "equation allows it, else oe)."),
+             "equation allows it, else oe) and 'pem' (prediction error: an extended "
+             "Kalman filter over each whole record)."),
     loss: str = typer.Option("squared", "--loss",
                              help="'squared' or 'huber' (robust to outliers; cvx or oe)."),
     estimation_fraction: float = typer.Option(
@@ -66,6 +68,10 @@ def fit(
              "`acid validate`."),
     oe_window: int = typer.Option(300, "--oe-window",
                                   help="Samples per output-error simulation window."),
+    max_evals: int = typer.Option(
+        100, "--max-evals",
+        help="A declared model's output-error or prediction-error fit: at most this many "
+             "evaluations of the loss (the report says whether it converged first)."),
     reference: str = typer.Option(
         "paper", "--reference",
         help="Parameters shown beside ours and used for parameters the data do not excite: "
@@ -141,6 +147,7 @@ def fit(
             f"must be one of {', '.join(METHODS)}, got {method!r}")
     require(loss in LOSSES, "--loss", f"must be one of {', '.join(LOSSES)}, got {loss!r}")
     require_range(oe_window, "--oe-window", 5, MAX_WINDOW, "samples")
+    require_range(max_evals, "--max-evals", 1, MAX_EVALS)
     bandwidth: str | int = hac_bandwidth
     if hac_bandwidth.strip().isdigit():
         bandwidth = int(hac_bandwidth)
@@ -163,7 +170,9 @@ def fit(
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                             covariance=covariance, bandwidth=bandwidth,
                             estimation_fraction=estimation_fraction,
-                            more=list(add_record or []))
+                            more=list(add_record or []), max_evals=max_evals)
+    require(max_evals == 100, "--max-evals", "is for a declared model's output-error or "
+            "prediction-error fit (--model FILE.py or a built-in declaration)")
     if model == "econ":
         paper_only = {"--method": method != "ls", "--loss": loss != "squared",
                       "--use-eta-cop": use_eta_cop, "--strict": strict,

@@ -89,6 +89,13 @@ def validate(
         False, "--to-end", help="Model file: also start where fewer than --horizon samples "
                                 "remain (short trips); those predictions stop at the "
                                 "experiment's end."),
+    warm_start: str = typer.Option(
+        "fit", "--warm-start",
+        help="Model file with latent states: how they are estimated at each start: 'fit' "
+             "(least squares over the --warmup stretch, parameters held), 'ekf' (the "
+             "extended Kalman filter with the declared noises, as `acid fit --method pem` "
+             "uses, over that stretch) or 'ekf-trip' (the filter from the start of the "
+             "trip, as it would run in the car)."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -102,9 +109,10 @@ def validate(
         return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
                                     placement, seed, held_out_fraction, exogenous,
                                     beside is not None or allow_unstable, non_overlapping,
-                                    yardsticks, to_end)
+                                    yardsticks, to_end, warm_start)
 
     require(not to_end, "--to-end", "is for a declared model (--model)")
+    require(warm_start == "fit", "--warm-start", "is for a declared model (--model)")
     check_paths(inputs={"DATA": data, "--params": params_input(params),
                         "--beside": params_input(beside)},
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
@@ -227,7 +235,8 @@ def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
 
 def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
                          seed, held_out_fraction, exogenous, paper_options,
-                         non_overlapping=False, yardsticks=True, to_end=False) -> None:
+                         non_overlapping=False, yardsticks=True, to_end=False,
+                         warm_start="fit") -> None:
     """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
     from acid.models.loader import BUILT_IN
     from acid_cli._declared import is_model_file, model_file_input, validate_declared
@@ -243,11 +252,15 @@ def _validate_model_file(data, model, params, json_path, starts, horizon, warmup
     _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
                    held_out_fraction)
     require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
+    from acid.ident.validate import WARM_STARTS
+
+    require(warm_start in WARM_STARTS, "--warm-start",
+            f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup, placement=placement, seed=seed,
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
                       non_overlapping=non_overlapping, yardsticks=yardsticks,
-                      to_end=to_end)
+                      to_end=to_end, warm_start=warm_start)
 
 
 #: Prediction times (s) of the yardstick table, when inside the horizon.

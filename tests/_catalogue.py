@@ -574,6 +574,12 @@ CASES: list[Case] = [
          ("--loss",)),
     Case("fit-oe-window-zero", "options", ("fit", D, "--out", "{w}/q.json", "--oe-window", "0"),
          ("--oe-window",)),
+    Case("fit-max-evals-zero", "options",
+         ("fit", D, "--out", "{w}/q.json", "--model", "car_cabin", "--max-evals", "0"),
+         ("--max-evals",)),
+    Case("fit-max-evals-paper-family", "options",
+         ("fit", D, "--out", "{w}/q.json", "--max-evals", "50"), ("--max-evals",
+                                                                   "declared model")),
     Case("fit-hac-negative", "options",
          ("fit", D, "--out", "{w}/q.json", "--hac-bandwidth", "-3"), ("--hac-bandwidth",)),
     Case("excite-duration-1e12", "sizes", ("excite", "--out", "{w}/x.h5", "--duration",
@@ -895,6 +901,10 @@ CASES: list[Case] = [
          ("--to-end", "declared model")),
     Case("validate-model-unknown-name", "options",
          (*V[:2], "--model", "car_cabn"), ("--model", "car_cabin", "'car_cabn'")),
+    Case("validate-warm-start-unknown", "options",
+         (*V, "--model", "car_cabin", "--warm-start", "kalman"), ("--warm-start", "ekf-trip")),
+    Case("validate-warm-start-without-model", "options", (*V, "--warm-start", "ekf"),
+         ("--warm-start", "declared model")),
 ]
 
 

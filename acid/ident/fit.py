@@ -10,6 +10,8 @@ Methods
            solution leaves them.
 ``"oe"``   output error (``acid.ident.oe``) over all free parameters, latent initial states
            included, started from the least-squares estimates where there are any.
+``"pem"``  prediction error (``acid.ident.pem``): an extended Kalman filter over each whole
+           experiment, latent states and random-walk loads followed by the filter.
 ``"auto"`` (default) ``"ls"`` when least squares reaches every free parameter and no state is
            latent, else ``"oe"``.
 
@@ -40,7 +42,7 @@ from acid.ident.data import ModelData
 from acid.models.declaration import Model
 from acid.models.loader import load
 
-METHODS = ("auto", "ls", "cvx", "oe")
+METHODS = ("auto", "ls", "cvx", "oe", "pem")
 COVARIANCES = ("hac", "white")
 PARAMS_FORMAT = "acid-declared-params"
 
@@ -187,6 +189,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                           f"use --method oe (or auto), not {method}")
     if fix or free:
         model = model.with_parameters(fix, tuple(free))
+    if method == "pem":
+        from acid.ident.pem import fit_pem
+
+        return fit_pem(model, ds, fix=fix, max_nfev=max_nfev, t0=t0)
     data = ModelData.of(model, ds)
     E = data.n_experiments
     names = model.parameter_names

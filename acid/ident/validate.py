@@ -30,6 +30,12 @@ from acid.models.declaration import Model
 from acid.models.loader import load
 
 PLACEMENTS = ("even", "random")
+#: How latent states at a start are estimated from the warm-up stretch: ``"fit"`` (the
+#: state at its beginning fitted by least squares, then simulated) or ``"ekf"`` (the
+#: extended Kalman filter of ``acid.ident.pem`` run along it, with the declared noises) or
+#: ``"ekf-trip"`` (the filter run from the start of the experiment, as in a car it runs
+#: from the start of the trip; the starts still need ``warmup`` samples before them).
+WARM_STARTS = ("fit", "ekf", "ekf-trip")
 #: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
 REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
 
@@ -141,7 +147,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                    start_index=None, non_overlapping: bool = False,
                    start_range: tuple[int, int] | None = None, yardsticks: bool = False,
                    estimation: tuple[int, int] | None = None,
-                   to_end: bool = False) -> DeclaredValidation:
+                   to_end: bool = False, warm_start: str = "fit") -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
 
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
@@ -155,7 +161,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     ``horizon`` samples before its experiment's end (at least ``horizon // 25`` steps, 60 s
     of 300 x 5 s); its prediction stops there, and the errors per prediction time count only
     the starts that reach it (short trips). Censored samples (a ``<channel>_censored`` mask)
-    are neither scored nor used by the warm-up.
+    are neither scored nor used by the warm-up. ``warm_start``: one of ``WARM_STARTS``.
     """
     model = load(model)
     unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
@@ -163,6 +169,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
         raise ConfigError(f"hold: {unknown[0]!r} is not a disturbance of model "
                           f"{model.name!r}")
     params = params or declared_parameters(model)
+    if warm_start not in WARM_STARTS:
+        raise ConfigError(f"warm_start must be one of {', '.join(WARM_STARTS)}, got "
+                          f"{warm_start!r}")
     if placement not in PLACEMENTS:
         raise ConfigError(f"placement must be one of {', '.join(PLACEMENTS)}, got "
                           f"{placement!r}")
@@ -204,10 +213,21 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     P = _parameters_at(model, data, params, k0, notes)
     x0 = data.initial_states(model, k0)
     if latent and need_warm > 0:
-        x0 = _warm_start(model, data, P, k0, need_warm, x0, latent)
+        if warm_start in ("ekf", "ekf-trip"):
+            from acid.ident.pem import filter_states
+
+            first = np.array([a for a, _ in data.segments])
+            W = k0 - first[np.searchsorted(first, k0, side="right") - 1] \
+                if warm_start == "ekf-trip" else need_warm
+            x0[:, latent] = filter_states(model, data, P, k0, W)[:, latent]
+        else:
+            x0 = _warm_start(model, data, P, k0, need_warm, x0, latent)
         notes.append(f"latent states ({', '.join(model.states[i].name for i in latent)}) "
-                     f"estimated from the {need_warm} samples ({need_warm * model.Ts:g} s) "
-                     "before each start")
+                     + ("estimated by the extended Kalman filter run from the start of "
+                        "each experiment" if warm_start == "ekf-trip" else
+                        f"estimated from the {need_warm} samples ({need_warm * model.Ts:g} s) "
+                        "before each start" + (" by the extended Kalman filter"
+                                               if warm_start == "ekf" else "")))
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]

@@ -26,14 +26,24 @@ Heat flows (W), a three-resistance, three-capacitance network::
 blower level constant (the i3 trips ran in "Automatic, level 1") and identifies the product.
 The supply air is the logged evaporator air temperature ``T_evap`` plus ``dT_sup`` (blower
 heat and duct gains). ``Q_sol``, the solar and occupant load absorbed by the interior, is
-not logged: it is a per-trip parameter (weather and route differ); on a trip the fit never
-saw, its mean over the fitted trips is used.
+not logged: it is a fourth, latent state that returns to its typical value ``Q_bar`` within
+``tau_Q`` and is driven by noise ``sigma_Q``::
 
-What the data identify: ``T_cab`` alone sees the network only through its response. On
-13 BMW i3 trips (README, "Your car's logs") ``C_cab`` and ``G_sup`` come out as one time
-constant (both at a bound), the interior's and shell's capacities and conductances only in
-combinations, the speed slope ``UA_out_v`` at zero, and ``dT_sup`` is indistinguishable from
-the load (so it is fixed). The ranges are those of published cabin models and measurements
+    dQ_sol/dt = (Q_bar - Q_sol) / tau_Q  (+ noise)
+
+``acid fit --method pem`` (``acid.ident.pem``) follows it with an extended Kalman filter
+along each whole trip and estimates the noises (``sigma_cab``, ``sigma_y``, ``sigma_Q``)
+with the rest; output error estimates it at each window's start. ``acid validate
+--warm-start ekf`` gives the filter's estimate at each start, then predicts open loop (the
+load relaxing to ``Q_bar``).
+
+What the data identify (13 BMW i3 trips, notes/i20-real-logs.md): ``T_cab`` alone sees the
+network only through its response. ``C_cab`` and ``G_sup`` come out as one time constant
+(both at a bound), the interior's and shell's capacities and conductances only in
+combinations, and ``dT_sup`` is indistinguishable from the load (so it is fixed). A load
+that returns to a typical value fits the trips better than a random walk (likelihood-ratio
+test) and a blower flow rising with the A/C power does not (``G_P`` 2.5 +/- 3.3 W/K per kW).
+The ranges are those of published cabin models and measurements
 (``acid/models/SOURCES.md``):
 
 * ``C_cab``: cabin air of a compact car (2.5-3 m^3, ~3 kg, ~3 kJ/K) plus the thin trims
@@ -50,8 +60,10 @@ the load (so it is fixed). The ranges are those of published cabin models and me
 * ``UA_out`` + ``UA_out_v v``: outer surface of ~10 m^2 with a still-air coefficient of
   5-15 W/(m^2 K) and a speed slope of 2-5 W/(m^2 K) per m/s (forced convection):
   20-300 W/K and 0-80 W/K per m/s [Fayazbakhsh2013].
-* ``Q_sol``: 0-1000 W/m^2 on ~2 m^2 of glazing, part transmitted and absorbed, plus
-  occupants (~100 W each): -300-1500 W [Fayazbakhsh2013, Marcos2014].
+* ``Q_bar`` (and the load ``Q_sol``): 0-1000 W/m^2 on ~2 m^2 of glazing, part transmitted
+  and absorbed, plus occupants (~100 W each): -300-1500 W [Fayazbakhsh2013, Marcos2014].
+* ``tau_Q``, ``sigma_cab``, ``sigma_y``, ``sigma_Q``: statistical, estimated by PEM; their
+  bounds are explained in SOURCES.md ("Noises and the load's prior").
 """
 
 from acid.models import RK4, Model, Parameter, Signal, State
@@ -66,7 +78,13 @@ def ode(s):
         "T_cab": (q_sup + q_int + q_shell) / (1e3 * s.C_cab),
         "T_int": (s.Q_sol - q_int) / (1e3 * s.C_int),
         "T_shell": (q_out - q_shell) / (1e3 * s.C_shell),
+        "Q_sol": (s.Q_bar - s.Q_sol) / s.tau_Q,     # returns to Q_bar; noise sigma_Q
     }
+
+
+#: The load a filter or an output-error window starts from, and its spread (W): the middle
+#: and the half-width of the per-trip loads fitted on the 13 estimation trips (91-1500 W).
+Q_SOL_PRIOR, Q_SOL_SPREAD = 500.0, 400.0
 
 
 def _between_cabin_and_ambient(m):
@@ -75,11 +93,17 @@ def _between_cabin_and_ambient(m):
 
 model = Model(
     "car_cabin",
-    states=[State("T_cab", "K", description="cabin air (logged)"),
+    states=[State("T_cab", "K", description="cabin air (logged)", noise="sigma_cab",
+                  sensor="sigma_y", spread=0.1),
             State("T_int", "K", measured=False, initial=lambda m: m.T_cab,
                   description="interior (seats, dashboard, panels), lumped; not logged"),
             State("T_shell", "K", measured=False, initial=_between_cabin_and_ambient,
-                  description="body shell and glazing, lumped; not logged")],
+                  description="body shell and glazing, lumped; not logged"),
+            State("Q_sol", "W", measured=False, initial=Q_SOL_PRIOR, noise="sigma_Q",
+                  spread=Q_SOL_SPREAD,
+                  description="solar and occupant load into the interior (not logged): "
+                  "it returns to Q_bar within tau_Q, driven by noise sigma_Q; per window for "
+                  "output error, followed by the filter")],
     inputs=[Signal("T_evap", "K", "air after the evaporator / heat exchanger (logged)")],
     disturbances=[Signal("T_amb", "K", "ambient air (logged)"),
                   Signal("v_veh", "m/s", "vehicle speed (logged)")],
@@ -97,8 +121,17 @@ model = Model(
         Parameter("UA_out", "W/K", 80.0, 20.0, 300.0, description="ambient <-> shell, still"),
         Parameter("UA_out_v", "W s/(K m)", 20.0, 0.0, 80.0,
                   description="ambient <-> shell, per m/s of speed"),
-        Parameter("Q_sol", "W", 300.0, -300.0, 1500.0, per_experiment=True,
-                  description="solar and occupant load into the interior, per trip"),
+        Parameter("Q_bar", "W", 500.0, -300.0, 1500.0,
+                  description="the load's typical value (solar and occupants)"),
+        Parameter("tau_Q", "s", 900.0, 60.0, 20000.0,
+                  description="how long a departure of the load from Q_bar lasts"),
+        Parameter("sigma_cab", "K", 0.02, 1e-4, 0.5, fixed=True,
+                  description="cabin air's random increment per sample (model error)"),
+        Parameter("sigma_y", "K", 0.05, 0.005, 0.5, fixed=True,
+                  description="cabin sensor noise (0.01 K resolution, 0.5 K steps of "
+                  "ambient/evaporator inputs)"),
+        Parameter("sigma_Q", "W", 10.0, 0.1, 200.0, fixed=True,
+                  description="load's random-walk step per sample"),
     ],
     Ts=5.0, ode=ode, integrator=RK4(substeps=2),
     description="car cabin from logged channels: cabin air, latent interior and shell",

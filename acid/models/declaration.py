@@ -61,6 +61,16 @@ class State:
     measured: bool = True
     initial: Callable | float | None = None
     description: str = ""
+    #: Process noise for a filter (``acid.ident.pem``): the standard deviation of the
+    #: state's random increment per sample, in its unit, or the name of a parameter that
+    #: holds it (estimated by the prediction-error method). A latent state whose equation
+    #: is zero with ``noise`` is a random walk: an unmeasured load the filter follows.
+    noise: float | str | None = None
+    #: Standard deviation of the initial value (in its unit) a filter starts from.
+    spread: float | None = None
+    #: A measured state's sensor noise for a filter: a standard deviation in its unit, or
+    #: the name of a parameter that holds it.
+    sensor: float | str | None = None
 
 
 @dataclass(frozen=True)

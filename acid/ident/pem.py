@@ -1,0 +1,421 @@
+"""Prediction-error method with an extended Kalman filter, over any declared model.
+
+Output error (``acid.ident.oe``) simulates windows open loop: an unmeasured load or a model
+error accumulates along each window, so long records must be cut into short windows, each
+with its own latent initial state. The prediction-error method instead runs an extended
+Kalman filter over each whole experiment and minimises what the filter could not predict
+one sample ahead (Ljung, *System Identification*, 2nd ed., 1999, sections 7.3 and 13.3;
+Kristensen, Madsen, Jorgensen, "Parameter estimation in stochastic grey-box models",
+Automatica 40 (2004) 225-237). The negative log-likelihood of the innovations,
+
+.. math::
+
+    J(\\theta) = \\sum_k \\log\\det S_k + e_k^T S_k^{-1} e_k,
+
+with ``e_k`` the measured channels minus their one-step prediction and ``S_k`` its
+covariance, is minimised over the free parameters (bounded, L-BFGS-B) with its gradient
+from CasADi's reverse mode through the whole filter recursion (nothing hand-derived).
+
+What the filter needs the declaration says (``acid.models.State``): ``noise`` (the state's
+random increment per sample, a number or a parameter's name), ``spread`` (the standard
+deviation of its initial value) and, for a measured state, ``sensor`` (the sensor's noise).
+A latent state whose equation is zero with ``noise`` is a random walk: the filter estimates
+an unmeasured load along the record. Parameters that only a noise names (``sigma_...``) are
+estimated here even when declared ``fixed`` (output error cannot see them).
+
+:func:`filter_states` runs the same filter over a stretch before each validation start
+(``acid.ident.validate``'s ``warm_start="ekf"``): the latent states (and load) at the start
+are the filter's estimate, then the prediction is open loop.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+import scipy.optimize
+
+from acid.errors import ConfigError, DataError
+from acid.ident import linear
+from acid.ident.data import ModelData
+from acid.models.declaration import Model
+
+#: Standard deviation (in the state's unit) of a filter's initial value when the
+#: declaration gives no ``spread``: a measured state starts at its measurement.
+DEFAULT_SPREAD_LATENT = 5.0
+DEFAULT_SPREAD_MEASURED = 0.1
+#: A measured state's sensor noise when the declaration gives no ``sensor``.
+DEFAULT_SENSOR = 0.05
+
+
+# ------------------------------------------------------------------ the filter's noises
+def _noise_expr(model: Model, p, what: str) -> ca.SX:
+    """The standard deviations ``what`` ("noise" or "sensor") of every state as
+    expressions of the parameter vector ``p`` (0 where not declared)."""
+    names = model.parameter_names
+    out = []
+    for s in model.states:
+        v = getattr(s, what)
+        if v is None:
+            v = DEFAULT_SENSOR if what == "sensor" and s.measured else 0.0
+        if isinstance(v, str):
+            if v not in names:
+                raise ConfigError(f"model {model.name!r}: state {s.name!r} {what}={v!r} "
+                                  f"is not a parameter (parameters: {', '.join(names)})")
+            out.append(p[names.index(v)])
+        else:
+            out.append(ca.SX(float(v)))
+    return ca.vertcat(*out)
+
+
+def noise_parameters(model: Model) -> tuple[str, ...]:
+    """Parameters the states name as their noise or sensor (what only a filter sees)."""
+    return tuple(dict.fromkeys(v for s in model.states for v in (s.noise, s.sensor)
+                               if isinstance(v, str)))
+
+
+def _spread(model: Model) -> np.ndarray:
+    return np.array([s.spread if s.spread is not None else
+                     (DEFAULT_SPREAD_MEASURED if s.measured else DEFAULT_SPREAD_LATENT)
+                     for s in model.states], dtype=float)
+
+
+@functools.lru_cache(maxsize=16)
+def _step(model: Model, chan: tuple[int, ...]) -> ca.Function:
+    """One filter sample: update with the measured channels ``chan`` of [x | y] (``o``: 1
+    where observed), then predict one sample ahead.
+
+    ``(x, P, u, d, p, m, o) -> (x_next, P_next, cost, e, s2, x_filtered)``; ``cost`` is
+    this sample's ``log det S + e' S^-1 e`` (0 where nothing is observed), ``s2`` the
+    innovations' variances."""
+    nx, nc = model.nx, len(chan)
+    x, u, d, p = (ca.SX.sym(n, k) for n, k in (("x", nx), ("u", model.nu),
+                                                ("d", model.nd), ("p", model.np)))
+    Pv = ca.SX.sym("P", nx * nx)
+    m, o = ca.SX.sym("m", nc), ca.SX.sym("o", nc)
+    P = ca.reshape(Pv, nx, nx)
+    g = ca.vertcat(x, model.h(x, u, d, p))[list(chan)]
+    H = ca.diag(o) @ ca.jacobian(g, x)
+    r = _noise_expr(model, p, "sensor")
+    rc = []
+    for c in chan:       # sensor noise of the channel (outputs: the declared default)
+        rc.append(r[c] if c < nx else ca.SX(DEFAULT_SENSOR))
+    R = ca.diag(o * ca.vertcat(*rc) ** 2 + (1 - o))
+    e = o * (m - g)
+    S = H @ P @ H.T + R
+    Si = ca.inv(S) if nc > 1 else 1.0 / S
+    K = P @ H.T @ Si
+    xf = x + K @ e
+    IKH = ca.SX.eye(nx) - K @ H
+    Pf = IKH @ P @ IKH.T + K @ R @ K.T                       # Joseph form
+    cost = ca.log(ca.det(S)) + e.T @ Si @ e
+    fx, _ = model.F(x, u, d, p)
+    xn, A = ca.substitute([fx, ca.jacobian(fx, x)], [x], [xf])
+    q = _noise_expr(model, p, "noise")
+    Pn = A @ Pf @ A.T + ca.diag(q ** 2)
+    Pn = 0.5 * (Pn + Pn.T)
+    return ca.Function("ekf_step", [x, Pv, u, d, p, m, o],
+                       [xn, ca.vec(Pn), cost, e, ca.diag(S), xf])
+
+
+@functools.lru_cache(maxsize=16)
+def _run(model: Model, chan: tuple[int, ...], L: int, n: int) -> ca.Function:
+    """The filter over ``n`` padded records of ``L`` samples each (``.map``)."""
+    acc = _step(model, chan).mapaccum("ekf", L, 2)
+    return acc.map(n)
+
+
+@dataclass(frozen=True)
+class _Records:
+    """Each experiment (or stretch) padded to one length; ``o`` 0 on the padding."""
+
+    x0: np.ndarray     # (n, nx)
+    P0: np.ndarray     # (n, nx * nx)
+    u: np.ndarray      # (n, L, nu)
+    d: np.ndarray
+    m: np.ndarray      # (n, L, nc)
+    o: np.ndarray
+    idx: np.ndarray    # (n, L) sample indices (edge-padded)
+    real: np.ndarray   # (n, L) True on real samples
+
+    @classmethod
+    def of(cls, model: Model, data: ModelData, chan, spans) -> _Records:
+        L = max(b - a for a, b in spans)
+        idx = np.array([np.pad(np.arange(a, b), (0, L - (b - a)), mode="edge")
+                        for a, b in spans])
+        real = np.array([np.arange(L) < b - a for a, b in spans])
+        meas = data.observed()[idx][..., list(chan)]
+        o = (np.isfinite(meas) & real[..., None]).astype(float)
+        x0 = data.initial_states(model, idx[:, 0])
+        P0 = np.tile(np.diag(_spread(model) ** 2).ravel(), (len(spans), 1))
+        return cls(x0=x0, P0=P0, u=data.u[idx], d=data.d[idx], m=np.nan_to_num(meas), o=o,
+                   idx=idx, real=real)
+
+    def call(self, fn, P: np.ndarray):
+        """``fn`` (``_run``) with parameters ``P`` (n, np): outputs as arrays."""
+        n, L = self.idx.shape
+
+        def cols(a):                           # (n, L, k) -> (k, n L)
+            return a.reshape(n * L, a.shape[-1]).T
+        Pm = np.repeat(P, L, axis=0).T
+        return fn(self.x0.T, self.P0.T, cols(self.u), cols(self.d), Pm, cols(self.m),
+                  cols(self.o))
+
+
+def _measured(model: Model, data: ModelData) -> tuple[int, ...]:
+    chan = tuple(c for c, _ in data.measured_channels(model))
+    if not chan:
+        raise DataError(f"{data.source}: no channel of model {model.name!r} is measured")
+    return chan
+
+
+# ----------------------------------------------------------------------- the fit
+class _Cap(Exception):
+    """The evaluation cap is reached."""
+
+
+@dataclass(frozen=True)
+class PEMResult:
+    """What :func:`solve` found (the free columns' values and the filter's summary)."""
+
+    theta: np.ndarray
+    cov: np.ndarray
+    stderr: np.ndarray
+    loss: float                  # J at the optimum (negative log-likelihood x 2 + const)
+    status: str
+    success: bool
+    nfev: int
+    channel_rms: dict            # RMS of the one-step innovations per channel
+    channel_fit: dict            # one-step fit % per channel
+    innovations: np.ndarray      # (n_obs,) normalised innovations e / sqrt(s2), time order
+    n_records: int
+    condition: float             # of the curvature over the parameters inside their bounds
+    identified: np.ndarray       # (n,) False: on a bound, or in a direction of no curvature
+
+
+def _curvature_covariance(H: np.ndarray, z, zlo, zhi, rtol: float = 1e-8):
+    """Covariance 2 H^-1 (J is -2 log L + const) over the parameters inside their bounds;
+    NaN for a parameter on a bound or with weight in a direction the loss does not curve
+    (the data do not fix it)."""
+    k = z.size
+    cov = np.full((k, k), np.nan)
+    inner = ~(np.isclose(z, zlo, rtol=0, atol=1e-6) | np.isclose(z, zhi, rtol=0, atol=1e-6))
+    ident = inner.copy()
+    if not inner.any():
+        return cov, ident, math.nan
+    w, V = np.linalg.eigh(H[np.ix_(inner, inner)])
+    keep = w > rtol * max(w.max(), 0.0)
+    flat = (np.abs(V[:, ~keep]) > 1e-3).any(axis=1)
+    sub = 2.0 * (V[:, keep] / w[keep]) @ V[:, keep].T
+    sub[flat, :] = np.nan
+    sub[:, flat] = np.nan
+    cov[np.ix_(inner, inner)] = sub
+    ident[np.flatnonzero(inner)[flat]] = False
+    return cov, ident, float(w.max() / w[keep].min()) if keep.any() else math.inf
+
+
+def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.ndarray,
+          lo: np.ndarray, hi: np.ndarray, max_nfev: int = 100) -> PEMResult:
+    """Minimise the innovations' negative log-likelihood over the free ``columns``
+    (``acid.ident.linear.Column``; per-experiment ones by experiment) from ``theta0``,
+    within [lo, hi]; ``base`` (E, np) the values of everything else per experiment."""
+    chan = _measured(model, data)
+    rec = _Records.of(model, data, chan, data.segments)
+    n, L = rec.idx.shape
+    exp = data.experiment[rec.idx[:, 0]]
+    Emap = np.zeros((n, model.np, len(columns)))
+    for c, col in enumerate(columns):
+        Emap[(exp == col.experiment) if col.experiment is not None else slice(None),
+             col.index, c] = 1.0
+    # theta = a + b zeta, zeta in [0, 1] where both bounds are finite
+    fin = np.isfinite(lo) & np.isfinite(hi)
+    a = np.where(fin, lo, 0.0)
+    b = np.where(fin, hi - lo, np.maximum(np.abs(theta0), 1.0))
+    zlo = np.where(np.isfinite(lo), (lo - a) / b, -np.inf)
+    zhi = np.where(np.isfinite(hi), (hi - a) / b, np.inf)
+
+    Z = ca.MX.sym("z", len(columns))
+    th = ca.DM(a) + ca.DM(b) * Z
+    Pbase = ca.DM(np.repeat(base[exp], L, axis=0).T)
+    Emx = np.repeat(Emap, L, axis=0)                           # (n L, np, nc)
+    cols = []
+    for c in range(len(columns)):
+        cols.append(ca.DM(Emx[:, :, c].T) * th[c])
+    Pm = Pbase + sum(cols) if cols else Pbase
+
+    def flat(v):
+        return ca.DM(v.reshape(n * L, v.shape[-1]).T)
+    out = _run(model, chan, L, n)(ca.DM(rec.x0.T), ca.DM(rec.P0.T), flat(rec.u),
+                                   flat(rec.d), Pm, flat(rec.m), flat(rec.o))
+    J = ca.sum2(out[2])
+    fg = ca.Function("pem_cost", [Z], [J, ca.gradient(J, Z)])
+    ev = ca.Function("pem_out", [Z], [out[3], out[4]])
+    count = {"n": 0}
+    best = [math.inf, None]
+
+    def fun(z):
+        if count["n"] >= max_nfev:        # the cap holds inside a line search too
+            raise _Cap
+        count["n"] += 1
+        f, g = fg(z)
+        f = float(f)
+        if not math.isfinite(f):   # the filter diverged (e.g. an unstable step): far uphill,
+            ref, zb = (best[0], best[1]) if best[1] is not None else (0.0, z0)
+            return ref + 1e6 * (1 + abs(ref)), 1e6 * (1 + abs(ref)) * (z - zb)  # back
+        if f < best[0]:
+            best[:] = [f, z.copy()]
+        return f, np.asarray(g).ravel()
+
+    z0 = np.clip((np.asarray(theta0, float) - a) / b, zlo, zhi)
+    try:
+        res = scipy.optimize.minimize(fun, z0, jac=True, method="L-BFGS-B",
+                                      bounds=list(zip(zlo, zhi, strict=True)),
+                                      options={"maxfun": int(max_nfev),
+                                               "maxiter": int(max_nfev), "ftol": 1e-12,
+                                               "gtol": 1e-8})
+        z, status, success, loss = res.x, str(res.message), bool(res.success), float(res.fun)
+    except _Cap:
+        z, loss = (best[1], best[0]) if best[1] is not None else (z0, math.nan)
+        status, success = f"stopped at the cap of {max_nfev} evaluations", False
+    # covariance: 2 H^-1 (J is -2 log L + const), H by differences of the exact gradient
+    H = np.zeros((z.size, z.size))
+    for i in range(z.size):
+        h = 1e-5 * max(1.0, abs(z[i]))
+        zp, zm = z.copy(), z.copy()
+        zp[i] += h
+        zm[i] -= h
+        H[:, i] = (np.asarray(fg(zp)[1]).ravel() - np.asarray(fg(zm)[1]).ravel()) / (2 * h)
+    H = 0.5 * (H + H.T)
+    cov, identified, cond = _curvature_covariance(H, z, zlo, zhi)
+    cov = cov * np.outer(b, b)
+    e, s2 = (np.asarray(v).reshape(len(chan), n, L) for v in ev(z))
+    obs = rec.o.transpose(2, 0, 1) > 0
+    rms, fit = {}, {}
+    names = [n_ for c, n_ in data.measured_channels(model)]
+    for i, name in enumerate(names):
+        ei = e[i][obs[i]]
+        mi = rec.m[..., i][obs[i].reshape(n, L)]
+        rms[name] = float(np.sqrt(np.mean(ei ** 2))) if ei.size else math.nan
+        den = np.linalg.norm(mi - mi.mean()) if mi.size else 0.0
+        fit[name] = float(100 * (1 - np.linalg.norm(ei) / den)) if den > 0 else math.nan
+    innov = (e / np.sqrt(np.maximum(s2, 1e-300)))[obs]
+    return PEMResult(theta=a + b * z, cov=cov, stderr=np.sqrt(np.diag(cov)),
+                     loss=loss, status=status, success=success,
+                     nfev=count["n"], channel_rms=rms, channel_fit=fit, innovations=innov,
+                     n_records=n, condition=cond, identified=identified)
+
+
+def columns_for(model: Model, data: ModelData, fix: dict | None = None):
+    """The free columns of a PEM fit: the free parameters (per-experiment ones per
+    experiment) and the noise parameters the states name, unless ``fix`` holds them."""
+    fix = dict(fix or {})
+    noise = set(noise_parameters(model)) - set(fix)
+    cols = []
+    for i, p in enumerate(model.parameters):
+        if p.fixed and p.name not in noise:
+            continue
+        if p.per_experiment:
+            cols += [linear.Column(i, p.name, e) for e in range(data.n_experiments)]
+        else:
+            cols.append(linear.Column(i, p.name))
+    return tuple(cols)
+
+
+# ---------------------------------------------------------------- validation starts
+def filter_states(model: Model, data: ModelData, P: np.ndarray, k0: np.ndarray,
+                  W) -> np.ndarray:
+    """(len(k0), nx): the filter's estimate of the state at each start ``k0`` (the
+    measurement at ``k0`` included), run over the ``W`` samples before it (a number, or one
+    per start) from the declared initial rules; ``P`` (len(k0), np) the parameters of each
+    start."""
+    chan = _measured(model, data)
+    k0 = np.asarray(k0, dtype=int)
+    W = np.broadcast_to(np.asarray(W, dtype=int), k0.shape)
+    rec = _Records.of(model, data, chan, [(k - w, k + 1) for k, w in zip(k0, W,
+                                                                        strict=True)])
+    n, L = rec.idx.shape
+    out = rec.call(_run(model, chan, L, n), P)
+    xf = np.asarray(out[5]).reshape(model.nx, n, L)
+    return xf[:, np.arange(n), W].T          # each stretch's last real sample
+
+
+def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
+            t0: float | None = None):
+    """``fit_model(..., method="pem")``: the declared table fitted by the prediction-error
+    method over each whole experiment; a ``DeclaredFitResult`` (standard errors from the
+    likelihood's curvature, 95 % normal intervals)."""
+    import time
+
+    from acid.ident.fit import DeclaredFitResult, Estimate
+
+    t0 = time.perf_counter() if t0 is None else t0
+    data = ModelData.of(model, ds)
+    E = data.n_experiments
+    columns = columns_for(model, data, fix)
+    declared = model.values
+    lo = np.array([model.parameters[c.index].min for c in columns])
+    hi = np.array([model.parameters[c.index].max for c in columns])
+    base = np.tile(declared, (E, 1))
+    for c in columns:
+        base[:, c.index] = 0.0
+    res = solve(model, data, columns, base, declared[[c.index for c in columns]], lo, hi,
+                max_nfev=max_nfev)
+    values = declared.copy()
+    names = model.parameter_names
+    per = {p.name: np.full(E, p.value) for p in model.parameters if p.per_experiment}
+    for k, c in enumerate(columns):
+        if c.experiment is None:
+            values[c.index] = res.theta[k]
+        else:
+            per[c.name][c.experiment] = res.theta[k]
+    for nm, v in per.items():
+        values[names.index(nm)] = float(np.mean(v))
+    estimates = []
+    for i, p in enumerate(model.parameters):
+        ks = [k for k, c in enumerate(columns) if c.index == i]
+        if not ks:
+            rows = [None] + (list(range(E)) if p.per_experiment else [])
+            estimates += [Estimate(p.name, p.unit, p.value, p.value, math.nan,
+                                   (math.nan, math.nan), "fixed", e) for e in rows]
+            continue
+        for k in ks:
+            se = float(res.stderr[k])
+            ci = (res.theta[k] - 1.96 * se, res.theta[k] + 1.96 * se)
+            estimates.append(Estimate(p.name, p.unit, p.value, float(res.theta[k]), se, ci,
+                                      "estimated (pem)" if res.identified[k] else
+                                      "not fixed by the data", columns[k].experiment))
+    latent = [s.name for s in model.states if not s.measured]
+    walks = [s.name for s in model.states if s.noise is not None]
+    notes = [f"prediction-error method: an extended Kalman filter over {res.n_records} "
+             "whole experiments, the innovations' negative log-likelihood minimised "
+             "(L-BFGS-B, CasADi gradient)" + (f"; latent: {', '.join(latent)}" if latent
+                                              else "")
+             + (f"; states with process noise: {', '.join(walks)}" if walks else "")]
+    at = [f"{c.label} at its {w} {bd:g}" for c, t, a, z in zip(columns, res.theta, lo, hi,
+                                                                strict=True)
+          for bd, w in ((a, "min"), (z, "max"))
+          if math.isfinite(bd) and abs(t - bd) <= 1e-6 * (1 + abs(bd))]
+    if at:
+        notes.append("the prediction-error fit ends on declared bounds: " + "; ".join(at))
+    warn = [] if res.success else [f"prediction-error fit did not converge ({res.status})"]
+    loose = [c.label for c, ok in zip(columns, res.identified, strict=True) if not ok]
+    if loose:
+        warn.append("prediction error: on a bound or not fixed by the data (no standard "
+                    f"error): {', '.join(loose)}")
+    summary = {"records": res.n_records, "loss": res.loss, "status": res.status,
+               "converged": res.success, "nfev": res.nfev,
+               "innovation_rms": res.channel_rms, "one_step_fit_percent": res.channel_fit,
+               "normalised_innovation_std": float(np.std(res.innovations))
+               if res.innovations.size else math.nan,
+               "condition": res.condition, "n_parameters": len(columns)}
+    return DeclaredFitResult(
+        model=model.name, model_source=model.source, method="pem",
+        estimates=tuple(estimates), equations=(), values=values, per_experiment=per,
+        experiment_ids=data.experiment_ids, covariance=res.cov,
+        covariance_names=tuple(c.label for c in columns), covariance_kind="hessian",
+        hac_bandwidth={}, output_error=summary, optima=(), combinations=(),
+        notes=tuple(notes), warnings=tuple(warn), n_samples=len(ds),
+        data_source=ds.source, elapsed_s=time.perf_counter() - t0)
