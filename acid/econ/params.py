@@ -20,54 +20,21 @@ import numpy as np
 
 from acid._io import json_safe, write_json
 from acid.errors import DataError
+from acid.models import econ
+from acid.models.econ import MAP_INPUTS, MAP_TERMS
 from acid.params import PAPER_BETA
 from acid.psychro import H_FG, P_ATM
 
 MODEL_NAME = "econ"
 
-#: (name, unit, meaning) of the dynamic parameters, in the order of ``EconParams.theta``.
-PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
-    ("r_max", "1", "largest recirculated share of the blower air"),
-    ("k_rec", "1/K", "recirculated share per kelvin of T_amb - T_cab, below r_max"),
-    ("ntu_ref", "1", "evaporator air-side NTU at W_bl = W_REF"),
-    ("ntu_exp", "1", "NTU ~ (W_bl / W_REF)^-ntu_exp (air-side Nusselt exponent 1 - n)"),
-    ("kappa_bl", "1", "share of the blower power that heats the supply air"),
-    ("C_cab", "J/K", "heat capacity of the cabin air node"),
-    ("hA_int", "W/K", "cabin air <-> interior conductance"),
-    ("hA_sh", "W/K", "cabin air <-> shell conductance"),
-    ("Q_cab", "W", "heat released into the cabin air (occupants, electronics)"),
-    ("C_int", "J/K", "heat capacity of the interior (seats, dash, panels)"),
-    ("Q_int", "W", "heat absorbed by the interior (solar through the glass)"),
-    ("C_sh", "J/K", "heat capacity of the shell (roof, doors, glass)"),
-    ("hA_ext0", "W/K", "shell <-> ambient conductance at standstill"),
-    ("hA_ext_v", "W/K/(m/s)^0.8", "its growth with speed, hA_ext0 + hA_ext_v v^0.8"),
-    ("Q_sh", "W", "heat absorbed by the shell (solar)"),
-    ("tau_ew", "s", "time constant of the evaporator wall tracking its set-point"),
-    ("dT_ew", "K", "steady offset of the evaporator wall from its set-point"),
-    ("M_cab", "kg", "air mass of the cabin humidity balance"),
-    ("m_w", "kg/s", "moisture released into the cabin (occupants)"),
-    ("RH_amb", "1", "relative humidity of the ambient air"),
-)
-NAMES: tuple[str, ...] = tuple(row[0] for row in PARAMETER_TABLE)
+#: (name, unit, meaning) of the thermal parameters: the declaration's table
+#: (``acid.models.econ``), as are the constants and the power map's terms.
+PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = tuple(
+    (n, u, m) for n, u, _, _, _, m in econ.THERMAL)
+NAMES: tuple[str, ...] = econ.THERMAL_NAMES
 UNITS: dict[str, str] = {row[0]: row[1] for row in PARAMETER_TABLE}
-
-#: Constants of the model, not fitted (name, value, unit, source).
-CONSTANTS = (
-    ("c_p", 1008.0, "J/(kg K)", "specific heat of air (paper Table II)"),
-    ("h_fg", H_FG, "J/kg", "latent heat of water near 20 degC (steam tables)"),
-    ("p_atm", P_ATM, "Pa", "standard atmosphere"),
-    ("W_REF", 0.1, "kg/s", "reference blower flow of ntu_ref (a normalisation)"),
-)
-W_REF = 0.1
-
-#: Normalisation of the power-map features: q = Q_e / Q_SCALE, t = (T_evap - T_REF) / DT_SCALE,
-#: s = v / V_SCALE, a = (T_amb - TA_REF) / DT_SCALE (units only: the map is fitted to data).
-Q_SCALE, T_REF, TA_REF, DT_SCALE, V_SCALE = 1000.0, 278.15, 303.15, 5.0, 10.0
-#: Monomials of the power map in (q, t, s, a): the full quadratic.
-MAP_TERMS: tuple[str, ...] = ("1", "q", "t", "s", "a", "q^2", "q t", "q s", "q a", "t^2",
-                              "t s", "t a", "s^2", "s a", "a^2")
-#: The map's inputs and their units (the domain it was identified on).
-MAP_INPUTS = (("Q_e", "W"), ("T_evap", "K"), ("v_veh", "m/s"), ("T_amb", "K"))
+CONSTANTS = tuple((c.name, c.value, c.unit, c.description) for c in econ.model.constants) + (
+    ("W_REF", econ.W_REF, "kg/s", "reference blower flow of ntu_ref (a normalisation)"),)
 
 
 @dataclass(frozen=True)
@@ -194,6 +161,22 @@ class EconParams:
         if name in values:
             return values[name]
         raise AttributeError(name)
+
+    @property
+    def theta_all(self) -> np.ndarray:
+        """Every number as the declared parameter vector of ``acid.models.econ.model``."""
+        return np.concatenate([self.theta, [self.C_ew], self.power_map.coef, self.beta])
+
+    @classmethod
+    def from_vector(cls, theta, **fields) -> EconParams:
+        """Parameters from the declared vector (``theta_all``); ``fields`` the rest."""
+        t = np.asarray(theta, dtype=float)
+        n, m = len(NAMES), len(MAP_TERMS)
+        pm = fields.pop("power_map", None)
+        pm = PowerMap(coef=tuple(t[n + 1:n + 1 + m])) if pm is None else \
+            dataclasses.replace(pm, coef=tuple(t[n + 1:n + 1 + m]))
+        return cls(values=dict(zip(NAMES, t[:n], strict=True)), C_ew=float(t[n]),
+                   power_map=pm, beta=tuple(t[n + 1 + m:]), **fields)
 
     @property
     def theta(self) -> np.ndarray:

@@ -97,6 +97,17 @@ class RK4:
 
     substeps: int = 1
 
+    def integrate(self, f: Callable, z, dt: float):
+        """``z`` after ``dt`` seconds of ``dz/dt = f(z)`` (CasADi column vectors)."""
+        h = dt / self.substeps
+        for _ in range(self.substeps):
+            k1 = f(z)
+            k2 = f(z + 0.5 * h * k1)
+            k3 = f(z + 0.5 * h * k2)
+            k4 = f(z + h * k3)
+            z = z + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        return z
+
 
 # ------------------------------------------------------------------------ namespace
 class _Names:
@@ -344,16 +355,7 @@ class Model:
             if out_names else ca.SX(0, 1)
         if self.continuous:
             f = ca.Function("f", [x, u, d, p], [ca.substitute(rhs, yr, h)])
-            n = self.integrator.substeps
-            dt = self.Ts / n
-            z = x
-            for _ in range(n):
-                k1 = f(z, u, d, p)
-                k2 = f(z + 0.5 * dt * k1, u, d, p)
-                k3 = f(z + 0.5 * dt * k2, u, d, p)
-                k4 = f(z + dt * k3, u, d, p)
-                z = z + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-            x_next = z
+            x_next = self.integrator.integrate(lambda z: f(z, u, d, p), x, self.Ts)
             self.f = f
             # the integrated map is the state "equation" a fit reads
             for i, s in enumerate(state_names):
