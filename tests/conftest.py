@@ -92,10 +92,11 @@ def econ_truth():
 @pytest.fixture(scope="session")
 def econ_model_dataset(econ_truth):
     """2 h of the econ model as a plant, excited as ``acid excite --model econ`` (seed 1)."""
-    from acid.econ.plant import EconPlant
     from acid.excite import spec_for_model
+    from acid.models import econ as econ_decl
 
-    return excite(EconPlant(econ_truth), spec_for_model("econ", duration=2 * 3600.0, seed=1))
+    return excite(econ_decl.plant(econ_truth.theta_all),
+                  spec_for_model("econ", duration=2 * 3600.0, seed=1))
 
 
 @pytest.fixture(scope="session")

@@ -87,12 +87,12 @@ def test_refuses_data_that_cannot_identify_it(econ_model_dataset):
 
 
 def test_warns_when_speed_is_not_excited(econ_truth):
-    from acid.econ.plant import EconPlant
     from acid.excite import excite, spec_for_model
+    from acid.models import econ as econ_decl
 
-    ds = excite(EconPlant(econ_truth), spec_for_model("econ", duration=2400.0,
-                                                      speed_bounds=None, speed=10.0,
-                                                      T_amb_bounds=None))
+    ds = excite(econ_decl.plant(econ_truth.theta_all),
+                spec_for_model("econ", duration=2400.0, speed_bounds=None, speed=10.0,
+                               T_amb_bounds=None))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = EconFitter(skip_s=0.0).fit(ds)

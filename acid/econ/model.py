@@ -57,7 +57,17 @@ def symbolic_parameters(theta):
 
 
 def _names(p):
-    return p if isinstance(p, dict) else symbolic_parameters(parameter_vector(p))
+    """The parameters by name from ``EconParams`` or an object with some of its attributes
+    (a map or C_ew it lacks reads as zero, any other parameter as NaN)."""
+    if isinstance(p, dict):
+        return p
+    pm = getattr(p, "power_map", None)
+    return econ._ByName(
+        {n: getattr(p, n, np.nan) for n in econ.THERMAL_NAMES}, C_ew=getattr(p, "C_ew", 0.0),
+        **dict(zip(MAP_NAMES, pm.coef if pm is not None else [0.0] * len(MAP_NAMES),
+                   strict=True)),
+        **dict(zip(("beta1", "beta2", "beta3"), p.beta, strict=True)),
+        **{c.name: c.value for c in econ.model.constants})
 
 
 def air_side(T_cab, T_evap, w_cab, W_bl, T_amb, p) -> AirSide:
@@ -71,8 +81,25 @@ def derivatives(x, u, d, p, dist=None):
 
 
 def step(x, u, d, p, dt: float = 5.0, dist=None, n_sub: int | None = None) -> econ.Interval:
-    """:func:`acid.models.econ.interval` (CasADi scalars) with ``EconParams``."""
-    return econ.interval(_names(p), x, u, d, dt, n_sub, dist)
+    """:func:`acid.models.econ.interval` with ``EconParams``: CasADi scalars, or numbers
+    and arrays (evaluated over the batch by its CasADi Function)."""
+    s = _names(p)
+    if any(isinstance(v, (ca.SX, ca.MX)) for v in (*x, *u, *d, *(dist or ()), *s.values())):
+        return econ.interval(s, x, u, d, dt, n_sub, dist)
+    args = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (*x, *u, *d)))
+    shape = args[0].shape
+    n = int(np.prod(shape)) if shape else 1
+    theta = np.array([s[k] for k in econ.model.parameter_names])
+    w = np.zeros((NX, n)) if dist is None else np.broadcast_to(
+        np.asarray(dist, float).reshape(NX, -1), (NX, n))
+    A = np.vstack([a.reshape(1, n) for a in args])
+    out = econ.casadi_interval(dt, n_sub).map(n)(A[:NX], A[NX:NX + NU], A[NX + NU:],
+                                                 np.tile(theta, (n, 1)).T, w)
+    xn, T_ain, Q_e, P_c, P_bl, Q_coil, T_ev = (np.asarray(o).reshape(-1, n) for o in out)
+    return econ.Interval(x=tuple(r.reshape(shape) for r in xn), T_ain=T_ain.reshape(shape),
+                         Q_coil=Q_coil.reshape(shape), T_evap=T_ev.reshape(shape),
+                         Q_e=Q_e.reshape(shape), P_comp=P_c.reshape(shape),
+                         P_bl=P_bl.reshape(shape), dt=float(dt))
 
 
 def refrigerant_heat(Q_coil, T_evap_start, T_evap_end, dt: float, p):
@@ -101,7 +128,7 @@ def casadi_step(p, dt: float, n_sub: int | None = None) -> ca.Function:
     declaration's interval at the numbers of ``p`` (P_comp unclipped)."""
     F = econ.casadi_interval(dt, n_sub)
     x, u, d, w = (ca.SX.sym(n, k) for n, k in (("x", NX), ("u", NU), ("d", ND), ("dist", NX)))
-    out = F(x, u, d, ca.DM(parameter_vector(p)), w)
+    out = F(x, u, d, ca.DM(parameter_vector(p)), w)[:5]
     return ca.Function("econ_step", [x, u, d, w], list(out), ["x", "u", "d", "dist"],
                        ["x_next", "T_ain", "Q_e", "P_comp", "P_bl"])
 

@@ -300,6 +300,21 @@ model = Model(
 )
 
 
+#: A hot-soaked start (K, kg/kg): the default initial state of the model as a plant.
+HOT_SOAK = {"T_cab": 313.15, "T_int": 315.15, "T_shell": 315.15, "T_evap": 303.15,
+            "w_cab": 0.0085}
+
+
+def plant(theta=None, **kw):
+    """The econ model as a plant (:class:`acid.models.plant.DeclaredPlant`) at the parameter
+    vector ``theta`` (default: declared), started hot-soaked, the compressor power map
+    floored at zero (``kw`` as ``DeclaredPlant``'s)."""
+    from acid.models.plant import DeclaredPlant
+
+    return DeclaredPlant(model, theta, **{"initial": HOT_SOAK, "floor": {"P_comp": 0.0},
+                                          **kw})
+
+
 class _ByName(dict):
     __getattr__ = dict.__getitem__
 
@@ -313,13 +328,15 @@ def parameters(theta) -> _ByName:
 
 
 def casadi_interval(dt: float = TS, n_sub: int | None = None) -> ca.Function:
-    """``F(x[5], u[2], d[2], p[np], dist[5]) -> (x_next, T_ain, Q_e, P_comp, P_bl)``: one
-    interval of ``dt`` s as a CasADi Function (SX inside) of the declared parameter vector,
-    for NLPs whose grid is not the declared step (``dist``: additive derivative terms)."""
+    """``F(x[5], u[2], d[2], p[np], dist[5]) -> (x_next, T_ain, Q_e, P_comp, P_bl, Q_coil,
+    T_evap)``: one interval of ``dt`` s as a CasADi Function (SX inside) of the declared
+    parameter vector, for NLPs whose grid is not the declared step (``dist``: additive
+    derivative terms; ``Q_coil`` and ``T_evap`` interval means)."""
     x, u, d = ca.SX.sym("x", len(STATES)), ca.SX.sym("u", 2), ca.SX.sym("d", 2)
     p, w = ca.SX.sym("p", model.np), ca.SX.sym("dist", len(STATES))
     r = interval(parameters(p), ca.vertsplit(x), ca.vertsplit(u), ca.vertsplit(d), dt, n_sub,
                  ca.vertsplit(w))
     return ca.Function("econ_interval", [x, u, d, p, w],
-                       [ca.vertcat(*r.x), r.T_ain, r.Q_e, r.P_comp, r.P_bl],
-                       ["x", "u", "d", "p", "dist"], ["x_next", "T_ain", "Q_e", "P_comp", "P_bl"])
+                       [ca.vertcat(*r.x), r.T_ain, r.Q_e, r.P_comp, r.P_bl, r.Q_coil, r.T_evap],
+                       ["x", "u", "d", "p", "dist"],
+                       ["x_next", "T_ain", "Q_e", "P_comp", "P_bl", "Q_coil", "T_evap"])
