@@ -59,6 +59,7 @@ from acid.errors import ConfigError, DataError, IdentifiabilityWarning, SolverWa
 from acid.fit import COVARIANCES, DEFAULT_COVARIANCE
 from acid.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.metrics import fit_percent
+from acid.models import econ as econ_decl
 from acid.psychro import H_FG
 
 #: Channels the identification needs (P_bl optional: eq. 5 kept at the paper's values).
@@ -67,16 +68,9 @@ REQUIRED = ("T_cab", "T_evap", "T_int", "T_shell", "w_cab", "W_bl", "T_evap_set"
 #: Channels of the one-step residual: the five states and the supply air.
 CHANNELS = model.STATES + ("T_ain",)
 
-#: Bounds of the dynamic parameters (physical signs; wide otherwise).
-_BOUNDS = {"r_max": (0.0, 0.99), "k_rec": (1e-3, 10.0), "ntu_ref": (1e-3, 50.0),
-           "ntu_exp": (-1.0, 2.0),
-           "kappa_bl": (0.0, 1.0), "C_cab": (100.0, 1e6), "hA_int": (0.0, 1e4),
-           "hA_sh": (0.0, 1e4), "Q_cab": (-1e4, 1e4), "C_int": (1e3, 1e8),
-           "Q_int": (-1e4, 1e4), "C_sh": (1e3, 1e8), "hA_ext0": (0.0, 1e4),
-           "hA_ext_v": (0.0, 1e4), "Q_sh": (-1e4, 1e4), "tau_ew": (0.5, 1e3),
-           "dT_ew": (-10.0, 10.0), "M_cab": (0.1, 1e3), "m_w": (-1e-3, 1e-3),
-           "RH_amb": (0.0, 1.0)}
-_C_EW_MAX = 5e4          # J/K, upper end of the C_ew search
+#: Bounds of the dynamic parameters: the declaration's (physical signs; wide otherwise).
+_BOUNDS = {q.name: (q.min, q.max) for q in econ_decl.model.parameters if q.name in NAMES}
+_C_EW_MAX = econ_decl.model.parameter("C_ew").max   # J/K, upper end of the C_ew search
 _STEADY_RATE = 0.02      # K/s: |dT_cab/dt| and |dT_evap/dt| below this count as near-steady
 
 
