@@ -112,8 +112,8 @@ def econ_hifi_fit(econ_hifi_dataset):
     """The econ model identified on the first 3/4 of ``econ_hifi_dataset``."""
     import warnings
 
-    from acid.econ.fit import EconFitter
+    from acid.econ.params import identify
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return EconFitter().fit(econ_hifi_dataset.split(0.75)[0])
+        return identify(econ_hifi_dataset.split(0.75)[0])
