@@ -150,3 +150,17 @@ def test_signal_declared_twice():
     with pytest.raises(DeclarationError, match="declared twice"):
         Model("x", states=[State("T", "K")], inputs=[Signal("T", "K")], parameters=[],
               Ts=1.0, step=lambda s: {"T": s.T}, source="x.py")
+
+
+def test_next_state_is_for_interval_outputs_only():
+    kw = dict(states=[State("T", "K")], inputs=[Signal("W", "kg/s")],
+              outputs=[Signal("P", "W")], parameters=[Parameter("a", "1", 0.5)], Ts=1.0,
+              source="nx.py")
+    m = Model("nx", step=lambda s: {"T": s.a * s.T + s.W, "P": s.next.T - s.T}, **kw)
+    x_next, y = m.step([2.0], [1.0], [])
+    assert x_next[0] == 2.0 and y[0] == 0.0          # simulated: the step's own end state
+    assert set(m.equations_next) == {"P"}
+    with pytest.raises(DeclarationError, match="only a step's interval outputs may read s.next"):
+        Model("nx", step=lambda s: {"T": s.next.T, "P": s.T}, **kw)
+    with pytest.raises(DeclarationError, match="only a step's interval outputs"):
+        Model("nx", step=lambda s: {"T": s.T}, output=lambda s: {"P": s.next.T}, **kw)
