@@ -16,23 +16,9 @@ import casadi as ca
 import numpy as np
 
 from acid.models import econ
-from acid.models.econ import (  # noqa: F401 - re-exported names
-    MAP_NAMES,
-    MAX_SUBSTEP,
-    R_SMOOTH,
-    STATE_UNITS,
-    STATES,
-    W_SMOOTH,
-    AirSide,
-    map_features,
-    n_substeps,
-    smooth_pos,
-    speed_factor,
-)
+from acid.models.econ import MAP_NAMES, STATES, AirSide
 
-INPUTS = ("W_bl", "T_evap_set")
-EXOGENOUS = ("v_veh", "T_amb")
-NX, NU, ND = len(STATES), len(INPUTS), len(EXOGENOUS)
+NX, NU, ND = len(STATES), 2, 2
 #: Scaling of the NLPs' variables on this model (economic NMPC, steady state, bound):
 #: z = (x - X_OFFSET) / X_SCALE, w = (u - U_OFFSET) / U_SCALE (K, kg/kg, kg/s)
 X_OFFSET = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
@@ -73,11 +59,6 @@ def _names(p):
 def air_side(T_cab, T_evap, w_cab, W_bl, T_amb, p) -> AirSide:
     """:func:`acid.models.econ.air_side` with ``EconParams``."""
     return econ.air_side(_names(p), T_cab, T_evap, w_cab, W_bl, T_amb)
-
-
-def derivatives(x, u, d, p, dist=None):
-    """:func:`acid.models.econ.derivatives` with ``EconParams``: (five derivatives, air)."""
-    return econ.derivatives(_names(p), x, u, d, dist)
 
 
 def step(x, u, d, p, dt: float = 5.0, dist=None, n_sub: int | None = None) -> econ.Interval:
@@ -143,14 +124,6 @@ class Trajectory:
     Q_e: np.ndarray
     P_comp: np.ndarray
     P_bl: np.ndarray
-
-    def state(self, name: str) -> np.ndarray:
-        return self.x[..., STATES.index(name)]
-
-    @property
-    def power(self) -> np.ndarray:
-        """P_comp + P_bl, W."""
-        return self.P_comp + self.P_bl
 
 
 def simulate(x0, W_bl, T_evap_set, v_veh, T_amb, p, dt: float | None = None,
