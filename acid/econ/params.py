@@ -16,6 +16,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from acid.models import econ
 from acid.models.econ import MAP_INPUTS, MAP_TERMS
 from acid.params import PAPER_BETA
 from acid.psychro import H_FG, P_ATM
+
+if TYPE_CHECKING:
+    from acid.ident.fit import DeclaredFitResult
 
 MODEL_NAME = "econ"
 
@@ -286,7 +290,7 @@ class EconFit:
     domain and quality) and ``fit``, acid.ident's report of the staged fit."""
 
     params: EconParams
-    fit: object
+    fit: DeclaredFitResult
 
     @property
     def power_map_quality(self) -> dict:
@@ -306,8 +310,8 @@ def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
     ``IdentifiabilityWarning``) where the excitation leaves a part unidentified."""
     import warnings
 
-    from acid import __version__
     from acid.errors import IdentifiabilityWarning
+    from acid.ident.fit import provenance
     from acid.ident.stages import Stage, fit_stages
 
     ds.validate(require=REQUIRED, min_samples=20)
@@ -357,10 +361,9 @@ def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
     domain = {n: (float(v.min()), float(v.max())) for (n, _), v in
               zip(MAP_INPUTS, (Q_e, T_ev, d[:, 0], d[:, 1]), strict=True)}
     se = {e.name: e.stderr for e in fit.estimates}
-    prov = {"data_file": ds.source, "method": "acid.ident staged fit (acid.models.econ."
-            "FIT_STAGES)", "n_samples": len(ds), "skip_s": econ.FIT_SKIP_S,
-            "acid_version": __version__, **({"data_seed": ds.metadata["seed"]}
-                                            if "seed" in ds.metadata else {})}
+    prov = {**provenance(ds, "acid.ident staged fit (acid.models.econ.FIT_STAGES)"),
+            "skip_s": econ.FIT_SKIP_S, **({"data_seed": ds.metadata["seed"]}
+                                          if "seed" in ds.metadata else {})}
     params = EconParams.from_vector(
         fit.values, power_map=PowerMap(coef=fit.values[len(NAMES) + 1:len(NAMES) + 16],
                                        stderr=tuple(se[n] for n in econ.MAP_NAMES),
