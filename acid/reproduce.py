@@ -233,7 +233,7 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """
     import warnings
 
-    from acid.econ.fit import EconFitter
+    from acid.econ.params import identify
     from acid.excite import excite, spec_for_model
     from acid.fit import ModelFitter
     from acid.plant import make_plant
@@ -246,7 +246,7 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     est, _ = ds.split(config["estimation_fraction"])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        econ = EconFitter().fit(est)
+        econ = identify(est)
         progress(2, 4)
         paper_fit = ModelFitter(method="oe").fit(est)
     econ.params.to_json(workdir / "econ_params.json", extra={"fit": econ.to_json_dict()})

@@ -302,7 +302,7 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
     Parameters
     ----------
     ds : dataset with the channels of ``acid.data.MODEL_CHANNELS``, sampled at ``params.Ts``
-        (for the econ model: those of ``acid.econ.fit.REQUIRED``).
+        (for the econ model: those of ``acid.econ.params.REQUIRED``).
     params : model parameters (kelvin convention): ``ModelParams`` or the result of
         ``acid.fit`` (the paper's eqs. 1-3), or ``acid.econ.EconParams``.
     starts : number of prediction windows requested (paper: 60).
@@ -364,7 +364,7 @@ def validate(ds: Dataset, params, starts: int = 60, horizon: int = 300,
     src = ds.source
     econ = _is_econ(params)
     if econ:
-        from acid.econ.fit import REQUIRED
+        from acid.econ.params import REQUIRED
     ds.validate(require=REQUIRED if econ else MODEL_CHANNELS)
     if not math.isclose(ds.Ts, params.Ts, rel_tol=1e-6):
         raise DataError(f"{src}: sample time {ds.Ts:g} s differs from the model's "

@@ -122,7 +122,7 @@ def validate(
     families = {model_family(params)} | ({model_family(beside)} if beside else set())
     channels = MODEL_CHANNELS
     if "econ" in families:
-        from acid.econ.fit import REQUIRED
+        from acid.econ.params import REQUIRED
 
         channels = tuple(dict.fromkeys(MODEL_CHANNELS + REQUIRED))
     ds = Dataset.from_hdf5(data, require=channels)

@@ -92,10 +92,11 @@ def econ_truth():
 @pytest.fixture(scope="session")
 def econ_model_dataset(econ_truth):
     """2 h of the econ model as a plant, excited as ``acid excite --model econ`` (seed 1)."""
-    from acid.econ.plant import EconPlant
     from acid.excite import spec_for_model
+    from acid.models import econ as econ_decl
 
-    return excite(EconPlant(econ_truth), spec_for_model("econ", duration=2 * 3600.0, seed=1))
+    return excite(econ_decl.plant(econ_truth.theta_all),
+                  spec_for_model("econ", duration=2 * 3600.0, seed=1))
 
 
 @pytest.fixture(scope="session")
@@ -111,8 +112,8 @@ def econ_hifi_fit(econ_hifi_dataset):
     """The econ model identified on the first 3/4 of ``econ_hifi_dataset``."""
     import warnings
 
-    from acid.econ.fit import EconFitter
+    from acid.econ.params import identify
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return EconFitter().fit(econ_hifi_dataset.split(0.75)[0])
+        return identify(econ_hifi_dataset.split(0.75)[0])

@@ -7,8 +7,8 @@ import warnings
 import numpy as np
 import pytest
 
-from acid.econ.plant import EconPlant
 from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
+from acid.models import econ as econ_decl
 from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
 from acid.mpc.econ_terminal import SteadyStatePrice
 from acid.units import C2K
@@ -24,7 +24,7 @@ def _cfg(**kw):  # CasADi's solver: compiling generated C takes minutes per stru
 
 def test_closed_loop_on_its_own_model_keeps_the_band(econ_truth):
     mpc = EconNMPC(econ_truth, _cfg())
-    plant = EconPlant(econ_truth)
+    plant = econ_decl.plant(econ_truth.theta_all)
     plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
     E, T = 0.0, []
     for _ in range(30):
@@ -147,7 +147,7 @@ def test_offset_free_estimation_removes_the_bias_of_a_mismatched_model(econ_trut
     settled = {}
     for offset_free in (False, True):
         mpc = EconNMPC(econ_truth, _cfg(offset_free=offset_free))
-        plant = EconPlant(plant_p)
+        plant = econ_decl.plant(plant_p.theta_all)
         plant.reset(start)
         for _ in range(60):
             m = plant.measure()

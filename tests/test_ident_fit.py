@@ -191,16 +191,17 @@ def test_multi_start_finds_the_global_optimum_and_reports_distinct_optima():
 
 
 def test_the_econ_declaration_gains_output_error():
-    from acid.econ.params import EconParams, PowerMap
-    from acid.econ.plant import EconPlant
     from acid.excite import excite, spec_for_model
-    from acid.models.econ import _MAP_START, _START
+    from acid.models import econ as econ_decl
 
-    truth = {**_START, "C_cab": 5000.0, "hA_int": 170.0, "Q_sh": 700.0, "tau_ew": 14.0}
-    plant = EconPlant(EconParams(values=truth, C_ew=2000.0, power_map=PowerMap(_MAP_START)))
-    ds = excite(plant, spec_for_model("econ", duration=1200.0, seed=1))
     m = load("econ")
-    free = ("C_cab", "hA_int", "Q_sh", "tau_ew")
+    truth = {"C_cab": 5000.0, "hA_int": 170.0, "Q_sh": 700.0, "tau_ew": 14.0}
+    theta = m.values.copy()
+    for n, v in truth.items():
+        theta[m.parameter_names.index(n)] = v
+    plant = econ_decl.plant(theta)
+    ds = excite(plant, spec_for_model("econ", duration=1200.0, seed=1))
+    free = tuple(truth)
     res = fit_model(m, ds, method="oe", oe_window=120,
                     fix={n: v for n, v in zip(m.parameter_names, m.values, strict=True)
                          if n not in free})

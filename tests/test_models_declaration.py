@@ -8,8 +8,6 @@ import textwrap
 import numpy as np
 import pytest
 
-from acid.econ import model as econ_model
-from acid.econ.params import EconParams, PowerMap
 from acid.models import DeclarationError, Model, Parameter, Signal, State, load
 from acid.params import paper
 
@@ -125,27 +123,6 @@ def test_paper_declaration_steps_as_acid_model(rng):
     assert m.parameter_names == tuple(p.as_dict())
 
 
-def test_econ_declaration_steps_as_acid_econ_model(rng):
-    from acid.models.econ import _MAP_START, _START
-
-    m = load("econ")
-    p = EconParams(values=dict(_START), C_ew=2000.0, power_map=PowerMap(coef=_MAP_START))
-    n = 100
-    x = np.c_[rng.uniform(290, 315, n), rng.uniform(290, 325, n), rng.uniform(290, 335, n),
-              rng.uniform(272, 288, n), rng.uniform(0.005, 0.016, n)]
-    u = np.c_[rng.uniform(0.04, 0.16, n), rng.uniform(274, 286, n)]
-    d = np.c_[rng.uniform(0, 30, n), rng.uniform(293, 315, n)]
-    xn, y = m.step(x, u, d)
-    r = econ_model.step(tuple(x.T), tuple(u.T), tuple(d.T), p, 5.0)
-    for i in range(5):
-        np.testing.assert_allclose(xn[:, i], r.x[i], rtol=1e-10)
-    np.testing.assert_allclose(y[:, 0], r.T_ain, rtol=1e-10)
-    F = econ_model.casadi_step(p, 5.0).map(n)
-    ref = F(x.T, u.T, d.T, np.zeros((5, n)))
-    np.testing.assert_allclose(y[:, 1], np.asarray(ref[3]).ravel(), rtol=1e-10, atol=1e-9)
-    np.testing.assert_allclose(y[:, 2], np.asarray(ref[4]).ravel(), rtol=1e-10)
-
-
 def test_simulate_matches_repeated_steps(rng):
     m = load("cabin3")
     H = 20
@@ -173,3 +150,17 @@ def test_signal_declared_twice():
     with pytest.raises(DeclarationError, match="declared twice"):
         Model("x", states=[State("T", "K")], inputs=[Signal("T", "K")], parameters=[],
               Ts=1.0, step=lambda s: {"T": s.T}, source="x.py")
+
+
+def test_next_state_is_for_interval_outputs_only():
+    kw = dict(states=[State("T", "K")], inputs=[Signal("W", "kg/s")],
+              outputs=[Signal("P", "W")], parameters=[Parameter("a", "1", 0.5)], Ts=1.0,
+              source="nx.py")
+    m = Model("nx", step=lambda s: {"T": s.a * s.T + s.W, "P": s.next.T - s.T}, **kw)
+    x_next, y = m.step([2.0], [1.0], [])
+    assert x_next[0] == 2.0 and y[0] == 0.0          # simulated: the step's own end state
+    assert set(m.equations_next) == {"P"}
+    with pytest.raises(DeclarationError, match="only a step's interval outputs may read s.next"):
+        Model("nx", step=lambda s: {"T": s.next.T, "P": s.T}, **kw)
+    with pytest.raises(DeclarationError, match="only a step's interval outputs"):
+        Model("nx", step=lambda s: {"T": s.T}, output=lambda s: {"P": s.next.T}, **kw)

@@ -36,3 +36,16 @@ def test_a_signal_no_schedule_gives_is_one_line():
     assert row["T_int"] == 305.0 and set(row) >= {"T_cab", "T_evap", "T_ain", "P_bl"}
     with pytest.raises(ConfigError, match="initial condition 'T_x' unknown"):
         held.reset({"T_x": 1.0})
+
+
+def test_a_floor_holds_an_output_where_the_smooth_model_goes_below_it():
+    from acid.models import econ
+
+    # the wall warming fast towards a far set-point: the refrigerant heat Q_e is negative
+    kw = {"initial": {**econ.HOT_SOAK, "T_cab": 295.0, "T_evap": 275.0}}
+    raw = DeclaredPlant("econ", **kw).step(0.1, 300.0, 10.0, T_amb=300.0)
+    floored = econ.plant(**kw).step(0.1, 300.0, 10.0, T_amb=300.0)
+    assert raw["P_comp"] < 0.0 and floored["P_comp"] == 0.0
+    assert floored["T_cab"] == raw["T_cab"] and floored["T_ain"] == raw["T_ain"]
+    with pytest.raises(ConfigError, match="floor of 'P_com', not an output"):
+        DeclaredPlant("econ", floor={"P_com": 0.0})

@@ -135,15 +135,17 @@ def test_the_coil_modifier_changes_nothing_when_the_plant_is_the_model(econ_trut
     import dataclasses
 
     from acid.econ.params import MAP_TERMS
-    from acid.econ.plant import EconPlant
+    from acid.models import econ as econ_decl
     from acid.mpc.econ_modifier import coil_modifier, model_steady_power
     from acid.plant.config import PlantConfig
 
     v, Ta, Tc = 8.8, C2K(30.0), C2K(24.0)
     _, T_true, _ = model_steady_power(econ_truth, v, Ta, Tc)
     assert COIL_RANGE[0] <= T_true <= COIL_RANGE[1]
-    m = coil_modifier(econ_truth, lambda: EconPlant(econ_truth), PlantConfig(), v, Ta, Tc,
-                      iterations=1, hold_s=5400.0)
+    def truth():
+        return econ_decl.plant(econ_truth.theta_all)
+
+    m = coil_modifier(econ_truth, truth, PlantConfig(), v, Ta, Tc, iterations=1, hold_s=5400.0)
     assert abs(m.delta_t_coef) < 2e-3
     j = MAP_TERMS.index("t")
     coef = list(econ_truth.power_map.coef)
@@ -152,7 +154,6 @@ def test_the_coil_modifier_changes_nothing_when_the_plant_is_the_model(econ_trut
         econ_truth.power_map, coef=tuple(coef)))
     _, T_wrong, _ = model_steady_power(wrong, v, Ta, Tc)
     assert T_wrong < T_true - 0.5
-    fixed = coil_modifier(wrong, lambda: EconPlant(econ_truth), PlantConfig(), v, Ta, Tc,
-                          iterations=2, hold_s=5400.0)
+    fixed = coil_modifier(wrong, truth, PlantConfig(), v, Ta, Tc, iterations=2, hold_s=5400.0)
     assert abs(fixed.steps[-1]["T_star_K"] - T_true) < 0.5 * abs(T_wrong - T_true)
     assert fixed.delta_t_coef < 0 and fixed.to_json_dict()["model_optimal_coil_K"][0] == T_wrong

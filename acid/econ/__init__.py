@@ -1,12 +1,12 @@
-"""The economic model family: cabin air, interior, shell, evaporator wall and cabin humidity,
-with an identified compressor power map (beyond the paper; the paper's model in
-:mod:`acid.model` stays the default).
+"""The economic model's parameter files and the names its controllers read. The model itself
+is declared once, in :mod:`acid.models.econ` (equations, parameter table, fitting stages).
 
-* :mod:`acid.econ.params` -- ``EconParams`` and ``PowerMap`` (named, unit-carrying, JSON);
-* :mod:`acid.econ.model` -- the model as pure functions (numpy and CasADi alike): the one
-  source of truth for the fit, the simulator, the economic NMPC and the bound;
-* :mod:`acid.econ.fit` -- ``EconFitter``: identification from excitation data
-  (``acid fit --model econ``).
+* :mod:`acid.econ.params` -- ``EconParams`` (the declaration's table as a value container,
+  JSON) with its ``PowerMap`` (domain, quality); ``identify`` (``acid fit --model econ``):
+  acid.ident's staged fit of the declaration;
+* :mod:`acid.econ.model` -- thin names over the declaration for code that passes
+  ``EconParams`` (economic NMPC, steady state, best known plan);
+* :mod:`acid.econ.validate` -- its multi-start windows for :func:`acid.validate.validate`.
 """
 
 from acid.econ.params import EconParams, PowerMap, load_any_params, model_family

@@ -1,7 +1,8 @@
 """Parameters of the economic model family (:mod:`acid.econ.model`) as a named, unit-carrying table.
 
-Every value is identified from data by :class:`acid.econ.fit.EconFitter` (``acid fit --model
-econ``); nothing is read from a plant's configuration. The physical constants the model uses
+The table is the declaration's (:mod:`acid.models.econ`); every value is identified from data
+by :func:`identify` (``acid fit --model econ``, acid.ident's staged fit); nothing is read from
+a plant's configuration. The physical constants the model uses
 (specific heat of air, latent heat of water, the atmosphere) are not fitted and are listed in
 ``CONSTANTS``.
 
@@ -15,59 +16,30 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from acid._io import json_safe, write_json
 from acid.errors import DataError
+from acid.models import econ
+from acid.models.econ import MAP_INPUTS, MAP_TERMS
 from acid.params import PAPER_BETA
 from acid.psychro import H_FG, P_ATM
 
+if TYPE_CHECKING:
+    from acid.ident.fit import DeclaredFitResult
+
 MODEL_NAME = "econ"
 
-#: (name, unit, meaning) of the dynamic parameters, in the order of ``EconParams.theta``.
-PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
-    ("r_max", "1", "largest recirculated share of the blower air"),
-    ("k_rec", "1/K", "recirculated share per kelvin of T_amb - T_cab, below r_max"),
-    ("ntu_ref", "1", "evaporator air-side NTU at W_bl = W_REF"),
-    ("ntu_exp", "1", "NTU ~ (W_bl / W_REF)^-ntu_exp (air-side Nusselt exponent 1 - n)"),
-    ("kappa_bl", "1", "share of the blower power that heats the supply air"),
-    ("C_cab", "J/K", "heat capacity of the cabin air node"),
-    ("hA_int", "W/K", "cabin air <-> interior conductance"),
-    ("hA_sh", "W/K", "cabin air <-> shell conductance"),
-    ("Q_cab", "W", "heat released into the cabin air (occupants, electronics)"),
-    ("C_int", "J/K", "heat capacity of the interior (seats, dash, panels)"),
-    ("Q_int", "W", "heat absorbed by the interior (solar through the glass)"),
-    ("C_sh", "J/K", "heat capacity of the shell (roof, doors, glass)"),
-    ("hA_ext0", "W/K", "shell <-> ambient conductance at standstill"),
-    ("hA_ext_v", "W/K/(m/s)^0.8", "its growth with speed, hA_ext0 + hA_ext_v v^0.8"),
-    ("Q_sh", "W", "heat absorbed by the shell (solar)"),
-    ("tau_ew", "s", "time constant of the evaporator wall tracking its set-point"),
-    ("dT_ew", "K", "steady offset of the evaporator wall from its set-point"),
-    ("M_cab", "kg", "air mass of the cabin humidity balance"),
-    ("m_w", "kg/s", "moisture released into the cabin (occupants)"),
-    ("RH_amb", "1", "relative humidity of the ambient air"),
-)
-NAMES: tuple[str, ...] = tuple(row[0] for row in PARAMETER_TABLE)
+#: (name, unit, meaning) of the thermal parameters: the declaration's table
+#: (``acid.models.econ``), as are the constants and the power map's terms.
+PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = tuple(
+    (n, u, m) for n, u, _, _, _, m in econ.THERMAL)
+NAMES: tuple[str, ...] = econ.THERMAL_NAMES
 UNITS: dict[str, str] = {row[0]: row[1] for row in PARAMETER_TABLE}
-
-#: Constants of the model, not fitted (name, value, unit, source).
-CONSTANTS = (
-    ("c_p", 1008.0, "J/(kg K)", "specific heat of air (paper Table II)"),
-    ("h_fg", H_FG, "J/kg", "latent heat of water near 20 degC (steam tables)"),
-    ("p_atm", P_ATM, "Pa", "standard atmosphere"),
-    ("W_REF", 0.1, "kg/s", "reference blower flow of ntu_ref (a normalisation)"),
-)
-W_REF = 0.1
-
-#: Normalisation of the power-map features: q = Q_e / Q_SCALE, t = (T_evap - T_REF) / DT_SCALE,
-#: s = v / V_SCALE, a = (T_amb - TA_REF) / DT_SCALE (units only: the map is fitted to data).
-Q_SCALE, T_REF, TA_REF, DT_SCALE, V_SCALE = 1000.0, 278.15, 303.15, 5.0, 10.0
-#: Monomials of the power map in (q, t, s, a): the full quadratic.
-MAP_TERMS: tuple[str, ...] = ("1", "q", "t", "s", "a", "q^2", "q t", "q s", "q a", "t^2",
-                              "t s", "t a", "s^2", "s a", "a^2")
-#: The map's inputs and their units (the domain it was identified on).
-MAP_INPUTS = (("Q_e", "W"), ("T_evap", "K"), ("v_veh", "m/s"), ("T_amb", "K"))
+CONSTANTS = tuple((c.name, c.value, c.unit, c.description) for c in econ.model.constants) + (
+    ("W_REF", econ.W_REF, "kg/s", "reference blower flow of ntu_ref (a normalisation)"),)
 
 
 @dataclass(frozen=True)
@@ -198,6 +170,22 @@ class EconParams:
         raise AttributeError(name)
 
     @property
+    def theta_all(self) -> np.ndarray:
+        """Every number as the declared parameter vector of ``acid.models.econ.model``."""
+        return np.concatenate([self.theta, [self.C_ew], self.power_map.coef, self.beta])
+
+    @classmethod
+    def from_vector(cls, theta, **fields) -> EconParams:
+        """Parameters from the declared vector (``theta_all``); ``fields`` the rest."""
+        t = np.asarray(theta, dtype=float)
+        n, m = len(NAMES), len(MAP_TERMS)
+        pm = fields.pop("power_map", None)
+        pm = PowerMap(coef=tuple(t[n + 1:n + 1 + m])) if pm is None else \
+            dataclasses.replace(pm, coef=tuple(t[n + 1:n + 1 + m]))
+        return cls(values=dict(zip(NAMES, t[:n], strict=True)), C_ew=float(t[n]),
+                   power_map=pm, beta=tuple(t[n + 1 + m:]), **fields)
+
+    @property
     def theta(self) -> np.ndarray:
         """The dynamic parameters as a vector (``PARAMETER_TABLE`` order)."""
         return np.array([self.values[n] for n in NAMES])
@@ -289,3 +277,99 @@ def as_any_params(obj):
     if isinstance(obj, (str, Path)):
         return load_any_params(obj)
     return as_params(obj)
+
+
+# ------------------------------------------------------------------ identification
+#: Channels ``acid fit --model econ`` needs (P_bl optional: eq. 5 then keeps its start).
+REQUIRED = econ.STATES + ("W_bl", "T_evap_set", "v_veh", "T_amb", "T_ain", "P_comp")
+#: |dT_cab/dt| and |dT_evap/dt| below this count as near-steady (the map's steady error), K/s
+_STEADY_RATE = 0.02
+
+
+@dataclass(frozen=True)
+class EconFit:
+    """The econ model identified by :func:`identify`: ``params`` (with the power map's
+    domain and quality) and ``fit``, acid.ident's report of the staged fit."""
+
+    params: EconParams
+    fit: DeclaredFitResult
+
+    @property
+    def power_map_quality(self) -> dict:
+        return self.params.power_map.quality
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        return self.fit.warnings
+
+    def to_json_dict(self) -> dict:
+        return {**self.fit.to_json_dict(), "power_map_quality": self.power_map_quality}
+
+
+def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
+    """Identify the econ model from ``ds`` (channels ``REQUIRED``) with acid.ident's staged
+    fit of the declaration (``acid.models.econ.FIT_STAGES``); warnings (``warnings.warn``,
+    ``IdentifiabilityWarning``) where the excitation leaves a part unidentified."""
+    import warnings
+
+    from acid.errors import IdentifiabilityWarning
+    from acid.ident.fit import provenance
+    from acid.ident.stages import Stage, fit_stages
+
+    ds.validate(require=REQUIRED, min_samples=20)
+    for name, unit, need in (("v_veh", "m/s", 5.0), ("T_amb", "K", 2.0)):
+        if float(np.ptp(ds.get(name, unit))) < need:
+            warnings.warn(f"{name} varies by only {np.ptp(ds.get(name, unit)):.3g} {unit} in "
+                          f"the data: the power map and the shell balance are not identified "
+                          f"in {name} (use `acid excite --model econ`)", IdentifiabilityWarning,
+                          stacklevel=2)
+    for name, unit, need, part in (("W_bl", "kg/s", 0.02, "air side"),
+                                   ("T_evap_set", "K", 1.0, "evaporator")):
+        if float(np.ptp(ds.get(name, unit))) < need:
+            raise DataError(f"{ds.source}: {name} is (nearly) constant: the {part} is not "
+                            "identifiable; excite it")
+    fit = fit_stages(econ.model, ds, [Stage(*s) for s in econ.FIT_STAGES],
+                     covariance=covariance, hac_bandwidth=hac_bandwidth,
+                     skip_s=econ.FIT_SKIP_S)
+    # the map's domain and quality on the rows it was fitted on, as fitted: the model's coil
+    # load from the measured state, the wall's storage from the measured end state
+    x = np.column_stack([ds.get(n, u) for n, u in zip(econ.STATES, econ.STATE_UNITS,
+                                                      strict=True)])
+    keep = np.zeros(len(ds), dtype=bool)
+    for a, b in ds.segments():
+        keep[a + int(round(econ.FIT_SKIP_S / ds.Ts)): b - 1] = True
+    k = np.flatnonzero(keep)
+    u = np.column_stack([ds.get("W_bl", "kg/s"), ds.get("T_evap_set", "K")])[k]
+    d = np.column_stack([ds.get("v_veh", "m/s"), ds.get("T_amb", "K")])[k]
+    out = econ.casadi_interval(ds.Ts).map(k.size)(x[k].T, u.T, d.T,
+                                                  np.tile(fit.values, (k.size, 1)).T,
+                                                  np.zeros((len(econ.STATES), k.size)))
+    Q_coil, T_ev = (np.asarray(out[j]).ravel() for j in (5, 6))
+    s = econ.parameters(fit.values)
+    Q_e = econ.refrigerant_heat(s, Q_coil, x[k, 3], x[k + 1, 3], ds.Ts)
+    P_hat = econ.compressor_power(s, Q_e, T_ev, d[:, 0], d[:, 1])
+    P = ds.get("P_comp", "W")[k]
+    e = P - P_hat
+    steady = (np.abs(x[k + 1, 0] - x[k, 0]) / ds.Ts < _STEADY_RATE) & \
+        (np.abs(x[k + 1, 3] - x[k, 3]) / ds.Ts < _STEADY_RATE) & (P > 0.05 * P.max())
+    rms = float(np.sqrt(np.mean(e**2)))
+    quality = {"n": int(P.size), "rms_W": rms, "rms_pct": 100.0 * rms / float(np.mean(P)),
+               "max_abs_W": float(np.max(np.abs(e))),
+               "r2": 1.0 - float(e @ e) / float(np.sum((P - P.mean()) ** 2)),
+               "mean_P_W": float(np.mean(P)), "n_steady": int(steady.sum())}
+    if steady.sum() >= 10:
+        quality.update(steady_rms_pct=100.0 * float(np.sqrt(np.mean((e / P)[steady] ** 2))),
+                       steady_max_pct=100.0 * float(np.max(np.abs(e / P)[steady])))
+    domain = {n: (float(v.min()), float(v.max())) for (n, _), v in
+              zip(MAP_INPUTS, (Q_e, T_ev, d[:, 0], d[:, 1]), strict=True)}
+    se = {e.name: e.stderr for e in fit.estimates}
+    prov = {**provenance(ds, "acid.ident staged fit (acid.models.econ.FIT_STAGES)"),
+            "skip_s": econ.FIT_SKIP_S, **({"data_seed": ds.metadata["seed"]}
+                                          if "seed" in ds.metadata else {})}
+    params = EconParams.from_vector(
+        fit.values, power_map=PowerMap(coef=fit.values[len(NAMES) + 1:len(NAMES) + 16],
+                                       stderr=tuple(se[n] for n in econ.MAP_NAMES),
+                                       domain=domain, quality=quality),
+        stderr={n: se[n] for n in NAMES + ("C_ew",)}, Ts=float(ds.Ts), name="econ-fit",
+        provenance=prov)
+    return EconFit(params=params, fit=fit)

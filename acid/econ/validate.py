@@ -20,8 +20,7 @@ import numpy as np
 
 from acid.data import Dataset
 from acid.econ import model
-from acid.econ.fit import REQUIRED
-from acid.econ.params import EconParams
+from acid.econ.params import REQUIRED, EconParams
 
 #: Extra channels: (name, unit, factor from model units).
 EXTRA_CHANNELS = (("T_int", "K", 1.0), ("T_shell", "K", 1.0), ("w_cab", "g/kg", 1e3),

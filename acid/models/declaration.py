@@ -9,7 +9,9 @@ there is one source of truth and CasADi gives every derivative.
 Two forms:
 
 * discrete time: ``step(s) -> {state: value one sample later, [output: value over the
-  interval]}``;
+  interval]}``; an interval output may read ``s.next.NAME``, the state at the interval's end
+  (simulated: the step's own; fitted by equation error, ``acid.ident.stages``: the measured
+  one);
 * continuous time: ``ode(s) -> {state: time derivative}``, integrated over ``Ts`` by
   ``RK4(substeps)`` with inputs and disturbances held.
 
@@ -106,6 +108,17 @@ class RK4:
     """Classical Runge-Kutta 4 over one sample, ``substeps`` equal sub-steps."""
 
     substeps: int = 1
+
+    def integrate(self, f: Callable, z, dt: float):
+        """``z`` after ``dt`` seconds of ``dz/dt = f(z)`` (CasADi column vectors)."""
+        h = dt / self.substeps
+        for _ in range(self.substeps):
+            k1 = f(z)
+            k2 = f(z + 0.5 * h * k1)
+            k3 = f(z + 0.5 * h * k2)
+            k4 = f(z + h * k3)
+            z = z + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        return z
 
 
 # ------------------------------------------------------------------------ namespace
@@ -269,6 +282,9 @@ class Model:
                 sym[row.name] = vec[i]
         for c in self.constants:
             sym[c.name] = float(c.value)
+        self._xn = ca.SX.sym("xn", self.nx)   # s.next.NAME: the state at the interval's end
+        sym.setdefault("next", _Names({s.name: self._xn[i] for i, s in enumerate(self.states)},
+                                      "next", self))
         return sym
 
     def _call(self, fn: Callable, symbols: dict, what: str, allowed: tuple[str, ...]) -> dict:
@@ -333,6 +349,9 @@ class Model:
         no_eq = [o for o in out_names if o not in y_sampled and o not in y_interval]
         if no_eq:
             raise self._error(f"output {no_eq[0]!r} has no equation")
+        if any(ca.depends_on(e, self._xn) for e in [*eqs.values(), *y_sampled.values()]):
+            raise self._error("only a step's interval outputs may read s.next (the state at "
+                              "the end of the interval)")
         self.sampled_outputs = tuple(o for o in out_names if o in y_sampled)
         self.interval_outputs = tuple(o for o in out_names if o in y_interval)
         for key in y_interval:
@@ -349,21 +368,16 @@ class Model:
         # the equations as written (outputs read as symbols): equation error substitutes data
         self.equations_raw = {s: eqs[s] for s in state_names}
         self.equations_raw.update({o: y_sampled[o] for o in self.sampled_outputs})
-        self.equations_raw.update({o: y_interval[o] for o in self.interval_outputs})
-        y_int = ca.vertcat(*[y_interval.get(o, ca.SX(0)) for o in out_names]) \
-            if out_names else ca.SX(0, 1)
+        self.equations_raw.update({o: ca.substitute(y_interval[o], self._xn, rhs)
+                                   for o in self.interval_outputs})
+        # outputs that read s.next: equation error gives them the measured end state
+        self.equations_next = {o: e for o, e in y_interval.items()
+                               if ca.depends_on(e, self._xn)}
+        y_int = ca.substitute(ca.vertcat(*[y_interval.get(o, ca.SX(0)) for o in out_names]),
+                              self._xn, rhs) if out_names else ca.SX(0, 1)
         if self.continuous:
             f = ca.Function("f", [x, u, d, p], [ca.substitute(rhs, yr, h)])
-            n = self.integrator.substeps
-            dt = self.Ts / n
-            z = x
-            for _ in range(n):
-                k1 = f(z, u, d, p)
-                k2 = f(z + 0.5 * dt * k1, u, d, p)
-                k3 = f(z + 0.5 * dt * k2, u, d, p)
-                k4 = f(z + dt * k3, u, d, p)
-                z = z + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-            x_next = z
+            x_next = self.integrator.integrate(lambda z: f(z, u, d, p), x, self.Ts)
             self.f = f
             # the integrated map is the state "equation" a fit reads
             for i, s in enumerate(state_names):

@@ -30,13 +30,21 @@ class DeclaredPlant(Plant):
     initial : {state: value} at reset (default: ``T_amb`` for temperature states, else 0).
     constant : {signal: value} for inputs/disturbances no schedule provides.
     T_amb : ambient temperature, K (a disturbance named T_amb when the schedule has none).
+    floor : {output: the lowest value the plant reports} (``{"P_comp": 0.0}``: a compressor
+        draws no negative power where a smooth model's map would).
     """
 
     name = "declared-model"
 
     def __init__(self, model: Model | str, values=None, initial: dict | None = None,
-                 constant: dict | None = None, T_amb: float = 303.15):
+                 constant: dict | None = None, T_amb: float = 303.15,
+                 floor: dict | None = None):
         self.model = load(model)
+        self.floor = {n: float(v) for n, v in (floor or {}).items()}
+        unknown = sorted(set(self.floor) - set(self.model.output_names))
+        if unknown:
+            raise ConfigError(f"model {self.model.name!r}: floor of {unknown[0]!r}, not an "
+                              f"output ({', '.join(self.model.output_names)})")
         m = self.model
         self.values = m.values if values is None else np.asarray(values, dtype=float)
         if self.values.shape != (m.np,):
@@ -118,4 +126,5 @@ class DeclaredPlant(Plant):
         row.update(zip((r.name for r in m.inputs), u, strict=True))
         row.update(zip((r.name for r in m.disturbances), d, strict=True))
         row.update(zip(m.output_names, map(float, y), strict=True))
+        row.update({n: max(row[n], v) for n, v in self.floor.items()})
         return row

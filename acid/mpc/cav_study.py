@@ -1043,17 +1043,17 @@ def identify_econ(plant_factory: PlantFactory, duration_s: float = 6 * 3600.0,
     """
     import warnings
 
-    from acid.econ.fit import EconFitter
+    from acid.econ.params import identify
     from acid.excite import excite, spec_for_model
 
     spec = spec_for_model("econ", duration=duration_s, seed=seed)
     ds = excite(plant_factory(), spec)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # carried by the result
-        res = EconFitter().fit(ds)
+        res = identify(ds)
     summary = {"source": f"acid excite --model econ ({duration_s:g} s, seed {seed}) + acid "
                          "fit --model econ", "power_map": res.power_map_quality,
-               "fit_percent_simulation": res.fit_percent_simulation,
+               "fit_percent_one_step": {q.name: q.fit_percent for q in res.fit.equations},
                "warnings": list(res.warnings)}
     return res.params, summary
 

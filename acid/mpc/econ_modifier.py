@@ -37,12 +37,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acid.econ.params import MAP_TERMS, EconParams
+from acid.econ.params import EconParams
+from acid.models.econ import DT_SCALE, MAP_TERMS
 from acid.mpc.econ_terminal import SteadyStatePrice
 from acid.mpc.pi_baselines import COIL_RANGE, PlantPI
-
-#: the power map's T_evap normalisation (``t = (T_evap - T_REF) / DT_SCALE``), K
-_DT_SCALE = 5.0
 
 
 @dataclass(frozen=True)
@@ -117,7 +115,7 @@ def coil_modifier(econ: EconParams, plant_factory: Callable[[], object], loops,
         mod = [model_steady_power(e, v, T_amb, T_cab, float(c))[0] for c in pts]
         width = float(pts[1] - pts[0])
         s_plant, s_model = (plant[1] - plant[0]) / width, (mod[1] - mod[0]) / width
-        dc = (s_plant - s_model) * _DT_SCALE / max(Q_e, 100.0)
+        dc = (s_plant - s_model) * DT_SCALE / max(Q_e, 100.0)
         coef = list(e.power_map.coef)
         coef[j] += dc
         total += dc

@@ -1,0 +1,50 @@
+"""acid.econ.params: the econ parameter file (the declaration's table) and its power map."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from acid.econ.params import EconParams
+from acid.errors import DataError
+from acid.models import load
+from acid.units import C2K
+
+
+def test_params_json_round_trip_and_family(econ_truth, tmp_path):
+    from acid.econ.params import load_any_params, model_family
+    from acid.params import paper
+
+    path = econ_truth.to_json(tmp_path / "econ.json")
+    back = EconParams.from_json(path)
+    assert back.values == econ_truth.values and back.C_ew == econ_truth.C_ew
+    assert back.power_map.coef == econ_truth.power_map.coef
+    assert model_family(path) == "econ" and isinstance(load_any_params(path), EconParams)
+    paper_file = paper().to_json(tmp_path / "paper.json")
+    assert model_family(paper_file) == "paper" and model_family("paper") == "paper"
+    with pytest.raises(DataError, match="not an econ parameter file"):
+        EconParams.from_json(paper_file)
+    with pytest.raises(DataError, match="C_cab must be positive"):
+        econ_truth.replace(C_cab=-1.0)
+
+
+def test_the_vector_is_the_declared_table(econ_truth):
+    m = load("econ")
+    theta = econ_truth.theta_all
+    assert theta.shape == (m.np,)
+    assert theta[m.parameter_names.index("C_cab")] == econ_truth.C_cab
+    assert theta[m.parameter_names.index("f_qt")] == econ_truth.power_map.coef[6]
+    assert theta[m.parameter_names.index("beta2")] == econ_truth.beta[1]
+    back = EconParams.from_vector(theta, power_map=econ_truth.power_map, name="truth")
+    assert back == econ_truth and back.power_map.domain == econ_truth.power_map.domain
+
+
+def test_power_map_names_what_it_extrapolates(econ_truth):
+    pm = econ_truth.power_map
+    assert pm.outside(v_veh=np.array([0.0, 20.0]), T_amb=np.array([C2K(30.0)])) == []
+    msg = pm.outside(v_veh=np.array([40.0]))
+    assert len(msg) == 1 and "v_veh up to 40" in msg[0]
+    hot = pm.outside(T_amb=np.array([C2K(70.0)]))   # what the user reads is in degC
+    assert len(hot) == 1 and re.search(r"T_amb up to 70 degC \(data [\d.]+-[\d.]+\)", hot[0])
