@@ -196,26 +196,3 @@ def test_excite_drives_a_declared_model_as_the_plant(tmp_path):
     assert res.exit_code == 0, res.output
     assert Dataset.from_hdf5(rec2).metadata["plant_config"]["parameters"] == {"a": 300.0,
                                                                               "b": 20.0}
-
-
-def test_the_declared_fitter_gives_acid_fit_paper_results(record, tmp_path):
-    """What `acid fit --model paper` writes today (acid/fit.py's least squares, HAC) equals
-    the declared fitter on acid.models.paper: the condition for deleting that path."""
-    from acid.data import Dataset
-    from acid.fit import ModelFitter
-    from acid.ident.fit import fit_model
-    from acid.params import paper
-
-    out = tmp_path / "p.json"
-    res = runner.invoke(app, ["fit", str(record), "--out", str(out)])
-    assert res.exit_code == 0, res.output
-    old = json.loads(out.read_text())
-    theta = np.concatenate([old["gamma"], old["tau"], old["beta"]])
-    ds = Dataset.from_hdf5(record)
-    new = fit_model("paper", ds, "ls")
-    np.testing.assert_allclose(new.values, theta, rtol=1e-9, atol=0)
-    ref = ModelFitter(method="ls", reference=paper()).fit(ds)
-    se = np.array([e.stderr for e in new.estimates])
-    sound = ref.stderr > 1e-8 * np.abs(theta)        # P_bl of the plant is exact: round-off
-    assert sound.sum() >= 10
-    np.testing.assert_allclose(se[sound], ref.stderr[sound], rtol=1e-6)

@@ -13,7 +13,8 @@ from typer.testing import CliRunner
 from acid.econ.fit import EconFitter
 from acid.econ.params import NAMES, EconParams
 from acid.errors import DataError, IdentifiabilityWarning
-from acid.fit import ModelFitter
+from acid.ident.fit import fit_model
+from acid.params import fitted
 from acid.validate import validate
 from acid_cli.main import app
 
@@ -62,7 +63,7 @@ def test_validates_beside_the_paper_model_on_held_out_data(econ_hifi_dataset, ec
     est, held = econ_hifi_dataset.split(0.75)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        paper = ModelFitter(method="oe").fit(est).params
+        paper = fitted(fit_model("paper", est, "oe"))
     kw = {"starts": 30, "horizon": 120}
     e = validate(held, econ_hifi_fit.params, **kw)
     p = validate(held, paper, **kw)

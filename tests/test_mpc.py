@@ -393,11 +393,12 @@ def test_plant_scenario_keeps_avoidable_violations_within_0_05_K(which):
     params = P
     if which == "identified":
         from acid.excite import ExcitationSpec, excite
-        from acid.fit import fit
+        from acid.ident.fit import fit
+        from acid.params import fitted
         from acid.plant.hifi import HifiPlant
 
         ds = excite(HifiPlant(), ExcitationSpec(seed=0))
-        params = fit(ds, method="oe").params
+        params = fitted(fit(ds, method="oe"))
     res = run_plant_scenario(params)
     d = res.to_json_dict()
     assert res.passed, d

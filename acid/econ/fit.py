@@ -56,8 +56,8 @@ from acid.econ.params import (
     PowerMap,
 )
 from acid.errors import ConfigError, DataError, IdentifiabilityWarning, SolverWarning
-from acid.fit import COVARIANCES, DEFAULT_COVARIANCE
 from acid.hac import hac_meat, resolve_bandwidth, segment_ids
+from acid.ident.fit import COVARIANCES, DEFAULT_COVARIANCE
 from acid.metrics import fit_percent
 from acid.psychro import H_FG
 

@@ -200,6 +200,12 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         raise ConfigError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
     if loss not in LOSSES:
         raise ConfigError(f"unknown loss {loss!r} (choose from {', '.join(LOSSES)})")
+    bw = hac_bandwidth
+    if not (bw in ("auto", "nw") or (isinstance(bw, (int, np.integer))
+                                     and not isinstance(bw, bool) and bw >= 0)):
+        raise ConfigError(f"hac_bandwidth must be 'auto', 'nw' or an integer >= 0, got {bw!r}")
+    if int(oe_window) < 5:
+        raise ConfigError(f"oe_window must be at least 5 samples, got {oe_window}")
     if covariance not in COVARIANCES:
         raise ConfigError(f"unknown covariance {covariance!r} (choose from "
                           f"{', '.join(COVARIANCES)})")
@@ -217,6 +223,12 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     names = model.parameter_names
     free_idx = tuple(i for i, p in enumerate(model.parameters) if not p.fixed)
     per_exp = {i for i, p in enumerate(model.parameters) if p.per_experiment}
+    forms = linear.equation_forms(model, data, free_idx)
+    # a parameter read only by outputs the data lack cannot be fitted: kept as declared
+    unseen = sorted(set(free_idx) - {i for f in forms for i in f.free
+                                     if not (f.name in model.output_names
+                                             and f.reason.endswith("is not measured"))})
+    free_idx = tuple(i for i in free_idx if i not in unseen)
     columns = tuple(c for i in free_idx for c in (
         [linear.Column(i, names[i], e) for e in range(E)] if i in per_exp
         else [linear.Column(i, names[i])]))
@@ -233,7 +245,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     lo = np.array([model.parameters[c.index].min for c in columns])
     hi = np.array([model.parameters[c.index].max for c in columns])
 
-    forms = linear.equation_forms(model, data, free_idx)
+    if unseen:
+        notes.append(f"not fitted (kept at the declared values): "
+                     f"{', '.join(names[i] for i in unseen)}: only outputs the data lack "
+                     "read them")
     reports: dict[str, EquationReport] = {
         f.name: EquationReport(f.name, "-", f.reason, tuple(names[i] for i in f.free))
         for f in forms}
@@ -387,7 +402,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         cols = [k for k, c in enumerate(columns) if c.index == i]
         if not cols:
             estimates.append(Estimate(p.name, p.unit, p.value, p.value, math.nan,
-                                      (math.nan, math.nan), "fixed"))
+                                      (math.nan, math.nan),
+                                      "not fitted" if i in unseen else "fixed"))
             if i in per_exp:
                 for e in range(E):
                     estimates.append(Estimate(p.name, p.unit, p.value, p.value, math.nan,
@@ -474,6 +490,13 @@ def _with_values(model: Model, start: dict) -> Model:
     other.parameters = tuple(dataclasses.replace(p, value=float(start[p.name]))
                              if p.name in start else p for p in model.parameters)
     return other
+
+
+def fit(ds: Dataset, method: str = "auto", model: Model | str = "paper",
+        **options) -> DeclaredFitResult:
+    """``fit_model(model, ds, method, **options)`` with the paper's model by default
+    (``acid.fit(est, method="oe")``)."""
+    return fit_model(model, ds, method, **options)
 
 
 def _whiteness(r: np.ndarray, exp: np.ndarray, lags: int = 20) -> dict:

@@ -1,8 +1,9 @@
 """Output error for any declared model: simulate windows of the data from estimated initial
 states (latent ones included) and minimise the weighted simulation error of every measured
 channel over the free parameters (per-experiment ones per experiment) and the initial
-states, with ``scipy.optimize.least_squares`` (trust-region reflective, declared bounds)
-and the exact Jacobian of the window simulations from CasADi.
+states, with ``scipy.optimize.least_squares`` (Levenberg-Marquardt when its optimum lies
+inside the declared bounds, else trust-region reflective within them) and the exact
+Jacobian of the window simulations from CasADi.
 """
 
 from __future__ import annotations
@@ -214,11 +215,22 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                             for i in range(len(prob.chan))])
             prob.weights = np.maximum(rms, floor)
         kwargs = {"loss": "huber", "f_scale": HUBER_M} if robust and it == 1 else {}
+        res = None
         with np.errstate(all="ignore"):
-            res = scipy.optimize.least_squares(
-                prob.residuals, z, jac=prob.jacobian, bounds=(zlo, zhi), method="trf",
-                x_scale="jac", ftol=1e-12, xtol=1e-12, gtol=1e-10, max_nfev=max_nfev,
-                **kwargs)
+            if not kwargs and prob.residuals(z).size >= z.size:
+                # MINPACK's Levenberg-Marquardt first (its own QR: no BLAS threads, which
+                # slow SVDs 100-fold on a busy machine); kept when it ends inside the bounds
+                res = scipy.optimize.least_squares(
+                    prob.residuals, z, jac=prob.jacobian, method="lm", x_scale="jac",
+                    ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=2 * max_nfev)
+                inside = np.all((res.x >= zlo) & (res.x <= zhi))
+                if not (inside and res.status > 0 and np.all(np.isfinite(res.x))):
+                    res = None
+            if res is None:  # trust-region reflective inside the declared bounds
+                res = scipy.optimize.least_squares(
+                    prob.residuals, z, jac=prob.jacobian, bounds=(zlo, zhi), method="trf",
+                    x_scale="jac", ftol=1e-12, xtol=1e-12, gtol=1e-10, max_nfev=max_nfev,
+                    **kwargs)
         z = res.x
     return summarise(prob, z, res, covariance, hac_bandwidth, loss)
 
