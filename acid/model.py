@@ -1,88 +1,55 @@
 """The paper's eqs. 1-5 as functions of ``ModelParams``, for the controllers that still take
-them (``acid/mpc``): each evaluates the declaration (``acid.models.paper``), the one place
-the equations are written, traced into CasADi once. Floats, numpy arrays (broadcasting over
-any batch shape) and CasADi symbols alike; kelvin, kg/s, W.
+them (``acid/mpc``): each calls the declaration's own equation functions
+(``acid.models.paper.step`` and ``output``), the one place the equations are written, with
+the values of ``ModelParams``. Floats, numpy arrays (broadcasting over any batch shape),
+complex numbers and CasADi symbols alike (the equations use ``+ - *`` only); kelvin, kg/s, W.
 """
 
 from __future__ import annotations
 
-import functools
+from types import SimpleNamespace
 
-import casadi as ca
 import numpy as np
 
+from acid.models.paper import PARAMETER_TABLE
 from acid.models.paper import compressor_power as _compressor_power
-from acid.models.paper import model as _DECL
+from acid.models.paper import output as _output
+from acid.models.paper import step as _step
+
+_NAMES = tuple(row[0] for row in PARAMETER_TABLE)
 
 
-@functools.cache
-def _equations() -> ca.Function:
-    """``(T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell, T_ain_in, theta) -> (eq. 1 with
-    T_ain_in, eq. 1 with eq. 3 substituted, eq. 2, eq. 3, eq. 5)`` from the declaration."""
-    sym = [ca.SX.sym(n) for n in ("T_cab", "T_evap", "W_bl", "T_evap_set", "T_int",
-                                   "T_shell", "T_ain_in")]
-    th = ca.SX.sym("theta", _DECL.np)
-    x, u, d = ca.vertcat(*sym[0:2]), ca.vertcat(*sym[2:4]), ca.vertcat(*sym[4:6])
-    raw = _DECL.equations_raw
-    subs = [_DECL._x, _DECL._u, _DECL._d, _DECL._p, _DECL._yr]
-    yr = ca.vertcat(sym[6], ca.SX(0))       # the measured T_ain; P_bl is read by nothing
-    args = [x, u, d, th, yr]
-
-    def at(expr):
-        return ca.substitute([expr], subs, args)[0]
-
-    x_next, y = _DECL.F(x, u, d, th)
-    names = _DECL.output_names
-    return ca.Function("paper_eqs", [*sym, th],
-                       [at(raw["T_cab"]), x_next[0], x_next[1], y[names.index("T_ain")],
-                        y[names.index("P_bl")]])
-
-
-def _theta(p):
-    """The declaration's 13 values of ``p`` (gamma, tau, beta; a parameter set without
-    gamma/tau, e.g. the econ model's, reads eq. 5 only)."""
-    vals = (*getattr(p, "gamma", (0.0,) * 7), *getattr(p, "tau", (0.0,) * 3), *p.beta)
-    if any(isinstance(v, (ca.SX, ca.MX)) for v in vals):
-        return ca.vertcat(*vals)
-    return np.asarray(vals, dtype=float)
-
-
-def _eval(p, T_cab=0.0, T_evap=0.0, W_bl=0.0, T_evap_set=0.0, T_int=0.0, T_shell=0.0,
-          T_ain_in=0.0):
-    """The five equations at these arguments (``_equations`` order)."""
-    args = (T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell, T_ain_in)
-    theta = _theta(p)
-    if isinstance(theta, ca.MX) or any(isinstance(a, (ca.SX, ca.MX)) for a in args):
-        return _equations()(*args, theta)
-    arr = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in args))
-    shape, n = arr[0].shape, arr[0].size
-    if n == 0:
-        return tuple(np.zeros(shape) for _ in range(5))
-    out = _equations().map(n)(*(a.reshape(1, n) for a in arr), np.tile(theta[:, None], n))
-    if not shape:
-        return tuple(float(np.asarray(o).item()) for o in out)
-    return tuple(np.asarray(o).reshape(shape) for o in out)
+def _signals(p, **signals) -> SimpleNamespace:
+    """The names the declaration's equations read: parameters from ``p`` (a parameter set
+    without gamma/tau, e.g. the econ model's, serves eq. 5 alone), signals as given."""
+    values = (*getattr(p, "gamma", (0.0,) * 7), *getattr(p, "tau", (0.0,) * 3), *p.beta)
+    return SimpleNamespace(**dict(zip(_NAMES, values, strict=True)), **signals)
 
 
 def inlet_air(T_evap, W_bl, p):
     """Eq. 3: cabin inlet air temperature T_ain (K) from the evaporator wall and blower flow."""
-    return _eval(p, T_evap=T_evap, W_bl=W_bl)[3]
+    return _output(_signals(p, T_evap=T_evap, W_bl=W_bl))["T_ain"]
 
 
 def cabin_step(T_cab, T_int, T_shell, T_ain, W_bl, p):
     """Eq. 1 with a given (e.g. measured) T_ain: cabin air one sample later (K)."""
-    return _eval(p, T_cab=T_cab, T_int=T_int, T_shell=T_shell, T_ain_in=T_ain, W_bl=W_bl)[0]
+    return _step(_signals(p, T_cab=T_cab, T_int=T_int, T_shell=T_shell, T_ain=T_ain,
+                          W_bl=W_bl, T_evap=0.0, T_evap_set=0.0))["T_cab"]
 
 
 def evap_step(T_evap, T_evap_set, p):
     """Eq. 2: evaporator wall temperature one sample later (K)."""
-    return _eval(p, T_evap=T_evap, T_evap_set=T_evap_set)[2]
+    return _step(_signals(p, T_evap=T_evap, T_evap_set=T_evap_set, T_cab=0.0, T_int=0.0,
+                          T_shell=0.0, T_ain=0.0, W_bl=0.0))["T_evap"]
 
 
 def step(T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell, p):
-    """Eqs. 1-3 together: (T_cab(k+1), T_evap(k+1), T_ain(k)), all K."""
-    out = _eval(p, T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell)
-    return out[1], out[2], out[3]
+    """Eqs. 1-3 together (eq. 3 substituted into eq. 1): (T_cab(k+1), T_evap(k+1),
+    T_ain(k)), all K."""
+    T_ain = inlet_air(T_evap, W_bl, p)
+    nxt = _step(_signals(p, T_cab=T_cab, T_evap=T_evap, W_bl=W_bl, T_evap_set=T_evap_set,
+                         T_int=T_int, T_shell=T_shell, T_ain=T_ain))
+    return nxt["T_cab"], nxt["T_evap"], T_ain
 
 
 def air_heat_flow(W_bl, T_ain, T_amb, c_p):
@@ -99,7 +66,7 @@ def compressor_power(W_bl, T_ain, T_amb, p, eta_cop=None):
 
 def blower_power(W_bl, p):
     """Eq. 5: P_bl = beta1 W_bl^2 + beta2 W_bl + beta3, W."""
-    return _eval(p, W_bl=W_bl)[4]
+    return _output(_signals(p, W_bl=W_bl, T_evap=0.0))["P_bl"]
 
 
 def evap_steady_state(T_evap_set, p):
