@@ -4,7 +4,6 @@ fixed parameters, identified combinations)."""
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
@@ -12,6 +11,7 @@ from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.ident.fit import fit_model
 from acid.models import Model, Parameter, Signal, State, load, sin
+
 
 def _dataset(channels: dict, units: dict, Ts: float, experiment=None) -> Dataset:
     n = len(next(iter(channels.values())))
