@@ -130,7 +130,7 @@ def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
 
 @pytest.mark.parametrize("args, fragments", [
     (["--model", "thermal"], ("--model", "thermal", "econ")),
-    (["--model", "econ", "--method", "oe"], ("--method", "only for --model paper")),
+    (["--model", "econ", "--method", "oe"], ("--method", "not for --model econ")),
 ])
 def test_cli_fit_bad_model_options(econ_file, tmp_path, args, fragments):
     res = runner.invoke(app, ["fit", str(econ_file), "--out", str(tmp_path / "p.json"), *args])
