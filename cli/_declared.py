@@ -9,7 +9,7 @@ from pathlib import Path
 
 from acid import __version__
 from acid._io import file_sha256
-from acid.data import Dataset
+from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError
 from acid_cli._common import note, print_table, require_range, say, warn, write_summary
 
@@ -89,10 +89,12 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
         start = ref.as_dict()
         if paper.no_blower:
             fixes = {**{n: start[n] for n in ("beta1", "beta2", "beta3")}, **fixes}
-    ds = Dataset.from_hdf5(data, min_samples=20)
+    # the paper's fit needs every channel of eqs. 1-3 (T_ain too: eq. 1 reads it measured)
+    need = {"require": MODEL_CHANNELS} if paper is not None else {}
+    ds = Dataset.from_hdf5(data, min_samples=20, **need)
     est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]
     if more:
-        parts = [Dataset.from_hdf5(p, min_samples=20) for p in more]
+        parts = [Dataset.from_hdf5(p, min_samples=20, **need) for p in more]
         parts = [p if estimation_fraction == 1.0 else p.split(estimation_fraction)[0]
                  for p in parts]
         est = Dataset.concatenate([est, *parts])
