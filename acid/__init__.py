@@ -57,8 +57,7 @@ _API = {
     "export_fmu": ("acid.plant.fmu_export", "export_fmu"),
     "speed_sweep": ("acid.plant.sweep", "speed_sweep"),
     # identification and validation
-    "fit": ("acid.fit", "fit"), "ModelFitter": ("acid.fit", "ModelFitter"),
-    "FitResult": ("acid.fit", "FitResult"),
+    "fit": ("acid.ident.fit", "fit"), "FitResult": ("acid.ident.fit", "DeclaredFitResult"),
     "validate": ("acid.validate", "validate"),
     "ValidationResult": ("acid.validate", "ValidationResult"),
     "predict": ("acid.analysis", "predict"), "compare": ("acid.analysis", "compare"),

@@ -25,9 +25,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acid import model
 from acid._io import json_safe
-from acid.data import MODEL_CHANNELS, Dataset
+from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.metrics import fit_percent, rmse
 from acid.params import as_params
@@ -359,41 +358,9 @@ def predict(data: Dataset, params, k: int | None = 1, *, warmup: int = 0) -> Pre
     ``acid fit --model``) go to :func:`acid.ident.analysis.predict_model` (every measured
     channel, ``warmup`` samples for latent states).
     """
-    if _declared(params):
-        from acid.ident.analysis import predict_model
+    from acid.ident.analysis import predict_model
 
-        return predict_model(data, params, k, warmup=warmup)
-    p = as_params(params)
-    data.validate(require=MODEL_CHANNELS)
-    if not math.isclose(data.Ts, p.Ts, rel_tol=1e-6):
-        raise DataError(f"{data.source}: sample time {data.Ts:g} s differs from the model's "
-                        f"Ts = {p.Ts:g} s (parameters {p.name!r})")
-    if k is not None and (isinstance(k, bool) or int(k) != k or int(k) < 1):
-        raise ConfigError(f"predict: horizon k must be a whole number of samples >= 1 or None, "
-                          f"got {k!r}")
-    T_cab, T_evap, T_ain, T_set, T_int, T_shell = (
-        data.get(n, "K") for n in ("T_cab", "T_evap", "T_ain", "T_evap_set", "T_int",
-                                   "T_shell"))
-    W_bl = data.get("W_bl", "kg/s")
-    n = len(data)
-    cab, evap = np.full(n, np.nan), np.full(n, np.nan)
-    for a, b in data.segments():
-        steps = (b - a - 1) if k is None else int(k)
-        if steps < 1 or b - a <= (0 if k is None else steps):
-            continue
-        starts = np.array([a]) if k is None else np.arange(a, b - steps)
-        idx = starts[:, None] + np.arange(steps)[None, :]
-        x0 = np.stack([T_cab[starts], T_evap[starts]], axis=-1)
-        c, e, _ = model.simulate(x0, W_bl[idx], T_set[idx], T_int[idx], T_shell[idx], p)
-        if k is None:
-            cab[a:b], evap[a:b] = c[0], e[0]
-        else:
-            cab[starts + steps], evap[starts + steps] = c[:, -1], e[:, -1]
-    ain = model.inlet_air(evap, W_bl, p)  # eq. 3 of the predicted evaporator wall
-    return PredictionResult(
-        time=data.time.copy(), measured=np.stack([T_cab, T_evap, T_ain], axis=-1),
-        predicted=np.stack([cab, evap, ain], axis=-1), horizon=None if k is None else int(k),
-        Ts=data.Ts, model=p.name, source=data.source)
+    return predict_model(data, _as_declared(params), k, warmup=warmup)
 
 
 def compare(data: Dataset, *models, k: int | None = None,
@@ -448,15 +415,9 @@ def resid(data: Dataset, params, max_lag: int = 25, k: int = 1, *,
     """
     if int(max_lag) < 1:
         raise ConfigError(f"resid: max_lag must be >= 1, got {max_lag}")
-    if _declared(params):
-        from acid.ident.analysis import resid_model
+    from acid.ident.analysis import resid_model
 
-        return resid_model(data, params, max_lag, k, warmup=warmup)
-    M = int(max_lag)
-    pr = predict(data, params, k)
-    u = np.stack([data.get("W_bl", "kg/s"), data.get("T_evap_set", "K")], axis=-1)
-    return residual_tests(pr, u, RESIDUAL_INPUTS, data.experiment, M,
-                          {"max_lag": M, "k": k}, data.source)
+    return resid_model(data, _as_declared(params), max_lag, k, warmup=warmup)
 
 
 def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
@@ -473,6 +434,9 @@ def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
         raise DataError(f"{source}: {nv} residual samples are too few for {M} lags")
     e = e - np.nanmean(e[valid], axis=0)
     e[~valid] = 0.0
+    # errors at round-off of the measured values (an exact equation): zero, "no test"
+    size = np.nanmax(np.abs(pr.measured[valid]), axis=0)
+    e[:, np.sqrt(np.mean(e[valid] ** 2, axis=0)) <= 1e-10 * size] = 0.0
     u = np.asarray(u, dtype=float).copy()
     u = u - u[valid].mean(axis=0)
     u[~valid] = 0.0
@@ -510,11 +474,19 @@ def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
                           inputs=tuple(inputs), channels=pr.channels, settings=settings)
 
 
-def _declared(params) -> bool:
-    """Whether ``params`` are a declared model's (routed to ``acid.ident.analysis``)."""
+def _as_declared(params):
+    """A declared model's parameters as they are; the paper's (``ModelParams``, a params.json,
+    ``None``/"paper") as its declaration (``acid.models.paper``) with those values."""
     from acid.ident.analysis import is_declared
 
-    return is_declared(params)
+    if is_declared(params):
+        return params
+    from acid.ident.validate import ParameterSet
+    from acid.models import load
+
+    p = as_params(params)
+    return load("paper"), ParameterSet(values=p.theta, source=p.name,
+                                       provenance=p.provenance, label=p.name)
 
 
 def _edge(values: np.ndarray, unit: str) -> np.ndarray:

@@ -1,5 +1,5 @@
 """Newey-West (HAC) covariance of least-squares scores, shared by the fits of both model
-families (:mod:`acid.fit`, :mod:`acid.ident`).
+families (:mod:`acid.ident`: the least-squares, staged and output-error fits).
 
 Scores ``h`` (n, p) are time-ordered rows labelled by experiment ``g`` (n,); lag products
 never cross an experiment (a dataset's segments are independent records).

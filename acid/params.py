@@ -1,4 +1,5 @@
-"""Parameters of the control-oriented model (paper eqs. 1-5) as a named, unit-carrying table.
+"""Values of the paper's model (eqs. 1-5): a container over the declaration's parameter
+table (``acid.models.paper``), what the controllers, plants and parameter files use.
 
 gamma1..gamma7 and tau1..tau3 parameterise eqs. 1-3 with **temperatures in kelvin** and W_bl
 in kg/s at Ts = 5 s; beta1..beta3 the blower power curve (eq. 5, W with W_bl in kg/s).
@@ -19,6 +20,7 @@ from acid._io import write_json
 from acid.claims import MODEL as _PAPER_MODEL
 from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import DataError
+from acid.models.paper import PARAMETER_TABLE as _DECLARED_TABLE
 
 UNITS_CONVENTION = (
     "temperatures in kelvin, W_bl in kg/s, Ts = 5 s; "
@@ -26,23 +28,9 @@ UNITS_CONVENTION = (
     "tau1,2,3 [K]; beta1 [W s^2/kg^2], beta2 [W s/kg], beta3 [W]"
 )
 
-#: (name, unit, meaning) of every parameter, in the order of the vectors.
-PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
-    ("gamma1", "1", "cabin air <- interior conductance per step (eq. 1)"),
-    ("gamma2", "1", "cabin air <- shell conductance per step (eq. 1)"),
-    ("gamma3", "s/kg", "cabin air <- inlet air, per unit blower flow (eq. 1)"),
-    ("gamma4", "1", "evaporator wall memory (eq. 2)"),
-    ("gamma5", "1", "evaporator wall <- set-point error gain (eq. 2)"),
-    ("gamma6", "1", "inlet air <- evaporator wall (eq. 3)"),
-    ("gamma7", "K s/kg", "inlet air <- blower flow (eq. 3)"),
-    ("tau1", "K", "cabin air offset (eq. 1)"),
-    ("tau2", "K", "evaporator wall offset (eq. 2)"),
-    ("tau3", "K", "inlet air offset (eq. 3)"),
-    ("beta1", "W s^2/kg^2", "blower power, quadratic (eq. 5)"),
-    ("beta2", "W s/kg", "blower power, linear (eq. 5)"),
-    ("beta3", "W", "blower power, constant (eq. 5)"),
-)
-
+#: (name, unit, meaning) of every parameter, in the order of the vectors: the paper
+#: declaration's table (``acid.models.paper``), the one parameter table.
+PARAMETER_TABLE = _DECLARED_TABLE
 
 
 def _block(prefix: str) -> slice:
@@ -312,17 +300,40 @@ def load_params(spec: str | Path | None, allow_unstable: bool = False) -> ModelP
     return p if allow_unstable else p.check_stable(str(spec))
 
 
-def as_params(obj) -> ModelParams:
-    """The model parameters of ``obj``: a ``ModelParams`` as is, the ``params`` of a fit result
-    (``acid.fit.FitResult``), ``None``/``"paper"`` for the preset or a params.json path.
+def fitted(result, eta_cop: float | None = None, name: str | None = None,
+           provenance: dict | None = None) -> ModelParams:
+    """The paper's parameters from a fit of its declaration (``acid.ident.fit_model(
+    "paper", ...)``); ``eta_cop`` replaces Table II's COP (eq. 4, e.g. ``eta_cop_of``)."""
+    changes = {} if eta_cop is None or not math.isfinite(eta_cop) or eta_cop <= 0 \
+        else {"eta_cop": float(eta_cop)}
+    return paper().with_theta(np.asarray(result.values, dtype=float),
+                              name=name or f"fit-{result.method}",
+                              provenance=dict(provenance or {}), **changes)
 
-    Lets every function that takes parameters accept what ``acid.fit`` returns.
+
+def eta_cop_of(ds, c_p: float = _TABLE_II.c_p) -> tuple[float, float]:
+    """eta_cop and its standard error from a dataset's P_comp, T_amb, W_bl and T_ain (eq. 4,
+    ``acid.models.paper.estimate_eta_cop``); NaN when the data lack a channel."""
+    from acid.models.paper import estimate_eta_cop
+
+    if not all(n in ds for n in ("P_comp", "T_amb", "W_bl", "T_ain")):
+        return math.nan, math.nan
+    return estimate_eta_cop(ds.get("W_bl", "kg/s"), ds.get("T_ain", "K"), ds.get("T_amb", "K"),
+                            ds.get("P_comp", "W"), c_p)
+
+
+def as_params(obj) -> ModelParams:
+    """The model parameters of ``obj``: a ``ModelParams`` as is, a fit of the paper's
+    declaration (``acid.ident.fit_model``'s result, or anything with ``params``),
+    ``None``/``"paper"`` for the preset or a params.json path.
     """
     if isinstance(obj, ModelParams):
         return obj
     inner = getattr(obj, "params", None)
     if isinstance(inner, ModelParams):
         return inner
+    if getattr(obj, "model", None) == "paper" and hasattr(obj, "values"):
+        return fitted(obj)
     if obj is None or isinstance(obj, (str, Path)):
         return load_params(obj)
     raise DataError(f"expected model parameters (ModelParams, a fit result or a params.json "

@@ -153,25 +153,25 @@ def stage_excite(workdir: Path, inputs: dict, config: dict, progress) -> dict:
 
 
 def stage_fit(workdir: Path, inputs: dict, config: dict, progress) -> dict:
-    """Identify eqs. 1-3 and 5 on the estimation part of the excitation record."""
-    import warnings
-
+    """Identify eqs. 1-3 and 5 (the paper's declaration) on the estimation part of the
+    excitation record."""
     from acid.data import MODEL_CHANNELS, Dataset
-    from acid.fit import ModelFitter
+    from acid.ident.fit import fit_model, provenance
+    from acid.models import load
+    from acid.params import eta_cop_of, fitted
 
     ds = Dataset.from_hdf5(inputs["excite"] / "excitation.h5", require=MODEL_CHANNELS)
     est, _ = ds.split(config["estimation_fraction"])
-    with warnings.catch_warnings(record=True):
-        warnings.simplefilter("always")
-        ls = ModelFitter(method="ls").fit(est)
-        progress(1, 2)
-        res = ModelFitter(method=config["method"]).fit(est)
-        progress(2, 2)
-    prov = dict(res.params.provenance, estimation_fraction=config["estimation_fraction"])
-    params = res.params.replace(provenance=prov, name=f"acid-{config['method']}")
-    params.to_json(workdir / "params.json", extra={"fit": res.to_json_dict(),
-                                                   "fit_ls": ls.to_json_dict()})
-    return FitStage.of(res, ls).to_json_dict()
+    model = load("paper")
+    ls = fit_model(model, est, "ls")
+    progress(1, 2)
+    res = fit_model(model, est, config["method"])
+    progress(2, 2)
+    prov = dict(provenance(est, res.method), estimation_fraction=config["estimation_fraction"])
+    params = fitted(res, name=f"acid-{config['method']}", provenance=prov)
+    res.write(workdir / "params.json", model, prov,
+              extra={**params.to_json_dict(), "fit_ls": ls.to_json_dict()})
+    return FitStage.of(res, ls, params, eta_cop_of(est)).to_json_dict()
 
 
 def stage_validate(workdir: Path, inputs: dict, config: dict, progress) -> dict:
@@ -235,7 +235,8 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
 
     from acid.econ.params import identify
     from acid.excite import excite, spec_for_model
-    from acid.fit import ModelFitter
+    from acid.ident.fit import fit_model
+    from acid.params import fitted
     from acid.plant import make_plant
     from acid.report.validation import error_figure
     from acid.validate import validate
@@ -248,11 +249,11 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
         warnings.simplefilter("ignore")
         econ = identify(est)
         progress(2, 4)
-        paper_fit = ModelFitter(method="oe").fit(est)
+        paper_fit = fitted(fit_model("paper", est, "oe"), provenance={"data_file": ds.source})
     econ.params.to_json(workdir / "econ_params.json", extra={"fit": econ.to_json_dict()})
     kw = {"starts": config["starts"], "horizon": config["horizon"],
           "held_out_fraction": 1.0 - config["estimation_fraction"]}
-    val_econ, val_paper = validate(ds, econ.params, **kw), validate(ds, paper_fit.params, **kw)
+    val_econ, val_paper = validate(ds, econ.params, **kw), validate(ds, paper_fit, **kw)
     progress(4, 4)
     write_figure_index(workdir, [save_report_figure(
         error_figure(val_econ), workdir, "fig_econ_errors",

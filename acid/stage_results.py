@@ -236,15 +236,25 @@ class FitStage(StageResult):
     warnings: tuple[str, ...] = ()
 
     @classmethod
-    def of(cls, res, ls) -> FitStage:
-        """From the output-error (``res``) and least-squares (``ls``) ``FitResult``."""
-        params = {name: Estimate(value=est, stderr=se, ci95_low=lo, ci95_high=hi)
-                  for name, _unit, _ref, est, se, lo, hi in res.table()}
-        p = res.params
-        return cls(method=res.method, covariance=res.covariance_kind, gamma=p.gamma,
-                   tau=p.tau, beta=p.beta, parameters=params, ls_gamma=ls.params.gamma,
-                   ls_tau=ls.params.tau, fit_percent_one_step=dict(res.fit_percent_one_step),
-                   fit_percent_simulation=dict(res.fit_percent_simulation),
+    def of(cls, res, ls, params, eta_cop: tuple[float, float] = (math.nan, math.nan)
+           ) -> FitStage:
+        """From fits of the paper's declaration (``acid.ident.fit_model``): ``res`` the
+        chosen method's, ``ls`` least squares; ``params`` the ``ModelParams`` written;
+        ``eta_cop`` (value, stderr) read off P_comp with eq. 4."""
+        est = {e.name: Estimate(value=e.value, stderr=e.stderr, ci95_low=e.ci95[0],
+                                ci95_high=e.ci95[1])
+               for e in res.estimates if e.experiment is None}
+        eta, se = eta_cop
+        if math.isfinite(eta):
+            est["eta_cop"] = Estimate(value=eta, stderr=se, ci95_low=eta - 1.96 * se,
+                                      ci95_high=eta + 1.96 * se)
+        n_gamma, n_tau = len(params.gamma), len(params.tau)
+        return cls(method=res.method, covariance=res.covariance_kind, gamma=params.gamma,
+                   tau=params.tau, beta=params.beta, parameters=est,
+                   ls_gamma=tuple(map(float, ls.values[:n_gamma])),
+                   ls_tau=tuple(map(float, ls.values[n_gamma:n_gamma + n_tau])),
+                   fit_percent_one_step=dict(res.one_step_fit),
+                   fit_percent_simulation=dict(res.simulation_fit),
                    warnings=tuple(res.warnings))
 
 

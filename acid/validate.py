@@ -27,7 +27,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from acid import model
 from acid._io import json_safe
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError, DataError
@@ -534,21 +533,30 @@ def _is_econ(params) -> bool:
 
 
 def _paper_windows(ds: Dataset, idx: np.ndarray, params: ModelParams, exogenous: str):
-    """Eqs. 1-3 over the windows: (predicted, measured, inputs, exogenous), (S, H + 1, .)."""
-    T_cab, T_evap, T_ain, T_evap_set, T_int, T_shell = (
-        ds.get(n, "K")[idx] for n in ("T_cab", "T_evap", "T_ain", "T_evap_set", "T_int",
-                                      "T_shell"))
-    W_bl = ds.get("W_bl", "kg/s")[idx]
+    """The paper's declaration (``acid.models.paper``) simulated over the windows ``idx``
+    (S, H + 1) from the measured states: (predicted, measured, inputs, exogenous), each
+    (S, H + 1, .); the predicted T_ain(i) is eq. 3 of the predicted T_evap(i)."""
+    import dataclasses
+
+    from acid.ident.data import ModelData
+    from acid.ident.oe import simulate_windows
+    from acid.models import load
+
+    decl = load("paper")
+    data = ModelData.of(decl, ds, min_samples=2)
+    S, L = idx.shape
+    d = data.d[idx]                                                   # (S, H + 1, 2)
     if exogenous == "hold":
-        T_int = np.broadcast_to(T_int[:, :1], T_int.shape)
-        T_shell = np.broadcast_to(T_shell[:, :1], T_shell.shape)
-    x0 = np.stack([T_cab[:, 0], T_evap[:, 0]], axis=-1)
-    cab_hat, evap_hat, _ = model.simulate(x0, W_bl[:, :-1], T_evap_set[:, :-1],
-                                          T_int[:, :-1], T_shell[:, :-1], params)
-    ain_hat = model.inlet_air(evap_hat, W_bl, params)  # eq. 3 at i = 0 .. H
-    return (np.stack([cab_hat, evap_hat, ain_hat], axis=-1),
-            np.stack([T_cab, T_evap, T_ain], axis=-1),
-            np.stack([W_bl, T_evap_set], axis=-1), np.stack([T_int, T_shell], axis=-1))
+        d = np.broadcast_to(d[:, :1], d.shape)
+    flat = dataclasses.replace(data, x=data.x[idx].reshape(S * L, -1),
+                               u=data.u[idx].reshape(S * L, -1), d=d.reshape(S * L, -1),
+                               y=data.y[idx].reshape(S * L, -1), censored=None)
+    Y = simulate_windows(decl, flat, np.arange(S * L).reshape(S, L), data.x[idx[:, 0]],
+                         np.tile(params.theta, (S, 1)))
+    names = (*decl.state_names, *decl.output_names)
+    pick = [names.index(c) for c in VALIDATED_CHANNELS]
+    measured = np.stack([ds.get(c, "K")[idx] for c in VALIDATED_CHANNELS], axis=-1)
+    return Y[..., pick], measured, data.u[idx], d
 
 
 def _sample_range(n: int, fraction: float | None, start_range: tuple[int, int] | None,

@@ -38,7 +38,8 @@ def run_cli(plant: str, method: str) -> dict[str, float]:
 
 def run_library(plant: str, method: str) -> dict[str, float]:
     from acid.excite import ExcitationSpec, excite
-    from acid.fit import ModelFitter
+    from acid.ident.fit import fit_model
+    from acid.params import fitted
     from acid.plant import make_plant
     from acid.validate import validate
 
@@ -50,7 +51,7 @@ def run_library(plant: str, method: str) -> dict[str, float]:
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        params = ModelFitter(method=method).fit(est).params
+        params = fitted(fit_model("paper", est, method))
     times["fit"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     validate(held, params, starts=60, horizon=300)

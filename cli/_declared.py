@@ -9,7 +9,7 @@ from pathlib import Path
 
 from acid import __version__
 from acid._io import file_sha256
-from acid.data import Dataset
+from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError
 from acid_cli._common import note, print_table, require_range, say, warn, write_summary
 
@@ -52,12 +52,26 @@ def parse_fix(items: list[str] | None) -> dict[str, float]:
     return out
 
 
+@dataclasses.dataclass(frozen=True)
+class PaperOptions:
+    """What ``acid fit --model paper`` adds: the reference values (``--reference``: shown
+    beside ours, where output error starts, what collinear parameters stay closest to),
+    ``--no-blower`` (beta held at them) and ``--use-eta-cop`` (eq. 4's COP read off P_comp
+    into the file)."""
+
+    reference: str = "paper"
+    no_blower: bool = False
+    use_eta_cop: bool = False
+
+
 def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None, *,
                  method: str, fix: list[str] | None, free: list[str] | None, fit_starts: int,
                  seed: int, oe_window: int, covariance: str, bandwidth,
-                 estimation_fraction: float, more: list[Path] = (),
-                 max_evals: int = 100) -> None:
-    """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``."""
+                 estimation_fraction: float, more: list[Path] = (), loss: str = "squared",
+                 strict: bool = False, oe_estimate_x0: bool = True,
+                 paper: PaperOptions | None = None, max_evals: int = 100) -> None:
+    """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``
+    (for the paper's model, ``paper``: also the params.json keys the controllers read)."""
     from acid.ident.fit import METHODS, fit_model, provenance
     from acid.models import load
 
@@ -67,22 +81,35 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     require_range(fit_starts, "--fit-starts", 1, MAX_STARTS)
     model = load(model_file)
     fixes = parse_fix(fix)
-    ds = Dataset.from_hdf5(data, min_samples=20)
+    start, ref = None, None
+    if paper is not None:
+        from acid.params import load_params
+
+        ref = load_params(paper.reference, allow_unstable=True)
+        start = ref.as_dict()
+        if paper.no_blower:
+            fixes = {**{n: start[n] for n in ("beta1", "beta2", "beta3")}, **fixes}
+    # the paper's fit needs every channel of eqs. 1-3 (T_ain too: eq. 1 reads it measured)
+    need = {"require": MODEL_CHANNELS} if paper is not None else {}
+    ds = Dataset.from_hdf5(data, min_samples=20, **need)
     est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]
     if more:
-        parts = [Dataset.from_hdf5(p, min_samples=20) for p in more]
+        parts = [Dataset.from_hdf5(p, min_samples=20, **need) for p in more]
         parts = [p if estimation_fraction == 1.0 else p.split(estimation_fraction)[0]
                  for p in parts]
         est = Dataset.concatenate([est, *parts])
         est.source = str(data)
     result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
                        fit_starts=fit_starts, seed=seed, oe_window=oe_window,
-                       covariance=covariance, hac_bandwidth=bandwidth, max_nfev=max_evals)
-    prov = provenance(ds, result.method)
+                       covariance=covariance, hac_bandwidth=bandwidth, loss=loss,
+                       oe_estimate_x0=oe_estimate_x0, start=start, strict=strict,
+                       max_nfev=max_evals)
+    prov = provenance(ds, result.method, loss)
     prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
                 records=[str(data), *map(str, more)])
     fitted = model.with_parameters(fixes, tuple(free or ()))
-    result.write(out, fitted, prov)
+    extra, params = _paper_file(result, est, prov, paper) if paper else ({}, None)
+    result.write(out, fitted, prov, extra=extra)
 
     say(f"{data}{' and ' + str(len(more)) + ' more record(s)' if more else ''}: "
         f"{len(est)} samples, {len(result.experiment_ids)} experiment(s), model "
@@ -94,8 +121,14 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
              e.unit, _num(e.declared), _num(e.value), _num(e.stderr, 2),
              "-" if not math.isfinite(e.ci95[0]) else f"[{_num(e.ci95[0])}, {_num(e.ci95[1])}]",
              e.status] for e in result.estimates]
-    print_table(f"Parameters of {model.name!r}, declared beside fitted",
-                ["name", "unit", "declared", "estimate", "stderr", "95 % interval", "status"],
+    beside = paper.reference if paper else "declared"
+    if paper and math.isfinite(extra["eta_cop_estimate"]["value"]):
+        eta, se = extra["eta_cop_estimate"]["value"], extra["eta_cop_estimate"]["stderr"]
+        rows.append(["eta_cop", "1", _num(ref.eta_cop), _num(eta), _num(se, 2),
+                     f"[{_num(eta - 1.96 * se)}, {_num(eta + 1.96 * se)}]",
+                     "eq. 4, " + ("in params" if paper.use_eta_cop else "not used")])
+    print_table(f"Parameters of {model.name!r}, {beside} beside fitted",
+                ["name", "unit", beside, "estimate", "stderr", "95 % interval", "status"],
                 rows)
     eq_rows = [[q.name, q.method, "-" if q.rank is None else f"{q.rank}/{q.n_columns}",
                 _num(q.condition, 3), _num(q.residual_std, 3), _num(q.fit_percent, 4),
@@ -126,15 +159,35 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                     _optima_rows(result.optima))
     for c in result.combinations:
         say(f"identified combination: {c}")
+    if result.simulation_fit:
+        say(f"{oe_window}-step simulation fit from measured states: " + ", ".join(
+            f"{c} {v:.2f} %" for c, v in result.simulation_fit.items()))
     for line in result.notes:
         note(line)
     for line in result.warnings:
         warn(line)
+    for line in params.stability_problems() if params else ():
+        warn(f"{out}: the fitted {line}; acid validate and mpc-check refuse these parameters "
+             "without --allow-unstable")
     say(f"parameters written to {out}")
     write_summary(json_path, {"command": "fit", "acid_version": __version__,
-                              "inputs": {"data": str(data), "model": str(model_file)},
+                              "inputs": {"data": str(data), "model": str(model_file),
+                                         **({"reference": paper.reference} if paper else {})},
                               "estimation_fraction": estimation_fraction, "out": str(out),
+                              **({"params": params.to_json_dict()} if params else {}),
                               **result.to_json_dict()})
+
+
+def _paper_file(result, est: Dataset, prov: dict, paper: PaperOptions):
+    """The params.json keys of the paper's model (``acid.params.ModelParams``, what the
+    controllers read) and eq. 4's COP read off P_comp, beside the declared parameter file."""
+    from acid.params import eta_cop_of, fitted
+
+    eta, se = eta_cop_of(est)
+    params = fitted(result, eta_cop=eta if paper.use_eta_cop else None,
+                    provenance={**prov, "reference": paper.reference})
+    return {**params.to_json_dict(),
+            "eta_cop_estimate": {"value": eta, "stderr": se}}, params
 
 
 def _optima_rows(optima, show: int = 3) -> list[list[str]]:

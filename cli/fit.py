@@ -1,38 +1,22 @@
-"""``acid fit``: identify gamma, tau, beta (paper eqs. 1-5) from a dataset; write params.json."""
+"""``acid fit``: identify a declared model (the paper's eqs. 1-5 by default) from a dataset;
+write its parameter file."""
 
 from __future__ import annotations
 
-import math
-import warnings
 from pathlib import Path
 
 import typer
 
-from acid import __version__
-from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError
-from acid.fit import (
-    COVARIANCES,
-    DEFAULT_COVARIANCE,
-    EQUATION_CHANNEL,
-    LOSSES,
-    METHODS,
-    ModelFitter,
-)
-from acid.params import load_params
+from acid.ident.fit import COVARIANCES, DEFAULT_COVARIANCE, LOSSES, METHODS
 from acid_cli._common import (
     check_paths,
     handle_errors,
-    note,
     params_input,
-    print_table,
     require,
     require_range,
-    say,
-    warn,
-    write_summary,
 )
-from acid_cli._declared import fit_declared, is_model_file, model_file_input
+from acid_cli._declared import PaperOptions, fit_declared, is_model_file, model_file_input
 
 #: Largest output-error window and HAC lag accepted, samples.
 MAX_WINDOW = 100_000
@@ -41,27 +25,18 @@ MAX_EVALS = 100_000
 MODEL_FAMILIES = ("paper", "econ")
 
 
-def _num(v: float, digits: int = 5) -> str:
-    return "-" if v is None or not math.isfinite(v) else f"{v:.{digits}g}"
-
-
-def _lags(bandwidths: dict[str, int]) -> str:
-    return ", ".join(f"{k} {v}" for k, v in bandwidths.items())
-
-
 @handle_errors
 def fit(
     data: Path = typer.Argument(..., help="Dataset (HDF5, from `acid excite` or `acid import`)."),
     out: Path = typer.Option(Path("params.json"), "--out", help="Parameter file to write."),
     method: str | None = typer.Option(
         None, "--method",
-        help="'ls' equation-error least squares (the default for paper), 'cvx' constrained "
-             "(CVXPY), 'oe' output error (multi-step simulation error, started from the ls "
-             "estimate); for a model file also 'auto' (its default: ls where every "
-             "equation allows it, else oe) and 'pem' (prediction error: an extended "
-             "Kalman filter over each whole record)."),
+        help="'auto' (ls where every equation allows it, else oe), 'ls' equation-error "
+             "least squares, 'cvx' least squares inside the declared bounds (CVXPY), 'oe' "
+             "output error (multi-step simulation error, started from the ls estimate), 'pem' "
+             "prediction error (an extended Kalman filter over each whole record)."),
     loss: str = typer.Option("squared", "--loss",
-                             help="'squared' or 'huber' (robust to outliers; cvx or oe)."),
+                             help="'squared' or 'huber' (robust to outliers)."),
     estimation_fraction: float = typer.Option(
         1.0, "--estimation-fraction",
         help="Fit on the first F of the record (e.g. 0.5); the rest is left for "
@@ -74,12 +49,19 @@ def fit(
              "evaluations of the loss (the report says whether it converged first)."),
     reference: str = typer.Option(
         "paper", "--reference",
-        help="Parameters shown beside ours and used for parameters the data do not excite: "
-             "'paper' or a params.json."),
+        help="--model paper: the values shown beside ours, where output error starts and "
+             "what parameters the data do not separate stay closest to: 'paper' or a "
+             "params.json."),
     strict: bool = typer.Option(False, "--strict",
-                                help="Refuse (instead of warn) when a parameter is not excited."),
+                                help="Refuse (instead of reporting the combination the data "
+                                     "identify) when parameters are not separated."),
     no_blower: bool = typer.Option(False, "--no-blower",
-                                   help="Keep the reference beta instead of fitting P_bl."),
+                                   help="--model paper: hold beta at the reference values "
+                                        "instead of fitting P_bl."),
+    oe_measured_x0: bool = typer.Option(
+        False, "--oe-measured-x0",
+        help="Output error: start each window from the measured states instead of "
+             "estimating them (latent states are estimated still)."),
     use_eta_cop: bool = typer.Option(
         False, "--use-eta-cop",
         help="Put the eta_cop estimated from P_comp (eq. 4) into params.json."),
@@ -114,37 +96,28 @@ def fit(
         None, "--add-record", help="Another record fitted with DATA, as its own experiment "
                                    "(model file; repeatable)."),
 ) -> None:
-    """Fit the control-oriented model and write params.json (kelvin convention).
+    """Fit a declared model (the paper's eqs. 1-5 by default) and write its parameter file.
 
-    Prints the parameter table with the reference (paper) values beside ours, the
-    conditioning of each regression and the one-step and multi-step fit %.
+    Prints the parameter table (declared or reference values beside ours), how each
+    equation was fitted (least squares where it is linear in its parameters) with its
+    conditioning and one-step fit %, and the multi-step simulation fit %. For the paper's
+    model the file is also a params.json the controllers read (kelvin convention).
     """
-    # A built-in family takes the declared path (acid.models.load(name)) when an option only
-    # the declared fitter has is given; without them it keeps its hand-written stack.
     from acid.models.loader import BUILT_IN
 
-    # A built-in declaration without a hand-written stack (cabin3, ...) is always declared.
-    declared = is_model_file(model) or (model in BUILT_IN and model not in MODEL_FAMILIES) or (
-        model in MODEL_FAMILIES and bool(fix or free or fit_starts != 1))
-    require(declared or model in MODEL_FAMILIES, "--model",
+    declared = model != "econ"
+    require(model in (*MODEL_FAMILIES, *BUILT_IN) or is_model_file(model), "--model",
             f"must be one of {', '.join(dict.fromkeys([*MODEL_FAMILIES, *BUILT_IN]))} or a "
             f"model file FILE.py, got {model!r}")
+    # econ keeps its family's fitter unless an option only the declared fitter has is given
+    if model == "econ" and (fix or free or fit_starts != 1):
+        declared = True
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
-                        "--model": model_file_input(model) if declared else None,
+                        "--model": model_file_input(model),
                         **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
                 outputs={"--out": out, "--json": json_path})
-    if not declared:
-        given = [opt for opt, set_ in (("--fix", fix), ("--free", free),
-                                       ("--fit-starts", fit_starts != 1),
-                                       ("--add-record", add_record)) if set_]
-        if given:
-            raise ConfigError(f"{', '.join(given)}: only for --model FILE.py (or with "
-                              "--fix, --free or --fit-starts, which fit paper and econ "
-                              "through the declared path)")
-    method = method or ("auto" if declared else "ls")
+    method = method or "auto"
     require_range(estimation_fraction, "--estimation-fraction", 0.0, 1.0, lo_open=True)
-    require(declared or method in METHODS, "--method",
-            f"must be one of {', '.join(METHODS)}, got {method!r}")
     require(loss in LOSSES, "--loss", f"must be one of {', '.join(LOSSES)}, got {loss!r}")
     require_range(oe_window, "--oe-window", 5, MAX_WINDOW, "samples")
     require_range(max_evals, "--max-evals", 1, MAX_EVALS)
@@ -158,92 +131,31 @@ def fit(
     if covariance not in COVARIANCES:
         raise ConfigError(f"--covariance: unknown covariance {covariance!r} (choose from "
                           f"{', '.join(COVARIANCES)})")
+    paper_only = [opt for opt, set_ in (("--use-eta-cop", use_eta_cop),
+                                        ("--reference", reference != "paper"),
+                                        ("--no-blower", no_blower)) if set_]
+    if paper_only and model != "paper":
+        raise ConfigError(f"{', '.join(paper_only)}: only for --model paper")
     if declared:
-        given = [opt for opt, set_ in (
-            ("--loss", loss != "squared"), ("--use-eta-cop", use_eta_cop),
-            ("--strict", strict), ("--reference", reference != "paper"),
-            ("--no-blower", no_blower)) if set_]
-        if given:
-            raise ConfigError(f"{', '.join(given)}: only for --model paper without --fix, "
-                              "--free or --fit-starts")
+        require(method in METHODS, "--method",
+                f"must be one of {', '.join(METHODS)}, got {method!r}")
         return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                             covariance=covariance, bandwidth=bandwidth,
                             estimation_fraction=estimation_fraction,
-                            more=list(add_record or []), max_evals=max_evals)
-    require(max_evals == 100, "--max-evals", "is for a declared model's output-error or "
-            "prediction-error fit (--model FILE.py or a built-in declaration)")
-    if model == "econ":
-        paper_only = {"--method": method != "ls", "--loss": loss != "squared",
-                      "--use-eta-cop": use_eta_cop, "--strict": strict,
-                      "--reference": reference != "paper", "--no-blower": no_blower}
-        given = [opt for opt, set_ in paper_only.items() if set_]
-        if given:
-            raise ConfigError(f"{', '.join(given)}: only for --model paper")
-        from acid_cli._fit_econ import fit_econ
+                            more=list(add_record or []), loss=loss, strict=strict,
+                            max_evals=max_evals,
+                            oe_estimate_x0=not oe_measured_x0,
+                            paper=PaperOptions(reference=reference, no_blower=no_blower,
+                                               use_eta_cop=use_eta_cop)
+                            if model == "paper" else None)
+    given = [opt for opt, set_ in (("--method", method != "auto"), ("--loss", loss != "squared"),
+                                   ("--strict", strict), ("--oe-measured-x0", oe_measured_x0),
+                                   ("--add-record", add_record),
+                                   ("--max-evals", max_evals != 100)) if set_]
+    if given:
+        raise ConfigError(f"{', '.join(given)}: not for --model econ (its family's fitter; "
+                          "--fix, --free or --fit-starts fit it through its declaration)")
+    from acid_cli._fit_econ import fit_econ
 
-        return fit_econ(data, out, estimation_fraction, covariance, bandwidth, json_path)
-    ref = load_params(reference)
-    ds = Dataset.from_hdf5(data, require=MODEL_CHANNELS, min_samples=20)
-    est = ds if estimation_fraction == 1.0 else ds.split(estimation_fraction)[0]
-    fitter = ModelFitter(method=method, loss=loss, fit_blower=not no_blower,
-                         oe_window=oe_window, use_eta_cop=use_eta_cop,
-                         on_rank_deficiency="raise" if strict else "fix", reference=ref,
-                         covariance=covariance, hac_bandwidth=bandwidth)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the result carries them; printed below, once
-        result = fitter.fit(est)
-
-    provenance = dict(result.params.provenance)
-    provenance["estimation_fraction"] = estimation_fraction
-    provenance["reference"] = reference
-    params = result.params.replace(provenance=provenance)
-    report = result.to_json_dict()
-    params.to_json(out, extra={"fit": report})
-
-    say(f"{data}: {len(est)} of {len(ds)} samples ({est.duration:g} s), method "
-                  f"{method}, loss {loss}, covariance {covariance}"
-                  + (f" (lags {_lags(result.hac_bandwidth)})" if result.hac_bandwidth else "")
-                  + f" ({result.elapsed_s * 1e3:.0f} ms)")
-    rows = []
-    for (name, unit, ref_v, v, se, lo, hi), st in zip(result.table(),
-                                                      result.param_status + ("eq. 4",),
-                                                      strict=False):
-        ci = "-" if not math.isfinite(lo) else f"[{_num(lo)}, {_num(hi)}]"
-        rows.append([name, unit, _num(ref_v), _num(v), _num(se, 2), ci, st])
-    print_table(f"Parameters (kelvin convention), {reference} beside ours",
-                ["name", "unit", reference, "estimate", "stderr", "95 % interval", "status"],
-                rows)
-    eq_rows = []
-    for eq, ch in EQUATION_CHANNEL.items():
-        if eq not in result.rank:
-            eq_rows.append([f"eq. {eq[2:]}", ch, "-", "-", "-", "-", "-", "kept"])
-            continue
-        eq_rows.append([f"eq. {eq[2:]}", ch, f"{result.rank[eq]}/{result.n_regressors[eq]}",
-                        _num(result.condition_number[eq], 3),
-                        _num(result.condition_number_raw[eq], 3),
-                        _num(result.residual_std[eq], 3),
-                        f"{result.fit_percent_one_step.get(ch, math.nan):.2f}",
-                        result.solver_status[eq].split(" ")[0]])
-    print_table("Regressions: rank, condition number (centred+scaled / raw kelvin), "
-                "residual std (K; W for eq. 5), one-step fit (%)",
-                ["eq.", "channel", "rank", "cond", "cond raw", "resid", "fit %", "solver"],
-                eq_rows)
-    sim = ", ".join(f"{c} {v:.2f} %" for c, v in result.fit_percent_simulation.items())
-    say(f"{oe_window}-step simulation fit from measured states: {sim}")
-    if "oe" in result.solver_status:
-        say(f"output error: {result.solver_status['oe']}")
-    if result.active_constraints:
-        say("active constraints: " + "; ".join(result.active_constraints))
-    for line in result.notes:
-        note(line)
-    for line in result.warnings:
-        warn(line)
-    for line in params.stability_problems():
-        warn(f"{out}: the fitted {line}; acid validate and mpc-check refuse these parameters "
-             "without --allow-unstable")
-    say(f"parameters written to {out}")
-    write_summary(json_path, {"command": "fit", "acid_version": __version__,
-                              "inputs": {"data": str(data), "reference": reference},
-                              "estimation_fraction": estimation_fraction, "out": str(out),
-                              "params": params.to_json_dict(), **report})
+    return fit_econ(data, out, estimation_fraction, covariance, bandwidth, json_path)

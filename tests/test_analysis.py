@@ -7,7 +7,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from acid import model
 from acid.analysis import compare, predict, resid
 from acid.errors import ConfigError, DataError
 from acid.excite import ExcitationSpec, excite
@@ -35,13 +34,16 @@ def test_k_step_prediction_matches_a_hand_rolled_loop(model_dataset):
     pr = predict(ds, p, k)
     K = {c: ds.get(c, "K") for c in ("T_cab", "T_evap", "T_evap_set", "T_int", "T_shell")}
     W = ds["W_bl"]
+    g, t = p.gamma, p.tau
     cab, evap = K["T_cab"][n - k], K["T_evap"][n - k]
-    for j in range(n - k, n):
-        cab, evap, _ = model.step(cab, evap, W[j], K["T_evap_set"][j], K["T_int"][j],
-                                  K["T_shell"][j], p)
+    for j in range(n - k, n):   # eqs. 1-3 written out here
+        ain = g[5] * evap + g[6] * W[j] + t[2]
+        cab, evap = (cab + g[0] * (K["T_int"][j] - cab) + g[1] * (K["T_shell"][j] - cab)
+                     + g[2] * (ain - cab) * W[j] + t[0],
+                     g[3] * evap + g[4] * (evap - K["T_evap_set"][j]) + t[1])
     assert pr.predicted[n, 0] == pytest.approx(cab, abs=1e-9)
     assert pr.predicted[n, 1] == pytest.approx(evap, abs=1e-9)
-    assert pr.predicted[n, 2] == pytest.approx(model.inlet_air(evap, W[n], p), abs=1e-9)
+    assert pr.predicted[n, 2] == pytest.approx(g[5] * evap + g[6] * W[n] + t[2], abs=1e-9)
     assert np.all(np.isnan(pr.predicted[:k]))
 
 
@@ -58,14 +60,15 @@ def test_compare_uses_matlabs_fit_definition_and_ranks_models(model_dataset):
     res = compare(model_dataset, paper(), wrong)
     df = res.to_frame()
     assert list(df.index) == ["paper", "wrong"] and list(df.columns) == ["T_cab", "T_evap",
-                                                                         "T_ain"]
+                                                                         "T_ain", "P_bl"]
     pr = res.predictions["wrong"]
     for i, c in enumerate(pr.channels):
         expected = fit_percent(pr.measured[:, i], pr.predicted[:, i])
         assert df.loc["wrong", c] == pytest.approx(expected)
-        assert df.loc["paper", c] > df.loc["wrong", c]
+        if c != "P_bl":   # perturbed() leaves beta (eq. 5) as it is
+            assert df.loc["paper", c] > df.loc["wrong", c]
     fig = res.plot()
-    assert isinstance(fig, matplotlib.figure.Figure) and len(fig.axes) == 3
+    assert isinstance(fig, matplotlib.figure.Figure) and len(fig.axes) == 4
     with pytest.raises(ConfigError, match="at least one model"):
         compare(model_dataset)
 
@@ -74,7 +77,8 @@ def test_compare_uses_matlabs_fit_definition_and_ranks_models(model_dataset):
 def process_noise_dataset():
     spec = ExcitationSpec(seed=5)
     plant = make_plant("model", process_noise_std=0.05, rng=spec.rng("noise"))
-    return excite(plant, spec)
+    ds = excite(plant, spec)
+    return ds.select([c for c in ds.channels if c != "P_bl"])   # eqs. 1-3: T_cab, T_evap, T_ain
 
 
 def test_resid_of_the_true_model_is_white_and_independent(process_noise_dataset):
@@ -102,18 +106,19 @@ def test_resid_of_a_wrong_model_fails_whiteness(process_noise_dataset):
 
 
 def test_fit_result_is_accepted_wherever_parameters_are(model_dataset):
-    from acid.fit import fit
+    from acid.ident.fit import fit
     from acid.mpc.nmpc import NMPC
+    from acid.params import fitted
     from acid.validate import validate
 
     est, val = model_dataset.split(0.5)
     result = fit(est)
     a = validate(model_dataset, result, starts=5, horizon=50, held_out_fraction=0.5)
-    b = validate(model_dataset, result.params, starts=5, horizon=50, held_out_fraction=0.5)
+    b = validate(model_dataset, fitted(result), starts=5, horizon=50, held_out_fraction=0.5)
     np.testing.assert_array_equal(a.predicted, b.predicted)
-    assert predict(val, result).model == result.params.name
-    assert NMPC(result).params is result.params
-    assert make_plant("model", params=result).params is result.params
+    assert predict(val, result).model == "paper (fit-ls)"
+    assert NMPC(result).params == fitted(result)
+    assert make_plant("model", params=result).params == fitted(result)
     with pytest.raises(DataError, match="expected model parameters"):
         validate(model_dataset, 3.5)
 
@@ -121,9 +126,10 @@ def test_fit_result_is_accepted_wherever_parameters_are(model_dataset):
 def test_frames_are_degc_and_labelled(model_dataset):
     pr = predict(model_dataset.window(0, 50), paper(), 3)
     df = pr.to_frame()
-    assert isinstance(df, pd.DataFrame) and df.attrs["units"] == "degC"
+    assert isinstance(df, pd.DataFrame)
+    assert df.attrs["units"] == {"T_cab": "degC", "T_evap": "degC", "T_ain": "degC", "P_bl": "W"}
     assert list(df.columns) == ["T_cab", "T_cab_pred", "T_evap", "T_evap_pred", "T_ain",
-                                "T_ain_pred"]
+                                "T_ain_pred", "P_bl", "P_bl_pred"]
     np.testing.assert_allclose(df["T_cab"], model_dataset["T_cab"][:50])
     with pytest.raises(ConfigError, match="horizon k"):
         predict(model_dataset, paper(), 0)

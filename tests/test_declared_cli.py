@@ -117,9 +117,14 @@ def test_add_record_makes_experiments(record, tmp_path):
     # the same record twice: the same load in both experiments
     assert q["values"][0] == pytest.approx(q["values"][1], rel=1e-6)
     assert d["provenance"]["records"] == [str(record), str(second)]
+    # the paper's model is a declaration too: its records become experiments alike
     res = runner.invoke(app, ["fit", str(record), "--add-record", str(second),
                               "--out", str(tmp_path / "q.json")])
-    assert_one_line_error(res, "--add-record", "--model FILE.py")
+    assert res.exit_code == 0, res.output
+    assert "2 experiment(s)" in res.output
+    res = runner.invoke(app, ["fit", str(record), "--add-record", str(second), "--model",
+                              "econ", "--out", str(tmp_path / "r.json")])
+    assert_one_line_error(res, "--add-record", "--model econ")
 
 
 def test_fit_starts_take_the_built_in_families_through_the_declared_fitter(record, tmp_path):
@@ -143,11 +148,16 @@ def test_fit_starts_take_the_built_in_families_through_the_declared_fitter(recor
                               str(vjson), "--no-yardsticks"])
     assert res.exit_code == 0, res.output
     assert json.loads(vjson.read_text())["model"] == "paper"
-    # without those options --model paper keeps its own stack and parameter file
-    old = tmp_path / "old.json"
-    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--out", str(old)])
+    # without those options too: one parameter file, read by the declared validator and
+    # by the controllers (ModelParams) alike
+    one = tmp_path / "one.json"
+    res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--out", str(one)])
     assert res.exit_code == 0, res.output
-    assert "format" not in json.loads(old.read_text())
+    d = json.loads(one.read_text())
+    assert d["format"] == "acid-declared-params" and len(d["gamma"]) == 7
+    from acid.params import ModelParams
+    assert ModelParams.from_json(one).gamma == tuple(
+        d["parameters"][f"gamma{i}"]["value"] for i in range(1, 8))
     res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--fit-starts", "3",
                               "--method", "ls", "--out", str(tmp_path / "q.json")])
     assert_one_line_error(res, "--fit-starts 3", "--method oe")
@@ -187,26 +197,3 @@ def test_excite_drives_a_declared_model_as_the_plant(tmp_path):
     assert res.exit_code == 0, res.output
     assert Dataset.from_hdf5(rec2).metadata["plant_config"]["parameters"] == {"a": 300.0,
                                                                               "b": 20.0}
-
-
-def test_the_declared_fitter_gives_acid_fit_paper_results(record, tmp_path):
-    """What `acid fit --model paper` writes today (acid/fit.py's least squares, HAC) equals
-    the declared fitter on acid.models.paper: the condition for deleting that path."""
-    from acid.data import Dataset
-    from acid.fit import ModelFitter
-    from acid.ident.fit import fit_model
-    from acid.params import paper
-
-    out = tmp_path / "p.json"
-    res = runner.invoke(app, ["fit", str(record), "--out", str(out)])
-    assert res.exit_code == 0, res.output
-    old = json.loads(out.read_text())
-    theta = np.concatenate([old["gamma"], old["tau"], old["beta"]])
-    ds = Dataset.from_hdf5(record)
-    new = fit_model("paper", ds, "ls")
-    np.testing.assert_allclose(new.values, theta, rtol=1e-9, atol=0)
-    ref = ModelFitter(method="ls", reference=paper()).fit(ds)
-    se = np.array([e.stderr for e in new.estimates])
-    sound = ref.stderr > 1e-8 * np.abs(theta)        # P_bl of the plant is exact: round-off
-    assert sound.sum() >= 10
-    np.testing.assert_allclose(se[sound], ref.stderr[sound], rtol=1e-6)

@@ -14,7 +14,8 @@ from typer.testing import CliRunner
 
 from acid.econ.params import NAMES, EconParams, identify
 from acid.errors import DataError, IdentifiabilityWarning
-from acid.fit import ModelFitter
+from acid.ident.fit import fit_model
+from acid.params import fitted
 from acid.validate import validate
 from acid_cli.main import app
 
@@ -83,7 +84,7 @@ def test_validates_beside_the_paper_model_on_held_out_data(econ_hifi_dataset, ec
     est, held = econ_hifi_dataset.split(0.75)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        paper = ModelFitter(method="oe").fit(est).params
+        paper = fitted(fit_model("paper", est, "oe"))
     kw = {"starts": 30, "horizon": 120}
     e = validate(held, econ_hifi_fit.params, **kw)
     p = validate(held, paper, **kw)
@@ -149,7 +150,7 @@ def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
 
 @pytest.mark.parametrize("args, fragments", [
     (["--model", "thermal"], ("--model", "thermal", "econ")),
-    (["--model", "econ", "--method", "oe"], ("--method", "only for --model paper")),
+    (["--model", "econ", "--method", "oe"], ("--method", "not for --model econ")),
 ])
 def test_cli_fit_bad_model_options(econ_file, tmp_path, args, fragments):
     res = runner.invoke(app, ["fit", str(econ_file), "--out", str(tmp_path / "p.json"), *args])

@@ -81,7 +81,7 @@ def test_bad_data_paths_and_options_give_a_one_line_error(data_file, tmp_path):
     assert_one_line_error(_invoke(data_file, "--method", "magic"), "magic")
     assert_one_line_error(_invoke(data_file, "--estimation-fraction", 1.5),
                            "--estimation-fraction")
-    assert_one_line_error(_invoke(data_file, "--loss", "huber"), "Huber")
+    assert_one_line_error(_invoke(data_file, "--loss", "cauchy"), "--loss", "cauchy")
 
 
 def test_unexcited_parameter_warns_or_refuses_with_strict(model_dataset, tmp_path):

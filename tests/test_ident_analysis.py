@@ -98,7 +98,7 @@ def test_resid_and_compare_through_acid_analysis(record, tmp_path):
     c.plot()
     r.plot()
     pr = predict(record, fit, 1)                           # a fit result routes here too
-    assert pr.model == "cabin3 (fit)" and pr.fit_percent["T_cab"] > 99.0
+    assert pr.model == "cabin3 (fit-oe)" and pr.fit_percent["T_cab"] > 99.0
 
 
 def test_econ_gains_resid_with_every_channel_and_its_units():

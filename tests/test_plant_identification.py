@@ -8,13 +8,12 @@ percentile < 5 K for T_cab, T_evap and T_ain.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 
 from acid.excite import ExcitationSpec, excite
-from acid.fit import ModelFitter
+from acid.ident.fit import fit_model
+from acid.params import fitted
 from acid.plant import make_plant
 from acid.validate import validate
 
@@ -31,10 +30,7 @@ def plant_records():
 @pytest.mark.parametrize("method", ["ls", "oe"])
 def test_fitted_model_predicts_1500_s_within_the_bands(plant_records, method):
     est, held = plant_records
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        fit = ModelFitter(method=method).fit(est)
-    res = validate(held, fit.params, starts=60, horizon=300)
+    res = validate(held, fitted(fit_model("paper", est, method)), starts=60, horizon=300)
     for ch in ("T_cab", "T_evap", "T_ain"):
         m = res.metrics[ch]
         assert m["median_abs"] < 1.5, f"{method} {ch}: median |error| {m['median_abs']:.2f} K"
@@ -43,9 +39,7 @@ def test_fitted_model_predicts_1500_s_within_the_bands(plant_records, method):
 
 def test_identified_model_is_physical(plant_records):
     """Signs the physics demands: conductances positive, a stable evaporator pole."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        p = ModelFitter(method="oe").fit(plant_records[0]).params
+    p = fitted(fit_model("paper", plant_records[0], "oe"))
     g = np.array(p.gamma)
     assert (g[[0, 1, 2, 5]] > 0).all(), p.gamma
     assert abs(g[3] + g[4]) < 1.0, "evaporator pole gamma4 + gamma5 must be stable"

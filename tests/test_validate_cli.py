@@ -117,7 +117,7 @@ def test_yardsticks_window_design_and_residuals_are_reported(noisy_model_dataset
     assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
     assert set(d["yardsticks"]["arx"]["T_cab"]["60"]) == {"rmse_K", "p90_K"}
     assert d["window_design"]["max_windows_per_sample"] > 1
-    assert set(d["residuals"]["interpretation"]) == {"T_cab", "T_evap", "T_ain"}
+    assert set(d["residuals"]["interpretation"]) == {"T_cab", "T_evap", "T_ain", "P_bl"}
     assert (out / "fig6b_yardsticks.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # a model worse than persistence would show it: here the model (true parameters) wins
     for c in ("T_cab", "T_evap", "T_ain"):

@@ -77,7 +77,7 @@ def resolve(params, model: Model | str | None = None) -> tuple[Model, ParameterS
     if isinstance(params, DeclaredFitResult):
         m = load(model) if model is not None else _model_named(params.model,
                                                                params.model_source)
-        return m, fitted_parameters(params), f"{m.name} (fit)"
+        return m, fitted_parameters(params), f"{m.name} (fit-{params.method})"
     if isinstance(params, (str, Path)):
         if model is None:
             try:
@@ -98,7 +98,7 @@ def resolve(params, model: Model | str | None = None) -> tuple[Model, ParameterS
     if not isinstance(ps, ParameterSet):
         raise ConfigError(f"parameters of model {m.name!r}: expected a fit result, a "
                           f"parameter file or a ParameterSet, got {type(ps).__name__}")
-    return m, ps, f"{m.name} ({ps.source})"
+    return m, ps, ps.label or f"{m.name} ({ps.source})"
 
 
 def _state_track(model: Model, data: ModelData, P: np.ndarray, first: np.ndarray,

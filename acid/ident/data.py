@@ -49,6 +49,14 @@ class ModelData:
             raise DataError(f"{ds.source}: sample time {ds.Ts:g} s differs from model "
                             f"{model.name!r}'s Ts = {model.Ts:g} s; resample the data")
         n = len(ds)
+        needed = [(r, w) for rows, w in ((model.states, "measured state"),
+                                         (model.inputs, "input"),
+                                         (model.disturbances, "disturbance"))
+                  for r in rows if getattr(r, "measured", True)]
+        missing = [f"{r.name!r} ({w}, {r.unit})" for r, w in needed if r.name not in ds]
+        if len(missing) > 1:
+            raise DataError(f"{ds.source}: model {model.name!r} needs channels "
+                            f"{', '.join(missing)}")
 
         def column(row, required: bool, what: str):
             if row.name not in ds:

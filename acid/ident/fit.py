@@ -36,7 +36,7 @@ import scipy.stats
 from acid import __version__
 from acid._io import file_sha256, json_safe, write_json
 from acid.data import Dataset
-from acid.errors import ConfigError
+from acid.errors import ConfigError, DataError
 from acid.ident import linear, oe
 from acid.ident.data import ModelData
 from acid.models.declaration import Model
@@ -44,6 +44,9 @@ from acid.models.loader import load
 
 METHODS = ("auto", "ls", "cvx", "oe", "pem")
 COVARIANCES = ("hac", "white")
+#: The default of ``fit_model(covariance=...)`` and ``acid fit --covariance``.
+DEFAULT_COVARIANCE = "hac"
+LOSSES = ("squared", "huber")
 PARAMS_FORMAT = "acid-declared-params"
 
 
@@ -116,6 +119,14 @@ class DeclaredFitResult:
     n_samples: int
     data_source: str
     elapsed_s: float = field(default=math.nan, compare=False)
+    #: {channel: fit %} of ``window``-sample simulations started from the measured states
+    #: (latent ones from their declared rule), the fitted parameters, every measured channel
+    simulation_fit: dict = field(default_factory=dict)
+    #: {equation: fit %} of its one-step predictions along the data with the fitted table
+    #: (measured states, inputs and read outputs substituted; equations reading a latent
+    #: state are left out)
+    one_step_fit: dict = field(default_factory=dict)
+    loss: str = "squared"
 
     def value(self, name: str, experiment: int | None = None) -> float:
         """The fitted value of ``name``; a per-experiment one of the experiment index
@@ -139,15 +150,19 @@ class DeclaredFitResult:
                             "experiment": e.experiment} for e in self.estimates],
             "equations": [vars(q) for q in self.equations],
             "combinations": list(self.combinations),
-            "output_error": self.output_error,
+            "output_error": self.output_error, "loss": self.loss,
+            "fit_percent_simulation": self.simulation_fit,
+            "fit_percent_one_step": self.one_step_fit,
             "optima": [vars(o) for o in self.optima],
             "covariance": {"names": list(self.covariance_names), "matrix": self.covariance},
             "notes": list(self.notes), "warnings": list(self.warnings),
             "elapsed_s": self.elapsed_s,
         })
 
-    def write(self, path: str | Path, model: Model, provenance: dict | None = None) -> Path:
-        """The parameter file ``acid validate --model FILE --params`` reads."""
+    def write(self, path: str | Path, model: Model, provenance: dict | None = None,
+              extra: dict | None = None) -> Path:
+        """The parameter file ``acid validate --model FILE --params`` reads; ``extra`` adds
+        keys (the paper's model adds its ``ModelParams`` keys, read by the controllers)."""
         params = {}
         for p, v in zip(model.parameters, self.values, strict=True):
             est = next((e for e in self.estimates if e.name == p.name and e.experiment is None),
@@ -161,7 +176,7 @@ class DeclaredFitResult:
                                     "values": list(map(float, v))}
                                 for n, v in self.per_experiment.items()},
              "provenance": provenance or {}, "fit": self.to_json_dict()}
-        return write_json(path, json_safe(d))
+        return write_json(path, json_safe({**(extra or {}), **d}))
 
 
 # -------------------------------------------------------------------------- fitter
@@ -169,16 +184,30 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
               fix: dict | None = None, free: tuple[str, ...] = (), fit_starts: int = 1,
               seed: int = 0, oe_window: int = 300, covariance: str = "hac",
               hac_bandwidth="auto", solver: str | None = None,
-              max_nfev: int = 100) -> DeclaredFitResult:
+              max_nfev: int = 100, loss: str = "squared", oe_estimate_x0: bool = True,
+              start: dict | None = None, strict: bool = False) -> DeclaredFitResult:
     """Fit ``model`` (a ``Model`` or a name/path for :func:`acid.models.load`) to ``ds``.
 
     See the module docstring for the methods. ``fix`` {name: value} and ``free`` (names)
-    change the declared table for this fit.
+    change the declared table for this fit; ``start`` {name: value} replaces declared
+    values (where output error starts, what a collinear set stays closest to) without
+    fixing them. ``loss="huber"``: robust to outliers (equation error by CVXPY, output
+    error by scipy's Huber loss). ``oe_estimate_x0=False``: output-error windows start from
+    the measured states (latent ones are still estimated). ``strict``: a parameter the data
+    do not separate from another is an error, not a reported combination.
     """
     t0 = time.perf_counter()
     model = load(model)
     if method not in METHODS:
         raise ConfigError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
+    if loss not in LOSSES:
+        raise ConfigError(f"unknown loss {loss!r} (choose from {', '.join(LOSSES)})")
+    bw = hac_bandwidth
+    if not (bw in ("auto", "nw") or (isinstance(bw, (int, np.integer))
+                                     and not isinstance(bw, bool) and bw >= 0)):
+        raise ConfigError(f"hac_bandwidth must be 'auto', 'nw' or an integer >= 0, got {bw!r}")
+    if int(oe_window) < 5:
+        raise ConfigError(f"oe_window must be at least 5 samples, got {oe_window}")
     if covariance not in COVARIANCES:
         raise ConfigError(f"unknown covariance {covariance!r} (choose from "
                           f"{', '.join(COVARIANCES)})")
@@ -189,6 +218,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                           f"use --method oe (or auto), not {method}")
     if fix or free:
         model = model.with_parameters(fix, tuple(free))
+    if start:
+        model = _with_values(model, start)
     if method == "pem":
         from acid.ident.pem import fit_pem
 
@@ -198,6 +229,12 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     names = model.parameter_names
     free_idx = tuple(i for i, p in enumerate(model.parameters) if not p.fixed)
     per_exp = {i for i, p in enumerate(model.parameters) if p.per_experiment}
+    forms = linear.equation_forms(model, data, free_idx)
+    # a parameter read only by outputs the data lack cannot be fitted: kept as declared
+    unseen = sorted(set(free_idx) - {i for f in forms for i in f.free
+                                     if not (f.name in model.output_names
+                                             and f.reason.endswith("is not measured"))})
+    free_idx = tuple(i for i in free_idx if i not in unseen)
     columns = tuple(c for i in free_idx for c in (
         [linear.Column(i, names[i], e) for e in range(E)] if i in per_exp
         else [linear.Column(i, names[i])]))
@@ -214,7 +251,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     lo = np.array([model.parameters[c.index].min for c in columns])
     hi = np.array([model.parameters[c.index].max for c in columns])
 
-    forms = linear.equation_forms(model, data, free_idx)
+    if unseen:
+        notes.append(f"not fitted (kept at the declared values): "
+                     f"{', '.join(names[i] for i in unseen)}: only outputs the data lack "
+                     "read them")
     reports: dict[str, EquationReport] = {
         f.name: EquationReport(f.name, "-", f.reason, tuple(names[i] for i in f.free))
         for f in forms}
@@ -233,7 +273,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         pos = [col_pos[(c.index, c.experiment)] for c in reg.columns]
         sol = linear.solve(reg, data, theta[pos], covariance, hac_bandwidth,
                            bounds=(lo[pos], hi[pos]) if ls_method == "cvx" else None,
-                           solver=solver)
+                           solver=solver, loss=loss)
         theta[pos] = sol.theta
         stderr[pos] = sol.stderr
         cov[np.ix_(pos, pos)] = sol.cov
@@ -246,6 +286,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         if sol.combinations:
             lost = [c.label for c, ok in zip(reg.columns, sol.identified, strict=True)
                     if not ok]
+            if strict:
+                raise DataError(f"{ds.source}: {' + '.join(reg.names)}: the data do not "
+                                f"separate {', '.join(lost)} (they identify "
+                                f"{'; '.join(sol.combinations)}); excite the inputs")
             warn.append(f"{' + '.join(reg.names)}: the data do not separate "
                         f"{', '.join(lost)}; they identify {'; '.join(sol.combinations)} "
                         "(estimates closest to the declared values)")
@@ -283,16 +327,16 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     if method == "oe" and columns:
         base = data.parameter_matrix(model, declared)
         prob = oe.OEProblem(model, data, columns, _window_base(base, columns, oe.Windows.of(
-            data.segments, oe_window)), oe_window)
-        start = np.where(np.isfinite(theta), theta, declared[[c.index for c in columns]])
-        res = oe.solve(prob, start, lo, hi, covariance=covariance,
-                       hac_bandwidth=hac_bandwidth, max_nfev=max_nfev)
+            data.segments, oe_window)), oe_window, estimate_x0=oe_estimate_x0)
+        theta_start = np.where(np.isfinite(theta), theta, declared[[c.index for c in columns]])
+        res = oe.solve(prob, theta_start, lo, hi, covariance=covariance,
+                       hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
         runs = [(res.loss, res.theta)]
         if fit_starts > 1:
             rng = np.random.default_rng(seed)
             for s0 in _starts(rng, fit_starts - 1, theta, lo, hi):
                 r = oe.solve(prob, s0, lo, hi, reweight=False, covariance=covariance,
-                             hac_bandwidth=hac_bandwidth, max_nfev=max_nfev)
+                             hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
                 runs.append((r.loss, r.theta))
                 if r.loss < res.loss * (1 - 1e-9):
                     res = r
@@ -322,8 +366,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         if not res.success:
             warn.append(f"output error did not converge ({res.status})")
         notes.append(f"output error over {res.n_windows} windows of <= {oe_window} samples, "
-                     "each window's initial state estimated" + (
-                         f" (latent: {', '.join(latent)})" if latent else ""))
+                     + ("each window's initial state estimated" if oe_estimate_x0 else
+                        "each window started from the measured states") + (
+                         f" (latent: {', '.join(latent)}, estimated)" if latent else ""))
         for f in forms:
             q = reports[f.name]
             if q.method == "-" and f.free:
@@ -363,7 +408,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         cols = [k for k, c in enumerate(columns) if c.index == i]
         if not cols:
             estimates.append(Estimate(p.name, p.unit, p.value, p.value, math.nan,
-                                      (math.nan, math.nan), "fixed"))
+                                      (math.nan, math.nan),
+                                      "not fitted" if i in unseen else "fixed"))
             if i in per_exp:
                 for e in range(E):
                     estimates.append(Estimate(p.name, p.unit, p.value, p.value, math.nan,
@@ -376,8 +422,11 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                 (math.nan, math.nan)
             estimates.append(Estimate(p.name, p.unit, p.value, float(theta[k]), se, ci,
                                       status[k], columns[k].experiment))
+    P_fit = _values_at(data, values, per_experiment, names)
     return DeclaredFitResult(
-        model=model.name, model_source=model.source, method=method,
+        simulation_fit=simulation_fit(model, data, P_fit, oe_window),
+        one_step_fit=one_step_fit(model, data, forms, P_fit),
+        loss=loss, model=model.name, model_source=model.source, method=method,
         estimates=tuple(estimates), equations=tuple(reports.values()), values=values,
         per_experiment=per_experiment, experiment_ids=data.experiment_ids,
         covariance=cov, covariance_names=tuple(c.label for c in columns),
@@ -385,6 +434,75 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         optima=tuple(optima), combinations=tuple(combos), notes=tuple(notes),
         warnings=tuple(warn), n_samples=len(ds), data_source=ds.source,
         elapsed_s=time.perf_counter() - t0)
+
+
+def simulation_fit(model: Model, data: ModelData, P: np.ndarray, window: int) -> dict:
+    """{channel: fit %} of ``window``-sample simulations of every experiment from the
+    measured states (latent ones from their declared rule) with the parameters ``P``
+    (N, np) per sample: the multi-step quality a one-step fit does not show."""
+    w = oe.Windows.of(data.segments, window)
+    i0 = w.idx[:, 0]
+    Y = oe.simulate_windows(model, data, w.idx, data.initial_states(model, i0), P[i0])
+    meas = data.observed()[w.idx]
+    out = {}
+    for c, name in data.measured_channels(model):
+        ok = w.mask & np.isfinite(meas[..., c])
+        m, y = meas[..., c][ok], Y[..., c][ok]
+        den = np.linalg.norm(m - m.mean())
+        out[name] = float(100.0 * (1.0 - np.linalg.norm(y - m) / den)) if den > 0 \
+            else math.nan
+    return out
+
+
+def one_step_fit(model: Model, data: ModelData, forms, P: np.ndarray) -> dict:
+    """{equation: fit %} of one-step predictions along the data with parameters ``P``
+    (N, np) per sample: a state's next value from the measured state, inputs and read
+    outputs; an output at its sample. Equations that read a latent state are left out."""
+    import casadi as ca
+
+    out = {}
+    args = (model._x, model._u, model._d, model._p, model._yr)
+    for f in forms:
+        if f.reason.startswith("reads the latent"):
+            continue
+        rows, target = linear.equation_rows(model, data, f.name)
+        if rows.size < 2:
+            continue
+        fn = ca.Function("e", list(args), [f.expr]).map(rows.size)
+        pred = np.asarray(fn(*[np.nan_to_num(a[rows]).T for a in (data.x, data.u, data.d)],
+                             P[rows].T, np.nan_to_num(data.y[rows]).T)).ravel()
+        den = np.linalg.norm(target - target.mean())
+        out[f.name] = float(100.0 * (1.0 - np.linalg.norm(pred - target) / den)) if den > 0 \
+            else math.nan
+    return out
+
+
+def _values_at(data: ModelData, values: np.ndarray, per_experiment: dict,
+               names: tuple[str, ...]) -> np.ndarray:
+    """(N, np) the fitted table at every sample (per-experiment values by experiment)."""
+    P = np.tile(values, (data.x.shape[0], 1))
+    for n, v in per_experiment.items():
+        P[:, names.index(n)] = np.asarray(v)[data.experiment]
+    return P
+
+
+def _with_values(model: Model, start: dict) -> Model:
+    """A copy of ``model`` whose table has the values ``start`` (name -> value)."""
+    import copy
+
+    for n in start:
+        model.parameter(n)
+    other = copy.copy(model)
+    other.parameters = tuple(dataclasses.replace(p, value=float(start[p.name]))
+                             if p.name in start else p for p in model.parameters)
+    return other
+
+
+def fit(ds: Dataset, method: str = "auto", model: Model | str = "paper",
+        **options) -> DeclaredFitResult:
+    """``fit_model(model, ds, method, **options)`` with the paper's model by default
+    (``acid.fit(est, method="oe")``)."""
+    return fit_model(model, ds, method, **options)
 
 
 def _whiteness(r: np.ndarray, exp: np.ndarray, lags: int = 20) -> dict:
@@ -458,9 +576,14 @@ def _distinct(runs, columns, lo, hi, rtol_loss: float = 1e-6,
     return out
 
 
-def provenance(ds: Dataset, method: str) -> dict:
-    out = {"data_file": ds.source, "method": method, "n_samples": len(ds),
+def provenance(ds: Dataset, method: str, loss: str = "squared") -> dict:
+    """Where a fit's values come from: the data file (and its SHA-256, which ``acid
+    validate`` compares), method, loss, samples and their time span, the data's seed."""
+    out = {"data_file": ds.source, "method": method, "loss": loss, "n_samples": len(ds),
+           "time_span_s": [float(ds.time[0]), float(ds.time[-1])],
            "acid_version": __version__}
     if Path(ds.source).is_file():
         out["data_sha256"] = file_sha256(ds.source)
+    if "seed" in ds.metadata:
+        out["data_seed"] = ds.metadata["seed"]
     return out

@@ -27,6 +27,8 @@ from acid.ident.data import ModelData
 from acid.models.declaration import Model
 
 _RANK_RTOL = 1e-9
+#: Huber threshold in robust standard deviations (95 % efficiency under normal errors).
+HUBER_M = 1.345
 
 
 @dataclass(frozen=True)
@@ -140,14 +142,7 @@ def regression(model: Model, data: ModelData, group: list[EquationForm], P: np.n
     x, u, d, p, yr = model._x, model._u, model._d, model._p, model._yr
     for k, f in enumerate(group):
         fn = ca.Function("e", [x, u, d, p, yr], [f.expr, ca.jacobian(f.expr, p)])
-        if f.name in model.state_names:
-            j = model.state_names.index(f.name)
-            rows = np.flatnonzero(data.transition & np.isfinite(data.x[1:, j]))
-            target = data.x[rows + 1, j]
-        else:
-            j = model.output_names.index(f.name)
-            rows = np.flatnonzero(np.isfinite(data.y[:, j]))
-            target = data.y[rows, j]
+        rows, target = equation_rows(model, data, f.name)
         if rows.size == 0:
             continue
         args = [np.nan_to_num(a[rows]).T for a in (data.x, data.u, data.d)]
@@ -168,6 +163,18 @@ def regression(model: Model, data: ModelData, group: list[EquationForm], P: np.n
                       y=np.concatenate(ys) if ys else np.zeros(0),
                       sample=np.concatenate(samples) if samples else np.zeros(0, int),
                       eq=np.concatenate(eqs) if eqs else np.zeros(0, int))
+
+
+def equation_rows(model: Model, data: ModelData, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, target) of equation ``name``: the samples k where its target is measured (a
+    state's next value inside one experiment, an output at k) and that target."""
+    if name in model.state_names:
+        j = model.state_names.index(name)
+        rows = np.flatnonzero(data.transition & np.isfinite(data.x[1:, j]))
+        return rows, data.x[rows + 1, j]
+    j = model.output_names.index(name)
+    rows = np.flatnonzero(np.isfinite(data.y[:, j]))
+    return rows, data.y[rows, j]
 
 
 @dataclass(frozen=True)
@@ -235,10 +242,14 @@ def combinations(Z: np.ndarray, scale: np.ndarray, labels: tuple[str, ...],
 
 def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: str,
           hac_bandwidth, bounds: tuple[np.ndarray, np.ndarray] | None = None,
-          solver: str | None = None) -> Solution:
+          solver: str | None = None, loss: str = "squared") -> Solution:
     """Least squares (CVXPY with ``bounds``), covariance (white or HAC), identifiability.
 
     ``reference`` (columns) is where a rank-deficient regression stays closest to.
+    ``loss="huber"``: the Huber M-estimate (CVXPY, threshold ``HUBER_M`` robust standard
+    deviations of the residuals, re-estimated once), robust to outliers; its covariance is
+    the M-estimator's sandwich (scores psi(e) z, the bread divided by the share of
+    unclipped residuals; "white": the robust sigma^2 (Z^T Z)^-1).
     """
     X, y = reg.X, reg.y
     n, k = X.shape
@@ -254,8 +265,11 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
     r0 = y - Z @ phi_ref
     phi = phi_ref + Vt[keep].T @ ((U[:, keep].T @ r0) / s[keep])
     status, active = "optimal (lstsq)", ()
-    if bounds is not None:
-        lo, hi = bounds
+    lo, hi = bounds if bounds is not None else (np.full(k, -np.inf), np.full(k, np.inf))
+    if loss == "huber":
+        phi, status, active = _solve_bounded(Z, y, scale, lo, hi, reg.columns, solver, phi,
+                                             huber=True)
+    elif bounds is not None:
         if np.any(phi / scale < lo - 1e-12) or np.any(phi / scale > hi + 1e-12):
             phi, status, active = _solve_bounded(Z, y, scale, lo, hi, reg.columns, solver, phi)
     theta = phi / scale
@@ -263,17 +277,24 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
     dof = max(n - rank, 1)
     bread = (Vt[keep].T / s[keep] ** 2) @ Vt[keep]
     bandwidth = None
+    psi, frac = resid, 1.0
+    if loss == "huber":  # M-estimator: scores psi(e) z, bread E[psi'] Z^T Z
+        c = HUBER_M * max(robust_std(resid), 1e-12 * (1.0 + float(np.abs(y).max())))
+        frac = max(float(np.mean(np.abs(resid) <= c)), 1.0 / n)
+        psi = np.clip(resid, -c, c)
     if covariance == "hac":
         order = np.argsort(reg.sample, kind="stable")
-        scores = Z * resid[:, None]
+        scores = Z * psi[:, None]
         # rows of one instant (several equations) make one score
         uniq, inv = np.unique(reg.sample[order], return_inverse=True)
         h = np.zeros((uniq.size, k))
         np.add.at(h, inv, scores[order])
         g = segment_ids(uniq, data.segments)
-        bandwidth = resolve_bandwidth(hac_bandwidth, _centred_scores(X, resid, reg.sample,
+        bandwidth = resolve_bandwidth(hac_bandwidth, _centred_scores(X, psi, reg.sample,
                                                                      order, inv, uniq.size), g)
-        cov_phi = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread)
+        cov_phi = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread) / frac**2
+    elif loss == "huber":
+        cov_phi = robust_std(resid) ** 2 * bread
     else:
         cov_phi = float(resid @ resid) / dof * bread
     cov = cov_phi / np.outer(scale, scale)
@@ -300,31 +321,60 @@ def _centred_scores(X, resid, sample, order, inv, n_inst) -> np.ndarray:
     return h
 
 
-def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start):
-    """min ||Z phi - y||^2 with lo <= phi / scale <= hi (CVXPY); scaled by ||y||."""
+def robust_std(r: np.ndarray) -> float:
+    """1.4826 x median absolute deviation: a standard deviation immune to a few outliers."""
+    return float(1.4826 * np.median(np.abs(r - np.median(r))))
+
+
+def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start, huber: bool = False):
+    """min ||Z phi - y||^2 (``huber``: the Huber loss of the residuals in robust standard
+    deviations, the scale estimated from ``phi_start``'s residuals and once more from the
+    first solution) with lo <= phi / scale <= hi (CVXPY).
+
+    Solved for the step from ``phi_start`` in units of its residuals' scale, in the
+    orthonormal basis of Z's columns (Z = Q R) when Z has full rank: a kelvin column beside
+    the constant one leaves Z ill-conditioned and the residuals are 1e-5 of y; the
+    problem CVXPY sees is neither.
+    """
     import cvxpy as cp
 
-    ny = float(np.linalg.norm(y)) or 1.0
-    v = cp.Variable(Z.shape[1])
-    cons = []
-    for j in range(Z.shape[1]):
-        if math.isfinite(lo[j]):
-            cons.append(v[j] >= lo[j] * scale[j] / ny)
-        if math.isfinite(hi[j]):
-            cons.append(v[j] <= hi[j] * scale[j] / ny)
-    prob = cp.Problem(cp.Minimize(cp.sum_squares(Z @ v - y / ny)), cons)
-    try:
-        prob.solve(solver=solver)
-    except cp.error.SolverError as exc:
-        return phi_start, f"CVXPY failed ({exc}); unconstrained estimate kept", ()
-    if v.value is None:
-        return phi_start, f"CVXPY {prob.status}; unconstrained estimate kept", ()
-    phi = np.asarray(v.value, dtype=float) * ny
-    theta = phi / scale
+    k = Z.shape[1]
+    Q, R = np.linalg.qr(Z)
+    dg = np.abs(np.diag(R))
+    if dg.size and dg.min() > _RANK_RTOL * dg.max():
+        to_phi, basis = np.linalg.solve(R, np.eye(k)), Q       # phi = R^-1 w, Z phi = Q w
+        w0 = R @ phi_start
+    else:
+        to_phi, basis, w0 = np.eye(k), Z, phi_start
+    r0 = y - basis @ w0
+    s = max(float(np.sqrt(np.mean(r0**2))), 1e-3 * float(np.std(y)),
+            1e-12 * (1.0 + float(np.abs(y).max())))
+    step = cp.Variable(k)                                    # w = w0 + s step
+    phi_expr = to_phi @ w0 + s * (to_phi @ step)
+    cons = [phi_expr[j] >= lo[j] * scale[j] for j in range(k) if math.isfinite(lo[j])]
+    cons += [phi_expr[j] <= hi[j] * scale[j] for j in range(k) if math.isfinite(hi[j])]
+    phi_now = phi_start
+    for _ in range(2 if huber else 1):
+        r = r0 / s - basis @ step
+        sigma = robust_std(Z @ phi_now - y) / s
+        if huber and sigma > 1e-6:   # else the data are fitted exactly: no outlier to bound
+            objective = cp.sum(cp.huber(r / sigma, HUBER_M))
+        else:
+            objective = cp.sum_squares(r)
+        prob = cp.Problem(cp.Minimize(objective), cons)
+        try:
+            prob.solve(solver=solver)
+        except cp.error.SolverError as exc:
+            return phi_start, f"CVXPY failed ({exc}); least-squares estimate kept", ()
+        if step.value is None:
+            return phi_start, f"CVXPY {prob.status}; least-squares estimate kept", ()
+        phi_now = to_phi @ (w0 + s * np.asarray(step.value, dtype=float).ravel())
+    theta = phi_now / scale
     active = []
     for j, c in enumerate(columns):
-        for bound, word in ((lo[j], "min"), (hi[j], "max")):
+        for bound, side in ((lo[j], "min"), (hi[j], "max")):
             if math.isfinite(bound) and abs(theta[j] - bound) <= 1e-6 * (1 + abs(bound)):
-                active.append(f"{c.label} at its {word} {bound:g}")
+                active.append(f"{c.label} at its {side} {bound:g}")
                 theta[j] = bound
-    return theta * scale, f"{prob.status} (CVXPY, declared bounds)", tuple(active)
+    word = "Huber loss" if huber else "declared bounds"
+    return theta * scale, f"{prob.status} (CVXPY, {word})", tuple(active)

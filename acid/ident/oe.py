@@ -1,8 +1,9 @@
 """Output error for any declared model: simulate windows of the data from estimated initial
 states (latent ones included) and minimise the weighted simulation error of every measured
 channel over the free parameters (per-experiment ones per experiment) and the initial
-states, with ``scipy.optimize.least_squares`` (trust-region reflective, declared bounds)
-and the exact Jacobian of the window simulations from CasADi.
+states, with ``scipy.optimize.least_squares`` (Levenberg-Marquardt when its optimum lies
+inside the declared bounds, else trust-region reflective within them) and the exact
+Jacobian of the window simulations from CasADi.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import scipy.optimize
 from acid.errors import DataError
 from acid.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.ident.data import ModelData
+from acid.ident.linear import HUBER_M, robust_std
 from acid.models.declaration import Model
 
 
@@ -121,7 +123,7 @@ class OEProblem:
     """Decision vector ``z = [theta (free columns), x0 of every window]``."""
 
     def __init__(self, model: Model, data: ModelData, columns, base_P: np.ndarray,
-                 window: int):
+                 window: int, estimate_x0: bool = True):
         self.model, self.data, self.columns = model, data, columns
         self.w = Windows.of(data.segments, window)
         self.window = window
@@ -149,6 +151,10 @@ class OEProblem:
                 self.E[self.win_exp == col.experiment, col.index, c] = 1.0
         self.x0_start = data.initial_states(model, self.w.idx[:, 0])
         self.free = tuple(sorted({c.index for c in columns}))
+        # initial states estimated per window: all, or (estimate_x0 False) the latent ones
+        # only, the measured ones then start at their measurement
+        self.x0_free = np.array([estimate_x0 or not s.measured for s in model.states],
+                                dtype=bool)
 
     @property
     def n_theta(self) -> int:
@@ -157,7 +163,9 @@ class OEProblem:
     def unpack(self, z):
         th = z[:self.n_theta]
         P = self.base_P + np.einsum("wpc,c->wp", self.E, th)
-        return th, P, z[self.n_theta:].reshape(self.nw, self.model.nx)
+        x0 = self.x0_start.copy()
+        x0[:, self.x0_free] = z[self.n_theta:].reshape(self.nw, int(self.x0_free.sum()))
+        return th, P, x0
 
     def errors(self, z) -> np.ndarray:
         _, P, x0 = self.unpack(z)
@@ -171,21 +179,23 @@ class OEProblem:
         _, P, x0 = self.unpack(z)
         _, J = simulate_windows(self.model, self.data, self.w.idx, x0, P, free=self.free)
         J = J[:, :, self.chan, :] / self.weights[None, None, :, None]
-        npar, nx = len(self.free), self.model.nx
+        npar, nx = len(self.free), int(self.x0_free.sum())
         Jth = np.einsum("wlcp,wpk->wlck", J[..., :npar], self.E[:, list(self.free), :])
         Jx = np.zeros(J.shape[:3] + (self.nw * nx,))
         for w in range(self.nw):
-            Jx[w, :, :, w * nx:(w + 1) * nx] = J[w, :, :, npar:]
+            Jx[w, :, :, w * nx:(w + 1) * nx] = J[w, :, :, npar:][..., self.x0_free]
         return np.concatenate([Jth, Jx], axis=-1)[self.obs]
 
 
 def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
           reweight: bool = True, covariance: str = "hac", hac_bandwidth="auto",
-          max_nfev: int = 100) -> OEResult:
+          max_nfev: int = 100, loss: str = "squared") -> OEResult:
     """Minimise from ``theta0`` (clipped into the bounds); ``reweight``: a second pass with
-    each channel weighted by its error RMS of the first (channels in their own units)."""
-    nx = prob.model.nx
-    z = np.concatenate([np.clip(theta0, lo, hi), prob.x0_start.ravel()])
+    each channel weighted by its error RMS of the first (channels in their own units).
+    ``loss="huber"``: the second pass weights each channel by its robust standard deviation
+    and minimises the Huber loss (threshold ``HUBER_M``), robust to outliers."""
+    nx = int(prob.x0_free.sum())
+    z = np.concatenate([np.clip(theta0, lo, hi), prob.x0_start[:, prob.x0_free].ravel()])
     zlo = np.concatenate([lo, np.full(prob.nw * nx, -np.inf)])
     zhi = np.concatenate([hi, np.full(prob.nw * nx, np.inf)])
     # keep the start strictly inside (trf needs it)
@@ -196,25 +206,46 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                                hi - 1e-9 * (1 + abs(hi)), z[:len(hi)])
     res = None
     floor = 1e-3 * prob.weights
-    for it in range(2 if reweight else 1):
+    robust = loss == "huber"
+    for it in range(2 if (reweight or robust) else 1):
         if it == 1:
             e = prob.errors(z)
-            rms = np.array([np.sqrt(np.mean(e[..., i][prob.obs[..., i]] ** 2))
+            rms = np.array([robust_std(e[..., i][prob.obs[..., i]]) if robust else
+                            np.sqrt(np.mean(e[..., i][prob.obs[..., i]] ** 2))
                             for i in range(len(prob.chan))])
             prob.weights = np.maximum(rms, floor)
+        kwargs = {"loss": "huber", "f_scale": HUBER_M} if robust and it == 1 else {}
+        res = None
         with np.errstate(all="ignore"):
-            res = scipy.optimize.least_squares(
-                prob.residuals, z, jac=prob.jacobian, bounds=(zlo, zhi), method="trf",
-                x_scale="jac", ftol=1e-12, xtol=1e-12, gtol=1e-10, max_nfev=max_nfev)
+            if not kwargs and prob.residuals(z).size >= z.size:
+                # MINPACK's Levenberg-Marquardt first (its own QR: no BLAS threads, which
+                # slow SVDs 100-fold on a busy machine); kept when it ends inside the bounds
+                res = scipy.optimize.least_squares(
+                    prob.residuals, z, jac=prob.jacobian, method="lm", x_scale="jac",
+                    ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=2 * max_nfev)
+                inside = np.all((res.x >= zlo) & (res.x <= zhi))
+                if not (inside and res.status > 0 and np.all(np.isfinite(res.x))):
+                    res = None
+            if res is None:  # trust-region reflective inside the declared bounds
+                res = scipy.optimize.least_squares(
+                    prob.residuals, z, jac=prob.jacobian, bounds=(zlo, zhi), method="trf",
+                    x_scale="jac", ftol=1e-12, xtol=1e-12, gtol=1e-10, max_nfev=max_nfev,
+                    **kwargs)
         z = res.x
-    return summarise(prob, z, res, covariance, hac_bandwidth)
+    return summarise(prob, z, res, covariance, hac_bandwidth, loss)
 
 
-def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth) -> OEResult:
+def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth,
+              loss: str = "squared") -> OEResult:
     J = prob.jacobian(z)
     r = prob.residuals(z)
+    loss_value = float(0.5 * r @ r)
     n, p = J.shape
     dof = max(n - p, 1)
+    frac = 1.0
+    if loss == "huber":  # the last pass minimised Huber(r, f_scale=HUBER_M): scores psi(r)
+        frac = max(float(np.mean(np.abs(r) <= HUBER_M)), 1.0 / r.size)
+        r = np.clip(r, -HUBER_M, HUBER_M)
     colnorm = np.linalg.norm(J, axis=0)
     colnorm = np.where(colnorm > 0, colnorm, 1.0)
     _, s, Vt = np.linalg.svd(J / colnorm, full_matrices=False)
@@ -230,9 +261,9 @@ def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth) -> OEResu
         np.add.at(h, inv, J * r[:, None])
         g = segment_ids(uniq, prob.data.segments)
         bandwidth = resolve_bandwidth(hac_bandwidth, h[:, :nth], g)
-        cov_z = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread)
+        cov_z = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread) / frac**2
     else:
-        cov_z = float(r @ r) / dof * bread
+        cov_z = float(r @ r) / dof * bread / frac**2
     cov = cov_z[:nth, :nth]
     Jth = J[:, :nth]
     cs = np.linalg.norm(Jth, axis=0)
@@ -252,7 +283,7 @@ def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth) -> OEResu
     theta, _, x0 = prob.unpack(z)
     return OEResult(theta=theta.copy(), x0=x0.copy(), cov=cov,
                     stderr=np.sqrt(np.clip(np.diag(cov), 0, None)),
-                    loss=float(0.5 * r @ r), status=str(res.message) if res else "",
+                    loss=loss_value, status=str(res.message) if res else "",
                     success=bool(res.status > 0) if res else False, channel_rms=rms,
                     channel_fit=fit, weights=prob.weights.copy(), n_windows=prob.nw,
                     window=prob.window,

@@ -48,6 +48,8 @@ class ParameterSet:
     per_experiment: dict = field(default_factory=dict)   # {name: {experiment id: value}}
     source: str = "declared"
     provenance: dict = field(default_factory=dict)
+    #: how results name these values (default: the model's name and ``source``)
+    label: str | None = None
 
 
 def fitted_parameters(result) -> ParameterSet:

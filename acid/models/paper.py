@@ -1,24 +1,44 @@
-"""The paper's control-oriented model (Wang et al., ACC 2018, eqs. 1-3 and 5) as a declaration.
+"""The paper's control-oriented model (Wang et al., ACC 2018, eqs. 1-5) as a declaration.
 
-Kelvin, kg/s, W; Ts = 5 s; values from ``acid.params.paper()`` (``acid.claims``). Eq. 1 reads
-the output T_ain: simulating, eq. 3 is substituted; fitting by equation error, the measured
-T_ain is (as the paper does). Eq. 4 (compressor power from a fixed COP) is the controller's
-cost, not an identified equation; it stays in ``acid.model.compressor_power``.
+Kelvin, kg/s, W; Ts = 5 s; values from the claims registry (``acid.claims.MODEL``, the one
+place the paper's numbers are written). Eq. 1 reads the output T_ain: simulating, eq. 3 is
+substituted; fitting by equation error, the measured T_ain is (as the paper does). Eq. 4
+(compressor power from a fixed COP) is the controller's cost, not an identified equation:
+``compressor_power`` below, and ``estimate_eta_cop`` reads its COP off P_comp.
 """
 
 from __future__ import annotations
 
 import math
 
-from acid.models.declaration import Model, Parameter, Signal, State
-from acid.params import PARAMETER_TABLE, paper
+import numpy as np
 
-_P = paper()
-# physical signs (heat flows from warm to cold, a higher set-point warms the wall), the
-# ones the constrained fit of acid.fit imposes; the rest are unbounded
+from acid.claims import MODEL as _PAPER
+from acid.claims import TABLE_II as _TABLE_II
+from acid.models.declaration import Model, Parameter, Signal, State
+
+#: (name, unit, meaning) of every parameter, in the order of the table.
+PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
+    ("gamma1", "1", "cabin air <- interior conductance per step (eq. 1)"),
+    ("gamma2", "1", "cabin air <- shell conductance per step (eq. 1)"),
+    ("gamma3", "s/kg", "cabin air <- inlet air, per unit blower flow (eq. 1)"),
+    ("gamma4", "1", "evaporator wall memory (eq. 2)"),
+    ("gamma5", "1", "evaporator wall <- set-point error gain (eq. 2)"),
+    ("gamma6", "1", "inlet air <- evaporator wall (eq. 3)"),
+    ("gamma7", "K s/kg", "inlet air <- blower flow (eq. 3)"),
+    ("tau1", "K", "cabin air offset (eq. 1)"),
+    ("tau2", "K", "evaporator wall offset (eq. 2)"),
+    ("tau3", "K", "inlet air offset (eq. 3)"),
+    ("beta1", "W s^2/kg^2", "blower power, quadratic (eq. 5)"),
+    ("beta2", "W s/kg", "blower power, linear (eq. 5)"),
+    ("beta3", "W", "blower power, constant (eq. 5)"),
+)
+# physical signs (heat flows from warm to cold, a higher set-point warms the wall) that
+# --method cvx imposes; the rest are unbounded
 _BOUNDS = {"gamma1": (0.0, math.inf), "gamma2": (0.0, math.inf), "gamma3": (0.0, math.inf),
            "gamma5": (-math.inf, 0.0), "gamma6": (0.0, math.inf), "gamma7": (0.0, math.inf),
            "beta1": (0.0, math.inf)}
+_VALUES = (*_PAPER.gamma, *_PAPER.tau, *_PAPER.beta)
 
 
 def step(s):
@@ -51,8 +71,31 @@ model = Model(
     outputs=[Signal("T_ain", "K", "inlet air"), Signal("P_bl", "W", "blower power")],
     parameters=[Parameter(name, unit, value, *_BOUNDS.get(name, (-math.inf, math.inf)),
                           description=meaning)
-                for (name, unit, meaning), value in zip(PARAMETER_TABLE, _P.theta,
-                                                        strict=True)],
-    Ts=_P.Ts, step=step, output=output,
+                for (name, unit, meaning), value in zip(PARAMETER_TABLE, _VALUES, strict=True)],
+    Ts=_TABLE_II.Ts, step=step, output=output,
     description="Wang et al., ACC 2018, eqs. 1-3 and 5 (kelvin convention)",
 )
+
+
+def compressor_power(W_bl, T_ain, T_amb, c_p, eta_cop):
+    """Eq. 4: P_c = c_p / eta_cop * W_bl * (T_amb - T_ain), W (numpy or CasADi alike;
+    ``eta_cop`` a scalar, an array per stage or a symbol; c_p in J/(kg K))."""
+    return c_p * W_bl * (T_amb - T_ain) / eta_cop
+
+
+def estimate_eta_cop(W_bl, T_ain, T_amb, P_comp, c_p: float) -> tuple[float, float]:
+    """eta_cop and its standard error from P_comp = c_p / eta_cop W_bl (T_amb - T_ain)
+    (eq. 4), a regression through the origin over the samples with the compressor running
+    and warm ambient air (kg/s, K, W); NaN when fewer than 10 samples qualify."""
+    x = compressor_power(np.asarray(W_bl), np.asarray(T_ain), np.asarray(T_amb), c_p, 1.0)
+    y = np.asarray(P_comp)
+    use = (y > 1.0) & (x > 1.0)
+    if use.sum() < 10:
+        return math.nan, math.nan
+    x, y = x[use], y[use]
+    slope = float(x @ y / (x @ x))
+    if slope <= 0:
+        return math.nan, math.nan
+    r = y - slope * x
+    se_slope = math.sqrt(float(r @ r) / (x.size - 1) / float(x @ x))
+    return 1.0 / slope, se_slope / slope**2

@@ -101,28 +101,25 @@ def identify_params(plant_config: PlantConfig, settings: IdentifySettings,
     (``acid fit``) on the whole record: the model parameters for that configuration.
     Unstable or implausible identified parameters raise ``DataError`` (every scenario that
     needs them is recorded as an error) unless ``allow_unstable``."""
-    import warnings
-
     from acid.excite import ExcitationSpec, excite
-    from acid.fit import ModelFitter
+    from acid.ident.fit import fit_model, provenance
+    from acid.params import fitted
     from acid.plant.hifi import HifiPlant
 
     spec = ExcitationSpec(duration=settings.duration_s, seed=settings.seed,
                           speed=settings.speed_m_s)
     ds = excite(HifiPlant(plant_config), spec)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = ModelFitter(method=settings.method).fit(ds)
-    prov = dict(res.params.provenance, identified_in="acid sweep",
+    res = fitted(fit_model("paper", ds, settings.method))
+    prov = dict(provenance(ds, settings.method), identified_in="acid sweep",
                 excitation={"duration_s": settings.duration_s, "seed": settings.seed,
                             "speed_m_s": settings.speed_m_s})
-    problems = [] if allow_unstable else res.params.stability_problems()
+    problems = [] if allow_unstable else res.stability_problems()
     if problems:
         from acid.errors import DataError
 
         raise DataError(f"parameters identified ({settings.method}) for this climate: "
                         f"{problems[0]} (--allow-unstable uses them anyway)")
-    return res.params.replace(name=f"identified-{settings.method}", provenance=prov)
+    return res.replace(name=f"identified-{settings.method}", provenance=prov)
 
 
 def warm_start(ctx: ScenarioContext, seconds: float) -> dict | None:
