@@ -1,6 +1,7 @@
 """degC at every edge (issue 23): a quick tour (excite, fit, validate, mpc-check, speed-sweep,
 plant-check on a plant file in degC, a one-scenario sweep) leaves no absolute temperature in
-kelvin in what the user reads: printed text, JSON keys and values, CSV headers and cells, figure axes.
+kelvin in what the user reads: printed text, JSON keys and values, CSV headers and cells,
+figure axes.
 
 A temperature *difference* (an error, a violation, a band) may be given in K: a kelvin and a
 degC of difference are the same size. What this test refuses is an absolute temperature in

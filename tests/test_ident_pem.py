@@ -138,7 +138,8 @@ def test_cli_fits_by_prediction_error_with_an_evaluation_cap_and_validates_with_
     assert res.exit_code == 0, res.output
     assert "extended Kalman filter" in res.output
     for args, opt in ((["fit", str(path), "--max-evals", "0"], "--max-evals"),
-                      (["fit", str(path), "--max-evals", "50"], "--max-evals"),
+                      (["fit", str(path), "--model", "econ", "--max-evals", "50"],
+                       "--max-evals"),
                       (["validate", str(path), "--model", str(src), "--warm-start", "x"],
                        "--warm-start")):
         res = runner.invoke(app, args)
