@@ -27,10 +27,10 @@ Cabin: the cooling plant's cabin air, fast and slow interior, shell and water ba
 (``PlantConfig``'s parameters, same equations as ``acid.plant.hifi``) with a **winter
 envelope**: the air-to-shell conductance ``shell_conductance`` puts the trim and insulation
 ``R_trim`` behind the inner film of the opaque skin (the summer shell is the film alone), and
-the windscreen is split off the shell as a **glass node**: C_ws dT_gl/dt = h_ws_in A_ws (T_loc - T_gl) + hA_ext(v)
-A_ws/A_shell (T_amb - T_gl), where the air at the glass T_loc = T_cab + f_def (T_sup - T_cab)
-carries the defrost-outlet share f_def of the supply air. The glass fogs when T_gl is below
-the cabin dew point.
+the windscreen is split off the shell as a **glass node**:
+C_ws dT_gl/dt = h_ws_in A_ws (T_loc - T_gl) + hA_ext(v) A_ws/A_shell (T_amb - T_gl), where
+the air at the glass T_loc = T_cab + f_def (T_sup - T_cab) carries the defrost-outlet share
+f_def of the supply air. The glass fogs when T_gl is below the cabin dew point.
 
 Production controller (``mode="nominal"``): supply-air target from a PI on the cabin error;
 blower rising with the cabin error, held low until a heat source is warm (cold-air
