@@ -40,6 +40,7 @@ def test_declaration_loads_by_name_with_measured_coolant_and_latent_interior_and
     for p in m.parameters:
         assert p.min < p.max and p.min <= p.value <= p.max, p.name
     assert m.parameter("Q_occ").per_experiment and m.parameter("eta_heater").fixed
+    assert m.parameter("G_cool").fixed
     # every cited key is a reference of one of the two source files
     doc = __import__("acid.models.heating", fromlist=["x"]).__doc__
     keys = set(re.findall(r"([A-Z][A-Za-z]+\d{4}|ASHRAE-F)", doc))
@@ -53,7 +54,7 @@ def _rhs(p):
     """The heat balance of the module docstring, written again in numpy (K, W, kJ/K)."""
     def f(_t, x, P, Ta, v):
         T_cool, T_cab, T_int, T_sh = x
-        q_hc = p["G_hc"] * (T_cool - T_cab)
+        q_hc = p["G_hc"] * (T_cool + p["eta_heater"] * P / p["G_cool"] - T_cab)
         q_int = p["UA_int"] * (T_int - T_cab)
         q_sh = p["UA_shell"] * (T_sh - T_cab)
         q_out = (p["UA_out"] + p["UA_out_v"] * v) * (Ta - T_sh)
@@ -76,7 +77,8 @@ def test_one_sample_matches_an_independent_integration():
                     atol=1e-11).y[:, -1]
     np.testing.assert_allclose(X[1], ref, atol=2e-5)
     # the supply air at the sample: cabin air raised by eps_sup of the coolant's excess
-    assert Y[0, 0] == pytest.approx(285.0 + p["eps_sup"] * 35.0)
+    T_hc = 320.0 + p["eta_heater"] * 3000.0 / p["G_cool"]
+    assert Y[0, 0] == pytest.approx(285.0 + p["eps_sup"] * (T_hc - 285.0))
 
 
 def test_steady_state_closes_the_energy_balance():

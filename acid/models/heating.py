@@ -1,19 +1,22 @@
 """Cabin heating from what a car records: ``--model heating`` (issue 25).
 
 The BMW i3 winter trips log the high-voltage coolant heater's electric power, the coolant at
-the heater's outlet, the air at the outlets (supply air), the cabin air (one sensor), the
+the heater's inlet and outlet, the air at the outlets (supply air), the cabin air (one sensor), the
 ambient and the speed; no blower flow, recirculation share, interior or shell temperature,
 solar or occupant load. This declaration follows the heat from the heater to the ambient
 through what is logged, with the interior and the shell latent:
 
-* ``T_cool`` (measured): the coolant loop, seen at the heater's outlet.
+* ``T_cool`` (measured): the coolant loop, seen at the heater's inlet; the heater raises it
+  by ``eta_heater P_heater / G_cool`` on its way to the heater core (``G_cool`` = m c of the
+  coolant flow), as in the heating plant.
 * ``T_cab`` (measured): the cabin air, with the fast trims that follow it.
 * ``T_int`` (latent): seats, dashboard, panels, lumped.
 * ``T_shell`` (latent): roof, doors, pillars and glazing with their trim, lumped.
 
 Heat flows (W)::
 
-    Q_hc    = G_hc (T_cool - T_cab)                     heater core -> supply air -> cabin
+    T_hc    = T_cool + eta_heater P_heater / G_cool     coolant at the heater core
+    Q_hc    = G_hc (T_hc - T_cab)                       heater core -> supply air -> cabin
     Q_vent  = G_vent (T_amb - T_cab)                    fresh-air share and infiltration
     Q_int   = UA_int (T_int - T_cab)                    interior surfaces -> cabin air
     Q_shell = UA_shell (T_shell - T_cab)                inner shell surface -> cabin air
@@ -26,7 +29,7 @@ Heat flows (W)::
     C_shell dT_shell/dt = Q_out - Q_shell
 
 and the supply air, an output fitted where the outlets are logged:
-``T_ain = T_cab + eps_sup (T_cool - T_cab)``. ``G_hc`` is the heater core's effectiveness
+``T_ain = T_cab + eps_sup (T_hc - T_cab)``. ``G_hc`` is the heater core's effectiveness
 times the blower's flow and c_p (the blower level is not logged: held constant), ``eps_sup``
 that effectiveness seen at the outlets (with the duct losses), so ``G_hc / eps_sup`` is the
 blower's W c_p. ``Q_occ`` (occupants and sun, not logged) is a per-trip parameter; a trip the
@@ -36,6 +39,9 @@ Ranges: the cabin ones are ``car_cabin``'s (``acid/models/SOURCES.md``: Fayazbak
 Marcos2014, TorregrosaJaime2015, Wang2018); the heating ones are those of the heating plant's
 cited parameters (``datasets/plant/SOURCES.md``, ``acid.plant.heating_config``):
 
+* ``G_cool``: 0.174 kg/s of 50 % glycol at 3.5 kJ/(kg K), 609 W/K, from the logs (heater
+  power over its outlet-inlet rise, median over 20 trips [Steinstraeter2020]; the logged flow
+  channel is unusable); fixed.
 * ``C_cool``: about 2 l of 50 % glycol (3.5 kJ/(kg K) [ASHRAE-F]) with the heater and core
   metal; the logs' first minutes give 8.5-11 kJ/K [Steinstraeter2020]: range 3-40 kJ/K.
 * ``G_hc``: effectiveness 0.4-0.9 [Steinstraeter2020, ChangWang1997] of 0.03-0.15 kg/s of
@@ -58,8 +64,12 @@ import numpy as np
 from acid.models import RK4, Model, Parameter, Signal, State
 
 
+def _heater_core(s):
+    return s.T_cool + s.eta_heater * s.P_heater / s.G_cool
+
+
 def ode(s):
-    q_hc = s.G_hc * (s.T_cool - s.T_cab)
+    q_hc = s.G_hc * (_heater_core(s) - s.T_cab)
     q_vent = s.G_vent * (s.T_amb - s.T_cab)
     q_int = s.UA_int * (s.T_int - s.T_cab)
     q_shell = s.UA_shell * (s.T_shell - s.T_cab)
@@ -74,7 +84,7 @@ def ode(s):
 
 
 def output(s):
-    return {"T_ain": s.T_cab + s.eps_sup * (s.T_cool - s.T_cab)}
+    return {"T_ain": s.T_cab + s.eps_sup * (_heater_core(s) - s.T_cab)}
 
 
 def _interior_start(m):
@@ -89,7 +99,7 @@ def _shell_start(m):
 
 model = Model(
     "heating",
-    states=[State("T_cool", "K", description="coolant at the heater outlet (logged)"),
+    states=[State("T_cool", "K", description="coolant at the heater inlet (logged)"),
             State("T_cab", "K", description="cabin air (logged)"),
             State("T_int", "K", measured=False, initial=_interior_start,
                   description="interior (seats, dashboard, panels), lumped; not logged"),
@@ -118,6 +128,8 @@ model = Model(
                   description="ambient <-> shell, per m/s of speed"),
         Parameter("UA_cool", "W/K", 5.0, 0.0, 30.0,
                   description="coolant loop -> under-hood air"),
+        Parameter("G_cool", "W/K", 609.0, 300.0, 1200.0, fixed=True,
+                  description="coolant flow x c_p through the heater"),
         Parameter("eta_heater", "1", 0.98, 0.9, 1.0, fixed=True,
                   description="heater: electric power into the coolant"),
         Parameter("Q_occ", "W", 150.0, -300.0, 1500.0, per_experiment=True,
