@@ -584,7 +584,8 @@ def _fmt_bound(v: float | None, unbounded: str) -> str:
 RESAMPLE_MODES = ("mean", "centered", "sample", "none")
 
 #: Keys a channel map may have.
-MAP_KEYS = ("time", "Ts", "resample", "channels", "description", "sep", "encoding", "decimal")
+MAP_KEYS = ("time", "Ts", "resample", "channels", "description", "sep", "encoding", "decimal",
+            "drop_incomplete_end")
 
 #: Keys of one channel entry of a map.
 CHANNEL_KEYS = ("column", "unit", "constant", "expr", "note", "censored_above",
@@ -678,6 +679,9 @@ class ChannelMap:
     encoding: str = "utf-8"
     decimal: str = "."
     description: str = ""
+    #: Drop the rows at a record's end where a read column is empty (a logger that stopped
+    #: mid-row); empty values anywhere else are still refused.
+    drop_incomplete_end: bool = False
 
     @property
     def columns(self) -> list[str]:
@@ -744,9 +748,12 @@ class ChannelMap:
         description = d.get("description", "")
         if not isinstance(description, str):
             raise DataError(f"{source}: description must be a text")
+        drop_end = d.get("drop_incomplete_end", False)
+        if not isinstance(drop_end, bool):
+            raise DataError(f"{source}: drop_incomplete_end must be true or false")
         return cls(time=time_col, channels=chans, Ts=Ts, resample=resample, source=source,
                    time_unit=time_unit, sep=sep, encoding=encoding, decimal=decimal,
-                   description=description)
+                   description=description, drop_incomplete_end=drop_end)
 
 
 def _time_entry(value, source: str) -> tuple[str, str]:
@@ -920,6 +927,14 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
             raise DataError(f"{source}: column {s.column!r} has {v.size} values, "
                             f"time has {time.size}")
         raw[name] = v
+    if cmap.drop_incomplete_end and time.size:
+        complete = np.isfinite(time) & np.logical_and.reduce(
+            [np.isfinite(v) for v in raw.values()] or [np.ones(time.size, bool)])
+        keep = int(np.nonzero(complete)[0][-1]) + 1 if complete.any() else 0
+        if keep < time.size:
+            metadata["dropped_incomplete_end"] = int(time.size - keep)
+            time = time[:keep]
+            raw = {name: v[:keep] for name, v in raw.items()}
     checks: list[dict] = []
     chans, units, masks, censored = {}, {}, {}, {}
     for name, s in cmap.channels.items():

@@ -25,6 +25,8 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "sample_log_map.toml": ("import map", "the map of sample_log.csv.gz"),
     "bmw_i3_map.toml": ("import map", "the BMW i3 trips of TU Munich (doi:10.21227/6jr9-5235;"
                                       " the trips are not shipped)"),
+    "bmw_i3_winter_map.toml": ("import map", "the BMW i3 winter trips (heater, coolant, "
+                                             "outlets) for --model heating; not shipped"),
     "coolsim_map.toml": ("import map", "a CoolSim (MATLAB/Simulink) run saved as a .mat"),
     "acid_hifi_fmu_map.toml": ("FMU map", "acid's plant exported with `acid export-fmu`"),
     "sweep_climates.toml": ("sweep spec", "ICM against NMPC across climates and drive cycles"),

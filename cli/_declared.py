@@ -19,7 +19,7 @@ MAX_STARTS = 1000
 
 #: Built-in declarations that ``--model`` names directly (``paper`` and ``econ`` name the
 #: model families of ``acid fit``; their declarations are loaded by path or through Python).
-DECLARED_NAMES = ("cabin3", "car_cabin")
+DECLARED_NAMES = ("cabin3", "car_cabin", "heating")
 
 
 def is_model_file(spec: str | None) -> bool:

@@ -56,6 +56,16 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
     if name.startswith(DECLARED_PREFIX):
         return declared_plant(name[len(DECLARED_PREFIX):], spec, params, plant_config, T_amb,
                               fmu_map)
+    if name == "heating":  # the heating plant as the logged i3 (acid.plant.heating_excite)
+        from acid.plant.heating_config import winter_plant_config
+        from acid.plant.heating_excite import HeatingExcitation
+
+        for flag, given in (("--params", params), ("--plant-config", plant_config),
+                            ("--fmu-map", fmu_map)):
+            if given is not None:
+                raise ConfigError(f"{flag} does not apply to --plant heating")
+        return HeatingExcitation(config=winter_plant_config(
+            None if T_amb is None else C2K(T_amb)))
     choice = plant_choice(name, fmu_map, allowed=PLANTS)
     if choice.kind != "model" and params is not None:
         raise ConfigError("--params applies to --plant model only (the high-fidelity plant "
@@ -113,7 +123,9 @@ def excite(
     out: Path = typer.Option(..., "--out", "-o", help="HDF5 dataset to write (atomically)."),
     plant: str = typer.Option(
         "hifi", "--plant",
-        help="Plant: 'hifi' (high-fidelity), 'model' (paper eqs. 1-5), 'model:FILE.py' (a "
+        help="Plant: 'hifi' (high-fidelity), 'model' (paper eqs. 1-5), 'heating' (the "
+             "heating plant as the logged i3: random heater power, fixed blower; for "
+             "acid fit --model heating), 'model:FILE.py' (a "
              "declared model, or model:paper|econ|cabin3; its inputs and disturbances "
              "driven by the schedule, --params a parameter file of acid fit --model) or "
              "'fmu:PATH.fmu' (your FMI 2.0/3.0 co-simulation FMU, with --fmu-map)."),

@@ -80,6 +80,24 @@ def test_decimal_comma(tmp_path):
     assert np.allclose(ds["P_comp"], truth["P"], atol=0.5)
 
 
+def test_empty_rows_at_the_end_are_dropped_only_when_the_map_says_so(tmp_path):
+    # a logger that stopped mid-row (the BMW i3 winter trips): empty cells in the last rows
+    (tmp_path / "end.csv").write_text("t,T,P\n0,20,900\n1,21,900\n2,22,900\n3,23,\n4,,\n")
+    d = {"time": "t", "channels": {"T_cab": {"column": "T", "unit": "degC"},
+                                   "P_comp": {"column": "P", "unit": "W"}}}
+    with pytest.raises(DataError, match="NaN"):
+        from_csv(tmp_path / "end.csv", ChannelMap.from_dict(d))
+    ds = from_csv(tmp_path / "end.csv", ChannelMap.from_dict({**d, "drop_incomplete_end": True}))
+    assert ds.time.tolist() == [0.0, 1.0, 2.0] and ds["T_cab"].tolist() == [20.0, 21.0, 22.0]
+    assert ds.metadata["dropped_incomplete_end"] == 2
+    # an empty cell before the end is still refused
+    (tmp_path / "mid.csv").write_text("t,T,P\n0,20,900\n1,,900\n2,22,900\n")
+    with pytest.raises(DataError, match="NaN"):
+        from_csv(tmp_path / "mid.csv", ChannelMap.from_dict({**d, "drop_incomplete_end": True}))
+    with pytest.raises(DataError, match="drop_incomplete_end"):
+        ChannelMap.from_dict({**d, "drop_incomplete_end": "yes"})
+
+
 def test_time_column_in_a_stated_unit(tmp_path):
     (tmp_path / "ms.csv").write_text("t_ms,T\n0,20\n500,21\n1000,22\n1500,23\n")
     cmap = ChannelMap.from_dict({"time": {"column": "t_ms", "unit": "ms"},

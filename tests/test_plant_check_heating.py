@@ -64,6 +64,7 @@ def test_cold_chamber_against_the_adac_test(result):
     # switched off, the cabin cools: no warmer than the best-insulated cars
     assert d["T_off_C"][30] < d["T_off_C"][5] < 20.0
     assert rows["cold chamber: cabin 30 min after switching off"].passed
+    assert rows["cold chamber: cabin 5 min after switching off"].passed
     assert d["E20_kWh"] > 0.0 and d["t20_min"] > 0.0
 
 
@@ -75,8 +76,8 @@ def test_warmup_against_the_i3_winter_logs():
     t20 = by["time to 20 degC (median plant/log)"]
     p10 = by["heater power, first 10 min (median plant/log)"]
     hold = by["heater power after 15 min (median plant/log)"]
-    assert t20.passed and p10.passed, (t20, p10)
-    # measured, not judged here: the plant's cabin needs more power to hold than the i3
+    # the winter envelope (trim behind the inner film) holds the cabin on the i3's power
+    assert t20.passed and p10.passed and hold.passed, (t20, p10, hold)
     assert hold.value is not None and math.isfinite(hold.value)
     for t in trips:
         assert t["P10_plant"] > 0 and t["t20_log"] > 0

@@ -10,7 +10,7 @@ import pytest
 from acid.errors import ConfigError
 from acid.plant.base import InputSchedule
 from acid.plant.check_heating import _hp_run, steady_cop
-from acid.plant.heating import HeatingPlant, dew_point
+from acid.plant.heating import HeatingPlant, dew_point, shell_conductance
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
 from acid.plant.hifi import humidity_ratio
 from acid.units import C2K
@@ -94,7 +94,9 @@ def test_outdoor_coil_balance_closes_through_frost_and_defrost():
 
 
 def test_coolant_heater_covers_the_defrost_in_nominal_mode():
-    p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(0.0), RH_amb=0.9))
+    # -3 degC: at 0 degC the winter cabin's smaller load frosts the coil below the defrost
+    # threshold within 2 h (0.54 of 0.6 kg)
+    p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(-3.0), RH_amb=0.9))
     rows = _run(p, 12 * 120, v=0.0)
     d = np.array([r["defrosting"] for r in rows])
     P = np.array([r["P_heater"] for r in rows])
@@ -201,3 +203,51 @@ def test_bad_values_are_one_line_config_errors(make, fragment):
         make()
     msg = str(exc.value)
     assert fragment in msg and "\n" not in msg
+
+
+def test_winter_envelope_is_the_summer_film_in_series_with_the_trim():
+    cfg = winter_plant_config(C2K(0.0))
+    h = HeatingConfig()
+    f_ws = h.A_ws / cfg.A_shell
+    # no trim, no glazing beyond the windshield: the summer shell (the film alone)
+    bare = shell_conductance(cfg, h.replace(R_trim=0.0, A_glass=h.A_ws))
+    assert bare == pytest.approx(cfg.hA_sh * (1.0 - f_ws), rel=1e-12)
+    # by hand: film 67.2/9 W/(m^2 K); 1.9 m^2 of side and rear glass; 6 m^2 behind 0.25 m^2 K/W
+    h_in = cfg.hA_sh / cfg.A_shell
+    A_op = cfg.A_shell - h.A_glass
+    hand = h_in * (h.A_glass - h.A_ws) + 1.0 / (1.0 / (h_in * A_op) + h.R_trim / A_op)
+    assert shell_conductance(cfg, h) == pytest.approx(hand, rel=1e-12)
+    assert shell_conductance(cfg, h) < 0.55 * bare
+    with pytest.raises(ConfigError, match="A_glass"):
+        HeatingPlant(h.replace(A_glass=cfg.A_shell), cfg)
+    with pytest.raises(ConfigError, match="A_glass"):
+        h.replace(A_glass=0.5)
+
+
+def test_winter_envelope_lowers_the_hold_power():
+    cfg = winter_plant_config(C2K(5.0))
+    h = HeatingConfig(heat_pump=False)
+    T = C2K(23.0)
+    start = {"T_cab": T, "T_int": T, "T_int_slow": T, "T_cool": T}
+
+    def hold(hc):
+        p = HeatingPlant(hc, cfg)
+        p.reset(start)
+        rows = [p.step(0.0, 0.0, 10.0, T_cab_set=T) for _ in range(12 * 120)]
+        return np.mean([r["P_heater"] for r in rows[-12 * 30:]])
+
+    summer = hold(h.replace(R_trim=0.0, A_glass=h.A_ws))
+    winter = hold(h)
+    assert winter < 0.85 * summer
+
+
+def test_pump_off_stops_the_heater_core():
+    p = HeatingPlant(HeatingConfig(heat_pump=False), winter_plant_config(C2K(0.0)),
+                     mode="direct")
+    p.reset({"T_cool": C2K(60.0), "T_cab": C2K(15.0)})
+    on = p.step(0.08, 0.0, 0.0, P_heater=0.0, recirc=1.0)
+    assert on["Q_hc"] > 500.0
+    p.reset({"T_cool": C2K(60.0), "T_cab": C2K(15.0)})
+    off = p.step(0.08, 0.0, 0.0, P_heater=3000.0, recirc=1.0, pump=False)
+    assert off["Q_hc"] == 0.0 and off["P_heater"] == 0.0
+    assert p.measure()["T_cool"] < C2K(60.0)  # the loop loses heat, gains none

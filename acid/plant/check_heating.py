@@ -355,7 +355,9 @@ def check_adac() -> tuple[list[CheckRow], dict]:
     hold = float(P[60 * 12:].mean() / 1e3)
     q = HeatingPlant(h, cfg, mode="direct")
     q.reset({k: v for k, v in p.measure().items() if k not in ("T_amb", "T_evap")})
-    off = [q.step(cfg.W_bl_min, 0.0, 0.0, P_heater=0.0, N_hp=0.0, recirc=1.0)
+    # switched off: heater, heat pump and coolant pump stop (the blower at its minimum, the
+    # plant's lowest flow, recirculating)
+    off = [q.step(cfg.W_bl_min, 0.0, 0.0, P_heater=0.0, N_hp=0.0, recirc=1.0, pump=False)
            for _ in range(30 * 12 + 1)]
     T_off = {m: off[m * 12]["T_cab"] - 273.15 for m in ADAC_OFF_BEST_C}
     ref = "[ADAC2022] 7 EVs, -10 degC chamber, standstill"

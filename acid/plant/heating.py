@@ -24,11 +24,13 @@ P_defrost into the coil, no heat to the cabin) until the coil is ice-free and ab
 T_defrost_end. Below T_hp_min the heat pump is off.
 
 Cabin: the cooling plant's cabin air, fast and slow interior, shell and water balance
-(``PlantConfig``'s parameters, same equations as ``acid.plant.hifi``) with the windscreen split
-off the shell as a **glass node**: C_ws dT_gl/dt = h_ws_in A_ws (T_loc - T_gl) + hA_ext(v)
-A_ws/A_shell (T_amb - T_gl), where the air at the glass T_loc = T_cab + f_def (T_sup - T_cab)
-carries the defrost-outlet share f_def of the supply air. The glass fogs when T_gl is below
-the cabin dew point.
+(``PlantConfig``'s parameters, same equations as ``acid.plant.hifi``) with a **winter
+envelope**: the air-to-shell conductance ``shell_conductance`` puts the trim and insulation
+``R_trim`` behind the inner film of the opaque skin (the summer shell is the film alone), and
+the windscreen is split off the shell as a **glass node**:
+C_ws dT_gl/dt = h_ws_in A_ws (T_loc - T_gl) + hA_ext(v) A_ws/A_shell (T_amb - T_gl), where
+the air at the glass T_loc = T_cab + f_def (T_sup - T_cab) carries the defrost-outlet share
+f_def of the supply air. The glass fogs when T_gl is below the cabin dew point.
 
 Production controller (``mode="nominal"``): supply-air target from a PI on the cabin error;
 blower rising with the cabin error, held low until a heat source is warm (cold-air
@@ -77,8 +79,8 @@ UNITS = {"T_glass": "K", "T_cool": "K", "T_icw": "K", "T_ow": "K", "M_frost": "k
          "Q_cond": "W", "Q_evap": "W", "Q_sup": "W", "COP_hp": "1", "f_def": "1", "m_frost": "kg/s",
          "P_total": "W", "recirc": "1"}
 
-_STEP_KEYWORDS = ("T_cab_set", "P_heater", "N_hp", "recirc", "f_def", "T_amb", "T_int",
-                  "T_shell")
+_STEP_KEYWORDS = ("T_cab_set", "P_heater", "N_hp", "recirc", "f_def", "pump", "T_amb",
+                  "T_int", "T_shell")
 
 
 def dew_point(w: float, p_atm: float = 101325.0) -> float:
@@ -95,6 +97,22 @@ def saturation_humidity_ratio_ice(T: float, p_atm: float = 101325.0) -> float:
     t = T - T0C
     p = 611.2 * math.exp(22.46 * t / (272.62 + t))
     return 0.621945 * p / (p_atm - p)
+
+
+def shell_conductance(cfg: PlantConfig, hc: HeatingConfig) -> float:
+    """Winter conductance from the cabin air to the shell node (W/K), windshield excluded.
+
+    The inner film coefficient is the cooling plant's, h_in = hA_sh / A_shell (the paper's
+    gamma2 over the shell area); the glazing besides the windshield (A_glass - A_ws) has the
+    film alone, the opaque skin (A_shell - A_glass) the film in series with its trim and
+    insulation R_trim: hA = h_in (A_glass - A_ws) + 1 / (1 / (h_in A_op) + R_trim / A_op).
+    """
+    A_op = cfg.A_shell - hc.A_glass
+    if A_op <= 0.0:
+        raise ConfigError(f"HeatingConfig: A_glass = {hc.A_glass} m^2 must be smaller than "
+                          f"PlantConfig.A_shell = {cfg.A_shell} m^2")
+    h_in = cfg.hA_sh / cfg.A_shell
+    return h_in * (hc.A_glass - hc.A_ws) + 1.0 / (1.0 / (h_in * A_op) + hc.R_trim / A_op)
 
 
 def _sat(x: float, lo: float, hi: float) -> float:
@@ -129,6 +147,7 @@ class HeatingPlant(Plant):
                                           k_is=self.hc.k_is_hp)
         self._solve, _ = make_solver(self.cycle_cfg)
         self._fe_cache: dict = {}
+        self.hA_sh_in = shell_conductance(self.cfg, self.hc)
         self.reset()
 
     # ------------------------------------------------------------------ protocol
@@ -232,6 +251,8 @@ class HeatingPlant(Plant):
         T_cab_set : (keyword, nominal) cabin set-point, K; default ``HeatingConfig.T_heat_set``.
         P_heater, N_hp, recirc, f_def : (keywords, direct) heater electric power W, compressor
             speed rpm (0 = heat pump off), recirculated fraction, defrost-outlet share.
+        pump : (keyword, direct) False stops the coolant pump (the car switched off): no heat
+            from the heater core to the air, and the heater off with it; default True.
         T_amb : (keyword) ambient over this step, K.
 
         Returns row k: the states at t_k (``measure()``) and means over the step: T_ain (supply
@@ -256,6 +277,7 @@ class HeatingPlant(Plant):
                 self.T_amb = T_amb_k
                 self.w_amb = humidity_ratio(T_amb_k, c.RH_amb, c.p_atm)
         T_set = float(kw.get("T_cab_set", h.T_heat_set))
+        pump = nominal or bool(kw.get("pump", True))
         if not nominal:
             cmd = {"W": float(W_bl), "P": float(kw.get("P_heater", 0.0)),
                    "N": float(kw.get("N_hp", 0.0)), "r": float(kw.get("recirc", 0.0)),
@@ -264,7 +286,7 @@ class HeatingPlant(Plant):
                 if not math.isfinite(x):
                     raise ConfigError(f"HeatingPlant.step: non-finite input {k2} = {x}")
             W_cmd = _sat(cmd["W"], c.W_bl_min, c.W_bl_max)
-            P_cmd = _sat(cmd["P"], 0.0, h.P_heater_max)
+            P_cmd = _sat(cmd["P"], 0.0, h.P_heater_max) if pump else 0.0
             N_in = cmd["N"]
             N_cmd_d = 0.0 if N_in <= 0.0 else _sat(N_in, c.N_min, c.N_max)
             r_cmd = _sat(cmd["r"], 0.0, 1.0)
@@ -281,7 +303,7 @@ class HeatingPlant(Plant):
         hA_ext = c.hA_ext(v_cab)
         hA_go, hA_ext_sh = hA_ext * f_ws, hA_ext * (1.0 - f_ws)
         hA_gi = h.h_ws_in * h.A_ws
-        hA_sh = c.hA_sh * (1.0 - f_ws)
+        hA_sh = self.hA_sh_in
         C_sh = c.C_sh * (1.0 - f_ws)
         m_inf = c.m_inf0 + c.k_inf * v_cab
         Ginf = m_inf * cp
@@ -398,7 +420,8 @@ class HeatingPlant(Plant):
             Q_h = h.eta_heater * P_h
             T_hc = T_cool + Q_h / mcc
             # the pump runs while the heater heats or the coolant is warmer than the air
-            Q_hc = eps_hc * Wcp * (T_hc - T_a1) if (Q_h > 0.0 or T_hc > T_a1) else 0.0
+            Q_hc = (eps_hc * Wcp * (T_hc - T_a1) if pump and (Q_h > 0.0 or T_hc > T_a1)
+                    else 0.0)
             T_sup = T_a1 + Q_hc / Wcp
             Q_loss = h.UA_cool_loss * (T_cool - T_amb)
             T_cool_n = T_cool + dt / h.C_cool * (Q_h - Q_hc - Q_loss)

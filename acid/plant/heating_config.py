@@ -49,13 +49,12 @@ class HeatingConfig:
                        "from the logs [Steinstraeter2020]: the heater-core coolant rises about "
                        "51 K in 2 min at 5.6 kW (trip B27) while the air takes 1-2 kW, so "
                        "8.5-11 kJ/K (about 2 l of coolant plus heater and core metal)")
-    UA_hc0: float = _p(120.0, "W/K", "heater",
-                       "assumption: heater-core air-side conductance at W_hc0 (effectiveness "
-                       "0.76 at 0.07 kg/s); the logs [Steinstraeter2020] bound it loosely: "
-                       "holding, coolant about 50 degC and the 14 outlets' mean 31-37 degC give "
-                       "0.4 (full recirculation) to 0.65 (fresh air), recirculation and duct "
-                       "losses unlogged; 80 W/K (0.61) slows the logged warm-ups 1.7x "
-                       "(heating-check k: time-to-20-degC ratio 1.31 against 0.76)")
+    UA_hc0: float = _p(80.0, "W/K", "heater",
+                       "[Steinstraeter2020] from the logs: heater-core air-side conductance at "
+                       "W_hc0; holding, coolant about 50 degC and the 14 outlets' mean 31-37 "
+                       "degC give an effectiveness of 0.4 (full recirculation) to 0.65 (fresh "
+                       "air); 80 W/K gives 0.61 at 0.07 kg/s, inside that bound (the summer "
+                       "cabin needed 120 W/K, effectiveness 0.76, beyond it)")
     W_hc0: float = _p(0.1, "kg/s", "heater", "reference air flow of UA_hc0")
     n_hc: float = _p(0.51, "1", "heater",
                      "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ W^0.51")
@@ -126,6 +125,20 @@ class HeatingConfig:
                           "assumption: share in anti-fog (defrost) mode")
     n_pass: float = _p(1.0, "1", "glass",
                        "occupants: PlantConfig.Q_pass and m_moist_pass are per occupant")
+
+    # ---------------------------------------------------------------- winter cabin envelope
+    A_glass: float = _p(3.0, "m^2", "envelope",
+                        "assumption from the i3's body (4.0 x 1.78 x 1.58 m, [BMW-i3]): "
+                        "windshield 1.1 (A_ws), four side windows about 1.4, tailgate glass "
+                        "about 0.5; glazing carries no trim")
+    R_trim: float = _p(0.25, "m^2 K/W", "envelope",
+                       "[ASHRAE-F] fibrous and foam insulation 0.035-0.045 W/(m K): about 10 mm "
+                       "of headliner, door-trim felt and carpet underlay (thickness an "
+                       "assumption) between the cabin air's inner film and the opaque skin; the "
+                       "i3's CFRP passenger cell [BMW-i3] adds 0.002-0.008 m^2 K/W (3 mm at "
+                       "0.4-1.3 W/(m K) through the thickness [CFRP-k]). The summer shell "
+                       "(PlantConfig.hA_sh, the paper's gamma2) is one film with no layer: "
+                       "in winter the whole cabin-outside difference lies across it")
 
     # ---------------------------------------------------------------- production controller
     T_heat_set: float = _p(296.15, "K", "controller",
@@ -199,7 +212,7 @@ class HeatingConfig:
                 bad(f"{f.name} must not be negative, got {v}")
         for name in ("m_cool", "c_cool", "C_cool", "UA_hc0", "W_hc0", "UA_ic0", "UA_icr0",
                      "C_icw", "UA_or0", "C_ow", "h_sg", "h_sf", "M_frost_def", "A_ws", "C_ws",
-                     "h_ws_in", "t_defrost_max", "e_blower", "dm_fog"):
+                     "h_ws_in", "t_defrost_max", "e_blower", "dm_fog", "A_glass"):
             if getattr(self, name) <= 0.0:
                 bad(f"{name} must be positive, got {getattr(self, name)}")
         for name in ("eta_heater", "s_fan_hp", "a_frost", "f_def0", "f_def_max"):
@@ -208,6 +221,9 @@ class HeatingConfig:
         if self.f_def0 > self.f_def_max:
             bad(f"bounds out of order: f_def0 = {self.f_def0} must not exceed "
                 f"f_def_max = {self.f_def_max}")
+        if self.A_glass < self.A_ws:
+            bad(f"bounds out of order: A_glass = {self.A_glass} m^2 must include the "
+                f"windshield A_ws = {self.A_ws} m^2")
         if self.a_frost >= 1.0:
             bad(f"a_frost = {self.a_frost} must stay below 1 (the coil would close)")
 
