@@ -30,8 +30,9 @@ Built-in
              set-point of least energy with the mean cabin RH in the band, golden section
              over 3-``coil_max_C`` degC, 10 by default as the econ controller's, F);
              ``match`` tunes the cabin set-point to another controller's mean cabin
-             temperature. The search ranks raw run energies (the sweep's tail correction
-             comes after the controller has run).
+             temperature. The search ranks energies with the end state charged back by the
+             scenario's continuation (``tail_s``; raw energies when it is 0), as
+             ``acid cav-study``'s F does.
 
 Further controllers register from their own module: add it to ``CONTROLLER_MODULES`` (in
 acid) or name it in the spec's ``plugins = ["my_package.my_controller"]``.
@@ -401,6 +402,7 @@ class PIController:
     def run(self, ctx: ScenarioContext) -> ControllerRun:
         from acid.comfort import RH_BAND, rh_band_distance
         from acid.mpc.pi_baselines import COIL_RANGE, CoilReset, golden_min
+        from acid.sweep.scenario import tail_energy_J
 
         c = self.config
         if c.coil != "search":
@@ -410,7 +412,8 @@ class PIController:
         def f(T_coil):
             r = self._matched(ctx, T_coil)
             out = rh_band_distance(r.info["rh_mean"], RH_BAND)
-            return (out > 0.0, out, r.info["energy_MJ"]), r
+            tail = tail_energy_J(ctx, r.end_state, ctx.tail_s) / 1e6 if ctx.tail_s > 0 else 0.0
+            return (out > 0.0, out, r.info["energy_MJ"] + tail), r
 
         x, r, hist = golden_min(f, COIL_RANGE[0], C2K(c.coil_max_C), tol=c.coil_tol_K)
         r.info.update(coil_set_point_K=float(x), coil_search=[

@@ -205,5 +205,48 @@ def controller_summary(df, baseline: str) -> dict:
     return out
 
 
+def prediction_roles(df) -> dict | None:
+    """The labels a prediction comparison needs, from the controller types: the first
+    ``econ`` controller, the ``pi`` controllers (references) and the first ``plan`` (None
+    when the sweep has no econ or no PI controller)."""
+    kinds = df.drop_duplicates("controller").set_index("controller")["controller_type"]
+    econ = [c for c, k in kinds.items() if k == "econ"]
+    refs = [c for c, k in kinds.items() if k == "pi"]
+    plan = [c for c, k in kinds.items() if k == "plan"]
+    if not econ or not refs:
+        return None
+    return {"econ": econ[0], "references": refs, "plan": plan[0] if plan else None}
+
+
+def prediction_summary(df) -> list[dict] | None:
+    """Per scenario: the economic NMPC's saving against each PI reference and the best known
+    plan's, tail-corrected (%), the econ's gap to the plan (points of the first reference)
+    and the plan's spread (None without the roles, :func:`prediction_roles`)."""
+    from acid.report.sweep import corrected_saving
+
+    roles = prediction_roles(df)
+    if roles is None:
+        return None
+    ok = df[df["status"] == "ok"]
+    econ, refs, plan = roles["econ"], roles["references"], roles["plan"]
+    vs = {ref: corrected_saving(ok, econ, ref) for ref in refs}
+    plan_vs = corrected_saving(ok, plan, refs[0]) if plan else None
+    out = []
+    for scen, g in df.groupby("scenario", sort=True):
+        row = {"scenario": int(scen), "label": str(g["label"].iloc[0]),
+               **{f"{econ}_vs_{ref}_pct": _num(vs[ref].get(scen, math.nan)) for ref in refs}}
+        if plan_vs is not None:
+            p = _num(plan_vs.get(scen, math.nan))
+            e = row[f"{econ}_vs_{refs[0]}_pct"]
+            info = g[g["controller"] == plan]["info"].dropna()
+            row[f"{plan}_vs_{refs[0]}_pct"] = p
+            row[f"{econ}_gap_to_{plan}_points"] = None if p is None or e is None else p - e
+            row["plan_spread_pct"] = (_num(json.loads(info.iloc[0]).get("plan_spread_pct",
+                                                                        math.nan))
+                                      if len(info) else None)
+        out.append(row)
+    return out
+
+
 __all__ = ["ResultStore", "record_problem", "results_table", "write_table", "controller_summary",
-           "failure_record"]
+           "failure_record", "prediction_roles", "prediction_summary"]

@@ -223,7 +223,8 @@ def _run_scenario(task: ScenarioTask, params: ModelParams | None, tick) -> dict:
     try:
         v_step, v_preview = speed_profiles(s, params.Ts)
         ctx = ScenarioContext(conditions=s.conditions, plant_config=task.plant_config,
-                              params=params, v_step=v_step, v_preview=v_preview, tick=tick)
+                              params=params, v_step=v_step, v_preview=v_preview, tick=tick,
+                              tail_s=s.tail_s)
         ctx.start = warm_start(ctx, s.warmup_s)
     except Exception as exc:  # the scenario cannot start: every controller fails with it
         for c in task.controllers:
