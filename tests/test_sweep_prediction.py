@@ -59,6 +59,9 @@ def test_the_summary_agrees_with_the_tables_own_tail_corrected_saving(result):
     assert row["econ_gap_to_plan_points"] == pytest.approx(
         row["plan_vs_F_pct"] - row["econ_vs_F_pct"])
     assert math.isfinite(row["econ_vs_P_pct"])
+    # every controller that drives the plant directly reports its mean cabin RH
+    assert set(row["rh_mean_pct"]) == {"econ", "F", "P", "plan"}
+    assert all(20.0 < v < 80.0 for v in row["rh_mean_pct"].values())
     assert result.files["prediction_figure"].stat().st_size > 10_000
 
 

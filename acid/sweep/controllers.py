@@ -442,17 +442,23 @@ class PIController:
     @staticmethod
     def _simulate(ctx: ScenarioContext, coil, T_cab_set: float) -> ControllerRun:
         from acid.mpc.pi_baselines import PlantPI
-        from acid.psychro import relative_humidity
 
         plant = ctx.make_plant()
         ctl = PlantPI(plant.cfg, ctx.Ts, T_cab_set, coil, plant.cfg.p_atm)
         r = direct_loop(ctx, plant, lambda meas, k: ctl.make_step(meas, k), "pi",
                         T_cab_set)
-        w = r.info.pop("w_cab")
-        rh = relative_humidity(r.run.T_cab[1:], w[1:], plant.cfg.p_atm)
-        r.info.update(rh_mean=float(np.mean(rh)), energy_MJ=float(
-            np.sum(r.run.P_comp + r.run.P_bl) * ctx.Ts / 1e6))
+        rh_into_info(r, plant.cfg.p_atm)
+        r.info.update(energy_MJ=float(np.sum(r.run.P_comp + r.run.P_bl) * ctx.Ts / 1e6))
         return r
+
+
+def rh_into_info(r: ControllerRun, p_atm: float) -> None:
+    """Replace the cabin humidity ratio that :func:`direct_loop` leaves in ``r.info`` by the
+    run's mean cabin relative humidity over samples 1..n (``rh_mean``, fraction)."""
+    from acid.psychro import relative_humidity
+
+    w = r.info.pop("w_cab")
+    r.info["rh_mean"] = float(np.mean(relative_humidity(r.run.T_cab[1:], w[1:], p_atm)))
 
 
 def direct_loop(ctx: ScenarioContext, plant, make_step, label: str, T_cab_max: float,
@@ -508,4 +514,4 @@ register_controller("pi", PIControllerConfig, PIController,
 __all__ = ["register_controller", "controller_types", "build_config", "ControllerType",
            "PaperNMPC", "PaperNMPCConfig", "ICMController", "ICMControllerConfig",
            "NominalController", "NominalConfig", "PIController", "PIControllerConfig",
-           "direct_loop"]
+           "direct_loop", "rh_into_info"]

@@ -171,8 +171,8 @@ class EconController:
 
         b, r, hist = tune_mean(run_at, target, cond.T_low, cond.T_high, c.tol_K, c.max_iter)
         return ControllerRun(r.run, r.end_state,
-                             {"bound_K": b, "matched_to": c.match, "target_mean_K": target,
-                              "tuning_runs": len(hist), **info})
+                             {**r.info, "bound_K": b, "matched_to": c.match,
+                              "target_mean_K": target, "tuning_runs": len(hist), **info})
 
     @staticmethod
     def _simulate(ctx: ScenarioContext, mpc, T_cab_max: float) -> ControllerRun:
@@ -180,7 +180,7 @@ class EconController:
         scenario's start with the upper cabin bound ``T_cab_max`` (K)."""
         from acid.econ.model import STATES
         from acid.mpc.econ_nmpc import stage_means
-        from acid.sweep.controllers import direct_loop
+        from acid.sweep.controllers import direct_loop, rh_into_info
 
         mpc.reset()
         iv = mpc.config.intervals
@@ -192,10 +192,11 @@ class EconController:
                                  stage_means(T_amb_preview, k, iv, ctx.Ts),
                                  T_cab_max=T_cab_max)
 
-        r = direct_loop(ctx, ctx.make_plant(), make_step, "econ", T_cab_max,
+        plant = ctx.make_plant()
+        r = direct_loop(ctx, plant, make_step, "econ", T_cab_max,
                         step_ms=lambda n: np.asarray(mpc.log.step_time_s[-n:]) * 1e3,
                         fallback=lambda n: np.asarray(mpc.log.fallback[-n:], dtype=bool))
-        r.info.pop("w_cab")
+        rh_into_info(r, plant.cfg.p_atm)
         return r
 
 
@@ -294,7 +295,7 @@ class PlanController:
                  T_high: float) -> ControllerRun:
         """The plan from ``x0`` whose replay meets the target mean (re-set mean)."""
         from acid.mpc.best_plan import PlanConfig, best_known_plan
-        from acid.sweep.controllers import direct_loop
+        from acid.sweep.controllers import direct_loop, rh_into_info
 
         c, cond = self.config, ctx.conditions
         T_req, best, guess = target, None, None
@@ -306,9 +307,9 @@ class PlanController:
             plan = best_known_plan(econ, ctx.v_step, T_amb, pc, guess=guess, x_start=x0,
                                    terminal_price=price)
             inputs = plan.inputs
-            r = direct_loop(ctx, ctx.make_plant(), lambda meas, k, u=inputs: u[k], "plan",
-                            T_high)
-            r.info.pop("w_cab")
+            plant = ctx.make_plant()
+            r = direct_loop(ctx, plant, lambda meas, k, u=inputs: u[k], "plan", T_high)
+            rh_into_info(r, plant.cfg.p_atm)
             err = r.mean_T_cab - target
             r.info.update(model_energy_MJ=plan.energy_J / 1e6, solve_status=plan.status,
                           plan_mean_request_K=pc.T_mean)

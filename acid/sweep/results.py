@@ -218,10 +218,18 @@ def prediction_roles(df) -> dict | None:
     return {"econ": econ[0], "references": refs, "plan": plan[0] if plan else None}
 
 
+def _rh_pct(g, label: str) -> float | None:
+    """Mean cabin RH (%) a controller's row reports in its ``info`` (None if it does not)."""
+    info = g[g["controller"] == label]["info"].dropna() if "info" in g else []
+    rh = json.loads(info.iloc[0]).get("rh_mean") if len(info) else None
+    return None if rh is None else _num(100.0 * rh)
+
+
 def prediction_summary(df) -> list[dict] | None:
     """Per scenario: the economic NMPC's saving against each PI reference and the best known
-    plan's, tail-corrected (%), the econ's gap to the plan (points of the first reference)
-    and the plan's spread (None without the roles, :func:`prediction_roles`)."""
+    plan's, tail-corrected (%), the econ's gap to the plan (points of the first reference),
+    the plan's spread and each controller's mean cabin RH (%) (None without the roles,
+    :func:`prediction_roles`)."""
     from acid.report.sweep import corrected_saving
 
     roles = prediction_roles(df)
@@ -234,7 +242,8 @@ def prediction_summary(df) -> list[dict] | None:
     out = []
     for scen, g in df.groupby("scenario", sort=True):
         row = {"scenario": int(scen), "label": str(g["label"].iloc[0]),
-               **{f"{econ}_vs_{ref}_pct": _num(vs[ref].get(scen, math.nan)) for ref in refs}}
+               **{f"{econ}_vs_{ref}_pct": _num(vs[ref].get(scen, math.nan)) for ref in refs},
+               "rh_mean_pct": {lab: _rh_pct(g, lab) for lab in [econ, *refs, plan] if lab}}
         if plan_vs is not None:
             p = _num(plan_vs.get(scen, math.nan))
             e = row[f"{econ}_vs_{refs[0]}_pct"]
