@@ -101,7 +101,10 @@ def prediction_figure(df, econ: str, references: list[str], plan: str | None = N
     marker on that bar, whisker its spread): the distance from the bar's top to the marker
     is the gap to the plan. Savings tail-corrected, %."""
     ok = _ok(df)
-    labels = ok.drop_duplicates("scenario").set_index("scenario")["label"]
+    first = ok.drop_duplicates("scenario").set_index("scenario")
+    labels = first["label"].map(_short_label)
+    if "warmup_s" in first:  # a pull-down from the soak says so
+        labels = labels.where(first["warmup_s"] > 0, labels + ", from the soak")
     scen = list(labels.index)
     fig = Figure(figsize=(max(7.5, 1.1 * len(scen) + 2.0), 5.0), layout="constrained")
     ax = fig.add_subplot()
@@ -122,8 +125,7 @@ def prediction_figure(df, econ: str, references: list[str], plan: str | None = N
                     capsize=3,
                     label=f"best known plan vs {references[0]} (whisker: its spread)")
     ax.axhline(0.0, color="0.5", lw=0.8)
-    ax.set_xticks(x, [_short_label(labels[s]) for s in scen], fontsize=7, rotation=20,
-                  ha="right")
+    ax.set_xticks(x, [labels[s] for s in scen], fontsize=7, rotation=20, ha="right")
     ax.set_ylabel("saving, end state charged back (%)")
     ax.set_title("Where prediction pays beyond a tuned PI (compressor + blower energy)")
     ax.legend(fontsize=8)
