@@ -62,7 +62,19 @@ def test_the_summary_agrees_with_the_tables_own_tail_corrected_saving(result):
     # every controller that drives the plant directly reports its mean cabin RH
     assert set(row["rh_mean_pct"]) == {"econ", "F", "P", "plan"}
     assert all(20.0 < v < 80.0 for v in row["rh_mean_pct"].values())
+    assert row["unequal_comfort"] == []      # every reference matched the paper NMPC's mean
     assert result.files["prediction_figure"].stat().st_size > 10_000
+
+
+def test_a_reference_that_misses_the_mean_is_named_not_at_equal_comfort(result):
+    """A fixed coil too warm to pull a soaked cabin down ends warmer on average: its
+    comparison is flagged, not silently ranked (here F is moved 0.3 K by hand)."""
+    from acid.sweep.results import EQUAL_COMFORT_K, unequal_comfort
+
+    t = result.table.copy()
+    assert unequal_comfort(t, "econ", ["F", "P", "plan"]) == []
+    t.loc[t["controller"] == "F", "mean_T_cab_C"] += 6 * EQUAL_COMFORT_K
+    assert unequal_comfort(t, "econ", ["F", "P", "plan"]) == ["F"]
 
 
 def test_a_plan_without_a_target_is_refused_before_anything_runs():

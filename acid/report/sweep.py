@@ -99,7 +99,8 @@ def prediction_figure(df, econ: str, references: list[str], plan: str | None = N
     """Where prediction pays: per scenario, the saving of the economic NMPC ``econ`` against
     each PI reference (bars), and the best known plan's against the first reference (black
     marker on that bar, whisker its spread): the distance from the bar's top to the marker
-    is the gap to the plan. Savings tail-corrected, %."""
+    is the gap to the plan. A hatched bar's reference missed the econ's mean cabin
+    temperature (not equal comfort). Savings tail-corrected, %."""
     ok = _ok(df)
     first = ok.drop_duplicates("scenario").set_index("scenario")
     labels = first["label"].map(_short_label)
@@ -111,10 +112,20 @@ def prediction_figure(df, econ: str, references: list[str], plan: str | None = N
     x = np.arange(len(scen))
     width = 0.8 / max(len(references), 1)
     cmap = _colors(len(references) + 1)
+    from acid.sweep.results import unequal_comfort
+
+    bad = {s: set(unequal_comfort(g, econ, references)) for s, g in ok.groupby("scenario")}
     for i, ref in enumerate(references):
         y = corrected_saving(ok, econ, ref).reindex(scen).to_numpy(float)
-        ax.bar(x - 0.4 + width * (i + 0.5), y, width, color=cmap[i],
-               label=f"{econ} vs {ref}")
+        bars = ax.bar(x - 0.4 + width * (i + 0.5), y, width, color=cmap[i],
+                      label=f"{econ} vs {ref}")
+        for b, s in zip(bars, scen, strict=True):
+            if ref in bad.get(s, ()):
+                b.set_hatch("//")
+                b.set_alpha(0.45)
+    if any(bad.values()):
+        ax.bar([np.nan], [np.nan], color="white", edgecolor="0.3", hatch="//",
+               label="hatched: the reference missed the mean T_cab (not equal comfort)")
     if plan is not None and plan in set(ok["controller"]):
         y = corrected_saving(ok, plan, references[0]).reindex(scen).to_numpy(float)
         g = ok[ok["controller"] == plan].set_index("scenario").reindex(scen)
