@@ -356,6 +356,9 @@ class NominalController:
 
 
 PI_COILS = ("reset", "fixed", "search")
+#: a fixed coil whose run misses the target mean cabin temperature by more than this (K) is
+#: not at equal comfort: the search ranks it behind every coil that meets it
+MEAN_MISS_K = 0.05
 
 
 @dataclass(frozen=True)
@@ -410,14 +413,18 @@ class PIController:
             return self._matched(ctx, coil)
 
         def f(T_coil):
+            # a coil too warm to reach the target mean (a pull-down from the soak) ranks
+            # behind every coil that does, nearest first: equal comfort comes before energy
             r = self._matched(ctx, T_coil)
+            miss = abs(r.mean_T_cab - r.info["target_mean_K"])
+            miss = miss if miss > MEAN_MISS_K else 0.0
             out = rh_band_distance(r.info["rh_mean"], RH_BAND)
             tail = tail_energy_J(ctx, r.end_state, ctx.tail_s) / 1e6 if ctx.tail_s > 0 else 0.0
-            return (out > 0.0, out, r.info["energy_MJ"] + tail), r
+            return (miss, out > 0.0, out, r.info["energy_MJ"] + tail), r
 
         x, r, hist = golden_min(f, COIL_RANGE[0], C2K(c.coil_max_C), tol=c.coil_tol_K)
         r.info.update(coil_set_point_K=float(x), coil_search=[
-            [float(t), float(k[2])] for t, k in hist])
+            [float(t), float(k[-1])] for t, k in hist])
         return r
 
     def _matched(self, ctx: ScenarioContext, coil) -> ControllerRun:
