@@ -24,6 +24,8 @@ Built-in
              the evaporator set-point): the conventional A/C.
 ``econ``     the economic NMPC on the identified power map (``acid cav-study``'s D and E;
              :mod:`acid.sweep.econ`).
+``plan``     the best known plan (perfect information) from the scenario's start, replayed
+             on the plant; ``match`` is required (:mod:`acid.sweep.econ`).
 ``pi``       the PI baselines of ``acid cav-study`` (:mod:`acid.mpc.pi_baselines`): the
              plant's blower PI with the coil set-point ``coil = "reset"`` (production-style
              reset, P), ``"fixed"`` (``T_evap_set_C``) or ``"search"`` (the fixed coil
