@@ -449,6 +449,7 @@ class EnergyController(JsonDataclass):
     mean_T_cab_K: float = math.nan
     max_T_cab_K: float = math.nan
     pmv_mean: float = math.nan
+    ppd_mean_pct: float = math.nan
     rh_mean_pct: float = math.nan
     w_cab_mean_g_kg: float = math.nan
     mean_T_evap_set_K: float = math.nan

@@ -251,9 +251,9 @@ def cav_study(
             rows.append([key, _fmt(d["energy_MJ"], 4), _fmt(d["tail_corrected_energy_MJ"], 4),
                          _fmt(d["saving_tail_corrected_pct"], 2),
                          _fmt(d["saving_vs_best_pi_pct"], 2),
-                         _fmt(d["gap_to_best_plan_pct"], 2), f"{K2C(d['mean_T_cab_K']):.2f}",
+                         _fmt(d["gap_to_best_plan_pct"], 2), f"{K2C(d['mean_T_cab_K']):.3f}",
                          f"{K2C(d['max_T_cab_K']):.2f}", _fmt(d["pmv_mean"], 2),
-                         _fmt(d["rh_mean_pct"], 0),
+                         _fmt(d["ppd_mean_pct"], 1), _fmt(d["rh_mean_pct"], 0),
                          "-" if d["rank"] is None else str(d["rank"]),
                          "yes" if d["in_rh_band"] else "outside RH band",
                          "-" if ms is None else f"{ms['median']:.1f}"])
@@ -261,7 +261,8 @@ def cav_study(
         print_table(f"{title}: {sc.duration_s:g} s, mean {sc.v.mean():.1f} m/s, target mean "
                     f"T_cab {K2C(st.target_mean_K):.2f} °C",
                     ["_ctrl", "E MJ", "E corr MJ", "save vs A %", "save vs F %",
-                     "gap plan %", "mean °C", "max °C", "PMV", "RH %", "rank", "in band",
+                     "gap plan %", "mean °C", "max °C", "PMV", "PPD %", "RH %", "rank",
+                     "in band",
                      "ms"], rows)
         line = f"preview's share (E minus D): {_fmt(st.preview_share_points, 3)} points"
         if "F" in st.results:

@@ -20,7 +20,7 @@ from acid_cli._common import (
 
 #: files acid sweep writes into its output folder
 OUTPUTS = ("results.parquet", "results.csv", "summary.json", "saving_vs_ambient.png",
-           "energy_per_cycle.png", "spec.toml", ".acid.lock")
+           "energy_per_cycle.png", "prediction.png", "spec.toml", ".acid.lock")
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -155,7 +155,8 @@ def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path,
         say(f"... {len(d['failures']) - 10} more failures in the table")
     say(f"{d['computed']} computed ({d['failed']} failed), {d['reused']} reused, "
         f"{result.executor}, {result.elapsed_s:.1f} s")
-    for key in ("parquet", "csv", "saving_figure", "energy_figure", "summary"):
+    for key in ("parquet", "csv", "saving_figure", "energy_figure", "prediction_figure",
+                "summary"):
         if key in result.files:
             say(f"{key.replace('_', ' ')}: {result.files[key]}")
     if json_path is not None:

@@ -28,7 +28,7 @@ from acid_cli.main import app
 
 runner = CliRunner()
 SHORT = StudyConfig(econ=EconNMPCConfig(intervals=(5.0,) * 6, compiled=False), warmup_s=1800.0,
-                    modifier_hold_s=1800.0,
+                    modifier_hold_s=1800.0, tol_K=0.02, max_iter=8,
                     tail_s=120.0, stopgo_s=240.0)
 
 

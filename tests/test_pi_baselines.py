@@ -123,7 +123,7 @@ def test_the_prediction_sweep_example_loads():
 
     path = Path(__file__).resolve().parents[1] / "datasets/examples/sweep_prediction.toml"
     spec = load_spec(path)
-    assert [c.label for c in spec.controllers] == ["nmpc", "F", "P", "econ"]
+    assert [c.label for c in spec.controllers] == ["nmpc", "F", "P", "econ", "plan"]
     assert len(spec.scenarios) == 8
 
 

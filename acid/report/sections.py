@@ -183,7 +183,8 @@ def _where_the_energy_is(r: CavStudyStage) -> ReportSection:
                          f(x.tail_corrected_energy_MJ, ".4f"), f(x.saving_tail_corrected_pct),
                          f(x.saving_vs_best_pi_pct), f(x.gap_to_best_plan_pct),
                          f(x.mean_T_cab_K - 273.15), f(x.mean_T_evap_set_K - 273.15, ".1f"),
-                         f(x.pmv_mean), f(x.rh_mean_pct, ".0f"), band))
+                         f(x.pmv_mean), f(x.ppd_mean_pct, ".1f"), f(x.rh_mean_pct, ".0f"),
+                         band))
     return ReportSection(
         "Where the energy is",
         paragraphs=(
@@ -200,7 +201,7 @@ def _where_the_energy_is(r: CavStudyStage) -> ReportSection:
             f"{CONCLUSION} " + energy_conclusion(r)),
         header=("cycle", "controller", "energy (MJ)", "charged back (MJ)", "saving vs A (%)",
                 "saving vs F (%)", "gap to plan (%)", "mean T_cab (°C)",
-                "mean T_evap_set (°C)", "PMV", "RH (%)", "RH in band"),
+                "mean T_evap_set (°C)", "PMV", "PPD (%)", "RH (%)", "RH in band"),
         rows=tuple(rows))
 
 

@@ -7,6 +7,9 @@ differences in %.
 
 from __future__ import annotations
 
+import json
+
+import numpy as np
 from matplotlib.figure import Figure
 
 
@@ -61,6 +64,78 @@ def energy_figure(df) -> Figure:
     return difference_figure(sweep_energy_bars(df, baseline), controllers, cmap)
 
 
+def corrected_saving(df, label: str, reference: str):
+    """Per scenario, the saving of ``label`` against ``reference`` with both end states
+    charged back, ``100 (E_ref + tail_ref - E - tail) / E_ref`` (%; raw energies when the
+    sweep has no tail): a pandas Series indexed by scenario."""
+    ok = _ok(df)
+
+    def corrected(lab):
+        g = ok[ok["controller"] == lab].set_index("scenario")
+        tail = g["tail_energy_MJ"].fillna(0.0) if "tail_energy_MJ" in g else 0.0
+        return g["energy_MJ"] + tail, g["energy_MJ"]
+
+    x, _ = corrected(label)
+    r, e_r = corrected(reference)
+    return (100.0 * (r - x) / e_r).dropna()
+
+
+def prediction_figure(df, econ: str, references: list[str], plan: str | None = None
+                      ) -> Figure:
+    """Where prediction pays: per scenario, the saving of the economic NMPC ``econ`` against
+    each PI reference (bars), and the best known plan's against the first reference (black
+    marker on that bar, whisker its spread): the distance from the bar's top to the marker
+    is the gap to the plan. A hatched bar's reference missed the econ's mean cabin
+    temperature (not equal comfort). Savings tail-corrected, %."""
+    ok = _ok(df)
+    first = ok.drop_duplicates("scenario").set_index("scenario")
+    labels = first["label"].map(_short_label)
+    if "warmup_s" in first:  # a pull-down from the soak says so
+        labels = labels.where(first["warmup_s"] > 0, labels + ", from the soak")
+    scen = list(labels.index)
+    fig = Figure(figsize=(max(7.5, 1.1 * len(scen) + 2.0), 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    x = np.arange(len(scen))
+    width = 0.8 / max(len(references), 1)
+    cmap = _colors(len(references) + 1)
+    from acid.sweep.results import unequal_comfort
+
+    bad = {s: set(unequal_comfort(g, econ, references)) for s, g in ok.groupby("scenario")}
+    for i, ref in enumerate(references):
+        y = corrected_saving(ok, econ, ref).reindex(scen).to_numpy(float)
+        bars = ax.bar(x - 0.4 + width * (i + 0.5), y, width, color=cmap[i],
+                      label=f"{econ} vs {ref}")
+        for b, s in zip(bars, scen, strict=True):
+            if ref in bad.get(s, ()):
+                b.set_hatch("//")
+                b.set_alpha(0.45)
+    if any(bad.values()):
+        ax.bar([np.nan], [np.nan], color="white", edgecolor="0.3", hatch="//",
+               label="hatched: the reference missed the mean T_cab (not equal comfort)")
+    if plan is not None and plan in set(ok["controller"]):
+        y = corrected_saving(ok, plan, references[0]).reindex(scen).to_numpy(float)
+        g = ok[ok["controller"] == plan].set_index("scenario").reindex(scen)
+        spread = [json.loads(s).get("plan_spread_pct") if isinstance(s, str) else None
+                  for s in g.get("info", [None] * len(scen))]
+        err = np.array([s if s is not None and np.isfinite(s) else 0.0 for s in spread])
+        ax.errorbar(x - 0.4 + 0.5 * width, y, yerr=0.5 * err, fmt="D", color="k", ms=5,
+                    capsize=3,
+                    label=f"best known plan vs {references[0]} (whisker: its spread)")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_xticks(x, [labels[s] for s in scen], fontsize=7, rotation=20, ha="right")
+    ax.set_ylabel("saving, end state charged back (%)")
+    ax.set_title("Where prediction pays beyond a tuned PI (compressor + blower energy)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, axis="y")
+    return fig
+
+
+def _short_label(label: str) -> str:
+    """A scenario label without its set-point and refrigerant (fits under a bar)."""
+    parts = [p.strip() for p in str(label).split(",")]
+    return ", ".join(p for p in parts if not p.startswith(("R1", "R7", "set ")))
+
+
 def _colors(n: int) -> list:
     from matplotlib import colormaps
 
@@ -68,4 +143,4 @@ def _colors(n: int) -> list:
     return [cmap(i % 10) for i in range(max(n, 1))]
 
 
-__all__ = ["saving_figure", "energy_figure"]
+__all__ = ["saving_figure", "energy_figure", "prediction_figure", "corrected_saving"]

@@ -70,6 +70,9 @@ class ScenarioContext:
     start : common initial plant state (K), None for the configuration's hot soak.
     completed : runs of the controllers that already ran in this scenario, by label.
     tick : called once per closed-loop step (interrupt checks, progress).
+    tail_s : the scenario's common continuation that charges back an end state, s (0: none).
+    shared : objects a controller leaves for the later ones of the same scenario, by name
+        (``"econ_model"``: the econ model with the coil modifier that ``econ`` ran on).
     """
 
     conditions: Conditions
@@ -80,6 +83,8 @@ class ScenarioContext:
     start: dict | None = None
     completed: dict = field(default_factory=dict)
     tick: Callable[[], None] | None = None
+    tail_s: float = 0.0
+    shared: dict = field(default_factory=dict)
 
     @property
     def Ts(self) -> float:

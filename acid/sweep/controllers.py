@@ -24,14 +24,17 @@ Built-in
              the evaporator set-point): the conventional A/C.
 ``econ``     the economic NMPC on the identified power map (``acid cav-study``'s D and E;
              :mod:`acid.sweep.econ`).
+``plan``     the best known plan (perfect information) from the scenario's start, replayed
+             on the plant; ``match`` is required (:mod:`acid.sweep.econ`).
 ``pi``       the PI baselines of ``acid cav-study`` (:mod:`acid.mpc.pi_baselines`): the
              plant's blower PI with the coil set-point ``coil = "reset"`` (production-style
              reset, P), ``"fixed"`` (``T_evap_set_C``) or ``"search"`` (the fixed coil
              set-point of least energy with the mean cabin RH in the band, golden section
              over 3-``coil_max_C`` degC, 10 by default as the econ controller's, F);
              ``match`` tunes the cabin set-point to another controller's mean cabin
-             temperature. The search ranks raw run energies (the sweep's tail correction
-             comes after the controller has run).
+             temperature. The search ranks energies with the end state charged back by the
+             scenario's continuation (``tail_s``; raw energies when it is 0), as
+             ``acid cav-study``'s F does.
 
 Further controllers register from their own module: add it to ``CONTROLLER_MODULES`` (in
 acid) or name it in the spec's ``plugins = ["my_package.my_controller"]``.
@@ -355,6 +358,9 @@ class NominalController:
 
 
 PI_COILS = ("reset", "fixed", "search")
+#: a fixed coil whose run misses the target mean cabin temperature by more than this (K) is
+#: not at equal comfort: the search ranks it behind every coil that meets it
+MEAN_MISS_K = 0.05
 
 
 @dataclass(frozen=True)
@@ -401,6 +407,7 @@ class PIController:
     def run(self, ctx: ScenarioContext) -> ControllerRun:
         from acid.comfort import RH_BAND, rh_band_distance
         from acid.mpc.pi_baselines import COIL_RANGE, CoilReset, golden_min
+        from acid.sweep.scenario import tail_energy_J
 
         c = self.config
         if c.coil != "search":
@@ -408,13 +415,18 @@ class PIController:
             return self._matched(ctx, coil)
 
         def f(T_coil):
+            # a coil too warm to reach the target mean (a pull-down from the soak) ranks
+            # behind every coil that does, nearest first: equal comfort comes before energy
             r = self._matched(ctx, T_coil)
+            miss = abs(r.mean_T_cab - r.info["target_mean_K"])
+            miss = miss if miss > MEAN_MISS_K else 0.0
             out = rh_band_distance(r.info["rh_mean"], RH_BAND)
-            return (out > 0.0, out, r.info["energy_MJ"]), r
+            tail = tail_energy_J(ctx, r.end_state, ctx.tail_s) / 1e6 if ctx.tail_s > 0 else 0.0
+            return (miss, out > 0.0, out, r.info["energy_MJ"] + tail), r
 
         x, r, hist = golden_min(f, COIL_RANGE[0], C2K(c.coil_max_C), tol=c.coil_tol_K)
         r.info.update(coil_set_point_K=float(x), coil_search=[
-            [float(t), float(k[2])] for t, k in hist])
+            [float(t), float(k[-1])] for t, k in hist])
         return r
 
     def _matched(self, ctx: ScenarioContext, coil) -> ControllerRun:
@@ -439,17 +451,23 @@ class PIController:
     @staticmethod
     def _simulate(ctx: ScenarioContext, coil, T_cab_set: float) -> ControllerRun:
         from acid.mpc.pi_baselines import PlantPI
-        from acid.psychro import relative_humidity
 
         plant = ctx.make_plant()
         ctl = PlantPI(plant.cfg, ctx.Ts, T_cab_set, coil, plant.cfg.p_atm)
         r = direct_loop(ctx, plant, lambda meas, k: ctl.make_step(meas, k), "pi",
                         T_cab_set)
-        w = r.info.pop("w_cab")
-        rh = relative_humidity(r.run.T_cab[1:], w[1:], plant.cfg.p_atm)
-        r.info.update(rh_mean=float(np.mean(rh)), energy_MJ=float(
-            np.sum(r.run.P_comp + r.run.P_bl) * ctx.Ts / 1e6))
+        rh_into_info(r, plant.cfg.p_atm)
+        r.info.update(energy_MJ=float(np.sum(r.run.P_comp + r.run.P_bl) * ctx.Ts / 1e6))
         return r
+
+
+def rh_into_info(r: ControllerRun, p_atm: float) -> None:
+    """Replace the cabin humidity ratio that :func:`direct_loop` leaves in ``r.info`` by the
+    run's mean cabin relative humidity over samples 1..n (``rh_mean``, fraction)."""
+    from acid.psychro import relative_humidity
+
+    w = r.info.pop("w_cab")
+    r.info["rh_mean"] = float(np.mean(relative_humidity(r.run.T_cab[1:], w[1:], p_atm)))
 
 
 def direct_loop(ctx: ScenarioContext, plant, make_step, label: str, T_cab_max: float,
@@ -505,4 +523,4 @@ register_controller("pi", PIControllerConfig, PIController,
 __all__ = ["register_controller", "controller_types", "build_config", "ControllerType",
            "PaperNMPC", "PaperNMPCConfig", "ICMController", "ICMControllerConfig",
            "NominalController", "NominalConfig", "PIController", "PIControllerConfig",
-           "direct_loop"]
+           "direct_loop", "rh_into_info"]

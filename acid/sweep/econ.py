@@ -154,6 +154,7 @@ class EconController:
                                 coil_range=(COIL_RANGE[0], C2K(c.coil_max_C)))
             econ, info = mod.params, {"modifier_optimal_coil_K": [
                 s["T_star_K"] for s in mod.steps]}
+            ctx.shared["econ_model"] = econ
         mpc = EconNMPC(econ, EconNMPCConfig(intervals=(ctx.Ts,) * n_iv, T_cab_min=cond.T_low,
                                             T_cab_max=cond.T_high, preview=c.preview,
                                             T_evap_set_max=C2K(c.coil_max_C),
@@ -170,8 +171,8 @@ class EconController:
 
         b, r, hist = tune_mean(run_at, target, cond.T_low, cond.T_high, c.tol_K, c.max_iter)
         return ControllerRun(r.run, r.end_state,
-                             {"bound_K": b, "matched_to": c.match, "target_mean_K": target,
-                              "tuning_runs": len(hist), **info})
+                             {**r.info, "bound_K": b, "matched_to": c.match,
+                              "target_mean_K": target, "tuning_runs": len(hist), **info})
 
     @staticmethod
     def _simulate(ctx: ScenarioContext, mpc, T_cab_max: float) -> ControllerRun:
@@ -179,7 +180,7 @@ class EconController:
         scenario's start with the upper cabin bound ``T_cab_max`` (K)."""
         from acid.econ.model import STATES
         from acid.mpc.econ_nmpc import stage_means
-        from acid.sweep.controllers import direct_loop
+        from acid.sweep.controllers import direct_loop, rh_into_info
 
         mpc.reset()
         iv = mpc.config.intervals
@@ -191,14 +192,140 @@ class EconController:
                                  stage_means(T_amb_preview, k, iv, ctx.Ts),
                                  T_cab_max=T_cab_max)
 
-        r = direct_loop(ctx, ctx.make_plant(), make_step, "econ", T_cab_max,
+        plant = ctx.make_plant()
+        r = direct_loop(ctx, plant, make_step, "econ", T_cab_max,
                         step_ms=lambda n: np.asarray(mpc.log.step_time_s[-n:]) * 1e3,
                         fallback=lambda n: np.asarray(mpc.log.fallback[-n:], dtype=bool))
-        r.info.pop("w_cab")
+        rh_into_info(r, plant.cfg.p_atm)
         return r
+
+
+@dataclass(frozen=True)
+class PlanControllerConfig:
+    """The best known plan (perfect information) of ``acid cav-study`` in a sweep.
+
+    Attributes
+    ----------
+    match : label of the controller whose mean cabin temperature the plan must meet
+        (required: a plan is only compared at equal comfort).
+    econ_params, identify_hours, seed : the econ model, as the ``econ`` controller's.
+    coil_max_C : warmest coil set-point, degC.
+    tol_K : tolerance of the replay's mean cabin temperature, K.
+    max_iter : plans solved per variant while the replay's mean is re-set to the target.
+    """
+
+    match: str = ""
+    econ_params: str = "identify"
+    identify_hours: float = 6.0
+    seed: int = 0
+    coil_max_C: float = 10.0
+    tol_K: float = 0.02
+    max_iter: int = 4
+
+    def __post_init__(self):
+        if not self.match:
+            raise ConfigError('a plan needs match = "<label>" (equal comfort)')
+        EconControllerConfig(econ_params=self.econ_params, identify_hours=self.identify_hours,
+                             coil_max_C=self.coil_max_C, tol_K=self.tol_K,
+                             max_iter=self.max_iter)
+
+
+class PlanController:
+    """The best known plan on a sweep's scenario: a whole-cycle optimum of the econ model
+    from the scenario's start, its end state priced at the optimal steady state's
+    multipliers, replayed open loop on the plant (:mod:`acid.mpc.best_plan`).
+
+    Two independent optima compete when the ``econ`` controller ran before it with its coil
+    modifier: one on the identified model, one on the corrected model. Each is tail-corrected
+    with the scenario's continuation; the least is the plan, ``plan_spread_pct`` (max - min
+    over the variants that met the target mean) its uncertainty. Like every plan, a feasible
+    operation, not a bound. For a pull-down from the soak the band's upper edge is raised to
+    the start's cabin temperature (the mean is what is held equal).
+    """
+
+    def __init__(self, config: PlanControllerConfig):
+        self.config = config
+
+    def run(self, ctx: ScenarioContext) -> ControllerRun:
+        import warnings
+
+        from acid.errors import ExtrapolationWarning
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ExtrapolationWarning)  # the econ row counts them
+            return self._run(ctx)
+
+    def _run(self, ctx: ScenarioContext) -> ControllerRun:
+        from acid.econ.model import STATES
+        from acid.mpc.econ_terminal import SteadyStatePrice
+        from acid.sweep.scenario import tail_energy_J
+
+        c, cond = self.config, ctx.conditions
+        target = ctx.completed[c.match].mean_T_cab
+        plant = ctx.make_plant()
+        plant.reset(ctx.start)
+        meas = plant.measure()
+        x0 = np.array([float(meas[n]) for n in STATES])
+        T_high = max(cond.T_high, float(x0[0]) + 0.5)
+        models = {"identified_model": econ_params_for(ctx, EconControllerConfig(
+            econ_params=c.econ_params, identify_hours=c.identify_hours, seed=c.seed))}
+        if "econ_model" in ctx.shared:
+            models["corrected_model"] = ctx.shared["econ_model"]
+        v_mean = float(np.mean(ctx.v_step))
+        found = {}
+        for name, econ in models.items():
+            price = SteadyStatePrice(econ, [0.05, C2K(3.0)], [0.15, C2K(c.coil_max_C)])(
+                v_mean, cond.T_amb, cond.T_low, cond.T_high)
+            r = self._matched(ctx, econ, x0, price, target, T_high)
+            tail = tail_energy_J(ctx, r.end_state, ctx.tail_s)
+            found[name] = (r, r.run.energy_J() + (tail if np.isfinite(tail) else 0.0))
+        matched = [k for k, (r, _) in found.items() if abs(r.mean_T_cab - target) <= c.tol_K]
+        pool = matched or [min(found, key=lambda k: abs(found[k][0].mean_T_cab - target))]
+        best = min(pool, key=lambda k: found[k][1])
+        e = [found[k][1] for k in matched]
+        spread = 100.0 * (max(e) - min(e)) / min(e) if len(e) > 1 else float("nan")
+        r = found[best][0]
+        r.info.update(best_variant=best, plan_spread_pct=spread, matched_to=c.match,
+                      target_mean_K=target, variants={
+                          k: {"energy_plus_tail_MJ": v / 1e6, "mean_T_cab_K": q.mean_T_cab,
+                              "matched": k in matched} for k, (q, v) in found.items()})
+        return r
+
+    def _matched(self, ctx: ScenarioContext, econ, x0, price, target: float,
+                 T_high: float) -> ControllerRun:
+        """The plan from ``x0`` whose replay meets the target mean (re-set mean)."""
+        from acid.mpc.best_plan import PlanConfig, best_known_plan
+        from acid.sweep.controllers import direct_loop, rh_into_info
+
+        c, cond = self.config, ctx.conditions
+        T_req, best, guess = target, None, None
+        T_amb = np.full(ctx.n, cond.T_amb)
+        for _ in range(c.max_iter):
+            pc = PlanConfig(T_mean=float(np.clip(T_req, cond.T_low, T_high)),
+                            T_low=cond.T_low, T_high=T_high, cyclic=False,
+                            T_evap_set_max=C2K(c.coil_max_C))
+            plan = best_known_plan(econ, ctx.v_step, T_amb, pc, guess=guess, x_start=x0,
+                                   terminal_price=price)
+            inputs = plan.inputs
+            plant = ctx.make_plant()
+            r = direct_loop(ctx, plant, lambda meas, k, u=inputs: u[k], "plan", T_high)
+            rh_into_info(r, plant.cfg.p_atm)
+            err = r.mean_T_cab - target
+            r.info.update(model_energy_MJ=plan.energy_J / 1e6, solve_status=plan.status,
+                          plan_mean_request_K=pc.T_mean)
+            if best is None or abs(err) < abs(best[1]):
+                best = (r, err)
+            if abs(err) <= c.tol_K:
+                break
+            T_req, guess = pc.T_mean - err, (plan.x, plan.inputs)
+        return best[0]
 
 
 register_controller("econ", EconControllerConfig, EconController,
                     "the economic NMPC on the identified power map (acid cav-study's D/E)")
+register_controller("plan", PlanControllerConfig, PlanController,
+                    "the best known plan (perfect information), replayed (acid cav-study's "
+                    "plan)")
 
-__all__ = ["EconController", "EconControllerConfig", "econ_params_for"]
+__all__ = ["EconController", "EconControllerConfig", "PlanController",
+           "PlanControllerConfig", "econ_params_for"]

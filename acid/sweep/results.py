@@ -212,5 +212,75 @@ def controller_summary(df, baseline: str) -> dict:
     return out
 
 
+def prediction_roles(df) -> dict | None:
+    """The labels a prediction comparison needs, from the controller types: the first
+    ``econ`` controller, the ``pi`` controllers (references) and the first ``plan`` (None
+    when the sweep has no econ or no PI controller)."""
+    kinds = df.drop_duplicates("controller").set_index("controller")["controller_type"]
+    econ = [c for c, k in kinds.items() if k == "econ"]
+    refs = [c for c, k in kinds.items() if k == "pi"]
+    plan = [c for c, k in kinds.items() if k == "plan"]
+    if not econ or not refs:
+        return None
+    return {"econ": econ[0], "references": refs, "plan": plan[0] if plan else None}
+
+
+#: mean cabin temperatures further apart than this are not a comparison at equal comfort, K
+EQUAL_COMFORT_K = 0.05
+
+
+def unequal_comfort(g, econ: str, others: list) -> list[str]:
+    """The controllers of one scenario's rows ``g`` whose mean cabin temperature misses the
+    econ controller's by more than :data:`EQUAL_COMFORT_K` (e.g. a fixed coil too warm to
+    pull a soaked cabin down): their savings are not at equal comfort."""
+    ok = g[g["status"] == "ok"].set_index("controller")["mean_T_cab_C"]
+    if econ not in ok:
+        return []
+    return [lab for lab in others
+            if lab and lab in ok and abs(ok[lab] - ok[econ]) > EQUAL_COMFORT_K]
+
+
+def _rh_pct(g, label: str) -> float | None:
+    """Mean cabin RH (%) a controller's row reports in its ``info`` (None if it does not)."""
+    info = g[g["controller"] == label]["info"].dropna() if "info" in g else []
+    rh = json.loads(info.iloc[0]).get("rh_mean") if len(info) else None
+    return None if rh is None else _num(100.0 * rh)
+
+
+def prediction_summary(df) -> list[dict] | None:
+    """Per scenario: the economic NMPC's saving against each PI reference and the best known
+    plan's, tail-corrected (%), the econ's gap to the plan (points of the first reference),
+    the plan's spread, each controller's mean cabin RH (%) and the controllers not at equal
+    comfort with the econ (:func:`unequal_comfort`) (None without the roles,
+    :func:`prediction_roles`)."""
+    from acid.report.sweep import corrected_saving
+
+    roles = prediction_roles(df)
+    if roles is None:
+        return None
+    ok = df[df["status"] == "ok"]
+    econ, refs, plan = roles["econ"], roles["references"], roles["plan"]
+    vs = {ref: corrected_saving(ok, econ, ref) for ref in refs}
+    plan_vs = corrected_saving(ok, plan, refs[0]) if plan else None
+    out = []
+    for scen, g in df.groupby("scenario", sort=True):
+        row = {"scenario": int(scen), "label": str(g["label"].iloc[0]),
+               **{f"{econ}_vs_{ref}_pct": _num(vs[ref].get(scen, math.nan)) for ref in refs},
+               "rh_mean_pct": {lab: _rh_pct(g, lab) for lab in [econ, *refs, plan] if lab},
+               "unequal_comfort": unequal_comfort(g, econ, [*refs, plan])}
+        if plan_vs is not None:
+            p = _num(plan_vs.get(scen, math.nan))
+            e = row[f"{econ}_vs_{refs[0]}_pct"]
+            info = g[g["controller"] == plan]["info"].dropna()
+            row[f"{plan}_vs_{refs[0]}_pct"] = p
+            row[f"{econ}_gap_to_{plan}_points"] = None if p is None or e is None else p - e
+            row["plan_spread_pct"] = (_num(json.loads(info.iloc[0]).get("plan_spread_pct",
+                                                                        math.nan))
+                                      if len(info) else None)
+        out.append(row)
+    return out
+
+
 __all__ = ["ResultStore", "record_problem", "results_table", "write_table", "controller_summary",
-           "failure_record"]
+           "failure_record", "prediction_roles", "prediction_summary", "unequal_comfort",
+           "EQUAL_COMFORT_K"]

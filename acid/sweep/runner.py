@@ -24,6 +24,8 @@ from acid.sweep.results import (
     ResultStore,
     controller_summary,
     failure_record,
+    prediction_roles,
+    prediction_summary,
     results_table,
     write_table,
 )
@@ -81,6 +83,7 @@ class SweepResult:
             "computed": self.computed, "reused": self.reused, "failed": self.failed,
             "executor": self.executor, "elapsed_s": self.elapsed_s,
             "per_controller": controller_summary(self.table, self.spec.baseline),
+            "prediction": (prediction_summary(self.table) if len(self.table) else None),
             "failures": self.failures(), "tampered_records": dict(self.tampered),
             "files": {k: str(v) for k, v in self.files.items()}})
 
@@ -142,6 +145,12 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
                                                  out / "saving_vs_ambient.png")
             files["energy_figure"] = save_figure(energy_figure(table),
                                                  out / "energy_per_cycle.png")
+            roles = prediction_roles(table) if len(table) else None
+            if roles is not None:
+                from acid.report.sweep import prediction_figure
+
+                files["prediction_figure"] = save_figure(
+                    prediction_figure(table, **roles), out / "prediction.png")
         if spec.path is not None and spec.path.is_file():
             from acid._io import write_text
 

@@ -172,6 +172,8 @@ def run_metrics(r: ControllerRun, ctx: ScenarioContext) -> dict:
             "comfort_violation_Ks": float(np.sum(out) * run.Ts),
             "max_comfort_violation_K": float(np.max(out, initial=0.0)),
             "max_state_violation_K": run.max_violation_K,
+            "mean_T_evap_set_C": float(K2C(np.mean(run.T_evap_set))),
+            "mean_W_bl_kg_s": float(np.mean(run.W_bl)),
             "solve_ms_median": stat(np.median),
             "solve_ms_p95": stat(lambda a: np.percentile(a, 95)),
             "solve_ms_max": stat(np.max), "fallbacks": int(np.sum(run.fallback)),
@@ -220,7 +222,8 @@ def _run_scenario(task: ScenarioTask, params: ModelParams | None, tick) -> dict:
     try:
         v_step, v_preview = speed_profiles(s, params.Ts)
         ctx = ScenarioContext(conditions=s.conditions, plant_config=task.plant_config,
-                              params=params, v_step=v_step, v_preview=v_preview, tick=tick)
+                              params=params, v_step=v_step, v_preview=v_preview, tick=tick,
+                              tail_s=s.tail_s)
         ctx.start = warm_start(ctx, s.warmup_s)
     except Exception as exc:  # the scenario cannot start: every controller fails with it
         for c in task.controllers:
