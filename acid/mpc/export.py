@@ -103,13 +103,13 @@ def step_function(params: ModelParams, config: NMPCConfig | None = None) -> ca.F
 
     put("x0", [x[0], x[1]])
     put("theta", [ca.MX(v) for v in mpc._theta])
-    put("T_amb", [T_amb])
-    put("d", [d[0], d[1]])
-    put("T_int", [T_int] * N)
-    put("T_shell", [T_shell] * N)
-    put("eta_cop", [ca.MX(params.eta_cop)] * (N + 1))
-    put("T_cab_max", [bounds[i] for i in range(N)])
-    put("T_cab_min", [bounds[N + i] for i in range(N)])
+    put("dist", [d[0], d[1]])
+    put("d", [T_int, T_shell] * N)                        # per stage: [T_int, T_shell]
+    put("q", [T_amb, ca.MX(params.eta_cop), ca.MX(params.c_p)] * (N + 1))  # STAGE_PARAMETERS
+    put("T_cab_hi", [bounds[i] for i in range(N)])
+    put("T_cab_lo", [bounds[N + i] for i in range(N)])
+    put("T_evap_hi", [ca.MX(cfg.T_evap_max)] * N)
+    put("T_evap_lo", [ca.MX(cfg.T_evap_min)] * N)
     p = ca.vertcat(*p)
 
     # the cold guess of NMPC._initial_guess: mid-range inputs, the model simulated

@@ -7,7 +7,7 @@ hand-computing where each entry lands, a :class:`BlockVector` is *built* from na
 ``index("u", 1)``): the order of the vector and its index maps come from one declaration.
 
 The same class serves the decision vector ``w``, the constraint vector ``g`` and the
-parameter vector ``p`` of :class:`acid.mpc.nmpc.NMPC` and of any other NMPC built on CasADi.
+parameter vector ``p`` of :class:`acid.control.ocp.OCP` (every NMPC of acid).
 """
 
 from __future__ import annotations
