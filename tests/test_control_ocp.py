@@ -88,3 +88,24 @@ def test_unknown_names_and_missing_bounds_are_one_line_errors():
         OCP(paper_model, OCPSpec(N=2, stage_cost=tracking_cost({"T_cab": 1.0})[0],
                                  stage_parameters=("ref_T_cab",),
                                  input_bounds=bounds)).theta({"gamma99": 1.0})
+
+
+@pytest.mark.parametrize("terminal", ["steady", "heat", "none"])
+def test_econ_nmpc_reproduces_the_first_moves_of_the_builder_it_replaced(econ_truth, terminal):
+    import warnings
+
+    from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig
+
+    rows = [r for r in REFS["econ"] if r["terminal"] == terminal]
+    cfg = EconNMPCConfig(intervals=tuple(rows[0]["intervals"]), T_cab_min=rows[0]["T_cab_min"],
+                         T_cab_max=rows[0]["T_cab_max"], compiled=False, terminal=terminal,
+                         solver="ipopt", tol=1e-10)
+    for r in rows:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sol = EconNMPC(econ_truth, cfg).solve(np.array(r["x"]), r["v_veh"], r["T_amb"])
+        assert sol.success, sol.status
+        scale = np.array([0.15, 300.0])
+        assert np.max(np.abs(sol.u - r["u"]) / scale) < 1e-6, (terminal, sol.u, r["u"])
+        assert sol.objective == pytest.approx(r["objective"], rel=1e-6)
+        assert sol.energy_J == pytest.approx(r["energy_J"], rel=1e-6)

@@ -56,13 +56,20 @@ class SoftBound:
 
     ``lower``/``upper``: default limits in the declared unit (None: that side is absent;
     the limits are NLP parameters, changed per solve and per stage). ``penalty``: cost
-    per unit of violation and stage (W per K for the paper's a_sl).
+    per unit of violation and stage (W per K for the paper's a_sl), per second of the
+    interval when ``per_second``. ``scale``: the constraint and its slack are in units of
+    ``1 / scale`` (e.g. 1e-3: kW for a bound in W). ``expr``: bound a derived quantity
+    instead of a declared name, ``expr(s)`` over the next state's names (and the stage's
+    inputs, disturbances, parameters and constants); ``name`` then only labels it.
     """
 
     name: str
     lower: float | None = None
     upper: float | None = None
     penalty: float = 1e5
+    scale: float = 1.0
+    per_second: bool = False
+    expr: Callable | None = None
 
     @property
     def sides(self) -> tuple[str, ...]:
@@ -75,9 +82,10 @@ class OCPSpec:
 
     Attributes
     ----------
-    N : horizon, samples of the model's ``Ts``.
+    N : horizon, samples of the model's ``Ts`` (or of ``intervals``).
     stage_cost : ``cost(s) -> {term: expression}`` (summed; each term reported along the
-        plan) where ``s.NAME`` is any declared name or stage parameter.
+        plan) where ``s.NAME`` is any declared name or stage parameter, and ``s.dt`` the
+        interval's length, s.
     stage_parameters : names of scalar parameters previewed per stage that the cost reads.
     input_bounds : ``{input: (min, max)}`` in the declared unit (every input).
     soft_bounds : :class:`SoftBound` rows.
@@ -89,6 +97,12 @@ class OCPSpec:
     x_offset, x_scale : ``{state: value}``, likewise for the states.
     cost_scale : factor of the objective inside the NLP.
     constants : ``{name: value}`` numbers the cost reads besides the declaration's.
+    intervals : interval lengths, s, one per stage (default ``N`` x the model's ``Ts``).
+    interval_model : for grids other than the declared step: ``interval_model(dt)`` is a
+        CasADi Function ``(x, u, d, p, dist) -> (x_next, OUT1, OUT2, ...)`` of the same
+        declaration over ``dt`` s (scalar outputs named by the Function; ``dist`` the
+        offset-free disturbances, one per ``disturbance_targets`` entry, as the Function
+        applies them). Default: the declared step with :func:`disturbed_dynamics`.
     """
 
     N: int
@@ -105,6 +119,8 @@ class OCPSpec:
     x_scale: Mapping[str, float] = field(default_factory=dict)
     cost_scale: float = 1.0
     constants: Mapping[str, float] = field(default_factory=dict)
+    intervals: tuple[float, ...] | None = None
+    interval_model: Callable | None = None
 
 
 def tracking_cost(weights: Mapping[str, float]) -> tuple[Callable, tuple[str, ...]]:
@@ -193,14 +209,32 @@ class OCP:
         missing = [n for n in model.inputs if n.name not in spec.input_bounds]
         if missing:
             raise ConfigError(f"input_bounds: no bounds for input {missing[0].name!r}")
+        self.ntarget = len(spec.disturbance_targets)
+        self.intervals = (tuple(float(t) for t in spec.intervals) if spec.intervals
+                          is not None else (model.Ts,) * N)
+        if len(self.intervals) != N or min(self.intervals) <= 0:
+            raise ConfigError(f"intervals: {N} positive lengths expected, got "
+                              f"{self.intervals}")
+        if spec.interval_model is None:
+            if any(abs(t - model.Ts) > 1e-12 for t in self.intervals):
+                raise ConfigError(f"intervals other than the declared Ts = {model.Ts:g} s "
+                                  "need an interval_model")
+            F = disturbed_dynamics(model, tuple(spec.disturbance_targets))
+            self._out_names = model.output_names
+            self._F = {model.Ts: lambda x, u, d, p, dist, F=F: tuple(F(x, u, d, p, dist))}
+        else:
+            self._F = {}
+            for dt in sorted(set(self.intervals)):
+                Fi = spec.interval_model(dt)
+                self._out_names = tuple(Fi.name_out()[1:])
+                self._F[dt] = lambda x, u, d, p, dist, F=Fi: (
+                    F(x, u, d, p, dist)[0], ca.vertcat(*F(x, u, d, p, dist)[1:]))
         for b in spec.soft_bounds:
-            if b.name not in model.state_names + model.output_names:
+            if b.expr is None and b.name not in model.state_names + self._out_names:
                 raise ConfigError(f"soft bound on {b.name!r}: not a state or output of "
                                   f"model {model.name!r}")
             if not b.sides:
                 raise ConfigError(f"soft bound on {b.name!r} has neither side")
-        self.ntarget = len(spec.disturbance_targets)
-        self._Fd = disturbed_dynamics(model, tuple(spec.disturbance_targets))
         un = [i.name for i in model.inputs]
         xn = list(model.state_names)
         self.u_offset = np.array([spec.u_offset.get(n, 0.0) for n in un], float)
@@ -214,31 +248,39 @@ class OCP:
         self._build()
 
     # ------------------------------------------------------------------------ build
-    def _namespace(self, x, u, d, y, theta, q) -> _Namespace:
+    def _Fd(self, x, u, d, theta, dist, dt: float | None = None):
+        """``(x_next, y)`` of one interval of ``dt`` s (default the declared step)."""
+        return self._F[self.model.Ts if dt is None else dt](x, u, d, theta, dist)
+
+    def _namespace(self, x, u, d, y, theta, q, dt: float | None = None) -> _Namespace:
         m = self.model
         sym = {}
-        for rows, vec in ((m.states, x), (m.inputs, u), (m.disturbances, d),
-                          (m.outputs, y), (m.parameters, theta)):
-            for k, r in enumerate(rows):
-                sym[r.name] = vec[k]
+        for names, vec in (((r.name for r in m.states), x), ((r.name for r in m.inputs), u),
+                           ((r.name for r in m.disturbances), d), (self._out_names, y),
+                           ((r.name for r in m.parameters), theta)):
+            for k, name in enumerate(names):
+                sym[name] = vec[k]
         for c in m.constants:
             sym[c.name] = float(c.value)
         sym.update({k: float(v) for k, v in self.spec.constants.items()})
         for k, n in enumerate(self.spec.stage_parameters):
             sym[n] = q[k]
+        sym["dt"] = m.Ts if dt is None else float(dt)
         return _Namespace(sym, f"model {m.name!r}: stage cost")
 
-    def _cost_terms(self, x, u, d, y, theta, q) -> dict:
-        out = self.spec.stage_cost(self._namespace(x, u, d, y, theta, q))
+    def _cost_terms(self, x, u, d, y, theta, q, dt: float | None = None) -> dict:
+        out = self.spec.stage_cost(self._namespace(x, u, d, y, theta, q, dt))
         if not isinstance(out, Mapping) or not out:
             raise ConfigError("stage_cost must return a non-empty dict {term: expression}")
         return {k: ca.SX(v) for k, v in out.items()}
 
-    def _bound_value(self, b: SoftBound, x_next, y):
+    def _bound_value(self, b: SoftBound, x_next, u, d, y, theta, q, dt):
         m = self.model
+        if b.expr is not None:
+            return b.expr(self._namespace(x_next, u, d, y, theta, q, dt))
         if b.name in m.state_names:
             return x_next[m.state_names.index(b.name)]
-        return y[m.output_names.index(b.name)]
+        return y[self._out_names.index(b.name)]
 
     def _build(self) -> None:
         m, spec, N = self.model, self.spec, self.N
@@ -261,30 +303,34 @@ class OCP:
         Zx = w.sym("x", 0, m.nx)
         g.add("init", 0, Zx - (x0 - xoff) / xscl)
         X = xoff + xscl * Zx
-        terms_list = []
+        terms_list, y_list = [], []
         for i in range(N):
+            dt = self.intervals[i]
             U = uoff + w.sym("u", i, m.nu) / uscl
             S = w.sym("s", i, ns) if ns else ca.SX(0, 1)
-            x_next, y = self._Fd(X, U, D[i], theta, dist)
-            terms = self._cost_terms(X, U, D[i], y, theta, Q[i])
+            x_next, y = self._Fd(X, U, D[i], theta, dist, dt)
+            terms = self._cost_terms(X, U, D[i], y, theta, Q[i], dt)
             terms_list.append(terms)
+            y_list.append(y)
             cost += sum(terms.values())
             if spec.terminal_stage and i == N - 1:   # stage N with u(N) := u(N-1)
-                y_N = self._Fd(x_next, U, D[i], theta, dist)[1]
-                terms_N = self._cost_terms(x_next, U, D[i], y_N, theta, Q[N])
+                y_N = self._Fd(x_next, U, D[i], theta, dist, dt)[1]
+                terms_N = self._cost_terms(x_next, U, D[i], y_N, theta, Q[N], dt)
                 terms_list.append(terms_N)
                 cost += sum(terms_N.values())
             Zn = ca.SX.sym(f"x_{i + 1}", m.nx)
             g.add("dyn", i, Zn - (x_next - xoff) / xscl)
             k = 0
             for b in spec.soft_bounds:
-                val = self._bound_value(b, x_next, y)
+                val = self._bound_value(b, x_next, U, D[i], y, theta, Q[i], dt)
                 for side in b.sides:
                     if side == "hi":
-                        g.add(f"{b.name}_hi", i, val - lim[(b.name, "hi")][i] - S[k])
+                        g.add(f"{b.name}_hi", i,
+                              (val - lim[(b.name, "hi")][i]) * b.scale - S[k])
                     else:
-                        g.add(f"{b.name}_lo", i, val - lim[(b.name, "lo")][i] + S[k])
-                    cost += b.penalty * S[k]
+                        g.add(f"{b.name}_lo", i,
+                              (val - lim[(b.name, "lo")][i]) * b.scale + S[k])
+                    cost += b.penalty * (dt if b.per_second else 1.0) * S[k]
                     k += 1
             w.add("x", i + 1, Zn)
             X = xoff + xscl * Zn
@@ -295,6 +341,12 @@ class OCP:
         self.w, self.g, self.par = w, g, par
         self.ns = ns
         self.term_names = tuple(terms_list[0])
+        self.output_names = self._out_names
+        # outputs and cost terms of the NLP's own stages (the states of w, not re-simulated)
+        self.stage_values = ca.Function(
+            "ocp_stage_values", [self.nlp["x"], self.nlp["p"]],
+            [ca.horzcat(*y_list), ca.horzcat(*[ca.vertcat(*t.values()) for t in terms_list])],
+            ["w", "p"], ["Y", "terms"])
         self._ix, self._iu = w.index("x"), w.index("u")
         self._is = w.index("s") if ns else np.zeros((N, 0), dtype=int)
         self._ip = {b: par.index(b) for b in par.blocks}
@@ -321,16 +373,18 @@ class OCP:
         th, ds = ca.SX.sym("th", m.np), ca.SX.sym("ds", self.ntarget)
         Ys, Ts = [], []
         for i in range(N):
-            xn, y = self._Fd(Xs[i], Uplan[:, i], Dplan[:, i], th, ds)
+            dt = self.intervals[i]
+            xn, y = self._Fd(Xs[i], Uplan[:, i], Dplan[:, i], th, ds, dt)
             Ys.append(y)
             Ts.append(ca.vertcat(*self._cost_terms(Xs[i], Uplan[:, i], Dplan[:, i], y, th,
-                                                   Qplan[:, i]).values()))
+                                                   Qplan[:, i], dt).values()))
             Xs.append(xn)
         if spec.terminal_stage:
-            y = self._Fd(Xs[N], Uplan[:, N - 1], Dplan[:, N - 1], th, ds)[1]
+            dt = self.intervals[-1]
+            y = self._Fd(Xs[N], Uplan[:, N - 1], Dplan[:, N - 1], th, ds, dt)[1]
             Ys.append(y)
             Ts.append(ca.vertcat(*self._cost_terms(Xs[N], Uplan[:, N - 1], Dplan[:, N - 1], y,
-                                                   th, Qplan[:, N]).values()))
+                                                   th, Qplan[:, N], dt).values()))
         self.trajectory = ca.Function(
             "ocp_trajectory", [Xs[0], Uplan, Dplan, Qplan, th, ds],
             [ca.horzcat(*Xs), ca.horzcat(*Ys), ca.horzcat(*Ts)],
@@ -379,7 +433,7 @@ class OCP:
             out[ip["d"]] = d
         if q is not None and self.spec.stage_parameters:
             out[ip["q"]] = q
-        if lam is not None:
+        if lam is not None and "lam" in ip:
             out[ip["lam"].ravel()] = lam
         for (name, side), val in (bounds or {}).items():
             out[ip[f"{name}_{side}"].ravel()] = val

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from acid.control.layout import BlockVector
-from acid.mpc.nmpc import NMPC, stage_shift
+from acid.control.ocp import stage_shift
+from acid.mpc.nmpc import NMPC
 from acid.params import paper
 
 
