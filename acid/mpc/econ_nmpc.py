@@ -315,6 +315,15 @@ def econ_interval(dt: float) -> ca.Function:
                        ["x", "u", "d", "p", "dist"], ["x_next", "T_ain", "Q_e", "P_comp", "P_bl"])
 
 
+def _at_parameters(F: ca.Function, theta: np.ndarray) -> ca.Function:
+    """``F(x, u, d, p, dist)`` at fixed parameters: ``(x, u, d, dist) -> F's outputs`` (the
+    guess, the price and the offset-free estimator step the same interval map)."""
+    x, u, d, w = (ca.SX.sym(n, F.size1_in(i)) for n, i in (("x", 0), ("u", 1), ("d", 2),
+                                                            ("dist", 4)))
+    return ca.Function(F.name() + "_at_p", [x, u, d, w], F(x, u, d, ca.DM(theta), w),
+                       ["x", "u", "d", "dist"], F.name_out())
+
+
 def econ_stage_cost(s) -> dict:
     """Electric energy of one interval, J: ``dt (P_comp + P_bl)``."""
     return {"E": s.dt * (s.P_comp + s.P_bl)}
@@ -410,7 +419,8 @@ class EconNMPC:
             model.heat_content(ca.vertsplit(xs), vv, p), xs)])
         self._steady = (SteadyStatePrice(p, cfg.u_min, cfg.u_max)
                         if cfg.terminal == "steady" else None)
-        self._steps = {dt: model.casadi_step(p, dt) for dt in sorted(set(cfg.intervals))}
+        self._steps = {dt: _at_parameters(econ_interval(dt), self._theta)
+                       for dt in sorted(set(cfg.intervals))}
         self._step0 = self._steps[cfg.intervals[0]]
         self.estimator = None
         if cfg.offset_free:  # f(x, u, v, d) -> x_next: one sample of the model, d = dist
