@@ -427,12 +427,14 @@ def predict(T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell, d, p, disturbance="
     Floats or CasADi symbols. Returns (T_cab+, T_evap+, T_ain), K.
     """
     F = _dynamics(disturbance)
-    args = (ca.vertcat(T_cab, T_evap), ca.vertcat(W_bl, T_evap_set), ca.vertcat(T_int, T_shell),
-            theta_vector(p), ca.vertcat(d[0], d[1]))
-    x_next, y = F(*args)
-    if isinstance(x_next, ca.DM):
-        x_next, y = np.asarray(x_next).ravel(), np.asarray(y).ravel()
+    pairs = ((T_cab, T_evap), (W_bl, T_evap_set), (T_int, T_shell), (d[0], d[1]))
+    if not any(isinstance(v, (ca.SX, ca.MX)) for pair in pairs for v in pair):
+        x, u, v, dd = (np.array(pair, dtype=float) for pair in pairs)
+        x_next, y = F(x, u, v, theta_vector(p), dd)
+        x_next, y = x_next.full().ravel(), y.full().ravel()
         return float(x_next[0]), float(x_next[1]), float(y[0])
+    x_next, y = F(*(ca.vertcat(*pair) for pair in pairs[:3]), theta_vector(p),
+                  ca.vertcat(*pairs[3]))
     return x_next[0], x_next[1], y[0]
 
 
@@ -769,7 +771,8 @@ class NMPC:
         self._applied = (u, v) if measured else None
         # the model's T_cab one step ahead under the applied input (for the back-off)
         self._predicted = (predict(x_hat[0], x_hat[1], u[0], u[1], v[0], v[1], d, self.params,
-                                   cfg.disturbance)[0] if measured else None)
+                                   cfg.disturbance)[0]
+                           if measured and self.backoff is not None else None)
         self.log.u.append(u)
         self.log.solutions.append(sol)
         self.log.fallback.append(not ok)
