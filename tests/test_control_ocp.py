@@ -90,8 +90,10 @@ def test_unknown_names_and_missing_bounds_are_one_line_errors():
                                  input_bounds=bounds)).theta({"gamma99": 1.0})
 
 
+@pytest.mark.parametrize("stage_functions", [False, True], ids=["inlined", "stage-functions"])
 @pytest.mark.parametrize("terminal", ["steady", "heat", "none"])
-def test_econ_nmpc_reproduces_the_first_moves_of_the_builder_it_replaced(econ_truth, terminal):
+def test_econ_nmpc_reproduces_the_first_moves_of_the_builder_it_replaced(econ_truth, terminal,
+                                                                         stage_functions):
     import warnings
 
     from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig
@@ -99,7 +101,7 @@ def test_econ_nmpc_reproduces_the_first_moves_of_the_builder_it_replaced(econ_tr
     rows = [r for r in REFS["econ"] if r["terminal"] == terminal]
     cfg = EconNMPCConfig(intervals=tuple(rows[0]["intervals"]), T_cab_min=rows[0]["T_cab_min"],
                          T_cab_max=rows[0]["T_cab_max"], compiled=False, terminal=terminal,
-                         solver="ipopt", tol=1e-10)
+                         solver="ipopt", tol=1e-10, stage_functions=stage_functions)
     for r in rows:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

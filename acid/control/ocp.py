@@ -103,6 +103,10 @@ class OCPSpec:
         declaration over ``dt`` s (scalar outputs named by the Function; ``dist`` the
         offset-free disturbances, one per ``disturbance_targets`` entry, as the Function
         applies them). Default: the declared step with :func:`disturbed_dynamics`.
+    stage_functions : build the NLP from one CasADi Function per distinct stage, called at
+        every stage (MX), instead of one expression inlining every stage (SX): the
+        generated C holds each stage and its derivatives once (several times less code to
+        compile for long horizons), for somewhat slower evaluations.
     """
 
     N: int
@@ -121,6 +125,7 @@ class OCPSpec:
     constants: Mapping[str, float] = field(default_factory=dict)
     intervals: tuple[float, ...] | None = None
     interval_model: Callable | None = None
+    stage_functions: bool = False
 
 
 def tracking_cost(weights: Mapping[str, float]) -> tuple[Callable, tuple[str, ...]]:
@@ -282,58 +287,108 @@ class OCP:
             return x_next[m.state_names.index(b.name)]
         return y[self._out_names.index(b.name)]
 
+    def _stage(self, X, U, S, Di, theta, dist, Qi, QN, lims, Zn, dt, last) -> dict:
+        """One stage's constraints and cost (SX): ``dyn`` (the gap), ``bounds`` (one entry
+        per soft-bound side), ``cost``, the outputs ``y`` and the cost ``terms`` (with the
+        stage N appended on the ``last`` stage of a ``terminal_stage`` problem)."""
+        spec = self.spec
+        xoff, xscl = ca.DM(self.x_offset), ca.DM(self.x_scale)
+        x_next, y = self._Fd(X, U, Di, theta, dist, dt)
+        terms = self._cost_terms(X, U, Di, y, theta, Qi, dt)
+        cost = sum(terms.values())
+        terms_N = {}
+        if last:   # stage N with u(N) := u(N-1)
+            y_N = self._Fd(x_next, U, Di, theta, dist, dt)[1]
+            terms_N = self._cost_terms(x_next, U, Di, y_N, theta, QN, dt)
+            cost += sum(terms_N.values())
+        bounds, k = [], 0
+        for b in spec.soft_bounds:
+            val = self._bound_value(b, x_next, U, Di, y, theta, Qi, dt)
+            for side in b.sides:
+                sign = -1.0 if side == "hi" else 1.0
+                bounds.append((val - lims[k]) * b.scale + sign * S[k])
+                cost += b.penalty * (dt if b.per_second else 1.0) * S[k]
+                k += 1
+        return {"dyn": Zn - (x_next - xoff) / xscl, "bounds": bounds, "cost": cost, "y": y,
+                "terms": terms, "terms_N": terms_N}
+
+    def _stage_function(self, dt: float, last: bool) -> ca.Function:
+        """:meth:`_stage` as one SX Function (the stage-function form), cached per kind."""
+        key = (dt, last)
+        if key not in self._stage_fns:
+            m, nq = self.model, len(self.spec.stage_parameters)
+            ins = [ca.SX.sym(n, k) for n, k in (
+                ("x", m.nx), ("u", m.nu), ("s", self.ns), ("d", m.nd), ("theta", m.np),
+                ("dist", self.ntarget), ("q", nq), ("qN", nq), ("lim", self.ns),
+                ("xn", m.nx))]
+            X = ca.DM(self.x_offset) + ca.DM(self.x_scale) * ins[0]
+            U = ca.DM(self.u_offset) + ins[1] / ca.DM(self.u_scale)
+            r = self._stage(X, U, ins[2], ins[3], ins[4], ins[5], ins[6], ins[7], ins[8],
+                            ins[9], dt, last)
+            self._stage_fns[key] = ca.Function(
+                f"ocp_stage_{len(self._stage_fns)}", ins,
+                [r["dyn"], ca.vertcat(*r["bounds"]), r["cost"], r["y"],
+                 ca.vertcat(*r["terms"].values(), *r["terms_N"].values())])
+            self._stage_terms = (tuple(r["terms"]), tuple(r["terms_N"]))
+        return self._stage_fns[key]
+
     def _build(self) -> None:
         m, spec, N = self.model, self.spec, self.N
         nq = len(spec.stage_parameters)
-        w, g, par = BlockVector("w"), BlockVector("g"), BlockVector("p")
+        kind = ca.MX if spec.stage_functions else ca.SX
+        w, g, par = BlockVector("w", kind), BlockVector("g", kind), BlockVector("p", kind)
         x0 = par.sym("x0", 0, m.nx)
         theta = par.sym("theta", 0, m.np)
         dist = par.sym("dist", 0, self.ntarget)
         D = [par.sym("d", i, m.nd) for i in range(N)]
         nstage_q = N + 1 if spec.terminal_stage else N
         Q = [par.sym("q", i, nq) for i in range(nstage_q)]
-        lim = {(b.name, side): [par.sym(f"{b.name}_{side}", i, 1) for i in range(N)]
-               for b in spec.soft_bounds for side in b.sides}
+        sides = [(b.name, side) for b in spec.soft_bounds for side in b.sides]
+        lim = {bs: [par.sym(f"{bs[0]}_{bs[1]}", i, 1) for i in range(N)] for bs in sides}
         lam = par.sym("lam", 0, m.nx) if spec.terminal_price else None
-        ns = sum(len(b.sides) for b in spec.soft_bounds)
+        self.ns = ns = len(sides)
+        self._stage_fns: dict = {}
         xoff, xscl = ca.DM(self.x_offset), ca.DM(self.x_scale)
         uoff, uscl = ca.DM(self.u_offset), ca.DM(self.u_scale)
 
         cost = 0
         Zx = w.sym("x", 0, m.nx)
         g.add("init", 0, Zx - (x0 - xoff) / xscl)
-        X = xoff + xscl * Zx
         terms_list, y_list = [], []
         for i in range(N):
             dt = self.intervals[i]
-            U = uoff + w.sym("u", i, m.nu) / uscl
-            S = w.sym("s", i, ns) if ns else ca.SX(0, 1)
-            x_next, y = self._Fd(X, U, D[i], theta, dist, dt)
-            terms = self._cost_terms(X, U, D[i], y, theta, Q[i], dt)
-            terms_list.append(terms)
+            last = spec.terminal_stage and i == N - 1
+            Zu = w.sym("u", i, m.nu)
+            S = w.sym("s", i, ns) if ns else kind(0, 1)
+            Zn = kind.sym(f"x_{i + 1}", m.nx)
+            lims = [lim[bs][i] for bs in sides]
+            QN = Q[N] if last else kind.zeros(nq)
+            if spec.stage_functions:
+                F = self._stage_function(dt, last)
+                dyn, bvec, c, y, tv = F(Zx, Zu, S, D[i], theta, dist, Q[i], QN,
+                                        ca.vertcat(*lims) if lims else kind(0, 1), Zn)
+                bounds = ca.vertsplit(bvec)
+                names = self._stage_terms[0] + (self._stage_terms[1] if last else ())
+                terms = dict(zip(names, ca.vertsplit(tv), strict=True))
+            else:
+                r = self._stage(xoff + xscl * Zx, uoff + Zu / uscl, S, D[i], theta, dist,
+                                Q[i], QN, lims, Zn, dt, last)
+                dyn, bounds, c, y = r["dyn"], r["bounds"], r["cost"], r["y"]
+                terms = {**r["terms"], **{f"{k} (N)": v for k, v in r["terms_N"].items()}}
+            n_first = len(terms) if not last else len(terms) // 2
+            items = list(terms.values())
+            terms_list.append(dict(zip(list(terms)[:n_first], items[:n_first], strict=True)))
+            if last:
+                terms_list.append(dict(zip(list(terms)[:n_first], items[n_first:],
+                                           strict=True)))
             y_list.append(y)
-            cost += sum(terms.values())
-            if spec.terminal_stage and i == N - 1:   # stage N with u(N) := u(N-1)
-                y_N = self._Fd(x_next, U, D[i], theta, dist, dt)[1]
-                terms_N = self._cost_terms(x_next, U, D[i], y_N, theta, Q[N], dt)
-                terms_list.append(terms_N)
-                cost += sum(terms_N.values())
-            Zn = ca.SX.sym(f"x_{i + 1}", m.nx)
-            g.add("dyn", i, Zn - (x_next - xoff) / xscl)
-            k = 0
-            for b in spec.soft_bounds:
-                val = self._bound_value(b, x_next, U, D[i], y, theta, Q[i], dt)
-                for side in b.sides:
-                    if side == "hi":
-                        g.add(f"{b.name}_hi", i,
-                              (val - lim[(b.name, "hi")][i]) * b.scale - S[k])
-                    else:
-                        g.add(f"{b.name}_lo", i,
-                              (val - lim[(b.name, "lo")][i]) * b.scale + S[k])
-                    cost += b.penalty * (dt if b.per_second else 1.0) * S[k]
-                    k += 1
+            cost += c
+            g.add("dyn", i, dyn)
+            for bs, expr in zip(sides, bounds, strict=True):
+                g.add(f"{bs[0]}_{bs[1]}", i, expr)
             w.add("x", i + 1, Zn)
-            X = xoff + xscl * Zn
+            Zx = Zn
+        X = xoff + xscl * Zx
         if spec.terminal_price:
             cost += ca.dot(lam, X - x0)
         self.nlp = {"x": w.vertcat(), "f": cost * spec.cost_scale, "g": g.vertcat(),
