@@ -45,14 +45,18 @@ price; the paper's NMPC is another configuration of the same builder. First move
 those of the hand-written builder it replaced to about 1e-11
 (``tests/test_control_ocp.py``).
 
-**Solver.** ``solver="sqp"``: SQP with the active-set QP solver qrqp, warm-started from
-the previous plan and multipliers shifted by one interval (about 3 iterations a step against
-about 15-25 for fatrop; measured inside CasADi on 80 UDDS steps under load: 30.7 ms against
-128.8 ms, moves within 3e-5 of the input range of IPOPT's at 1e-10), each result checked for
-convergence; a failed solve (typically the cold start) is finished by ``fallback_solver``
-(IPOPT inside CasADi: nothing more to compile), after which SQP starts again from the primal
-plan with zero multipliers. ``stage_functions=True`` builds the NLP from one function per
-stage (several times less C to compile). The NLP is built once through
+**Solver.** By default (``solver="sqp"``) SQP with the active-set QP solver qrqp,
+warm-started from the previous plan and multipliers shifted by one interval (about 3
+iterations a step against 15-25 for fatrop), each result checked for convergence; a failed
+solve (typically the cold start) is finished by ``fallback_solver`` (IPOPT inside CasADi:
+nothing more to compile), after which SQP starts again from the primal plan with zero
+multipliers. Measured (``benchmarks/bench_compile.py``, 100 UDDS states x 2, interleaved,
+load 20 on 2 cores): 15.8 ms per step against fatrop's 42.2 ms as generated C; inside
+CasADi 30.7 ms against 128.8 ms; moves within 1e-6 of IPOPT's at 1e-10
+(``tests/test_econ_nmpc.py``). ``stage_functions=True`` (default) builds the NLP from one
+function per stage called over the horizon: 18 CPU-s of compiling against 42 (SQP) or 53
+(fatrop) inlined, steps as fast. ``solver="fatrop"`` (the previous default) or ``"ipopt"``
+solve the same NLP. The NLP is built once through
 :func:`_make_solver`, which hands it to
 :class:`acid.mpc.solver.NLPSolver` (issue 13): generated C compiled at first use and cached
 per user when a C compiler works (``compiled="auto"``; CasADi otherwise, the same algorithm),
@@ -153,9 +157,9 @@ class EconNMPCConfig:
     terminal : terminal cost of the horizon's end state, ``"heat"`` (the heat content at the
         marginal compressor price), ``"steady"`` (the optimal steady state's multipliers) or
         ``"none"`` (module docstring).
-    solver : ``"fatrop"`` (default, structure-exploiting interior point), ``"sqp"`` (SQP
-        with the active-set QP solver qrqp, warm-started from the shifted primal and dual
-        solution, each result checked for convergence) or ``"ipopt"``.
+    solver : ``"sqp"`` (default: SQP with the active-set QP solver qrqp, warm-started from
+        the shifted primal and dual solution, each result checked for convergence),
+        ``"fatrop"`` (structure-exploiting interior point) or ``"ipopt"``.
     fallback_solver : solves the same problem from the same guess when ``solver`` fails
         (default ``"ipopt"``: inside CasADi, nothing more to compile; None: the
         controller's fallback input at once).
@@ -175,8 +179,8 @@ class EconNMPCConfig:
         disturbances on the five state derivatives) and predict with them held.
     estimator : its tuning (``ECON_ESTIMATOR``).
     stage_functions : build the NLP from one function per stage called over the horizon
-        (:class:`acid.control.ocp.OCPSpec`): several times less C to compile, slower
-        evaluations.
+        (default; :class:`acid.control.ocp.OCPSpec`): 3.5x less C, 18 against 42 CPU-s of
+        compiling for SQP (``benchmarks/bench_compile.py``), steps as fast as inlined.
     """
 
     intervals: tuple[float, ...] = (5.0,) * 24
@@ -190,7 +194,7 @@ class EconNMPCConfig:
     slack_penalty: float = 1e5
     preview: bool = True
     terminal: str = "steady"
-    solver: str = "fatrop"
+    solver: str = "sqp"
     fallback_solver: str | None = "ipopt"
     tol: float = 1e-6
     max_iter: int = 200
@@ -200,7 +204,7 @@ class EconNMPCConfig:
     max_solve_s: float | None = None
     offset_free: bool = False
     estimator: EstimatorConfig = ECON_ESTIMATOR
-    stage_functions: bool = False
+    stage_functions: bool = True
 
     def __post_init__(self):
         iv = tuple(float(t) for t in self.intervals)
