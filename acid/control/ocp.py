@@ -402,6 +402,8 @@ class OCP:
             "ocp_stage_values", [self.nlp["x"], self.nlp["p"]],
             [ca.horzcat(*y_list), ca.horzcat(*[ca.vertcat(*t.values()) for t in terms_list])],
             ["w", "p"], ["Y", "terms"])
+        if spec.stage_functions:   # evaluated in Python every solve: SX, not the MX VM
+            self.stage_values = self.stage_values.expand()
         self._ix, self._iu = w.index("x"), w.index("u")
         self._is = w.index("s") if ns else np.zeros((N, 0), dtype=int)
         self._ip = {b: par.index(b) for b in par.blocks}
