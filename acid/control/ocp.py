@@ -450,6 +450,32 @@ class OCP:
         self.shift_g = stage_shift(g)
 
     # ------------------------------------------------------------------ numerics
+    def trajectory_evaluator(self, compiled: bool | str = "auto") -> Callable:
+        """``f(x0, U (nu, N), D (nd, N), Q (nq, N[+1]), theta, dist) -> (X, Y, terms)``
+        numpy arrays: :attr:`trajectory` as generated C when ``compiled`` allows and a
+        compiler works (about 20x faster per call than inside CasADi), else inside CasADi."""
+        fn = self.trajectory
+        if compiled is not False:
+            from acid.mpc.codegen import CodegenError, compile_function
+
+            try:
+                cf, _ = compile_function(fn)
+            except CodegenError:
+                cf = None   # the solver already noticed a missing compiler
+            if cf is not None:
+                shapes = [fn.size_out(i) for i in range(fn.n_out())]
+
+                def evaluate(*args):
+                    for buf, a in zip(cf.inputs, args, strict=True):
+                        buf[:] = np.asarray(a, dtype=float).ravel(order="F")
+                    if cf.call():
+                        raise RuntimeError("ocp_trajectory: the generated code failed")
+                    return tuple(o.reshape(sh, order="F").copy()
+                                 for o, sh in zip(cf.outputs, shapes, strict=True))
+
+                return evaluate
+        return lambda *args: tuple(np.asarray(a) for a in fn(*args))
+
     def u_nlp(self, u) -> np.ndarray:
         """Inputs (declared units) as the NLP's scaled variables."""
         return (np.asarray(u, dtype=float) - self.u_offset) * self.u_scale

@@ -511,6 +511,7 @@ class NMPC:
                     ("T_evap", "lo"): np.full(N, cfg.T_evap_min)})
         # warm start: the previous primal/dual solution shifted by one stage
         self._shift_w, self._shift_g = ocp.shift_w, ocp.shift_g
+        self._trajectory = ocp.trajectory_evaluator(cfg.compiled)
 
     def _fallback_solver(self) -> NLPSolver | None:
         """The solver of ``config.fallback_solver`` (None when there is none), built at its
@@ -591,9 +592,9 @@ class NMPC:
         cfg = self.config
         u = (np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
              if u_prev is not None else 0.5 * (cfg.u_min + cfg.u_max))
-        X = self._ocp.trajectory(x, np.tile(u[:, None], self.N), D.T, Q.T, self._theta, d)[0]
+        X = self._trajectory(x, np.tile(u[:, None], self.N), D.T, Q.T, self._theta, d)[0]
         w = np.zeros(self._w.size)
-        w[self._ocp.w.index("x")] = np.asarray(X).T
+        w[self._ocp.w.index("x")] = X.T
         w[self._iu] = self._u_nlp(u)
         return w
 
@@ -694,8 +695,7 @@ class NMPC:
         cfg = self.config
         plan = np.clip(self._u_plan(w), cfg.u_min, cfg.u_max)
         W, Tset = plan[:, 0], plan[:, 1]
-        X, Y, terms = (np.asarray(a) for a in self._ocp.trajectory(
-            x, plan.T, D.T, Q.T, self._theta, d))
+        X, Y, terms = self._trajectory(x, plan.T, D.T, Q.T, self._theta, d)
         T_cab, T_evap = X[0], X[1]
         T_ain = Y[PAPER_MODEL.output_names.index("T_ain")]
         P_comp, P_bl = terms[self._ocp.term_names.index("P_comp")], \
