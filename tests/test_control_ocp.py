@@ -111,3 +111,25 @@ def test_econ_nmpc_reproduces_the_first_moves_of_the_builder_it_replaced(econ_tr
         assert np.max(np.abs(sol.u - r["u"]) / scale) < 1e-6, (terminal, sol.u, r["u"])
         assert sol.objective == pytest.approx(r["objective"], rel=1e-6)
         assert sol.energy_J == pytest.approx(r["energy_J"], rel=1e-6)
+
+
+def test_the_steady_state_problem_is_the_models_fixed_point():
+    # tracking T_evap = 279 K at rest: eq. 2's fixed point gives the set-point in closed form
+    cost, refs = tracking_cost({"T_evap": 1.0})
+    ocp = OCP(paper_model, OCPSpec(N=2, stage_cost=cost, stage_parameters=refs,
+                                   input_bounds={"W_bl": (0.05, 0.15),
+                                                 "T_evap_set": (260.0, 300.0)}))
+    nlp = ocp.steady_state_nlp()
+    res = ca.nlpsol("ss", "ipopt", nlp, {"print_time": False, "ipopt.print_level": 0,
+                                         "ipopt.sb": "yes", "ipopt.tol": 1e-12})(
+        x0=np.r_[300.0, 280.0, 0.1, 280.0], p=np.r_[305.0, 310.0, ocp.theta(), 279.0],
+        lbx=np.r_[-np.inf, -np.inf, ocp.u_nlp(ocp.u_min)],
+        ubx=np.r_[np.inf, np.inf, ocp.u_nlp(ocp.u_max)], lbg=0.0, ubg=0.0)
+    z = np.asarray(res["x"]).ravel()
+    g = dict(zip(paper_model.parameter_names, ocp.theta(), strict=True))
+    u_set = (279.0 * (1 - g["gamma4"] - g["gamma5"]) - g["tau2"]) / -g["gamma5"]
+    assert z[1] == pytest.approx(279.0, abs=1e-8)
+    assert ocp.u_offset[1] + z[3] / ocp.u_scale[1] == pytest.approx(u_set, abs=1e-6)
+    x_next = np.asarray(paper_model.F(z[:2], [z[2], z[3]], [305.0, 310.0],
+                                      ocp.theta())[0]).ravel()
+    np.testing.assert_allclose(x_next, z[:2], atol=1e-8)

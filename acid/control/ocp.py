@@ -449,6 +449,42 @@ class OCP:
         self.shift_w = stage_shift(w)
         self.shift_g = stage_shift(g)
 
+    def steady_state_nlp(self) -> dict:
+        """The model's optimal steady state as an NLP (for a terminal price from its
+        multipliers): over the scaled ``[x, u]``,
+
+            min  cost_scale * l(x, u, d, y, q)   s.t.  (F(x, u, d) - x) / x_scale = 0,
+                 the soft bounds as hard constraints at ``x`` (= x_next) and on ``y``
+
+        of the first interval, parameters ``[d, theta, dist, q, limits]``; ``g`` starts with
+        the ``nx`` fixed-point equations, then one row per bound side (``lbg``/``ubg``:
+        :attr:`steady_state_sides`). Their multipliers divided by ``x_scale`` and
+        ``cost_scale`` are the stationary costates (cost per unit state)."""
+        m, spec, dt = self.model, self.spec, self.intervals[0]
+        nq = len(spec.stage_parameters)
+        z, wu = ca.SX.sym("z", m.nx), ca.SX.sym("w", m.nu)
+        d, th = ca.SX.sym("d", m.nd), ca.SX.sym("theta", m.np)
+        dist, q = ca.SX.sym("dist", self.ntarget), ca.SX.sym("q", nq)
+        lims = ca.SX.sym("lim", self.ns)
+        X = ca.DM(self.x_offset) + ca.DM(self.x_scale) * z
+        U = ca.DM(self.u_offset) + wu / ca.DM(self.u_scale)
+        x_next, y = self._Fd(X, U, d, th, dist, dt)
+        g = [(x_next - X) / ca.DM(self.x_scale)]
+        k = 0
+        for b in spec.soft_bounds:
+            val = self._bound_value(b, X, U, d, y, th, q, dt)   # at a fixed point x = x_next
+            for _side in b.sides:
+                g.append((val - lims[k]) * b.scale)
+                k += 1
+        cost = sum(self._cost_terms(X, U, d, y, th, q, dt).values())
+        return {"x": ca.vertcat(z, wu), "p": ca.vertcat(d, th, dist, q, lims),
+                "f": spec.cost_scale * cost, "g": ca.vertcat(*g)}
+
+    @property
+    def steady_state_sides(self) -> tuple[str, ...]:
+        """``"hi"``/``"lo"`` of each bound row of :meth:`steady_state_nlp`, in order."""
+        return tuple(side for b in self.spec.soft_bounds for side in b.sides)
+
     # ------------------------------------------------------------------ numerics
     def trajectory_evaluator(self, compiled: bool | str = "auto") -> Callable:
         """``f(x0, U (nu, N), D (nd, N), Q (nq, N[+1]), theta, dist) -> (X, Y, terms)``
