@@ -133,3 +133,19 @@ def test_the_steady_state_problem_is_the_models_fixed_point():
     x_next = np.asarray(paper_model.F(z[:2], [z[2], z[3]], [305.0, 310.0],
                                       ocp.theta())[0]).ravel()
     np.testing.assert_allclose(x_next, z[:2], atol=1e-8)
+
+
+def test_the_trajectory_as_generated_c_equals_casadis():
+    from acid.mpc.codegen import find_compiler
+
+    if find_compiler() is None:
+        pytest.skip("no C compiler")
+    mpc = NMPC(paper(), NMPCConfig(compiled=False))
+    ocp = mpc._ocp
+    args = (np.array([300.0, 280.0]), np.array([[0.1] * 6, np.linspace(277, 283, 6)]),
+            np.full((2, 6), 305.0), np.tile([[303.15], [3.5], [1008.0]], (1, 7)), mpc._theta,
+            np.array([0.02, -0.01]))
+    fast, slow = ocp.trajectory_evaluator("auto"), ocp.trajectory_evaluator(False)
+    for a, b in zip(fast(*args), slow(*args), strict=True):
+        assert a.shape == b.shape
+        np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-9)
