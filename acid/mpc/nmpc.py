@@ -7,9 +7,9 @@ The optimal control problem solved at every update k (kelvin, kg/s, W, s inside)
     \\min_{U, v_{sl}} \\sum_{i=0}^{N_p} P_c(i|k) + P_{bl}(i|k)
         + \\sum_{i=1}^{N_c} a_{sl}^\\top v_{sl}(i|k)                          \\quad (7)
 
-subject to the control-oriented model, eqs. 1-3 (paper eqs. 8-9, built from the functions
-of :mod:`acid.model`: one source of truth), the state bounds relaxed by non-negative slacks
-``x_min(i) - v_sl(i) <= x(i|k) <= x_max(i) + v_sl(i)`` (eqs. 10-12, one slack per state and
+subject to the control-oriented model, eqs. 1-3 (paper eqs. 8-9, from the declaration
+``acid.models.paper``: one source of truth), the state bounds relaxed by non-negative
+slacks ``x_min(i) - v_sl(i) <= x(i|k) <= x_max(i) + v_sl(i)`` (eqs. 10-12, one slack per state and
 stage, penalty ``a_sl = 1e5`` W/K each), the input bounds (eq. 12) and ``x(0|k) = x(k)``
 (eq. 13). Powers are eqs. 4-5 with ``T_ain`` from eq. 3.
 
@@ -58,7 +58,7 @@ Beyond the paper
   a relaxed bound moves the cabin by about 1e-9 K (measured: at most 1e-9 K above an
   active bound, against 2.7e-6 K before).
   The reported objective is eq. 7 evaluated at the applied plan: the predicted trajectory is
-  recomputed from the plan (clipped to its bounds) with :mod:`acid.model`, the slacks are
+  recomputed from the plan (clipped to its bounds) with the declared model, the slacks are
   its actual violations.
 * **Model parameters as NLP parameters.** gamma, tau, beta, c_p enter as parameters, so one
   built (and compiled) solver serves every parameter set of the same horizon and options.
