@@ -34,7 +34,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import platform
+import sys
 import time
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -49,26 +51,11 @@ from acid.mpc.scenarios import (
 )
 from acid.params import ModelParams, paper
 
-
-# The peer's model: the paper's eqs. 1-5 transcribed here from the paper, independently of
-# acid's declaration (acid/models/paper.py), so that the comparison checks that one too.
-def _inlet_air(T_evap, W_bl, p):
-    return p.gamma[5] * T_evap + p.gamma[6] * W_bl + p.tau[2]                       # eq. 3
-
-
-def _step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p):
-    """(T_cab+, T_evap+, T_ain): eqs. 1-3, K."""
-    g, t = p.gamma, p.tau
-    T_ain = _inlet_air(T_evap, W_bl, p)
-    return (T_cab + g[0] * (T_int - T_cab) + g[1] * (T_shell - T_cab)               # eq. 1
-            + g[2] * (T_ain - T_cab) * W_bl + t[0],
-            g[3] * T_evap + g[4] * (T_evap - T_set) + t[1], T_ain)                   # eq. 2
-
-
-def _power(W_bl, T_ain, T_amb, p):
-    """P_comp + P_bl, W: eqs. 4-5."""
-    b = p.beta
-    return p.c_p / p.eta_cop * W_bl * (T_amb - T_ain) + b[0] * W_bl * W_bl + b[1] * W_bl + b[2]
+# the peer's model: the paper's eqs. 1-5 transcribed independently of acid's declaration
+sys.path.insert(0, str(Path(__file__).parent.parent / "tests"))
+from _paper_oracle import inlet_air as _inlet_air  # noqa: E402
+from _paper_oracle import power as _power  # noqa: E402
+from _paper_oracle import step as _step  # noqa: E402
 
 
 def record_states(params: ModelParams, config: NMPCConfig):

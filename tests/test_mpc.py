@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _paper_oracle import inlet_air as _inlet_air
+from _paper_oracle import power as _power
+from _paper_oracle import step as _step
 from scipy.optimize import minimize
 
 from acid.errors import ConfigError, DataError, SolverWarning
@@ -24,25 +27,6 @@ from acid.plant.model_plant import ModelPlant
 from acid.units import C2K
 
 P = paper()
-
-
-# The oracle's model: the paper's eqs. 1-5 transcribed here (independent of the declaration
-# the NMPC is built from); numbers, arrays and complex steps alike.
-def _inlet_air(T_evap, W_bl, p):
-    return p.gamma[5] * T_evap + p.gamma[6] * W_bl + p.tau[2]                      # eq. 3
-
-
-def _step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p):
-    g, t = p.gamma, p.tau
-    T_ain = _inlet_air(T_evap, W_bl, p)
-    return (T_cab + g[0] * (T_int - T_cab) + g[1] * (T_shell - T_cab)              # eq. 1
-            + g[2] * (T_ain - T_cab) * W_bl + t[0],
-            g[3] * T_evap + g[4] * (T_evap - T_set) + t[1], T_ain)                  # eq. 2
-
-
-def _power(W_bl, T_ain, T_amb, p):                                                  # eqs. 4-5
-    b = p.beta
-    return p.c_p / p.eta_cop * W_bl * (T_amb - T_ain) + b[0] * W_bl * W_bl + b[1] * W_bl + b[2]
 
 
 @pytest.fixture(scope="module")
