@@ -34,12 +34,13 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import platform
+import sys
 import time
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from acid import model
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.mpc.scenarios import (
     BOUND_STEPS,
@@ -49,6 +50,12 @@ from acid.mpc.scenarios import (
     step_bound,
 )
 from acid.params import ModelParams, paper
+
+# the peer's model: the paper's eqs. 1-5 transcribed independently of acid's declaration
+sys.path.insert(0, str(Path(__file__).parent.parent / "tests"))
+from _paper_oracle import inlet_air as _inlet_air  # noqa: E402
+from _paper_oracle import power as _power  # noqa: E402
+from _paper_oracle import step as _step  # noqa: E402
 
 
 def record_states(params: ModelParams, config: NMPCConfig):
@@ -80,7 +87,7 @@ def build_dompc(params: ModelParams, config: NMPCConfig):
     ub_next = m.set_variable("_tvp", "T_cab_max_next")
     T_int = m.set_variable("_tvp", "T_int")
     T_shell = m.set_variable("_tvp", "T_shell")
-    T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p)
+    T_cab_n, T_evap_n, T_ain = _step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p)
     m.set_rhs("T_cab", T_cab_n)
     m.set_rhs("T_evap", T_evap_n)
     m.set_rhs("W_last", W_bl)
@@ -89,7 +96,7 @@ def build_dompc(params: ModelParams, config: NMPCConfig):
     T_cab, T_evap, W_last = m.x["T_cab"], m.x["T_evap"], m.x["W_last"]
     W_bl, T_set = m.u["W_bl"], m.u["T_evap_set"]
     ub_next, T_int, T_shell = m.tvp["T_cab_max_next"], m.tvp["T_int"], m.tvp["T_shell"]
-    T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p)
+    T_cab_n, T_evap_n, T_ain = _step(T_cab, T_evap, W_bl, T_set, T_int, T_shell, p)
 
     mpc = do_mpc.controller.MPC(m)
     mpc.settings.n_horizon = N
@@ -102,10 +109,10 @@ def build_dompc(params: ModelParams, config: NMPCConfig):
     s = cfg.cost_scale
 
     def power(W, Ta):
-        return model.compressor_power(W, Ta, cfg.T_amb, p) + model.blower_power(W, p)
+        return _power(W, Ta, cfg.T_amb, p)
 
     lterm = power(W_bl, T_ain) * s
-    mterm = power(W_last, model.inlet_air(T_evap, W_last, p)) * s
+    mterm = power(W_last, _inlet_air(T_evap, W_last, p)) * s
     mpc.set_objective(lterm=lterm, mterm=mterm)
     mpc.set_rterm(W_bl=0.0, T_evap_set=0.0)
     mpc.bounds["lower", "_u", "W_bl"] = cfg.W_bl_min
@@ -144,13 +151,16 @@ def dompc_solution(mpc, x0, ub, params: ModelParams, config: NMPCConfig):
     """(first move, objective in W) of do-mpc's last solve, evaluated like acid's."""
     N = config.N
     U = np.array([np.asarray(mpc.opt_x_num_unscaled["_u", k, 0]).ravel() for k in range(N)])
-    T_cab, T_evap, T_ain = model.simulate(x0, U[:, 0], U[:, 1], MODEL_T_INT, MODEL_T_SHELL,
-                                          params)
-    P = (model.compressor_power(U[:, 0], T_ain, config.T_amb, params)
-         + model.blower_power(U[:, 0], params))
-    Ta_N = model.inlet_air(T_evap[-1], U[-1, 0], params)
-    P_N = (model.compressor_power(U[-1, 0], Ta_N, config.T_amb, params)
-           + model.blower_power(U[-1, 0], params))
+    T_cab, T_evap, T_ain = [float(x0[0])], [float(x0[1])], []
+    for k in range(N):
+        c, e, a = _step(T_cab[k], T_evap[k], U[k, 0], U[k, 1], MODEL_T_INT, MODEL_T_SHELL,
+                        params)
+        T_cab.append(c)
+        T_evap.append(e)
+        T_ain.append(a)
+    T_cab, T_evap, T_ain = np.array(T_cab), np.array(T_evap), np.array(T_ain)
+    P = _power(U[:, 0], T_ain, config.T_amb, params)
+    P_N = _power(U[-1, 0], _inlet_air(T_evap[-1], U[-1, 0], params), config.T_amb, params)
     viol_c = np.maximum.reduce([np.zeros(N), T_cab[1:] - ub[1:], config.T_cab_min - T_cab[1:]])
     viol_e = np.maximum.reduce([np.zeros(N), T_evap[1:] - config.T_evap_max,
                                 config.T_evap_min - T_evap[1:]])

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _paper_oracle import inlet_air as _inlet_air
+from _paper_oracle import power as _power
+from _paper_oracle import step as _step
 from scipy.optimize import minimize
 
-from acid import model
 from acid.errors import ConfigError, DataError, SolverWarning
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.mpc.scenarios import (
@@ -71,16 +73,6 @@ N = 6
 _LB = NMPCConfig()
 
 
-def _eqs(Tc, Te, W, Tset, T_int, T_shell, p):
-    """Eqs. 1-3 and 4-5 written out here (complex arrays pass: the complex-step gradient):
-    (T_cab+, T_evap+, T_ain, P_comp + P_bl)."""
-    g, t, b = p.gamma, p.tau, p.beta
-    Ta = g[5] * Te + g[6] * W + t[2]
-    power = p.c_p / p.eta_cop * W * (_LB.T_amb - Ta) + b[0] * W * W + b[1] * W + b[2]
-    return (Tc + g[0] * (T_int - Tc) + g[1] * (T_shell - Tc) + g[2] * (Ta - Tc) * W + t[0],
-            g[3] * Te + g[4] * (Te - Tset) + t[1], Ta, power)
-
-
 def _condensed(z, x0, T_int, T_shell, ub):
     """Cost (kW) and constraints of eqs. 7-13, condensed on z = [W, Tset, s_cab, s_evap].
 
@@ -94,14 +86,15 @@ def _condensed(z, x0, T_int, T_shell, ub):
     cost, cons = 0.0, []
     for i in range(N):
         Wi = W[..., i]
-        Tc_n, Te_n, _, power = _eqs(Tc, Te, Wi, Ts[..., i], T_int, T_shell, P)
-        cost = cost + power
+        Tc_n, Te_n, Ta = _step(Tc, Te, Wi, Ts[..., i], T_int, T_shell, P)
+        cost = cost + _power(Wi, Ta, cfg.T_amb, P)
         cost = cost + cfg.slack_penalty * (s_c[..., i] + s_e[..., i])
         Tc, Te = Tc_n, Te_n
         cons += [ub[i + 1] + s_c[..., i] - Tc, Tc + s_c[..., i] - cfg.T_cab_min,
                  cfg.T_evap_max + s_e[..., i] - Te, Te + s_e[..., i] - cfg.T_evap_min]
     Wl = W[..., -1]
-    cost = cost + _eqs(Tc, Te, Wl, Ts[..., -1], T_int, T_shell, P)[3]
+    Ta = _inlet_air(Te, Wl, P)
+    cost = cost + _power(Wl, Ta, cfg.T_amb, P)
     return cost * 1e-3, cons
 
 
@@ -175,8 +168,12 @@ def test_objective_is_eq7_evaluated_with_the_model_functions(mpc):
     x0 = np.array([C2K(28.0), C2K(8.0)])
     ub = np.full(N + 1, C2K(26.0))
     sol = mpc.solve(x0, ub, MODEL_T_INT, MODEL_T_SHELL)
-    T_cab, T_evap, T_ain = model.simulate(x0, sol.W_bl, sol.T_evap_set, MODEL_T_INT,
-                                          MODEL_T_SHELL, P)
+    T_cab, T_evap, T_ain = [x0[0]], [x0[1]], []
+    for W, Ts in zip(sol.W_bl, sol.T_evap_set, strict=True):
+        c, e, a = _step(T_cab[-1], T_evap[-1], W, Ts, MODEL_T_INT, MODEL_T_SHELL, P)
+        T_cab.append(c)
+        T_evap.append(e)
+        T_ain.append(a)
     np.testing.assert_allclose(sol.T_cab, T_cab, atol=1e-6)
     np.testing.assert_allclose(sol.T_evap, T_evap, atol=1e-6)
     np.testing.assert_allclose(sol.T_ain[:N], T_ain, atol=1e-6)

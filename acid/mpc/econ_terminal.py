@@ -17,7 +17,10 @@ more of each state (K, kg/kg). The NMPC's terminal cost ``lam^T (x_N - x_0)`` th
 charges the heat left in the slow states at what removing it will cost at the best operating
 point, per state and at the speed and ambient given.
 
-The steady states are solved with IPOPT (7 variables) on a grid of speeds over the power
+The problem is the economic NMPC's own (:func:`acid.mpc.econ_nmpc.ocp_spec` over the econ
+declaration), taken to its steady state by the builder
+(:meth:`acid.control.ocp.OCP.steady_state_nlp`): the same interval map, stage cost and
+bounds. The steady states are solved with IPOPT (7 variables) on a grid of speeds over the power
 map's speed data (about 2 m/s apart) and interpolated linearly in speed; one grid per
 (ambient, band), computed when first asked and cached. Temperatures in K, energies in J.
 """
@@ -36,8 +39,6 @@ from acid.errors import SolverWarning
 
 _X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
 _U_OFF, _U_SCL = model.U_OFFSET, model.U_SCALE
-#: objective scale inside the NLP (kJ instead of J)
-_COST_SCALE = 1e-3
 #: speed spacing of the grid, m/s
 GRID_DV = 2.0
 
@@ -74,23 +75,27 @@ class SteadyStatePrice:
     """
 
     def __init__(self, params: EconParams, u_min, u_max):
+        from acid.control.ocp import OCP  # (acid.mpc.econ_nmpc imports this module)
+        from acid.models.econ import model as econ_model
+        from acid.mpc.econ_nmpc import EconNMPCConfig, _at_parameters, econ_interval, ocp_spec
+
         self.params = params
         self.u_min, self.u_max = np.asarray(u_min, float), np.asarray(u_max, float)
-        F = model.casadi_step(params, params.Ts)
-        z = ca.SX.sym("z", model.NX)
-        w = ca.SX.sym("w", model.NU)
-        d = ca.SX.sym("d", model.ND)
-        dist = ca.SX.sym("dist", model.NX)
-        x = ca.DM(_X_OFF) + ca.DM(_X_SCL) * z
-        u = ca.DM(_U_OFF) + ca.DM(_U_SCL) * w
-        xn, _T_ain, Q_e, P_c, P_b = F(x, u, d, dist)
-        g = ca.vertcat((xn - x) / ca.DM(_X_SCL), x[0], Q_e / 1e3)
-        nlp = {"x": ca.vertcat(z, w), "p": ca.vertcat(d, dist), "g": g,
-               "f": _COST_SCALE * params.Ts * (P_c + P_b)}
+        # the economic NMPC's own problem: the steady state of its builder (the input
+        # bounds, which may pin an input here, are applied per solve: u_min, u_max)
+        cfg = EconNMPCConfig(intervals=(params.Ts, params.Ts), terminal="none",
+                             stage_functions=False, compiled=False)
+        self._ocp = OCP(econ_model, ocp_spec(cfg))
+        self._theta = model.parameter_vector(params)
+        nlp = self._ocp.steady_state_nlp()
         self._solver = ca.nlpsol("acid_econ_steady", "ipopt", nlp, {
             "print_time": False, "ipopt": {"print_level": 0, "sb": "yes", "tol": 1e-10,
                                            "max_iter": 200}})
+        self._sides = self._ocp.steady_state_sides
+        self._cost_scale = cfg.cost_scale
+        F = _at_parameters(econ_interval(params.Ts), self._theta)
         xs, us = ca.SX.sym("x", model.NX), ca.SX.sym("u", model.NU)
+        d = ca.SX.sym("d", model.ND)
         out = F(xs, us, d, ca.DM.zeros(model.NX))
         self._power = ca.Function("power", [xs, us, d], [out[3] + out[4]])
         self._F = F
@@ -115,15 +120,20 @@ class SteadyStatePrice:
             w0 = np.concatenate(((x0 - _X_OFF) / _X_SCL, np.zeros(model.NU)))
         lbx = np.concatenate((np.full(model.NX, -np.inf), (self.u_min - _U_OFF) / _U_SCL))
         ubx = np.concatenate((np.full(model.NX, np.inf), (self.u_max - _U_OFF) / _U_SCL))
-        lbg = np.concatenate((np.zeros(model.NX), [T_cab_min, 0.0]))
-        ubg = np.concatenate((np.zeros(model.NX), [T_cab_max, np.inf]))
-        res = self._solver(x0=w0, p=np.concatenate(([v_veh, T_amb], dist)), lbx=lbx,
-                           ubx=ubx, lbg=lbg, ubg=ubg)
+        # the band on T_cab and Q_e >= 0 (ocp_spec's soft bounds, hard here), limits 0
+        limits = np.array([T_cab_max, T_cab_min, 0.0][:len(self._sides)])
+        lbg = np.concatenate((np.zeros(model.NX),
+                              [-np.inf if s == "hi" else 0.0 for s in self._sides]))
+        ubg = np.concatenate((np.zeros(model.NX),
+                              [0.0 if s == "hi" else np.inf for s in self._sides]))
+        res = self._solver(x0=w0, p=np.concatenate(([v_veh, T_amb], self._theta, dist,
+                                                    limits)),
+                           lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         ok = bool(self._solver.stats().get("success", False))
         wv = np.asarray(res["x"]).ravel()
         x = wv[:model.NX] * _X_SCL + _X_OFF
         u = wv[model.NX:] * _U_SCL + _U_OFF
-        lam = np.asarray(res["lam_g"]).ravel()[:model.NX] / _X_SCL / _COST_SCALE
+        lam = np.asarray(res["lam_g"]).ravel()[:model.NX] / _X_SCL / self._cost_scale
         return SteadyState(v_veh=float(v_veh), T_amb=float(T_amb), x=x, u=u,
                            power_W=float(self._power(x, u, [v_veh, T_amb])), lam=lam,
                            success=ok)
