@@ -165,7 +165,7 @@ def test_sqp_warm_started_reaches_the_interior_point_optimum(econ_truth):
     # starts from the shifted plan converge in SQP, to IPOPT's optimum
     sqp = EconNMPC(econ_truth, _cfg(solver="sqp"))
     ip = EconNMPC(econ_truth, _cfg(solver="ipopt", tol=1e-10))
-    plant = EconPlant(econ_truth)
+    plant = econ_decl.plant(econ_truth.theta_all)
     plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
     for k in range(8):
         m = plant.measure()
