@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import typer
@@ -44,6 +45,18 @@ def export_c_cmd(
     allow_unstable: bool = typer.Option(
         False, "--allow-unstable",
         help="Use --params even if eqs. 1-3 are unstable or not in kelvin."),
+    model: str = typer.Option(
+        "paper", "--model",
+        help="The declared model whose controller to export: 'paper' (the paper's NMPC, "
+             "eqs. 7-13), a built-in name (e.g. car_cabin) or a model file FILE.py. Other "
+             "than 'paper': a tracking NMPC of --track within --input bounds; --params is "
+             "then a parameter file of `acid fit --model` ('paper': the declared values)."),
+    track: list[str] = typer.Option(
+        [], "--track", help="(--model) a state, input or output to track (repeat; default: "
+                            "the measured states); references per stage at run time."),
+    inputs: list[str] = typer.Option(
+        [], "--input", help="(--model) bounds of an input, NAME=MIN:MAX (degC for a "
+                            "temperature, else the declared unit); every input needs one."),
 ) -> None:
     """Export the paper's NMPC (eqs. 7-13) as plain C for an ECU.
 
@@ -52,6 +65,9 @@ def export_c_cmd(
     acid_nmpc_step(x, disturbances, bounds, u), with input checks and a fallback), an example
     main.c, a Makefile (`make` needs only cc) and problem.json.
     """
+    if model != "paper":
+        return _export_declared(model, params, out, horizon, check, check_states, json_path,
+                                track, inputs)
     check_paths(inputs={"--params": params_input(params)}, outputs={"--json": json_path},
                 folders={"--out": (out, FILES)})
     if not 2 <= horizon <= 100:
@@ -60,19 +76,9 @@ def export_c_cmd(
         raise ConfigError(f"--check-states must be between 1 and 10000, got {check_states}")
     p = load_params(params, allow_unstable=allow_unstable)
     config = NMPCConfig(N=horizon)
-    with progress_bar("export-c", total=2) as update:
-        res = export_c(p, out, config)
-        update(1)
-        checked = None
-        if check:
-            if find_compiler() is None:
-                say("no C compiler found: the package is written but not built")
-            else:
-                try:
-                    checked = check_export(out, p, config, n_states=check_states)
-                except CodegenError as exc:
-                    raise ConfigError(f"--out {out}: {exc}") from None
-        update(2)
+    res, checked = _write_and_check(
+        out, lambda: export_c(p, out, config),
+        (lambda: check_export(out, p, config, n_states=check_states)) if check else None)
     say(f"C package for parameters {p.name!r} (N = {horizon}) written to {out}/: "
         + ", ".join(res.files))
     if checked is not None:
@@ -87,3 +93,94 @@ def export_c_cmd(
         "inputs": {"params": params,
                    "params_sha256": None if params == "paper" else file_sha256(params)},
         **res.to_json_dict(), "check": checked})
+
+
+def _write_and_check(out: Path, write, check):
+    """Write the package (``write()``), then build and check it (``check()``, unless None
+    or no compiler is found), with progress; returns (what write returned, the check)."""
+    with progress_bar("export-c", total=2) as update:
+        written = write()
+        update(1)
+        checked = None
+        if check is not None:
+            if find_compiler() is None:
+                say("no C compiler found: the package is written but not built")
+            else:
+                try:
+                    checked = check()
+                except CodegenError as exc:
+                    raise ConfigError(f"--out {out}: {exc}") from None
+        update(2)
+    return written, checked
+
+
+def _input_bounds(m, specs: list[str]) -> dict:
+    """``--input NAME=MIN:MAX`` for every input of ``m`` (degC for a kelvin input)."""
+    from acid.units import C2K
+
+    bounds = {}
+    units = {i.name: i.unit for i in m.inputs}
+    for spec in specs:
+        name, sep, rng = spec.partition("=")
+        lo, sep2, hi = rng.partition(":")
+        if not (sep and sep2) or name not in units:
+            raise ConfigError(f"--input {spec!r}: expected NAME=MIN:MAX with NAME one of "
+                              f"{', '.join(units) or 'no inputs'}")
+        try:
+            a, b = float(lo), float(hi)
+        except ValueError:
+            raise ConfigError(f"--input {spec!r}: MIN and MAX must be numbers") from None
+        if not (math.isfinite(a) and math.isfinite(b) and a < b):
+            raise ConfigError(f"--input {spec!r}: needs finite MIN < MAX")
+        bounds[name] = (C2K(a), C2K(b)) if units[name] == "K" else (a, b)
+    missing = [n for n in units if n not in bounds]
+    if missing:
+        raise ConfigError(f"--input: no bounds for input {missing[0]!r} (give "
+                          f"--input {missing[0]}=MIN:MAX)")
+    return bounds
+
+
+def _export_declared(model_spec: str, params: str, out: Path, horizon: int, check: bool,
+                     check_states: int, json_path: Path | None, track: list[str],
+                     inputs: list[str]) -> None:
+    """``acid export-c --model NAME|FILE.py``: the tracking NMPC of a declared model."""
+    import numpy as np
+
+    from acid.control.export import FILES as MODEL_FILES
+    from acid.control.export import TrackingController, check_model_export, export_model_c
+    from acid.ident.validate import read_parameters
+    from acid.models.loader import load
+
+    check_paths(inputs={"--params": params_input(params),
+                        "--model": model_spec if model_spec.endswith(".py") else None},
+                outputs={"--json": json_path}, folders={"--out": (out, MODEL_FILES)})
+    if not 1 <= check_states <= 10_000:
+        raise ConfigError(f"--check-states must be between 1 and 10000, got {check_states}")
+    m = load(model_spec)
+    theta, label = m.values, "declared values"
+    if params != "paper":
+        ps = read_parameters(m, params)
+        theta = ps.values.copy()
+        for name, per in ps.per_experiment.items():   # a per-trip value: their mean
+            theta[m.parameter_names.index(name)] = float(np.mean(list(per.values())))
+        label = Path(params).name
+    names = tuple(track) or tuple(s.name for s in m.states if s.measured)
+    ctrl = TrackingController(m, theta, names, _input_bounds(m, inputs), N=horizon,
+                              params_label=label)
+    files, checked = _write_and_check(
+        out, lambda: export_model_c(ctrl, out),
+        (lambda: check_model_export(out, ctrl, n_states=check_states)) if check else None)
+    say(f"C package of model {m.name!r} (tracking {', '.join(names)}, N = {horizon}) "
+        f"written to {out}/: " + ", ".join(files))
+    if checked is not None:
+        print_table("exported first move vs the same NLP in CasADi (max, share of input range)",
+                    ["states", "C solves OK", "vs SQP (same guess)", "vs IPOPT"],
+                    [[checked["states"], checked["c_status_ok"],
+                      f"{checked['max_diff_vs_sqp']:.1e}",
+                      f"{checked['max_diff_vs_ipopt']:.1e}"]])
+    write_summary(json_path, {
+        "command": "export-c", "acid_version": __version__, "model": m.name,
+        "inputs": {"params": params, "model": model_spec,
+                   "params_sha256": None if params == "paper" else file_sha256(params)},
+        "out": str(out), "files": list(files), "N": horizon, "track": list(names),
+        "check": checked})

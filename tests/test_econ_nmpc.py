@@ -158,3 +158,21 @@ def test_offset_free_estimation_removes_the_bias_of_a_mismatched_model(econ_trut
     assert settled[False] > C2K(24.0) + 0.2
     assert settled[True] == pytest.approx(C2K(24.0), abs=0.02)
     assert mpc.log.disturbance[-1][0] > 0.0   # the estimated extra heat on the cabin air
+
+
+def test_sqp_warm_started_reaches_the_interior_point_optimum(econ_truth):
+    # cold start: SQP from the simulated guess may stall and IPOPT finishes it; warm
+    # starts from the shifted plan converge in SQP, to IPOPT's optimum
+    sqp = EconNMPC(econ_truth, _cfg(solver="sqp"))
+    ip = EconNMPC(econ_truth, _cfg(solver="ipopt", tol=1e-10))
+    plant = EconPlant(econ_truth)
+    plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
+    for k in range(8):
+        m = plant.measure()
+        x = [m[n] for n in ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")]
+        u = sqp.make_step(x, 12.0, C2K(30.0))
+        ref = ip.solve(x, 12.0, C2K(30.0))
+        assert np.max(np.abs(u - ref.u) / (sqp.config.u_max - sqp.config.u_min)) < 1e-6
+        plant.step(u[0], u[1], 12.0, T_amb=C2K(30.0))
+    assert sqp.fallbacks == 0 and sqp.solver_fallbacks <= 1
+    assert "ipopt after sqp" not in sqp.log.solutions[-1].status

@@ -546,7 +546,9 @@ def _cached_build(fn, name, source, cc, libs, key, folder: Path) -> tuple[Path, 
         meta = {"name": name, "sha256": _sha256(data), "verified": _sha256(data),
                 "casadi": ca.__version__, "compiler": info["compiler"],
                 "flags": [*cflags(source), *(f"-l{n}" for n in libs)],
-                "created": time.strftime("%Y-%m-%dT%H:%M:%S")}
+                "created": time.strftime("%Y-%m-%dT%H:%M:%S"),
+                "source_bytes": len(source), "compile_cpu_s": info["compile_cpu_s"],
+                "compile_wall_s": info["compile_s"]}
         with atomic_path(manifest) as tmp:
             tmp.write_text(json.dumps(meta, indent=2) + "\n")
     return lib, info

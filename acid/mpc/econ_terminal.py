@@ -76,7 +76,10 @@ class SteadyStatePrice:
     def __init__(self, params: EconParams, u_min, u_max):
         self.params = params
         self.u_min, self.u_max = np.asarray(u_min, float), np.asarray(u_max, float)
-        F = model.casadi_step(params, params.Ts)
+        from acid.mpc.econ_nmpc import _at_parameters, econ_interval  # (it imports this)
+
+        # the declaration's interval map, as the NMPC predicts with it
+        F = _at_parameters(econ_interval(params.Ts), model.parameter_vector(params))
         z = ca.SX.sym("z", model.NX)
         w = ca.SX.sym("w", model.NU)
         d = ca.SX.sym("d", model.ND)

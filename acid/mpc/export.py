@@ -103,13 +103,13 @@ def step_function(params: ModelParams, config: NMPCConfig | None = None) -> ca.F
 
     put("x0", [x[0], x[1]])
     put("theta", [ca.MX(v) for v in mpc._theta])
-    put("T_amb", [T_amb])
-    put("d", [d[0], d[1]])
-    put("T_int", [T_int] * N)
-    put("T_shell", [T_shell] * N)
-    put("eta_cop", [ca.MX(params.eta_cop)] * (N + 1))
-    put("T_cab_max", [bounds[i] for i in range(N)])
-    put("T_cab_min", [bounds[N + i] for i in range(N)])
+    put("dist", [d[0], d[1]])
+    put("d", [T_int, T_shell] * N)                        # per stage: [T_int, T_shell]
+    put("q", [T_amb, ca.MX(params.eta_cop), ca.MX(params.c_p)] * (N + 1))  # STAGE_PARAMETERS
+    put("T_cab_hi", [bounds[i] for i in range(N)])
+    put("T_cab_lo", [bounds[N + i] for i in range(N)])
+    put("T_evap_hi", [ca.MX(cfg.T_evap_max)] * N)
+    put("T_evap_lo", [ca.MX(cfg.T_evap_min)] * N)
     p = ca.vertcat(*p)
 
     # the cold guess of NMPC._initial_guess: mid-range inputs, the model simulated
@@ -408,10 +408,11 @@ def sample_problems(n: int, N: int, seed: int = 0) -> list[tuple]:
     return out
 
 
-def build_example(package: str | Path, build_dir: str | Path, cc: list[str] | None = None
-                  ) -> Path:
-    """Compile the package's example with the C compiler alone (no make) into
-    ``build_dir``; returns the executable. Raises CodegenError when it does not build."""
+def build_c(package: str | Path, build_dir: str | Path, sources: tuple[str, ...],
+            cc: list[str] | None = None) -> Path:
+    """Compile ``sources`` of an exported package with the C compiler alone (no make) into
+    ``build_dir``/example; returns the executable. Raises CodegenError when it does not
+    build."""
     import subprocess
 
     from acid.mpc.codegen import CodegenError, find_compiler
@@ -422,8 +423,7 @@ def build_example(package: str | Path, build_dir: str | Path, cc: list[str] | No
     package, build_dir = Path(package), Path(build_dir)
     build_dir.mkdir(parents=True, exist_ok=True)
     exe = build_dir / "example"
-    cmd = [*cc, "-O2", "-std=c99", "-o", str(exe), str(package / "main.c"),
-           str(package / "acid_nmpc.c"), str(package / "acid_nmpc_solver.c"), "-lm"]
+    cmd = [*cc, "-O2", "-std=c99", "-o", str(exe), *(str(package / s) for s in sources), "-lm"]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     if res.returncode != 0:
         msg = (res.stderr or res.stdout).strip().splitlines()
@@ -431,15 +431,25 @@ def build_example(package: str | Path, build_dir: str | Path, cc: list[str] | No
     return exe
 
 
-def run_example(exe: str | Path, problems: list[tuple]) -> np.ndarray:
-    """(n, 3) ``[status, W_bl, T_evap_set]`` of the example executable on ``problems``."""
+def run_lines(exe: str | Path, rows: list, ncols: int) -> np.ndarray:
+    """(n, ncols) numbers the example executable prints for ``rows`` (one per line)."""
     import subprocess
 
-    text = "".join(" ".join(repr(float(v)) for v in np.r_[x, d, b]) + "\n"
-                   for x, d, b in problems)
+    text = "".join(" ".join(repr(float(v)) for v in row) + "\n" for row in rows)
     res = subprocess.run([str(exe)], input=text, capture_output=True, text=True, timeout=600)
-    rows = [[float(t) for t in line.split()] for line in res.stdout.strip().splitlines()]
-    return np.array(rows).reshape(-1, 3)
+    out = [[float(t) for t in line.split()] for line in res.stdout.strip().splitlines()]
+    return np.array(out).reshape(-1, ncols)
+
+
+def build_example(package: str | Path, build_dir: str | Path, cc: list[str] | None = None
+                  ) -> Path:
+    """Compile the package's example (:func:`build_c`); returns the executable."""
+    return build_c(package, build_dir, ("main.c", "acid_nmpc.c", "acid_nmpc_solver.c"), cc)
+
+
+def run_example(exe: str | Path, problems: list[tuple]) -> np.ndarray:
+    """(n, 3) ``[status, W_bl, T_evap_set]`` of the example executable on ``problems``."""
+    return run_lines(exe, [np.r_[x, d, b] for x, d, b in problems], 3)
 
 
 def check_export(package: str | Path, params: ModelParams, config: NMPCConfig | None = None,

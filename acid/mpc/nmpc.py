@@ -65,7 +65,7 @@ Beyond the paper
 
 Solver
 ------
-The NLP is built once from a declared layout (:class:`acid.mpc.layout.BlockVector`: named
+The NLP is built once from a declared layout (:class:`acid.control.layout.BlockVector`: named
 blocks per stage ``[x_0, u_0, s_1, x_1, u_1, s_2, ..., x_N]``; every index map is derived
 from it). By default (``solver="sqp"``) an SQP method with exact Hessian and the active-set
 QP solver qrqp (the algorithm of ``acid export-c``) solves it to ``SQP_TOL``, warm-started
@@ -105,8 +105,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from acid import model
 from acid.claims import TABLE_II
+from acid.control.ocp import OCP, OCPSpec, SoftBound, disturbed_dynamics
 from acid.errors import ConfigError, DataError, SolverWarning
 from acid.mpc.estimator import (
     BackoffConfig,
@@ -116,14 +116,13 @@ from acid.mpc.estimator import (
 )
 
 __all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog", "predict"]
-from acid.mpc.layout import BlockVector
+from acid.models.paper import model as PAPER_MODEL
 from acid.mpc.solver import NLPSolver
-from acid.params import ModelParams, as_params
+from acid.params import PARAMETER_TABLE, ModelParams, as_params
 from acid.units import C2K
 
-#: x = [T_cab, T_evap], u = [W_bl, T_evap_set], slacks s of the upper and lower bounds of
-#: T_cab and T_evap (one per bound: see the module docstring)
-_NX, _NU, _NS = 2, 2, 4
+#: x = [T_cab, T_evap], u = [W_bl, T_evap_set] (the declaration's order)
+_NX, _NU = PAPER_MODEL.nx, PAPER_MODEL.nu
 #: The interior-point solvers relax every bound by 1e-8 max(1, |bound|) in the NLP's own
 #: units (fatrop cannot be told not to). So the NLP's inputs are offsets from the maximum
 #: cooling corner in g/s and K (``u_nlp = (u - [W_bl_max, T_evap_set_min]) * _U_SCALE``) and
@@ -132,6 +131,11 @@ _NX, _NU, _NS = 2, 2, 4
 _U_SCALE = np.array([1e3, 1.0])
 SOLVERS = ("fatrop", "ipopt", "sqp")
 DISTURBANCES = ("state", "inlet")
+#: where the offset-free disturbances [d_cab, d_evap] act, per ``NMPCConfig.disturbance``:
+#: named states (added to their next value) or outputs (eq. 3's inlet air, read by eq. 1)
+DISTURBANCE_TARGETS = {"state": ("T_cab", "T_evap"), "inlet": ("T_ain", "T_evap")}
+#: per-stage parameters of eq. 4 in the paper's stage cost
+STAGE_PARAMETERS = ("T_amb", "eta_cop", "c_p")
 #: plausible temperatures inside the model, K (-60 .. 150 degC): anything else is an error
 T_PLAUSIBLE_K = (213.15, 423.15)
 #: SQP tolerance on the constraint violation (K) and the scaled dual infeasibility: SQP
@@ -369,54 +373,78 @@ class StepLog:
     margin: list = field(default_factory=list)
 
 
-@dataclass(frozen=True)
-class SymbolicParams:
-    """Model parameters as CasADi symbols, for :mod:`acid.model`'s functions (duck-types
-    :class:`acid.params.ModelParams`): gamma (7), tau (3), beta (3), c_p, eta_cop."""
+def paper_stage_cost(s) -> dict:
+    """Eq. 7's stage terms, W: eq. 4 ``P_c = c_p / eta_cop * W_bl * (T_amb - T_ain)`` with
+    ``T_ain`` the declared eq. 3 and ``eta_cop``, ``T_amb``, ``c_p`` stage parameters, and
+    eq. 5's declared blower power."""
+    return {"P_comp": s.c_p / s.eta_cop * s.W_bl * (s.T_amb - s.T_ain), "P_bl": s.P_bl}
 
-    gamma: tuple
-    tau: tuple
-    beta: tuple
-    c_p: object
-    eta_cop: object
 
-    @classmethod
-    def from_vector(cls, theta: ca.SX, eta_cop=None) -> SymbolicParams:
-        """From ``theta = [gamma1..7, tau1..3, beta1..3, c_p]`` (14 entries)."""
-        e = [theta[i] for i in range(14)]
-        return cls(gamma=tuple(e[:7]), tau=tuple(e[7:10]), beta=tuple(e[10:13]), c_p=e[13],
-                   eta_cop=eta_cop)
+def ocp_spec(config: NMPCConfig) -> OCPSpec:
+    """The paper's NMPC (eqs. 7-13) as a configuration of the one optimal-control builder
+    (:class:`acid.control.ocp.OCP`) over ``acid.models.paper.model``: the economic stage
+    cost of eqs. 4-5, the stage ``i = N`` with the last input held, soft bounds on both
+    states (the upper cabin bound previewed), inputs scaled as offsets from the
+    maximum-cooling corner (``_U_SCALE``)."""
+    cfg = config
+    corner = {"W_bl": cfg.W_bl_max, "T_evap_set": cfg.T_evap_set_min}
+    return OCPSpec(
+        N=int(cfg.N), stage_cost=paper_stage_cost, stage_parameters=STAGE_PARAMETERS,
+        input_bounds={"W_bl": (cfg.W_bl_min, cfg.W_bl_max),
+                      "T_evap_set": (cfg.T_evap_set_min, cfg.T_evap_set_max)},
+        soft_bounds=(SoftBound("T_cab", cfg.T_cab_min, cfg.T_cab_min + 10.0,
+                               cfg.slack_penalty),
+                     SoftBound("T_evap", cfg.T_evap_min, cfg.T_evap_max, cfg.slack_penalty)),
+        disturbance_targets=DISTURBANCE_TARGETS[cfg.disturbance], terminal_stage=True,
+        u_offset=corner, u_scale=dict(zip(corner, _U_SCALE, strict=True)),
+        cost_scale=cfg.cost_scale)
 
 
 def theta_vector(p: ModelParams) -> np.ndarray:
-    """``[gamma1..7, tau1..3, beta1..3, c_p]`` of a parameter set (the NLP's ``theta``)."""
-    return np.r_[p.gamma, p.tau, p.beta, p.c_p]
+    """The declaration's parameter vector (``acid.models.paper``'s table, by name) of a
+    parameter set."""
+    values = dict(zip((n for n, _, _ in PARAMETER_TABLE), p.theta, strict=True))
+    return np.array([values[n] for n in PAPER_MODEL.parameter_names])
+
+
+_DYNAMICS: dict[str, ca.Function] = {}
+
+
+def _dynamics(disturbance: str) -> ca.Function:
+    if disturbance not in _DYNAMICS:
+        _DYNAMICS[disturbance] = disturbed_dynamics(PAPER_MODEL,
+                                                    DISTURBANCE_TARGETS[disturbance])
+    return _DYNAMICS[disturbance]
 
 
 def predict(T_cab, T_evap, W_bl, T_evap_set, T_int, T_shell, d, p, disturbance="state"):
-    """One step of the NMPC's prediction model: eqs. 1-3 with the disturbances ``d``.
+    """One step of the NMPC's prediction model: the declared eqs. 1-3 with the disturbances
+    ``d`` (``acid.models.paper``).
 
     ``disturbance="state"``: ``d = [d_cab, d_evap]`` added to eqs. 1-2 (K per step).
     ``disturbance="inlet"``: ``d[0]`` added to eq. 3's inlet air (K), so that it acts on
     the cabin through the air flow as the inlet air does; ``d[1]`` added to eq. 2.
-    Floats, numpy arrays and CasADi symbols alike. Returns (T_cab+, T_evap+, T_ain), K.
+    Floats or CasADi symbols. Returns (T_cab+, T_evap+, T_ain), K.
     """
-    if disturbance == "state":
-        T_cab_n, T_evap_n, T_ain = model.step(T_cab, T_evap, W_bl, T_evap_set, T_int,
-                                              T_shell, p)
-        return T_cab_n + d[0], T_evap_n + d[1], T_ain
-    T_ain = model.inlet_air(T_evap, W_bl, p) + d[0]
-    return (model.cabin_step(T_cab, T_int, T_shell, T_ain, W_bl, p),
-            model.evap_step(T_evap, T_evap_set, p) + d[1], T_ain)
+    F = _dynamics(disturbance)
+    pairs = ((T_cab, T_evap), (W_bl, T_evap_set), (T_int, T_shell), (d[0], d[1]))
+    if not any(isinstance(v, (ca.SX, ca.MX)) for pair in pairs for v in pair):
+        x, u, v, dd = (np.array(pair, dtype=float) for pair in pairs)
+        x_next, y = F(x, u, v, theta_vector(p), dd)
+        x_next, y = x_next.full().ravel(), y.full().ravel()
+        return float(x_next[0]), float(x_next[1]), float(y[0])
+    x_next, y = F(*(ca.vertcat(*pair) for pair in pairs[:3]), theta_vector(p),
+                  ca.vertcat(*pairs[3]))
+    return x_next[0], x_next[1], y[0]
 
 
 def model_function(p, disturbance: str = "state", name: str = "acid_model") -> ca.Function:
     """The prediction model as a CasADi function ``(x, u, v, d) -> x_next`` with
     ``x = [T_cab, T_evap]``, ``u = [W_bl, T_evap_set]``, ``v = [T_int, T_shell]`` (K, kg/s)
     and the disturbances ``d`` of :func:`predict` (for the estimator)."""
+    F = _dynamics(disturbance)
     x, u, v, d = (ca.SX.sym(n, 2) for n in ("x", "u", "v", "d"))
-    T_cab_n, T_evap_n, _ = predict(x[0], x[1], u[0], u[1], v[0], v[1], d, p, disturbance)
-    return ca.Function(name, [x, u, v, d], [ca.vertcat(T_cab_n, T_evap_n)],
+    return ca.Function(name, [x, u, v, d], [F(x, u, v, ca.DM(theta_vector(p)), d)[0]],
                        ["x", "u", "v", "d"], ["x_next"])
 
 
@@ -458,87 +486,32 @@ class NMPC:
 
     # ----------------------------------------------------------------- build
     def _build(self) -> None:
-        """Build the NLP once: symbols, cost (eq. 7) and constraints (eqs. 8-13)."""
-        cfg, N = self.config, self.N
-        w, g, par = BlockVector("w"), BlockVector("g"), BlockVector("p")
-        x0 = par.sym("x0", 0, _NX)
-        theta = par.sym("theta", 0, 14)
-        T_amb = par.sym("T_amb", 0, 1)
-        d = par.sym("d", 0, _NX)  # offset-free disturbances on eqs. 1-2, K per step
-        T_int = [par.sym("T_int", i, 1) for i in range(N)]
-        T_shell = [par.sym("T_shell", i, 1) for i in range(N)]
-        # per-stage eta_cop of eq. 4 (default p.eta_cop at every stage; a speed-aware
-        # controller previews eta_cop(v(i|k)), see acid.mpc.speed_model)
-        eta = [par.sym("eta_cop", i, 1) for i in range(N + 1)]
-        T_max = [par.sym("T_cab_max", i, 1) for i in range(1, N + 1)]
-        T_min = [par.sym("T_cab_min", i, 1) for i in range(1, N + 1)]
-        p = SymbolicParams.from_vector(theta)
-        u_ref = self._u_ref = np.array([cfg.W_bl_max, cfg.T_evap_set_min])  # max cooling
-
-        def power(W_bl, T_ain, i):  # eqs. 4-5, W, with the stage-i eta_cop
-            return (model.compressor_power(W_bl, T_ain, T_amb, p, eta_cop=eta[i])
-                    + model.blower_power(W_bl, p))
-
-        cost = 0
-        X = w.sym("x", 0, _NX)
-        g.add("init", 0, X - x0)  # eq. 13: x(0|k) = x(k)
-        for i in range(N):
-            U = w.sym("u", i, _NU)  # scaled inputs, see _U_SCALE
-            W_bl = u_ref[0] + U[0] / _U_SCALE[0]
-            T_set = u_ref[1] + U[1] / _U_SCALE[1]
-            S = w.sym("s", i, _NS)  # slacks of x(i+1|k), K
-            T_cab_n, T_evap_n, T_ain = predict(X[0], X[1], W_bl, T_set, T_int[i],
-                                               T_shell[i], d, p, cfg.disturbance)  # eqs. 1-3
-            x_next = ca.vertcat(T_cab_n, T_evap_n)
-            cost += power(W_bl, T_ain, i) + cfg.slack_penalty * ca.sum1(S)
-            if i == N - 1:  # stage i = N of eq. 7, with u(N|k) := u(N-1|k)
-                T_ain_N = predict(x_next[0], x_next[1], W_bl, T_set, T_int[i], T_shell[i], d,
-                                  p, cfg.disturbance)[2]
-                cost += power(W_bl, T_ain_N, N)
-            X = ca.SX.sym(f"x_{i + 1}", _NX)
-            g.add("dyn", i, X - x_next)  # eqs. 8-9 as gap constraints
-            # eqs. 10-11 for x(i+1|k) with stage-i variables (keeps the OCP structure); the
-            # bounds are parameters, the limits exactly 0 (no relaxation of |T_max|)
-            g.add("cab_hi", i, x_next[0] - T_max[i] - S[0])
-            g.add("cab_lo", i, x_next[0] - T_min[i] + S[1])
-            g.add("evap_hi", i, x_next[1] - cfg.T_evap_max - S[2])
-            g.add("evap_lo", i, x_next[1] - cfg.T_evap_min + S[3])
-            w.add("x", i + 1, X)
-        nlp = {"x": w.vertcat(), "f": cost * cfg.cost_scale, "g": g.vertcat(),
-               "p": par.vertcat()}
-        self._w, self._g, self._p = w, g, par
-        self._nlp_dict = nlp
-        self._nlp = NLPSolver("acid_nmpc", nlp, *self._solver_options(g, cfg.solver),
+        """Build the NLP once: eqs. 7-13 as the paper's configuration of the one
+        optimal-control builder (:func:`ocp_spec`) over ``acid.models.paper.model``."""
+        cfg = self.config
+        ocp = self._ocp = OCP(PAPER_MODEL, ocp_spec(cfg))
+        self._w, self._g, self._p = ocp.w, ocp.g, ocp.par
+        self._nlp_dict = ocp.nlp
+        self._nlp = NLPSolver("acid_nmpc", ocp.nlp, *self._solver_options(cfg.solver),
                               compiled=cfg.compiled, verify=_verify(cfg.solver),
                               timeout_s=cfg.max_solve_s)
         self._fallback_nlp: NLPSolver | None = None
         if cfg.max_solve_s is not None:  # a real-time run builds it now, not mid-run
             self._fallback_solver()
-
-        # index maps from the layout
-        self._iT_cab = w.index("x", 0)
-        self._iT_evap = w.index("x", 1)
-        self._iu = w.index("u")
-        self._ip = {b: par.index(b).ravel() for b in par.blocks}
-
-        # constant bound vectors
-        inf = np.inf
-        lbx = np.full(w.size, -inf)
-        ubx = np.full(w.size, inf)
-        lbx[self._iu], ubx[self._iu] = self._u_nlp(cfg.u_min), self._u_nlp(cfg.u_max)
-        lbx[w.index("s").ravel()] = 0.0
-        self._lbx0, self._ubx0 = lbx, ubx
-        lbg, ubg = np.zeros(g.size), np.zeros(g.size)
-        for b in ("cab_hi", "evap_hi"):
-            lbg[g.index(b).ravel()] = -inf
-        for b in ("cab_lo", "evap_lo"):
-            ubg[g.index(b).ravel()] = inf
-        self._lbg, self._ubg = lbg, ubg
-        self._pvec = np.zeros(par.size)
-        self._pvec[self._ip["theta"]] = self._theta
+        self._iT_cab = ocp.w.index("x", 0)
+        self._iT_evap = ocp.w.index("x", 1)
+        self._iu = ocp.w.index("u")
+        self._u_ref = ocp.u_offset
+        self._lbx0, self._ubx0 = ocp.lbx, ocp.ubx
+        self._lbg, self._ubg = ocp.lbg, ocp.ubg
+        N = self.N
+        self._pvec = ocp.parameters(
+            np.zeros(ocp.par.size), theta=self._theta,
+            bounds={("T_evap", "hi"): np.full(N, cfg.T_evap_max),
+                    ("T_evap", "lo"): np.full(N, cfg.T_evap_min)})
         # warm start: the previous primal/dual solution shifted by one stage
-        self._shift_w = stage_shift(w)
-        self._shift_g = stage_shift(g)
+        self._shift_w, self._shift_g = ocp.shift_w, ocp.shift_g
+        self._trajectory = ocp.trajectory_evaluator(cfg.compiled)
 
     def _fallback_solver(self) -> NLPSolver | None:
         """The solver of ``config.fallback_solver`` (None when there is none), built at its
@@ -549,19 +522,17 @@ class NMPC:
         if self._fallback_nlp is None:
             self._fallback_nlp = NLPSolver(
                 f"acid_nmpc_{cfg.fallback_solver}", self._nlp_dict,
-                *self._solver_options(self._g, cfg.fallback_solver), compiled=cfg.compiled,
+                *self._solver_options(cfg.fallback_solver), compiled=cfg.compiled,
                 verify=_verify(cfg.fallback_solver), timeout_s=cfg.max_solve_s)
         return self._fallback_nlp
 
-    def _solver_options(self, g: BlockVector, solver: str) -> tuple[str, dict]:
+    def _solver_options(self, solver: str) -> tuple[str, dict]:
         """(plugin, options) of ``solver``: no bound relaxation anywhere."""
         cfg = self.config
         if solver == "fatrop":
-            eq = np.zeros(g.size, dtype=bool)
-            for b in ("init", "dyn"):
-                eq[g.index(b).ravel()] = True
             return "fatrop", {
-                "structure_detection": "auto", "equality": eq.tolist(), "print_time": False,
+                "structure_detection": "auto", "equality": self._ocp.equality.tolist(),
+                "print_time": False,
                 "fatrop": {"print_level": 0, "tol": cfg.tol, "max_iter": int(cfg.max_iter)}}
         if solver == "ipopt":
             return "ipopt", {"print_time": False,
@@ -572,11 +543,11 @@ class NMPC:
 
     def _u_nlp(self, u) -> np.ndarray:
         """Inputs [W_bl kg/s, T_evap_set K] as the NLP's scaled variables."""
-        return (np.asarray(u, dtype=float) - self._u_ref) * _U_SCALE
+        return self._ocp.u_nlp(u)
 
     def _u_plan(self, w: np.ndarray) -> np.ndarray:
         """(N, 2) planned inputs [W_bl kg/s, T_evap_set K] from the NLP vector."""
-        return self._u_ref + w[self._iu] / _U_SCALE
+        return self._ocp.plan(w)
 
     # ----------------------------------------------------------------- state
     def reset(self, u_initial=None) -> None:
@@ -611,8 +582,8 @@ class NMPC:
             raise ConfigError(f"{name}: preview needs {n} values, got {a.shape[0]}")
         return a[:n]
 
-    def _initial_guess(self, x: np.ndarray, T_int: np.ndarray, T_shell: np.ndarray,
-                       u_prev, d: np.ndarray) -> np.ndarray:
+    def _initial_guess(self, x: np.ndarray, D: np.ndarray, Q: np.ndarray, u_prev,
+                       d: np.ndarray) -> np.ndarray:
         """Shifted previous solution, else a forward simulation with a mid-range input."""
         if self._w_prev is not None:
             w = self._w_prev[self._shift_w]
@@ -621,12 +592,9 @@ class NMPC:
         cfg = self.config
         u = (np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
              if u_prev is not None else 0.5 * (cfg.u_min + cfg.u_max))
-        N = self.N
-        T_cab, T_evap, _ = simulate_with_disturbance(x, np.full(N, u[0]), np.full(N, u[1]),
-                                                     T_int, T_shell, d, self.params,
-                                                     cfg.disturbance)
+        X = self._trajectory(x, np.tile(u[:, None], self.N), D.T, Q.T, self._theta, d)[0]
         w = np.zeros(self._w.size)
-        w[self._iT_cab], w[self._iT_evap] = T_cab, T_evap
+        w[self._ocp.w.index("x")] = X.T
         w[self._iu] = self._u_nlp(u)
         return w
 
@@ -678,16 +646,11 @@ class NMPC:
             u0 = np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
             lbx[self._iu[0]] = self._u_nlp(u0)
             ubx[self._iu[0]] = self._u_nlp(u0)
-        pv, ip = self._pvec, self._ip
-        pv[ip["x0"]] = x
-        pv[ip["T_amb"]] = amb
-        pv[ip["d"]] = d
-        pv[ip["T_int"]] = Ti
-        pv[ip["T_shell"]] = Tsh
-        pv[ip["eta_cop"]] = eta
-        pv[ip["T_cab_max"]] = ub[1:]
-        pv[ip["T_cab_min"]] = lb[1:]
-        w0 = self._initial_guess(x, Ti, Tsh, u_prev, d)
+        D = np.column_stack((Ti, Tsh))
+        Q = np.column_stack((np.full(N + 1, amb), eta, np.full(N + 1, self.params.c_p)))
+        pv = self._ocp.parameters(self._pvec, x0=x, dist=d, d=D, q=Q, bounds={
+            ("T_cab", "hi"): ub[1:], ("T_cab", "lo"): lb[1:]})
+        w0 = self._initial_guess(x, D, Q, u_prev, d)
         lam_x0 = lam_g0 = None
         if self._lam_g_prev is not None:
             lam_g0 = self._lam_g_prev[self._shift_g]
@@ -708,8 +671,8 @@ class NMPC:
             self._w_prev = res.x
             self._lam_g_prev = res.lam_g
             self._lam_x_prev = res.lam_x
-        return self._solution(res.x, x, Ti, Tsh, amb, eta, ub, lb, d, res.status,
-                              res.success, res.iterations, res.solve_time_s)
+        return self._solution(res.x, x, D, Q, ub, lb, d, res.status, res.success,
+                              res.iterations, res.solve_time_s)
 
     def _check_inputs(self, x, ub, lb, Ti, Tsh, amb, eta, d) -> None:
         """Finite, plausible kelvin temperatures and positive efficiencies, or an error."""
@@ -725,18 +688,18 @@ class NMPC:
         if d.shape != (_NX,) or not np.isfinite(d.sum()):
             raise DataError(f"disturbance must be 2 finite values (K per step), got {d}")
 
-    def _solution(self, w, x, Ti, Tsh, T_amb, eta, ub, lb, d, status, success, iterations,
+    def _solution(self, w, x, D, Q, ub, lb, d, status, success, iterations,
                   dt) -> MPCSolution:
         """Eq. 7 at the plan: the trajectory recomputed from the (clipped) plan with the
-        model functions, the slacks its actual violations (eqs. 3-5, 7 in W)."""
-        cfg, p = self.config, self.params
+        declared model, the slacks its actual violations (eqs. 3-5, 7 in W)."""
+        cfg = self.config
         plan = np.clip(self._u_plan(w), cfg.u_min, cfg.u_max)
         W, Tset = plan[:, 0], plan[:, 1]
-        T_cab, T_evap, T_ain = simulate_with_disturbance(x, W, Tset, Ti, Tsh, d, p,
-                                                         cfg.disturbance)
-        W_ext = np.append(W, W[-1])  # u(N|k) := u(N-1|k)
-        P_comp = model.compressor_power(W_ext, T_ain, T_amb, p, eta_cop=eta)
-        P_bl = model.blower_power(W_ext, p)
+        X, Y, terms = self._trajectory(x, plan.T, D.T, Q.T, self._theta, d)
+        T_cab, T_evap = X[0], X[1]
+        T_ain = Y[PAPER_MODEL.output_names.index("T_ain")]
+        P_comp, P_bl = terms[self._ocp.term_names.index("P_comp")], \
+            terms[self._ocp.term_names.index("P_bl")]
         s_cab = np.maximum(np.maximum(T_cab[1:] - ub[1:], lb[1:] - T_cab[1:]), 0.0)
         s_evap = np.maximum(np.maximum(T_evap[1:] - cfg.T_evap_max,
                                        cfg.T_evap_min - T_evap[1:]), 0.0)
@@ -808,7 +771,8 @@ class NMPC:
         self._applied = (u, v) if measured else None
         # the model's T_cab one step ahead under the applied input (for the back-off)
         self._predicted = (predict(x_hat[0], x_hat[1], u[0], u[1], v[0], v[1], d, self.params,
-                                   cfg.disturbance)[0] if measured else None)
+                                   cfg.disturbance)[0]
+                           if measured and self.backoff is not None else None)
         self.log.u.append(u)
         self.log.solutions.append(sol)
         self.log.fallback.append(not ok)
@@ -853,32 +817,3 @@ def sqp_options(tol: float = SQP_TOL, max_iter: int = 100) -> dict:
             "qpsol_options": {"print_iter": False, "print_header": False,
                               "print_info": False, "error_on_fail": False,
                               "min_lam": 1e-12, "max_iter": 50}}
-
-
-def stage_shift(vec: BlockVector) -> np.ndarray:
-    """Index permutation that shifts a stage-wise vector by one stage (``v[perm]``): each
-    block at stage ``i`` takes its value at stage ``i + 1``; each block's last stage keeps
-    its own value (the last input is repeated; the state of the last input stage takes the
-    old terminal state, which is kept)."""
-    perm = np.arange(vec.size)
-    for b in vec.blocks:
-        idx = vec.index(b)
-        perm[idx[:-1]] = idx[1:]
-    return perm
-
-
-def simulate_with_disturbance(x0, W_bl, T_evap_set, T_int, T_shell, d, p: ModelParams,
-                              disturbance: str = "state"):
-    """The NMPC's prediction model (:func:`predict`) along a plan. ``T_int``, ``T_shell``
-    are (H,) previews. Returns (T_cab, T_evap) of length H+1 and T_ain of length H+1 (K;
-    the last with the last input held, ``u(H) := u(H-1)``)."""
-    T_cab, T_evap, T_ain = [float(x0[0])], [float(x0[1])], []
-    d = [float(d[0]), float(d[1])]
-    W, Ts = W_bl.tolist(), T_evap_set.tolist()
-    for k, (Ti, Tsh) in enumerate(zip(T_int.tolist(), T_shell.tolist(), strict=True)):
-        c, e, a = predict(T_cab[k], T_evap[k], W[k], Ts[k], Ti, Tsh, d, p, disturbance)
-        T_cab.append(c)
-        T_evap.append(e)
-        T_ain.append(a)
-    T_ain.append(predict(T_cab[-1], T_evap[-1], W[-1], Ts[-1], Ti, Tsh, d, p, disturbance)[2])
-    return np.array(T_cab), np.array(T_evap), np.array(T_ain)

@@ -6,8 +6,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from acid.mpc.layout import BlockVector
-from acid.mpc.nmpc import NMPC, stage_shift
+from acid.control.layout import BlockVector
+from acid.control.ocp import stage_shift
+from acid.mpc.nmpc import NMPC
 from acid.params import paper
 
 
@@ -57,4 +58,4 @@ def test_the_nmpc_index_maps_come_from_its_layout():
     assert w.size == N * (2 + 2 + 4) + 2
     assert g.size == 2 + N * (2 + 4)
     np.testing.assert_array_equal(mpc._iT_cab, w.index("x", 0))
-    assert set(g.blocks) == {"init", "dyn", "cab_hi", "cab_lo", "evap_hi", "evap_lo"}
+    assert set(g.blocks) == {"init", "dyn", "T_cab_hi", "T_cab_lo", "T_evap_hi", "T_evap_lo"}

@@ -7,7 +7,7 @@ hand-computing where each entry lands, a :class:`BlockVector` is *built* from na
 ``index("u", 1)``): the order of the vector and its index maps come from one declaration.
 
 The same class serves the decision vector ``w``, the constraint vector ``g`` and the
-parameter vector ``p`` of :class:`acid.mpc.nmpc.NMPC` and of any other NMPC built on CasADi.
+parameter vector ``p`` of :class:`acid.control.ocp.OCP` (every NMPC of acid).
 """
 
 from __future__ import annotations
@@ -29,8 +29,9 @@ class BlockVector:
     [3]
     """
 
-    def __init__(self, name: str):
+    def __init__(self, name: str, sym_type=ca.SX):
         self.name = name
+        self.sym_type = sym_type  # ca.SX, or ca.MX for an NLP that calls stage functions
         self._parts: list = []
         self._blocks: dict[str, dict[int, np.ndarray]] = {}
         self.size = 0
@@ -51,7 +52,7 @@ class BlockVector:
 
     def sym(self, block: str, stage: int, n: int) -> ca.SX:
         """Append a fresh symbol of ``n`` entries as ``block`` of ``stage`` and return it."""
-        return self.add(block, stage, ca.SX.sym(f"{block}_{stage}", n))
+        return self.add(block, stage, self.sym_type.sym(f"{block}_{stage}", n))
 
     def vertcat(self):
         """The whole vector, blocks in the order they were added."""
