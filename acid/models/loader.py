@@ -15,7 +15,8 @@ from acid.models.declaration import DeclarationError, Model
 
 #: Built-in declarations: name -> module defining ``model``.
 BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
-            "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin"}
+            "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin",
+            "car_ac": "acid.models.car_ac"}
 
 
 def load(spec: str | Path | Model) -> Model:

@@ -1,0 +1,339 @@
+"""The real car's A/C under economic NMPC (issue 20, item 5): the study.
+
+Three steps, each returning a result object (no printing):
+
+1. :func:`fit_power`: the A/C power output of ``acid.models.car_ac`` fitted by least squares
+   on estimation trips (the cabin rows held at their prediction-error fit), scored on
+   held-out trips (R^2 and RMSE per sample, R^2 of each trip's mean power, total energy).
+2. :func:`closed_loop`: one controller on the identified model as the plant
+   (:class:`acid.models.plant.DeclaredPlant`) over a logged trip's ambient and speed:
+   the economic NMPC (:class:`acid.control.car_ac.CarEconNMPC`, state from the filter),
+   a PI loop (:class:`acid.control.car_ac.CabinPI`), or the car's own logged set-point
+   replayed.
+3. :func:`compare_on_trip`: the NMPC against the PI tuned to the same mean cabin air
+   (its set-point by bisection, its gains the least energy among those that hold the band
+   as well as the NMPC), and the logged car's set-point replayed on the same model.
+
+Temperatures in K inside, energies in J, powers in W.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from acid.control.car_ac import CabinFilter, CabinPI, CarACConfig, CarEconNMPC
+from acid.data import Dataset
+from acid.errors import DataError
+from acid.models.car_ac import POWER_NAMES
+from acid.models.car_ac import model as CAR_AC
+from acid.models.car_cabin import Q_SOL_PRIOR
+from acid.models.declaration import Model
+from acid.models.plant import DeclaredPlant
+
+
+# ----------------------------------------------------------------- 1. the power output
+def car_ac_values(cabin_values, model: Model = CAR_AC) -> np.ndarray:
+    """car_ac's table: the cabin rows given (car_cabin's table order), the power rows as
+    declared."""
+    cabin = np.asarray(cabin_values, dtype=float)
+    values = model.values.copy()
+    values[:cabin.size] = cabin
+    return values
+
+
+def power_function(model: Model = CAR_AC) -> ca.Function:
+    """``(T_cab, T_evap, T_amb, v_veh, p) -> P_comp``: the declaration's power output on
+    logged channels (it must read no latent state), vectorised by ``.map``."""
+    k = model.output_names.index("P_comp")
+    y = model.h(model._x, model._u, model._d, model._p)[k]
+    latent = [i for i, s in enumerate(model.states) if not s.measured]
+    if any(ca.depends_on(y, model._x[i]) for i in latent):
+        raise DataError(f"model {model.name!r}: P_comp reads a latent state; it cannot be "
+                        "fitted on logged channels alone")
+    return ca.Function("P_comp", [model._x, model._u, model._d, model._p], [y])
+
+
+@dataclass(frozen=True)
+class PowerScore:
+    """How the power output predicts one set of trips.
+
+    r2 : 1 - mean squared error / variance of the logged power, per 5 s sample.
+    rmse_W, bias_W : root mean square and mean of logged - predicted, W.
+    trip_r2 : the same R^2 over each trip's mean power.
+    energy_ratio : predicted / logged total A/C energy.
+    n : samples.
+    """
+
+    r2: float
+    rmse_W: float
+    bias_W: float
+    trip_r2: float
+    energy_ratio: float
+    n: int
+
+
+@dataclass(frozen=True)
+class PowerFit:
+    """The power rows fitted (``values``: name -> value) and their scores."""
+
+    values: dict
+    estimation: PowerScore
+    held_out: PowerScore
+    status: str
+
+
+def _logged(ds: Dataset, model: Model):
+    names = {"T_cab", "T_evap", "T_amb", "v_veh", "P_comp"}
+    missing = sorted(n for n in names if n not in ds)
+    if missing:
+        raise DataError(f"{ds.source}: missing channel(s) {', '.join(map(repr, missing))}")
+    X = np.zeros((len(ds), model.nx))
+    X[:, model.state_names.index("T_cab")] = ds.get("T_cab", "K")
+    U = ds.get("T_evap", "K")[:, None]
+    D = np.column_stack([ds.get(s.name, s.unit) for s in model.disturbances])
+    return X, U, D, ds.get("P_comp", "W")
+
+
+def _predict_power(fn, X, U, D, values) -> np.ndarray:
+    return np.asarray(fn.map(len(X))(X.T, U.T, D.T, values)).ravel()
+
+
+def _score(ds: Dataset, P: np.ndarray, Ph: np.ndarray) -> PowerScore:
+    r = P - Ph
+    trips = ds.segments()
+    pm = np.array([P[a:b].mean() for a, b in trips])
+    ph = np.array([Ph[a:b].mean() for a, b in trips])
+    return PowerScore(r2=float(1 - np.mean(r ** 2) / P.var()), rmse_W=float(np.sqrt(np.mean(
+        r ** 2))), bias_W=float(r.mean()), trip_r2=float(1 - np.mean((pm - ph) ** 2) /
+                                                          pm.var()),
+        energy_ratio=float(Ph.sum() / P.sum()), n=len(P))
+
+
+def fit_power(est: Dataset, held_out: Dataset, cabin_values, model: Model = CAR_AC
+              ) -> PowerFit:
+    """Least squares of the logged A/C power on the declaration's ``P_comp`` output over the
+    estimation trips (its free power rows within their declared bounds, from their declared
+    values), scored on both sets."""
+    from scipy.optimize import least_squares
+
+    fn = power_function(model)
+    values = car_ac_values(cabin_values, model)
+    idx = [model.parameter_names.index(n) for n in POWER_NAMES]
+    lo = [model.parameters[i].min for i in idx]
+    hi = [model.parameters[i].max for i in idx]
+    Xe, Ue, De, Pe = _logged(est, model)
+
+    def residual(z):
+        v = values.copy()
+        v[idx] = z
+        return _predict_power(fn, Xe, Ue, De, v) - Pe
+
+    res = least_squares(residual, values[idx], bounds=(lo, hi))
+    values[idx] = res.x
+    Xv, Uv, Dv, Pv = _logged(held_out, model)
+    return PowerFit(values={n: float(v) for n, v in zip(POWER_NAMES, res.x, strict=True)},
+                    estimation=_score(est, Pe, _predict_power(fn, Xe, Ue, De, values)),
+                    held_out=_score(held_out, Pv, _predict_power(fn, Xv, Uv, Dv, values)),
+                    status=str(res.message))
+
+
+# ----------------------------------------------------------------- 2. closed loop
+@dataclass(frozen=True)
+class Trip:
+    """A logged trip's disturbances (the declaration's order: T_amb K, v_veh m/s), its
+    logged cabin air, set-point and A/C power, and its name."""
+
+    name: str
+    d: np.ndarray
+    T_cab: np.ndarray
+    T_evap: np.ndarray
+    P_comp: np.ndarray
+    Ts: float
+
+    @classmethod
+    def of(cls, ds: Dataset, experiment: int, model: Model = CAR_AC) -> Trip:
+        ids = np.unique(ds.experiment)
+        if experiment not in ids:
+            raise DataError(f"{ds.source}: no experiment {experiment} (has {ids.min()}-"
+                            f"{ids.max()})")
+        a, b = ds.segments()[list(ids).index(experiment)]
+        w = ds.window(a, b)
+        X, U, D, P = _logged(w, model)
+        return cls(name=ds.experiment_names()[list(ids).index(experiment)], d=D,
+                   T_cab=w.get("T_cab", "K"), T_evap=U[:, 0], P_comp=P, Ts=ds.Ts)
+
+    def preview(self, k: int, N: int) -> np.ndarray:
+        """(N, nd): the disturbances from sample k on, the last row repeated past the end."""
+        return self.d[np.minimum(np.arange(k, k + N), len(self.d) - 1)]
+
+
+@dataclass(frozen=True)
+class ClosedLoop:
+    """One controller over one trip.
+
+    T_cab : (n,) cabin air at each sample, K; T_evap : (n,) set-point applied, K;
+    P_comp : (n,) A/C power over each sample, W; energy_J : sum P_comp Ts;
+    mean_T_cab_K : mean cabin air over the samples scored (after ``settle`` s);
+    violation_Ks : integral of the cabin air outside the band over them, K s;
+    max_violation_K : largest excursion outside the band over them, K;
+    fallbacks : solver failures (NMPC).
+    """
+
+    name: str
+    T_cab: np.ndarray
+    T_evap: np.ndarray
+    P_comp: np.ndarray
+    energy_J: float
+    mean_T_cab_K: float
+    violation_Ks: float
+    max_violation_K: float
+    fallbacks: int = 0
+
+    def summary(self) -> dict:
+        return {"controller": self.name, "energy_kJ": self.energy_J / 1e3,
+                "mean_T_cab_C": self.mean_T_cab_K - 273.15,
+                "violation_Ks": self.violation_Ks, "max_violation_K": self.max_violation_K,
+                "mean_P_comp_W": float(self.P_comp.mean()), "fallbacks": self.fallbacks}
+
+
+def initial_state(model: Model, values, T_cab: float, d0) -> np.ndarray:
+    """A trip's start: cabin air as logged, interior at it, shell between it and the
+    ambient, the load at its typical value ``Q_bar`` (the plant's truth)."""
+    v = dict(zip(model.parameter_names, values, strict=True))
+    T_amb = float(d0[[s.name for s in model.disturbances].index("T_amb")])
+    x = {"T_cab": T_cab, "T_int": T_cab, "T_shell": 0.5 * (T_cab + T_amb),
+         "Q_sol": v["Q_bar"]}
+    return np.array([x[n] for n in model.state_names])
+
+
+def closed_loop(name: str, trip: Trip, values, control: Callable, band: tuple[float, float],
+                *, model: Model = CAR_AC, settle_s: float = 0.0, fallbacks=lambda: 0
+                ) -> ClosedLoop:
+    """The identified model as the plant over ``trip``; ``control(k, T_cab) -> T_evap``
+    each sample (it sees the measured cabin air only). Scores from ``settle_s`` on."""
+    x0 = initial_state(model, values, float(trip.T_cab[0]), trip.d[0])
+    plant = DeclaredPlant(model, values, initial=dict(zip(model.state_names, x0,
+                                                          strict=True)))
+    names = [s.name for s in model.disturbances]
+    n = len(trip.d)
+    T, U, P = np.empty(n), np.empty(n), np.empty(n)
+    for k in range(n):
+        T[k] = plant.x[model.state_names.index("T_cab")]
+        U[k] = control(k, T[k])
+        row = plant.step(W_bl=0.0, T_evap_set=0.0, T_evap=U[k],
+                         **dict(zip(names, trip.d[k], strict=True)))
+        P[k] = row["P_comp"]
+    k0 = min(int(round(settle_s / trip.Ts)), n - 1)
+    lo, hi = band
+    excess = np.maximum(T[k0:] - hi, 0.0) + np.maximum(lo - T[k0:], 0.0)
+    return ClosedLoop(name, T, U, P, energy_J=float(P.sum() * trip.Ts),
+                      mean_T_cab_K=float(T[k0:].mean()),
+                      violation_Ks=float(excess.sum() * trip.Ts),
+                      max_violation_K=float(excess.max()), fallbacks=int(fallbacks()))
+
+
+def run_nmpc(trip: Trip, values, config: CarACConfig | None = None, *,
+             model: Model = CAR_AC, settle_s: float = 0.0) -> ClosedLoop:
+    """The economic NMPC in closed loop; its state from :class:`CabinFilter` (started from
+    the logged cabin air and the load's prior, not the plant's truth)."""
+    cfg = config or CarACConfig()
+    nmpc = CarEconNMPC(model, values, cfg)
+    x0 = initial_state(model, values, float(trip.T_cab[0]), trip.d[0])
+    x0[model.state_names.index("Q_sol")] = Q_SOL_PRIOR
+    filt = CabinFilter(model, values, x0)
+
+    def control(k, T_cab):
+        xhat = filt.update(T_cab)
+        u = nmpc.make_step(xhat, trip.preview(k, cfg.N))
+        filt.predict([u], trip.d[k])
+        return u
+
+    return closed_loop("economic NMPC", trip, values, control, (cfg.T_cab_min, cfg.T_cab_max),
+                       model=model, settle_s=settle_s, fallbacks=lambda: nmpc.fallbacks)
+
+
+def run_pi(trip: Trip, values, pi: CabinPI, band: tuple[float, float], *,
+           model: Model = CAR_AC, settle_s: float = 0.0) -> ClosedLoop:
+    """The PI baseline in closed loop."""
+    step = pi.run()
+    return closed_loop(f"PI (set-point {pi.T_set - 273.15:.2f} degC, Kp {pi.Kp:g}, "
+                       f"Ki {pi.Ki:g})", trip, values, lambda k, T: step(T, trip.Ts), band,
+                       model=model, settle_s=settle_s)
+
+
+def run_logged(trip: Trip, values, band: tuple[float, float], *, model: Model = CAR_AC,
+               settle_s: float = 0.0) -> ClosedLoop:
+    """The car's own logged set-point replayed on the model (what the car did, on the same
+    plant: comparable in energy, not in the cabin air it reached)."""
+    return closed_loop("logged car (set-point replayed)", trip, values,
+                       lambda k, T: float(trip.T_evap[k]), band, model=model,
+                       settle_s=settle_s)
+
+
+def tune_pi(trip: Trip, values, target_mean_K: float, band: tuple[float, float],
+            max_violation_Ks: float, *, gains=((1.0, 0.003), (3.0, 0.01), (6.0, 0.02),
+                                               (10.0, 0.05)),
+            model: Model = CAR_AC, settle_s: float = 0.0) -> tuple[CabinPI, ClosedLoop,
+                                                                   list[ClosedLoop]]:
+    """The PI baseline at the NMPC's mean cabin air: for each ``(Kp, Ki)`` the set-point by
+    bisection (equal mean within 0.01 K), then the least energy among the gains whose band
+    violation is at most ``max_violation_Ks`` and whose mean is within 0.05 K (all of them
+    when none is)."""
+    runs = []
+    for Kp, Ki in gains:
+        lo, hi = target_mean_K - 15.0, target_mean_K + 15.0
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            r = run_pi(trip, values, CabinPI(mid, Kp, Ki), band, model=model,
+                       settle_s=settle_s)
+            if abs(r.mean_T_cab_K - target_mean_K) < 0.01:
+                break
+            lo, hi = (mid, hi) if r.mean_T_cab_K < target_mean_K else (lo, mid)
+        runs.append((CabinPI(mid, Kp, Ki), r))
+    ok = [(p, r) for p, r in runs if r.violation_Ks <= max_violation_Ks + 1e-9
+          and abs(r.mean_T_cab_K - target_mean_K) < 0.05] or runs
+    pi, best = min(ok, key=lambda pr: pr[1].energy_J)
+    return pi, best, [r for _, r in runs]
+
+
+@dataclass(frozen=True)
+class TripComparison:
+    """NMPC, tuned PI and the logged car's set-point on one trip (same plant, same band)."""
+
+    trip: str
+    nmpc: ClosedLoop
+    pi: ClosedLoop
+    pi_candidates: tuple
+    logged: ClosedLoop
+    logged_energy_J: float        # the A/C energy the car logged on this trip
+    logged_mean_T_cab_K: float    # the cabin air the car logged (after settle_s)
+    band_K: tuple[float, float]
+    settle_s: float
+
+    def summary(self) -> dict:
+        return {"trip": self.trip, "band_C": [b - 273.15 for b in self.band_K],
+                "settle_s": self.settle_s, "nmpc": self.nmpc.summary(),
+                "pi": self.pi.summary(), "logged_replayed": self.logged.summary(),
+                "logged": {"energy_kJ": self.logged_energy_J / 1e3,
+                           "mean_T_cab_C": self.logged_mean_T_cab_K - 273.15},
+                "nmpc_vs_pi_energy_percent": 100 * (self.nmpc.energy_J / self.pi.energy_J - 1)}
+
+
+def compare_on_trip(trip: Trip, values, config: CarACConfig | None = None, *,
+                    model: Model = CAR_AC, settle_s: float = 600.0) -> TripComparison:
+    """The NMPC, the PI tuned to its mean cabin air (after ``settle_s``: a hot start's
+    pull-down is not comfort), and the logged set-point replayed, on the identified model."""
+    cfg = config or CarACConfig()
+    band = (cfg.T_cab_min, cfg.T_cab_max)
+    nm = run_nmpc(trip, values, cfg, model=model, settle_s=settle_s)
+    _, pi, cands = tune_pi(trip, values, nm.mean_T_cab_K, band, nm.violation_Ks,
+                           model=model, settle_s=settle_s)
+    k0 = min(int(round(settle_s / trip.Ts)), len(trip.T_cab) - 1)
+    return TripComparison(trip.name, nm, pi, tuple(cands),
+                          run_logged(trip, values, band, model=model, settle_s=settle_s),
+                          float(trip.P_comp.sum() * trip.Ts), float(trip.T_cab[k0:].mean()),
+                          band, settle_s)
