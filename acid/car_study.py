@@ -381,3 +381,85 @@ def compare_on_trip(trip: Trip, values, make_plant: Callable | None = None,
                           run_logged(trip, make_plant(), band, settle_s=settle_s),
                           float(trip.P_comp.sum() * trip.Ts), float(trip.T_cab[k0:].mean()),
                           band, settle_s)
+
+
+# ----------------------------------------------------------------- 3. acid's plant near it
+@dataclass(frozen=True)
+class MappedField:
+    """One row of the mapping onto :class:`acid.plant.config.PlantConfig`: the plant field,
+    the value set (SI), what it comes from, or why it is left as configured."""
+
+    field: str
+    value: float | None
+    source: str
+
+
+def hifi_mapping(values, model: Model = CAR_AC) -> tuple[dict, tuple[MappedField, ...]]:
+    """The high-fidelity plant's fields set from the identified ``car_ac`` values as far as
+    its structure allows (``{field: value}`` for ``PlantConfig.replace``, and every row,
+    mapped or not, with its reason). The A/C power is the plant's own cycle, not mapped."""
+    v = dict(zip(model.parameter_names, values, strict=True))
+    c_p = 1006.0   # J/(kg K), air near 20 degC
+    W_bl = v["G_sup"] / c_p
+    A_glass_tau = 0.9 * 0.5          # PlantConfig defaults A_glass_sun x tau_glass, m^2
+    rows = (
+        MappedField("C_cab", 1e3 * v["C_cab"], "C_cab (cabin air + trims; at its bound)"),
+        MappedField("C_int", 1e3 * v["C_int"], "C_int (at its bound)"),
+        MappedField("hA_int", v["UA_int"], "UA_int (at its bound)"),
+        MappedField("hA_int_slow", 0.1, "none: the car model has no slow interior (the "
+                    "plant's slow node decoupled at its lowest conductance)"),
+        MappedField("C_sh", 1e3 * v["C_shell"], "C_shell (+/- 550 kJ/K: barely fixed)"),
+        MappedField("hA_sh", v["UA_shell"], "UA_shell"),
+        MappedField("h_ext_nat", v["UA_out"] / 9.0, "UA_out / A_shell (9 m^2); the plant's "
+                    "speed dependence is its own correlation (UA_out_v 9 +/- 28 W s/(K m) "
+                    "is not fixed by the data)"),
+        MappedField("W_bl_min", min(0.02, W_bl), "lowered so that the blower can run at "
+                    "G_sup / c_p"),
+        MappedField("G_solar", max(v["Q_bar"] - 80.0, 0.0) / A_glass_tau,
+                    "Q_bar (the load's typical value) less one occupant (Q_pass 80 W), "
+                    "through the glazing onto the interior"),
+        MappedField("alpha_shell", 0.0, "the identified load enters the interior only (no "
+                    "solar term on the shell)"),
+        MappedField("r_max", 1.0 - v["f_fresh"], "1 - f_fresh of the power map (0.38 on the "
+                    "estimation trips, 0 with the split reversed: not fixed)"),
+        MappedField("k_rec", 10.0, "recirculation held at r_max (the car's flap is not "
+                    "logged)"),
+        MappedField("W_bl (input)", W_bl, "G_sup / c_p, held (blower level 1 in the logs)"),
+        MappedField("compressor, cycle, COP", None, "not mapped: the plant computes its "
+                    f"cycle (COP 2.4-3.7); the logs give k_ac {v['k_ac']:.1f} W/K, i.e. COP "
+                    f"{v['G_sup'] / v['k_ac']:.2f} with G_sup as the evaporator's flow"),
+        MappedField("humidity, infiltration", None, "not mapped: the logs carry neither; "
+                    "the plant keeps its own"),
+    )
+    fields = {r.field: r.value for r in rows if r.value is not None and "(" not in r.field}
+    return fields, rows
+
+
+class HifiCarPlant:
+    """acid's high-fidelity plant configured by :func:`hifi_mapping`, driven like the car:
+    the blower held at ``G_sup / c_p``, the evaporator set-point the controller's
+    ``T_evap``, from a trip's start (cabin, interior, shell as :func:`initial_state`)."""
+
+    def __init__(self, values, trip: Trip, model: Model = CAR_AC):
+        from acid.plant.config import PlantConfig
+        from acid.plant.hifi import HifiPlant
+
+        fields, rows = hifi_mapping(values, model)
+        self.W_bl = next(r.value for r in rows if r.field == "W_bl (input)")
+        T_amb0 = float(trip.d[0][[s.name for s in model.disturbances].index("T_amb")])
+        self.plant = HifiPlant(PlantConfig().replace(T_amb=T_amb0, **fields), mode="direct")
+        x0 = dict(zip(model.state_names, initial_state(model, values, float(trip.T_cab[0]),
+                                                       trip.d[0]), strict=True))
+        self.plant.reset({"T_cab": x0["T_cab"], "T_int": x0["T_int"],
+                          "T_int_slow": x0["T_int"], "T_shell": x0["T_shell"],
+                          "T_evap": x0["T_cab"]})
+        self._d = [s.name for s in model.disturbances]
+
+    def T_cab(self) -> float:
+        return float(self.plant.measure()["T_cab"])
+
+    def step(self, T_evap: float, d) -> float:
+        dd = dict(zip(self._d, d, strict=True))
+        row = self.plant.step(W_bl=self.W_bl, T_evap_set=T_evap, v_veh=dd["v_veh"],
+                              T_amb=dd["T_amb"])
+        return float(row["P_comp"])
