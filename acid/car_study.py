@@ -252,14 +252,15 @@ def closed_loop(name: str, trip: Trip, plant, control: Callable, band: tuple[flo
 
 
 def run_nmpc(trip: Trip, values, plant, config: CarACConfig | None = None, *,
-             model: Model = CAR_AC, settle_s: float = 0.0) -> ClosedLoop:
+             model: Model = CAR_AC, settle_s: float = 0.0,
+             Q_sol0: float = Q_SOL_PRIOR) -> ClosedLoop:
     """The economic NMPC (on ``model`` with ``values``) in closed loop on ``plant``; its
-    state from :class:`CabinFilter` (started from the measured cabin air and the load's
-    prior, not the plant's truth)."""
+    state from :class:`CabinFilter`, started from the measured cabin air and the load
+    ``Q_sol0`` (W; default the filter's prior, not the plant's truth)."""
     cfg = config or CarACConfig()
     nmpc = CarEconNMPC(model, values, cfg)
     x0 = initial_state(model, values, plant.T_cab(), trip.d[0])
-    x0[model.state_names.index("Q_sol")] = Q_SOL_PRIOR
+    x0[model.state_names.index("Q_sol")] = Q_sol0
     filt = CabinFilter(model, values, x0)
 
     def control(k, T_cab):
