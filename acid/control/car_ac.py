@@ -25,6 +25,7 @@ Temperatures in K, powers in W.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -149,10 +150,8 @@ class CarEconNMPC:
     def make_step(self, x, d_preview) -> float:
         """The set-point ``T_evap`` (K) for the next sample from the state ``x`` (nx,) and the
         previewed disturbances ``d_preview`` (N, nd) in the declaration's order (past the
-        trip's end the caller repeats its last row). A failed solve applies the rest of the
-        last plan (counted in ``fallbacks``, one :class:`SolverWarning`)."""
-        import warnings
-
+        trip's end the caller repeats its last row). A failed solve applies the last plan's
+        next move (counted in ``fallbacks``, one :class:`SolverWarning`)."""
         ocp = self.ocp
         d = np.asarray(d_preview, dtype=float).reshape(ocp.N, self.model.nd)
         par = ocp.parameters(self._par.copy(), x0=x, d=d)
