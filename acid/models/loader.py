@@ -16,7 +16,7 @@ from acid.models.declaration import DeclarationError, Model
 #: Built-in declarations: name -> module defining ``model``.
 BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
             "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin",
-            "heating": "acid.models.heating"}
+            "heating": "acid.models.heating", "car_ac": "acid.models.car_ac"}
 
 
 def load(spec: str | Path | Model) -> Model:
