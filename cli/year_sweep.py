@@ -21,6 +21,7 @@ from acid_cli._common import (
     say,
     write_summary,
 )
+from acid_cli._plant import config_input, refrigerant_option
 
 OUTPUTS = ("year.csv", "year.json", "year_share.png")
 
@@ -34,6 +35,7 @@ def year_sweep(
     config: list[str] | None = typer.Option(
         None, "--plant-config",
         help="Vehicle name or plant TOML; repeat for a list (default: default and paper)."),
+    refrigerant: str | None = refrigerant_option(),
     switch_over: float = typer.Option(
         18.0, "--switch-over",
         help="Heating plant below this ambient, cooling plant at and above it, degC."),
@@ -56,15 +58,16 @@ def year_sweep(
     from acid.plant import year
     from acid.report.year import year_figure
 
-    check_paths(outputs={"--json": json_path}, folders={"--out": (out, OUTPUTS)})
+    check_paths(inputs={f"--plant-config {v}": config_input(v) for v in config or ()},
+                outputs={"--json": json_path}, folders={"--out": (out, OUTPUTS)})
     require_range(jobs, "--jobs", 1, 256, integer=True)
     ambients = tuple(t_amb) if t_amb else (year.QUICK_AMBIENTS_C if quick else year.AMBIENTS_C)
     cycles = tuple(cycle) if cycle else (year.QUICK_CYCLES if quick else year.CYCLES)
     vehicles = tuple(config) if config else year.VEHICLES
-    year.check_grid(ambients, cycles, vehicles, switch_over)
-    n = len(year._tasks(ambients, cycles, vehicles, switch_over))
+    year.check_grid(ambients, cycles, vehicles, switch_over, refrigerant)
+    n = len(year.plan_tasks(ambients, cycles, vehicles, switch_over, refrigerant))
     with claim(out, "acid year-sweep"), progress_bar("year sweep", total=n) as update:
-        result = year.year_sweep(ambients, cycles, vehicles, switch_over, jobs=jobs,
+        result = year.year_sweep(ambients, cycles, vehicles, switch_over, refrigerant, jobs=jobs,
                                  progress=lambda done, total, label: update(done, total))
         rows = result.rows()
         buf = io.StringIO()

@@ -59,13 +59,14 @@ HEAT_PUMP, HEATER_ONLY = "heat pump", "heater only"
 @dataclass(frozen=True)
 class YearTask:
     """One plant run: ambient (K), cycle, vehicle (name or plant TOML), heat pump fitted,
-    mode ("heating" or "cooling")."""
+    mode ("heating" or "cooling"), refrigerant (None: the vehicle's)."""
 
     T_amb_K: float
     cycle: str
     vehicle: str
     heat_pump: bool
     mode: str
+    refrigerant: str | None = None
 
     @property
     def label(self) -> str:
@@ -115,24 +116,29 @@ class YearPoint:
                 (round(K2C(v), 6) if k.endswith("_K") else v) for k, v in asdict(self).items()}
 
 
-def _tasks(ambients_C: Sequence[float], cycles: Sequence[str], vehicles: Sequence[str],
-           switch_C: float) -> list[YearTask]:
+def plan_tasks(ambients_C: Sequence[float], cycles: Sequence[str], vehicles: Sequence[str],
+               switch_C: float, refrigerant: str | None = None) -> list[YearTask]:
+    """The runs of a grid: two per heating point (heat pump, heater only), one per cooling
+    point."""
     tasks = []
     for vehicle in vehicles:
         for cycle in cycles:
             for t in ambients_C:
                 T = C2K(float(t))
                 if t < switch_C:
-                    tasks += [YearTask(T, cycle, vehicle, hp, "heating") for hp in (True, False)]
+                    tasks += [YearTask(T, cycle, vehicle, hp, "heating", refrigerant)
+                              for hp in (True, False)]
                 else:
-                    tasks.append(YearTask(T, cycle, vehicle, False, "cooling"))
+                    tasks.append(YearTask(T, cycle, vehicle, False, "cooling", refrigerant))
     return tasks
 
 
 def check_grid(ambients_C: Sequence[float], cycles: Sequence[str], vehicles: Sequence[str],
-               switch_C: float) -> None:
-    """Refuse (``ConfigError``, one line naming the option) an empty or out-of-range grid."""
-    from acid.plant.vehicles import is_vehicle, resolve_config
+               switch_C: float, refrigerant: str | None = None) -> None:
+    """Refuse (``ConfigError``, one line naming the option) an empty or out-of-range grid or
+    a refrigerant acid has no tables for."""
+    from acid.plant.config import REFRIGERANTS
+    from acid.plant.vehicles import is_vehicle, resolve_config, vehicle_config
     from acid.signals import available_drive_cycles
 
     lo, hi = AMBIENT_RANGE_C
@@ -155,6 +161,9 @@ def check_grid(ambients_C: Sequence[float], cycles: Sequence[str], vehicles: Seq
     for v in vehicles:
         if not is_vehicle(v) and not resolve_config(v).is_file():
             raise ConfigError(f"--plant-config {v}: neither a vehicle name nor a file")
+        vehicle_config(v)  # a bad file is refused here, before any run
+    if refrigerant is not None and refrigerant not in REFRIGERANTS:
+        raise ConfigError(f"--refrigerant {refrigerant!r}: choose {' or '.join(REFRIGERANTS)}")
 
 
 def run_task(task: YearTask) -> YearPoint:
@@ -168,6 +177,8 @@ def run_task(task: YearTask) -> YearPoint:
 
     T = task.T_amb_K
     base = vehicle_config(task.vehicle)
+    if task.refrigerant is not None:
+        base = base.replace(refrigerant=task.refrigerant)
     if task.mode == "heating":
         hc = HeatingConfig(heat_pump=task.heat_pump)
         plant = HeatingPlant(hc, winter_plant_config(T, base=base), mode="nominal")
@@ -217,6 +228,7 @@ class YearResult:
     cycles: tuple[str, ...]
     vehicles: tuple[str, ...]
     switch_C: float
+    refrigerant: str | None = None
 
     def rows(self) -> list[dict]:
         return [p.to_row() for p in self.points]
@@ -232,6 +244,7 @@ class YearResult:
 
         return {"switch_over_C": self.switch_C, "ambients_C": list(self.ambients_C),
                 "cycles": list(self.cycles), "vehicles": list(self.vehicles),
+                "refrigerant": self.refrigerant or "the vehicle's",
                 "rule": (f"heating plant (heat pump first, coolant heater; and heater only) "
                          f"below {self.switch_C:g} degC, target 23 degC, no sun, 80 % RH; "
                          f"cooling plant at and above, target 22 degC, the vehicle's sun and "
@@ -247,7 +260,7 @@ class YearResult:
 
 def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] = CYCLES,
                vehicles: Sequence[str] = VEHICLES, switch_C: float = SWITCH_C,
-               jobs: int | None = 1, scheduler: str | None = None,
+               refrigerant: str | None = None, jobs: int | None = 1, scheduler: str | None = None,
                progress: Callable[[int, int, str], None] | None = None) -> YearResult:
     """Run the whole grid through ``acid.executor`` (``jobs`` 1: in this process; more: a
     Dask LocalCluster of that many workers) and return the points.
@@ -257,8 +270,8 @@ def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] =
 
     ambients_C = tuple(float(t) for t in ambients_C)
     cycles, vehicles = tuple(cycles), tuple(str(v) for v in vehicles)
-    check_grid(ambients_C, cycles, vehicles, switch_C)
-    tasks = _tasks(ambients_C, cycles, vehicles, switch_C)
+    check_grid(ambients_C, cycles, vehicles, switch_C, refrigerant)
+    tasks = plan_tasks(ambients_C, cycles, vehicles, switch_C, refrigerant)
     done: dict[YearTask, YearPoint] = {}
     with open_executor(jobs, scheduler) as ex:
         handles = {ex.submit(run_task, t): t for t in tasks}
@@ -273,8 +286,9 @@ def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] =
                 if progress is not None:
                     progress(len(done), len(tasks), task.label)
     return YearResult(tuple(done[t] for t in tasks), ambients_C, cycles, vehicles,
-                      float(switch_C))
+                      float(switch_C), refrigerant)
 
 
 __all__ = ["AMBIENTS_C", "CYCLES", "HEATER_ONLY", "HEAT_PUMP", "SWITCH_C", "VEHICLES",
-           "YearPoint", "YearResult", "YearTask", "check_grid", "run_task", "year_sweep"]
+           "YearPoint", "YearResult", "YearTask", "check_grid", "plan_tasks", "run_task",
+           "year_sweep"]
