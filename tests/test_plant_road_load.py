@@ -59,3 +59,18 @@ def test_the_i3_road_load_sits_near_its_epa_label():
 def test_bad_values_are_refused(change):
     with pytest.raises(ConfigError, match=next(iter(change))):
         RoadLoad(**change)
+
+
+def test_every_road_load_value_cites_a_source():
+    import dataclasses
+    import re
+    from pathlib import Path
+
+    sources = (Path(__file__).parents[1] / "datasets/plant/SOURCES.md").read_text()
+    for f in dataclasses.fields(RoadLoad):
+        source = f.metadata["source"]
+        assert f.metadata["unit"] and source, f.name
+        keys = re.findall(r"\[([A-Za-z0-9.\-]+)\]", source)
+        assert keys or "assumption" in source or "standard" in source, f.name
+        for key in keys:
+            assert f"[{key}]" in sources, (f.name, key)

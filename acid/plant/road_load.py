@@ -51,7 +51,7 @@ class RoadLoad:
     f_rot: float = _p(1.05, "1", "road",
                       "assumption: rotating inertia (wheels, motor, gear) as 5 % of the mass "
                       "(3-10 % for passenger cars)")
-    C_d: float = _p(0.29, "1", "road", "[BMW-i3] drag coefficient of the BEV (REx 0.30)")
+    C_d: float = _p(0.29, "1", "road", "[i3-Cd] drag coefficient of the BEV (REx 0.30)")
     A_f: float = _p(2.38, "m^2", "road",
                     "[BMW-i3] 1775 mm width x 1578 mm height x 0.85 (assumption: the frontal "
                     "area's share of the enclosing rectangle, 0.8-0.9 for passenger cars)")

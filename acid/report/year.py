@@ -1,10 +1,10 @@
 """The whole-year figure (issue 25) from ``acid.plant.year.YearResult``: the share of range the
 climate costs, and the climate energy, against ambient (degC).
 
-One colour per drive cycle, one marker per vehicle (the first filled, the others hollow); solid: with the heat pump (and the A/C
-above the switch-over), dashed: the coolant heater alone (below the switch-over only; above
-it both systems share the cooling point). Builds a ``matplotlib.figure.Figure`` directly;
-save it with ``acid._io.save_figure``.
+One colour per drive cycle, one marker per vehicle (the first filled, the others hollow);
+solid: with the heat pump (and the A/C above the switch-over), dashed: the coolant heater
+alone (below the switch-over only; above it both systems share the cooling point). Builds a
+``matplotlib.figure.Figure`` directly; save it with ``acid._io.save_figure``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ _MARKERS = ("o", "s", "^", "D", "v", "P")
 
 def year_figure(result: YearResult) -> Figure:
     """Two panels against ambient: share of range (%), climate energy per km (Wh/km)."""
-    fig = Figure(figsize=(11.0, 4.6), layout="constrained")
+    fig = Figure(figsize=(11.0, 5.6), layout="constrained")
     ax_share, ax_energy = fig.subplots(1, 2)
     colors = {c: f"C{i}" for i, c in enumerate(result.cycles)}
     for iv, vehicle in enumerate(result.vehicles):
@@ -48,7 +48,9 @@ def year_figure(result: YearResult) -> Figure:
     ax_energy.set_ylabel("climate energy (Wh/km)")
     ax_share.set_title(f"heating below {result.switch_C:g} °C, cooling above")
     ax_energy.set_title("compressor + heater + blower + front fan")
-    ax_share.legend(fontsize=7, loc="upper center")
+    handles, labels = ax_share.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(4, max(1, len(labels))),
+               fontsize=7)
     return fig
 
 
