@@ -61,3 +61,13 @@ def test_rows_are_in_degC(quick):
 def test_a_bad_grid_is_refused_before_any_run(kw, option):
     with pytest.raises(ConfigError, match=option):
         year_sweep(**kw)
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_same_points_as_this_process(quick):
+    from acid.executor import dask_available
+
+    if not dask_available():
+        pytest.skip("dask.distributed is not installed")
+    on_dask = year_sweep((-10.0, 0.0, 25.0, 35.0), ("udds",), ("default",), jobs=2)
+    assert on_dask.points == quick.points
