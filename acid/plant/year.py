@@ -219,9 +219,8 @@ def run_task(task: YearTask) -> YearPoint:
 @dataclass(frozen=True)
 class YearResult:
     """The sweep: ``points`` (one per run: a cooling point, ``heating`` "-", serves both
-    heating systems), the grid and
-    the switch-over (degC at the edges: ``to_json_dict`` goes through ``json_in_degC`` in the
-    CLI)."""
+    heating systems), the grid and the switch-over (degC at the edges; the CLI writes
+    ``to_json_dict`` through ``json_in_degC``)."""
 
     points: tuple[YearPoint, ...]
     ambients_C: tuple[float, ...]
@@ -240,15 +239,17 @@ class YearResult:
         return sorted(pts, key=lambda p: p.T_amb_K)
 
     def to_json_dict(self) -> dict:
+        from acid.plant.heating_config import HeatingConfig
         from acid.plant.road_load import RoadLoad, epa_label_check
 
+        T_heat = K2C(HeatingConfig().T_heat_set)
         return {"switch_over_C": self.switch_C, "ambients_C": list(self.ambients_C),
                 "cycles": list(self.cycles), "vehicles": list(self.vehicles),
                 "refrigerant": self.refrigerant or "the vehicle's",
                 "rule": (f"heating plant (heat pump first, coolant heater; and heater only) "
-                         f"below {self.switch_C:g} degC, target 23 degC, no sun, 80 % RH; "
-                         f"cooling plant at and above, target 22 degC, the vehicle's sun and "
-                         f"humidity; one pass of each cycle from a soak at ambient"),
+                         f"below {self.switch_C:g} degC, target {T_heat:g} degC, no sun, 80 % "
+                         f"RH; cooling plant at and above, target the vehicle's T_cab_set, "
+                         f"sun and humidity; one pass of each cycle from a soak at ambient"),
                 "share": "climate / (traction + 12 V base + climate)",
                 "road_load": RoadLoad().to_dict(),
                 "road_load_check": [{"cycle": c.cycle, "model_Wh_per_km": c.model_Wh_per_km,
