@@ -917,6 +917,22 @@ CASES: list[Case] = [
          (*V, "--model", "car_cabin", "--warm-start", "kalman"), ("--warm-start", "ekf-trip")),
     Case("validate-warm-start-without-model", "options", (*V, "--warm-start", "ekf"),
          ("--warm-start", "declared model")),
+    # ------------------------------------------------------------------------- year-sweep
+    Case("year-sweep-ambient-kelvin", "options",
+         ("year-sweep", "--t-amb", "263.15", "--out", "{w}/y"), ("--t-amb 263.15", "degC")),
+    Case("year-sweep-cycle-unknown", "options", ("year-sweep", "--cycle", "moon", "--out",
+                                                 "{w}/y"), ("--cycle moon", "udds")),
+    Case("year-sweep-jobs-zero", "options", ("year-sweep", "--jobs", "0", "--out", "{w}/y"),
+         ("--jobs",)),
+    Case("year-sweep-vehicle-unknown", "files",
+         ("year-sweep", "--plant-config", "papr", "--out", "{w}/y"), ("--plant-config", "papr")),
+    Case("year-sweep-vehicle-bad-file", "files",
+         ("year-sweep", "--plant-config", "{w}/c.toml", "--out", "{w}/y"), ("c.toml", "warp"),
+         _write("c.toml", "warp = 9\n")),
+    Case("year-sweep-refrigerant-unknown", "options",
+         ("year-sweep", "--refrigerant", "R22", "--out", "{w}/y"), ("--refrigerant 'R22'",)),
+    Case("year-sweep-out-is-a-file", "output", ("year-sweep", "--out", "{w}/afile"),
+         ("--out", "afile")),
 ]
 
 
