@@ -58,3 +58,7 @@ app.command(name="sweep")(sweep.sweep)
 from acid_cli import examples  # noqa: E402
 
 app.command(name="examples")(examples.examples)
+
+from acid_cli import year_sweep  # noqa: E402
+
+app.command(name="year-sweep")(year_sweep.year_sweep)
