@@ -46,7 +46,7 @@ from acid.stage_results import (
 )
 
 #: where Table I is judged (``acid.plant.vehicles``)
-_VEHICLE_NOTE = ("on the paper vehicle (the Table I calibration, datasets/plant/"
+_VEHICLE_NOTE = ("on the paper vehicle (the Table I calibration, example:"
                  "table_i_20cc.toml); acid's default vehicle beside it in the report")
 #: the mechanism of Table I, as measured (issue 21): stated once, here
 TABLE_I_MECHANISM = (

@@ -73,11 +73,11 @@ NA = "not available on this plant"
 
 #: what the search behind the paper vehicle (``datasets/plant/table_i_20cc.toml``) did and
 #: did not establish (issue 21)
-SEARCH_NOTE = ("The paper vehicle (datasets/plant/table_i_20cc.toml) meets every published "
-               "test here (Table I, the GT-R service chart, JAF 2016); it came from about "
-               "1,000 parameter sets (960 random, then a local search) inside the cited "
-               "ranges. That search was not exhaustive: no set meeting the hot pull-down "
-               "target as well was found, which does not show that none exists.")
+SEARCH_NOTE = ("The paper vehicle (--plant-config paper, example:table_i_20cc.toml) meets "
+               "every published test here (Table I, the GT-R service chart, JAF 2016); it "
+               "came from about 1,000 parameter sets (960 random, then a local search) "
+               "inside the cited ranges. That search was not exhaustive: no set meeting the "
+               "hot pull-down target as well was found, which does not show that none exists.")
 
 
 @dataclass(frozen=True)

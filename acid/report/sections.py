@@ -88,7 +88,7 @@ def _table_i_vehicles(r: SweepStage) -> ReportSection:
         "Table I: the paper vehicle and acid's default vehicle",
         paragraphs=(
             f"The paper's Table I is judged on the {vehicle} vehicle (the Table I calibration, "
-            "datasets/plant/table_i_20cc.toml); acid's "
+            "--plant-config paper, example:table_i_20cc.toml); acid's "
             f"{r.beside_vehicle or 'default'} vehicle (the plant of every other stage) is "
             "shown beside it. Energy over "
             f"{format_number(r.duration_s, 'g')} s, compressor + blower, MJ"
