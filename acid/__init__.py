@@ -50,7 +50,7 @@ _API = {
     "make_plant": ("acid.plant", "make_plant"), "Plant": ("acid.plant.base", "Plant"),
     "HifiPlant": ("acid.plant.hifi", "HifiPlant"), "PlantConfig": ("acid.plant.config",
                                                                    "PlantConfig"),
-    "ModelPlant": ("acid.plant.model_plant", "ModelPlant"),
+    "ModelPlant": ("acid.plant", "ModelPlant"),
     "HeatingPlant": ("acid.plant.heating", "HeatingPlant"),
     "HeatingConfig": ("acid.plant.heating_config", "HeatingConfig"),
     "FmuPlant": ("acid.plant.fmu", "FmuPlant"), "FmuMap": ("acid.plant.fmu", "FmuMap"),
