@@ -58,8 +58,8 @@ _API = {
     "speed_sweep": ("acid.plant.sweep", "speed_sweep"),
     # identification and validation
     "fit": ("acid.ident.fit", "fit"), "FitResult": ("acid.ident.fit", "DeclaredFitResult"),
-    "validate": ("acid.validate", "validate"),
-    "ValidationResult": ("acid.validate", "ValidationResult"),
+    "validate": ("acid.ident.validate", "validate"),
+    "ValidationResult": ("acid.ident.validate", "DeclaredValidation"),
     "predict": ("acid.analysis", "predict"), "compare": ("acid.analysis", "compare"),
     "resid": ("acid.analysis", "resid"),
     # declared models (acid.models) and the identification derived from them (acid.ident)

@@ -2,7 +2,7 @@
 
 A reviewer's first question about a grey-box model is whether it predicts better than
 trivial black-box predictors fitted on the same data. Each yardstick here predicts the same
-windows (start ``k0``, steps ``i = 0 .. H``) as :func:`acid.validate.validate`, from the
+windows (start ``k0``, steps ``i = 0 .. H``) as :func:`acid.ident.validate.validate_model`, from the
 same information the model gets: the outputs measured up to ``k0`` and the inputs over the
 window (measured, or held at their value at ``k0`` where the model holds them).
 

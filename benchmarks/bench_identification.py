@@ -41,7 +41,7 @@ def run_library(plant: str, method: str) -> dict[str, float]:
     from acid.ident.fit import fit_model
     from acid.params import fitted
     from acid.plant import make_plant
-    from acid.validate import validate
+    from acid.ident.validate import validate
 
     times = {}
     t0 = time.perf_counter()

@@ -15,7 +15,7 @@ from acid.excite import ExcitationSpec, excite
 from acid.ident.fit import fit_model
 from acid.params import fitted
 from acid.plant import make_plant
-from acid.validate import validate
+from acid.ident.validate import validate
 
 pytestmark = pytest.mark.slow
 

@@ -123,7 +123,9 @@ def plant(params=None, T_amb: float = 303.15, meas_noise_std: float = 0.0,
                 "P_comp": max(0.0, float(compressor_power(float(row["W_bl"]), row["T_ain"],
                                                           given["T_amb"], p.c_p, p.eta_cop)))}
 
-    return DeclaredPlant(model, p.theta, initial=PLANT_INITIAL, T_amb=float(T_amb),
-                         meas_noise_std=meas_noise_std, process_noise_std=process_noise_std,
-                         rng=rng, derived=eq4, name="model",
-                         info={"params": p.to_json_dict(), "T_amb_K": float(T_amb)})
+    out = DeclaredPlant(model, p.theta, initial=PLANT_INITIAL, T_amb=float(T_amb),
+                        meas_noise_std=meas_noise_std, process_noise_std=process_noise_std,
+                        rng=rng, derived=eq4, name="model",
+                        info={"params": p.to_json_dict(), "T_amb_K": float(T_amb)})
+    out.params = p   # the ModelParams it runs (the controllers' tests compare them)
+    return out
