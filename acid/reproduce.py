@@ -177,8 +177,8 @@ def stage_fit(workdir: Path, inputs: dict, config: dict, progress) -> dict:
 def stage_validate(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """60 starts x 300 steps on the held-out part (paper Figs. 5-6)."""
     from acid.data import MODEL_CHANNELS, Dataset
-    from acid.params import ModelParams
     from acid.ident.validate import validate
+    from acid.params import ModelParams
     from acid.report.validation import error_figure, prediction_figure, yardstick_figure
 
     ds = Dataset.from_hdf5(inputs["excite"] / "excitation.h5", require=MODEL_CHANNELS)
@@ -236,9 +236,9 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     from acid.econ.params import identify
     from acid.excite import excite, spec_for_model
     from acid.ident.fit import fit_model
+    from acid.ident.validate import validate
     from acid.params import fitted
     from acid.plant import make_plant
-    from acid.ident.validate import validate
     from acid.report.validation import error_figure
 
     ds = excite(make_plant("hifi"), spec_for_model("econ", duration=config["duration_s"],

@@ -317,17 +317,20 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
             "estimation part); yardsticks are never used for control")
     other = None
     if beside is not None:
+        other_model = load(beside.model or model)   # e.g. the paper's beside the econ model
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the same windows: warned about above
-            other = validate_model(model, ds, beside, **{**kw, "start_index": res.starts,
-                                                         "non_overlapping": False})
+            other = validate_model(other_model, ds, beside, **{
+                **kw, "start_index": res.starts, "non_overlapping": False,
+                "hold": tuple(d.name for d in other_model.disturbances) if hold_all else ()})
         print_table(f"Beside: |e| median / p90, {ps.label or ps.source!r} vs "
                     f"{beside.label or beside.source!r}, same starts",
                     ["channel", "this", "beside"],
                     [[c, f"{_num(res.metrics[c]['median_abs'], 3)} / "
                          f"{_num(res.metrics[c]['p90_abs'], 3)}",
                       f"{_num(other.metrics[c]['median_abs'], 3)} / "
-                      f"{_num(other.metrics[c]['p90_abs'], 3)}"] for c in res.channels])
+                      f"{_num(other.metrics[c]['p90_abs'], 3)}"]
+                     for c in res.channels if c in other.metrics])
     from acid_cli.validate import residual_section
 
     residuals = residual_section(ds, (model, ps), lo, len(ds))

@@ -15,8 +15,8 @@ from typer.testing import CliRunner
 from acid.econ.params import NAMES, EconParams, identify
 from acid.errors import DataError, IdentifiabilityWarning
 from acid.ident.fit import fit_model
-from acid.params import fitted
 from acid.ident.validate import validate
+from acid.params import fitted
 from acid_cli.main import app
 
 runner = CliRunner()
@@ -143,9 +143,12 @@ def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
                               str(tmp_path / "figs"), "--json", str(vj)])
     assert res.exit_code == 0, res.output
     v = json.loads(vj.read_text())
-    assert v["settings"]["model"] == "econ" and "w_cab" in v["extra_channels"]
-    assert v["settings"]["held_out_fraction"] == pytest.approx(0.4)
-    assert set(v["beside"]["channels"]) == {"T_cab", "T_evap", "T_ain"}
+    assert v["settings"]["model"] == "econ" and "w_cab" in v["channels"]
+    n = v["settings"]["data_samples"]
+    assert v["settings"]["sample_range"] == [round(0.6 * n), n]
+    assert v["held_out_fraction_source"] == "params provenance"
+    assert {"T_cab", "T_evap", "T_ain"} <= set(v["beside"]["channels"])
+    assert "T_int" not in v["beside"]["channels"]      # the paper's model, beside
 
 
 @pytest.mark.parametrize("args, fragments", [

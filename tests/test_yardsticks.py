@@ -10,11 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from acid.ident.validate import by_time, validate
 from acid.params import paper
-from acid.ident.validate import validate
 from acid.yardsticks import (
     YARDSTICKS,
-    by_horizon,
     evaluate,
     fit_arx,
     moesp_model,
@@ -143,15 +142,14 @@ def test_too_short_an_estimation_part_leaves_the_fitted_ones_out_with_a_warning(
     assert tuple(out) == ("persistence",)
 
 
-def test_by_horizon_reports_rmse_and_p90_at_the_times_inside_the_horizon():
-    e = np.zeros((10, 13, 1))
-    e[:, 12, 0] = np.arange(10.0)
-    t = np.arange(13) * 5.0
-    d = by_horizon(e, t, ("T_cab",), (0.0, 60.0, 300.0))
-    assert set(d["T_cab"]) == {"0", "60"}
-    assert d["T_cab"]["0"] == {"rmse_K": 0.0, "p90_K": 0.0}
+def test_by_time_reports_rmse_and_p90_at_the_times_inside_the_horizon():
+    e = np.zeros((10, 12))             # steps 1 .. 12 of 5 s
+    e[:, 11] = np.arange(10.0)
+    d = by_time({"T_cab": e}, 5.0, (60.0, 300.0))
+    assert set(d["T_cab"]) == {"60"}
     assert d["T_cab"]["60"]["rmse_K"] == pytest.approx(np.sqrt(np.mean(np.arange(10.0) ** 2)))
     assert d["T_cab"]["60"]["p90_K"] == pytest.approx(np.percentile(np.arange(10.0), 90))
+    assert d["T_cab"]["60"]["n"] == 10
 
 
 def test_on_plant_data_persistence_holds_the_start_value(model_dataset):

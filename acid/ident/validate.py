@@ -33,7 +33,7 @@ from acid.errors import ConfigError, DataError
 from acid.ident.data import ModelData
 from acid.ident.fit import PARAMS_FORMAT
 from acid.ident.oe import simulate_windows
-from acid.metrics import fit_percent, max_abs_error, percentile_abs_error, rmse
+from acid.metrics import fit_percent, max_abs_error, rmse
 from acid.models.declaration import Model
 from acid.models.loader import load
 
