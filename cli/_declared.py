@@ -335,7 +335,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
 
     residuals = residual_section(ds, (model, ps), lo, len(ds))
     saved = {}
-    if figures is not None:
+    if figures is not None and "K" in res.units:     # the figures draw temperatures
         from acid._io import save_figure
         from acid.report.validation import error_figure, prediction_figure, yardstick_figure
 

@@ -41,8 +41,8 @@ def validate(
                                 help="Prediction steps per start (300 x 5 s = 1500 s)."),
     exogenous: str = typer.Option(
         "hold", "--exogenous",
-        help="T_int/T_shell over a prediction: 'hold' at the start value (paper) or "
-             "'measured' (a model file: all its disturbances)."),
+        help="The model's disturbances over a prediction: 'hold' each at its start value "
+             "(the paper's protocol for T_int/T_shell) or 'measured'."),
     held_out_fraction: float | None = typer.Option(
         None, "--held-out-fraction",
         help="Validate on the last F of the record only. Default: the part after "
@@ -76,15 +76,15 @@ def validate(
              "acid.models): validate that declared model, with --params from `acid fit "
              "--model ...` (default: its declared values)."),
     warmup: int = typer.Option(
-        60, "--warmup", help="Model file with latent states: samples before each start from "
+        60, "--warmup", help="A model with latent states: samples before each start from "
                              "which they are estimated."),
     to_end: bool = typer.Option(
-        False, "--to-end", help="Model file: also start where fewer than --horizon samples "
+        False, "--to-end", help="Also start where fewer than --horizon samples "
                                 "remain (short trips); those predictions stop at the "
                                 "experiment's end."),
     warm_start: str = typer.Option(
         "fit", "--warm-start",
-        help="Model file with latent states: how they are estimated at each start: 'fit' "
+        help="A model with latent states: how they are estimated at each start: 'fit' "
              "(least squares over the --warmup stretch, parameters held), 'ekf' (the "
              "extended Kalman filter with the declared noises, as `acid fit --method pem` "
              "uses, over that stretch) or 'ekf-trip' (the filter from the start of the "

@@ -145,7 +145,7 @@ def test_few_admissible_starts_are_used_once_with_a_warning(varying):
 def test_record_too_short_and_bad_options_are_one_line_errors(varying):
     ds = varying.window(0, 200)
     ds.source = "short.h5"
-    with pytest.raises(DataError, match=r"short\.h5: no experiment is longer") as exc:
+    with pytest.raises(DataError, match=r"short\.h5: record too short: no experiment") as exc:
         validate(ds, paper(), starts=60, horizon=300)
     assert "\n" not in str(exc.value)
     with pytest.raises(DataError, match="no experiment"):

@@ -327,7 +327,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - reach)
                            for a, b in data.segments] + [np.zeros(0, int)]).astype(int)
     if cand.size == 0:
-        raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
+        raise DataError(f"{ds.source}: record too short: no experiment is longer than "
+                        f"warmup + horizon "
                         f"({need_warm} + {reach} + 1 samples)")
     if start_index is not None:
         k0 = np.asarray(start_index, dtype=int)

@@ -41,7 +41,10 @@ def _held(result: DeclaredValidation) -> str:
 
 
 def representative_start(result: DeclaredValidation, channel: str = "T_cab") -> int:
-    """Position (0 .. S-1) of the start whose RMSE on ``channel`` is the median one."""
+    """Position (0 .. S-1) of the start whose RMSE on ``channel`` (default T_cab, else the
+    first temperature channel) is the median one."""
+    if channel not in result.errors:
+        channel = (_temperatures(result) or [(0, result.channels[0])])[0][1]
     r = np.sqrt(np.nanmean(result.errors[channel] ** 2, axis=1))
     return int(np.argsort(r)[(r.size - 1) // 2])
 
