@@ -17,7 +17,6 @@ exact by construction, is not scored). ``validate(ds, params)`` takes ``ModelPar
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
 import warnings
@@ -96,13 +95,10 @@ def declared_parameters(model: Model) -> ParameterSet:
 def read_parameters(model: Model, path: str | Path) -> ParameterSet:
     """A parameter file written by ``acid fit --model FILE`` for this model (one-line
     ``DataError`` when it is not one, or names parameters the model lacks)."""
+    from acid._readers import load_json
+
     path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{path}: parameter file not found")
-    try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: not valid JSON ({type(exc).__name__})") from None
+    d = load_json(path, "parameter file", DataError, top=None)
     if not isinstance(d, dict) or d.get("format") != PARAMS_FORMAT:
         raise DataError(f"{path}: not a parameter file of a declared model (no \"format\": "
                         f"\"{PARAMS_FORMAT}\"; write one with acid fit --model FILE.py)")
