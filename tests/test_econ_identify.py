@@ -149,6 +149,13 @@ def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
     assert v["held_out_fraction_source"] == "params provenance"
     assert {"T_cab", "T_evap", "T_ain"} <= set(v["beside"]["channels"])
     assert "T_int" not in v["beside"]["channels"]      # the paper's model, beside
+    # the same file named with --model: one reader, the same numbers
+    vm = tmp_path / "val_model.json"
+    res = runner.invoke(app, ["validate", str(econ_file), "--model", "econ", "--params",
+                              str(out), "--starts", "8", "--horizon", "60", "--out",
+                              str(tmp_path / "figs2"), "--json", str(vm)])
+    assert res.exit_code == 0, res.output
+    assert json.loads(vm.read_text())["channels"] == v["channels"]
 
 
 @pytest.mark.parametrize("args, fragments", [

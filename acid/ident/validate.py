@@ -17,6 +17,7 @@ exact by construction, is not scored). ``validate(ds, params)`` takes ``ModelPar
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
 import os
 import warnings
@@ -92,13 +93,27 @@ def declared_parameters(model: Model) -> ParameterSet:
     return ParameterSet(values=model.values, source="declared values")
 
 
+#: Built-in models whose parameter files predate the declared format (no "format" key):
+#: the class that reads them, with its ``parameter_set()``.
+_LEGACY_FILES = {"paper": ("acid.params", "ModelParams"),
+                 "econ": ("acid.econ.params", "EconParams")}
+
+
 def read_parameters(model: Model, path: str | Path) -> ParameterSet:
     """A parameter file written by ``acid fit --model FILE`` for this model (one-line
-    ``DataError`` when it is not one, or names parameters the model lacks)."""
+    ``DataError`` when it is not one, or names parameters the model lacks); for the paper's
+    and the econ model, also their own files (params.json, ``"model": "econ"``): the one
+    reader ``acid validate --model NAME --params FILE`` uses for every model."""
     from acid._readers import load_json
 
     path = Path(path)
     d = load_json(path, "parameter file", DataError, top=None)
+    legacy = _LEGACY_FILES.get(model.name)
+    if isinstance(d, dict) and "format" not in d and legacy is not None:
+        # the paper's params.json and the econ model's file: their classes read them
+        module, cls = legacy
+        return getattr(importlib.import_module(module), cls).from_json_dict(
+            d, source=str(path)).parameter_set()
     if not isinstance(d, dict) or d.get("format") != PARAMS_FORMAT:
         raise DataError(f"{path}: not a parameter file of a declared model (no \"format\": "
                         f"\"{PARAMS_FORMAT}\"; write one with acid fit --model FILE.py)")
