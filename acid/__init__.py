@@ -50,7 +50,7 @@ _API = {
     "make_plant": ("acid.plant", "make_plant"), "Plant": ("acid.plant.base", "Plant"),
     "HifiPlant": ("acid.plant.hifi", "HifiPlant"), "PlantConfig": ("acid.plant.config",
                                                                    "PlantConfig"),
-    "ModelPlant": ("acid.plant.model_plant", "ModelPlant"),
+    "ModelPlant": ("acid.plant", "ModelPlant"),
     "HeatingPlant": ("acid.plant.heating", "HeatingPlant"),
     "HeatingConfig": ("acid.plant.heating_config", "HeatingConfig"),
     "FmuPlant": ("acid.plant.fmu", "FmuPlant"), "FmuMap": ("acid.plant.fmu", "FmuMap"),
@@ -58,8 +58,8 @@ _API = {
     "speed_sweep": ("acid.plant.sweep", "speed_sweep"),
     # identification and validation
     "fit": ("acid.ident.fit", "fit"), "FitResult": ("acid.ident.fit", "DeclaredFitResult"),
-    "validate": ("acid.validate", "validate"),
-    "ValidationResult": ("acid.validate", "ValidationResult"),
+    "validate": ("acid.ident.validate", "validate"),
+    "ValidationResult": ("acid.ident.validate", "DeclaredValidation"),
     "predict": ("acid.analysis", "predict"), "compare": ("acid.analysis", "compare"),
     "resid": ("acid.analysis", "resid"),
     # declared models (acid.models) and the identification derived from them (acid.ident)

@@ -105,6 +105,15 @@ class ModelParams:
             object.__setattr__(self, attr, v)
 
     # ------------------------------------------------------------------ views
+
+    def parameter_set(self):
+        """These values as ``acid.ident.validate.ParameterSet`` of the declaration
+        ``acid.models.paper`` (what ``acid validate`` runs)."""
+        from acid.ident.validate import ParameterSet
+
+        return ParameterSet(values=self.theta, source=self.name, label=self.name,
+                            provenance=self.provenance, model="paper")
+
     @property
     def theta(self) -> np.ndarray:
         """All 13 parameters as one vector, in ``PARAMETER_TABLE`` order."""

@@ -177,9 +177,9 @@ def stage_fit(workdir: Path, inputs: dict, config: dict, progress) -> dict:
 def stage_validate(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """60 starts x 300 steps on the held-out part (paper Figs. 5-6)."""
     from acid.data import MODEL_CHANNELS, Dataset
+    from acid.ident.validate import validate
     from acid.params import ModelParams
     from acid.report.validation import error_figure, prediction_figure, yardstick_figure
-    from acid.validate import validate
 
     ds = Dataset.from_hdf5(inputs["excite"] / "excitation.h5", require=MODEL_CHANNELS)
     params = ModelParams.from_json(inputs["fit"] / "params.json")
@@ -236,10 +236,10 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     from acid.econ.params import identify
     from acid.excite import excite, spec_for_model
     from acid.ident.fit import fit_model
+    from acid.ident.validate import validate
     from acid.params import fitted
     from acid.plant import make_plant
     from acid.report.validation import error_figure
-    from acid.validate import validate
 
     ds = excite(make_plant("hifi"), spec_for_model("econ", duration=config["duration_s"],
                                                    seed=config["seed"]))

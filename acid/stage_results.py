@@ -280,7 +280,7 @@ class ValidationStage(StageResult):
     horizon: int
     horizon_s: float
     channels: dict[str, ChannelErrors]
-    #: ``ValidationResult.window_design`` in words, and its overlap of consecutive windows
+    #: ``DeclaredValidation.window_design`` in words, and its overlap of consecutive windows
     window_design: str = ""
     overlap_fraction: float = math.nan
     #: {"model" | yardstick: {channel: {horizon_s: {"rmse_K", "p90_K"}}}}
@@ -292,8 +292,9 @@ class ValidationStage(StageResult):
 
     @classmethod
     def of(cls, res) -> ValidationStage:
-        """From an :class:`acid.validate.ValidationResult`."""
-        from acid.validate import window_design_text
+        """From an :class:`acid.ident.validate.DeclaredValidation` (errors at prediction
+        steps 1 .. horizon)."""
+        from acid.ident.validate import window_design_text
 
         names = [f.name for f in dataclasses.fields(ChannelErrors)]
         ch = {c: ChannelErrors(**{n: float(res.metrics[c].get(n, math.nan)) for n in names})
@@ -303,9 +304,10 @@ class ValidationStage(StageResult):
                    horizon_s=float(res.horizon_s[-1]), channels=ch,
                    window_design=window_design_text(design),
                    overlap_fraction=float(design["overlap_fraction"]),
-                   by_horizon=res.by_horizon(),
-                   yardsticks={k: y.description for k, y in res.yardsticks.items()},
-                   yardsticks_fitted_on=tuple(res.settings.get("yardsticks_fitted_on", ())))
+                   by_horizon=res.by_horizon_table(),
+                   yardsticks={k: y["description"] for k, y in res.yardsticks.items()},
+                   yardsticks_fitted_on=tuple(res.settings.get("yardsticks_fitted_on")
+                                              or ()))
 
 
 @dataclass(frozen=True)
@@ -520,14 +522,20 @@ class EconStage(StageResult):
 
     @classmethod
     def of(cls, duration_s: float, power_map: dict, econ, paper) -> EconStage:
-        """From the power map's quality and the two ``ValidationResult``s."""
+        """From the power map's quality and the two ``DeclaredValidation``s; the extra
+        channels are the econ model's beyond the paper's (in the declaration's units) and
+        its compressor energy per window (%)."""
         e, p = ValidationStage.of(econ), ValidationStage.of(paper)
+        extra = {k: _f(econ.metrics[k].get("median_abs")) * (1e3 if u == "kg/kg" else 1.0)
+                 for k, u in zip(econ.channels, econ.units, strict=True)
+                 if k not in paper.channels}   # humidity in g/kg
+        if "P_comp" in econ.energy:
+            extra["compressor_energy"] = _f(econ.energy["P_comp"].get("median_abs"))
         return cls(duration_s=float(duration_s),
                    power_map_rms_pct=_f(power_map.get("rms_pct")),
                    power_map_steady_rms_pct=_f(power_map.get("steady_rms_pct")),
                    starts=e.starts, horizon=e.horizon, econ=e.channels, paper=p.channels,
-                   extra_median_abs={k: _f(m.get("median_abs"))
-                                     for k, m in econ.extra_metrics.items()})
+                   extra_median_abs=extra)
 
 
 @dataclass(frozen=True)

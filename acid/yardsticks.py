@@ -2,7 +2,7 @@
 
 A reviewer's first question about a grey-box model is whether it predicts better than
 trivial black-box predictors fitted on the same data. Each yardstick here predicts the same
-windows (start ``k0``, steps ``i = 0 .. H``) as :func:`acid.validate.validate`, from the
+windows (start ``k0``, steps ``i = 0 .. H``) as :func:`acid.ident.validate.validate_model`, from the
 same information the model gets: the outputs measured up to ``k0`` and the inputs over the
 window (measured, or held at their value at ``k0`` where the model holds them).
 
@@ -453,21 +453,3 @@ def _segments(experiment: np.ndarray, offset: int) -> list[tuple[int, int]]:
     cut = np.flatnonzero(np.diff(experiment) != 0) + 1
     edges = np.concatenate(([0], cut, [experiment.shape[0]])) + offset
     return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True)]
-
-
-def by_horizon(errors: np.ndarray, horizon_s: np.ndarray, channels: tuple[str, ...],
-               times_s) -> dict[str, dict[str, dict[str, float]]]:
-    """{channel: {"<t>": {"rmse_K", "p90_K"}}}: RMSE and 90th percentile of |error| over
-    the starts at each prediction time ``t`` (s) inside the horizon."""
-    Ts = float(horizon_s[1] - horizon_s[0]) if horizon_s.size > 1 else 1.0
-    out: dict[str, dict[str, dict[str, float]]] = {c: {} for c in channels}
-    for t in times_s:
-        i = int(round(t / Ts))
-        if not 0 <= i < horizon_s.size:
-            continue
-        e = errors[:, i, :]
-        for c, name in enumerate(channels):
-            out[name][f"{horizon_s[i]:g}"] = {
-                "rmse_K": float(np.sqrt(np.mean(e[:, c] ** 2))),
-                "p90_K": float(np.percentile(np.abs(e[:, c]), 90))}
-    return out

@@ -39,9 +39,9 @@ def run_cli(plant: str, method: str) -> dict[str, float]:
 def run_library(plant: str, method: str) -> dict[str, float]:
     from acid.excite import ExcitationSpec, excite
     from acid.ident.fit import fit_model
+    from acid.ident.validate import validate
     from acid.params import fitted
     from acid.plant import make_plant
-    from acid.validate import validate
 
     times = {}
     t0 = time.perf_counter()

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from pathlib import Path
 
 from acid import __version__
@@ -211,14 +212,24 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                       starts: int, horizon: int, warmup: int, placement: str, seed: int,
                       held_out_fraction: float | None, hold_all: bool = False,
                       non_overlapping: bool = False, yardsticks: bool = True,
-                      to_end: bool = False, warm_start: str = "fit") -> None:
-    """Validate the model declared in ``model_file`` on ``data``; print the errors."""
-    from acid.ident.validate import declared_parameters, read_parameters, validate_model
+                      to_end: bool = False, warm_start: str = "fit", values=None,
+                      beside=None, figures: Path | None = None) -> None:
+    """Validate the model declared in ``model_file`` on ``data``; print the errors, write
+    Figs. 5-6 (and the yardsticks' figure) into ``figures``. ``values``: the parameters
+    (a ``ParameterSet``) when already read (the paper's and the econ model's files);
+    ``beside``: another ``ParameterSet`` of the same model, validated on the same starts."""
+    from acid.ident.validate import (
+        declared_parameters,
+        held_out_part,
+        read_parameters,
+        validate_model,
+        window_design_text,
+    )
     from acid.models import load
-    from acid.validate import held_out_part
 
     model = load(model_file)
-    ps = declared_parameters(model) if params == "paper" else read_parameters(model, params)
+    ps = values if values is not None else declared_parameters(model) \
+        if params == "paper" else read_parameters(model, params)
     ds = Dataset.from_hdf5(data, min_samples=2)
     sha = file_sha256(data)
     part = held_out_part(ps.provenance, str(data), sha, held_out_fraction)
@@ -237,22 +248,37 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         n_est = len(est)
         ds = Dataset.concatenate([est, ds])
         lo, hi, estimation = n_est + lo, n_est + hi, (0, n_est)
-    res = validate_model(model, ds, ps, starts=starts, horizon=horizon, warmup=warmup,
-                         placement=placement, seed=seed, non_overlapping=non_overlapping,
-                         hold=tuple(d.name for d in model.disturbances) if hold_all else (),
-                         start_range=(lo, hi), yardsticks=yardsticks,
-                         estimation=estimation, to_end=to_end, warm_start=warm_start)
+    kw = {"starts": starts, "horizon": horizon, "warmup": warmup, "placement": placement,
+          "seed": seed, "non_overlapping": non_overlapping, "start_range": (lo, hi),
+          "hold": tuple(d.name for d in model.disturbances) if hold_all else (),
+          "to_end": to_end, "warm_start": warm_start}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = validate_model(model, ds, ps, yardsticks=yardsticks, estimation=estimation,
+                             **kw)
+    for w in caught:
+        warn(w.message)
     if est is not None:
         note(f"yardsticks fitted on the parameters' records ({est.source})")
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
         f"{model.name!r}, parameters from {ps.source}"
         + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
            and frac < 1 else ""))
-    print_table("Open-loop prediction error, all starts and steps",
-                ["channel", "unit", "RMSE", "p90 |e|", "max |e|", "fit %"],
-                [[c, u, _num(res.metrics[c]["rmse"], 3), _num(res.metrics[c]["p90_abs"], 3),
-                  _num(res.metrics[c]["max_abs"], 3), _num(res.metrics[c]["fit_percent"], 4)]
+    say(window_design_text(res.window_design))
+    print_table("Open-loop prediction error, all starts and steps 1 .. horizon",
+                ["channel", "unit", "RMSE", "median |e|", "p90 |e|", "p95 |e|", "max |e|",
+                 "fit %", "fit % pooled"],
+                [[c, u, *[_num(res.metrics[c][k], 3) for k in
+                          ("rmse", "median_abs", "p90_abs", "p95_abs", "max_abs")],
+                  _num(res.metrics[c]["fit_percent"], 4),
+                  _num(res.metrics[c]["fit_percent_pooled"], 4)]
                  for c, u in zip(res.channels, res.units, strict=True)])
+    if res.energy:
+        print_table("Energy of each window: |error| (% of the measured)",
+                    ["channel", "median", "p90", "max", "bias %"],
+                    [[c, *[_num(e[k], 3) for k in ("median_abs", "p90_abs", "max_abs",
+                                                    "bias_pct")]]
+                     for c, e in res.energy.items()])
     print_table("Error vs prediction time: RMSE / p90 |e|",
                 ["step", "time (s)", *res.channels],
                 [[str(r["step"]), f"{r['time_s']:g}",
@@ -282,13 +308,49 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                      for c, r in table.items()])
     for line in res.notes:
         note(line)
+    if yardsticks and estimation is None:
+        note(f"ARX and subspace fitted on samples 0..{len(ds) - 1}, the validated samples "
+             "themselves (no held-out part): in-sample, they are favoured; yardsticks are "
+             "never used for control")
+    elif yardsticks:
+        say(f"  ARX and subspace fitted on samples {estimation[0]}..{estimation[1] - 1} (the "
+            "estimation part); yardsticks are never used for control")
+    other = None
+    if beside is not None:
+        other_model = load(beside.model or model)   # e.g. the paper's beside the econ model
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the same windows: warned about above
+            other = validate_model(other_model, ds, beside, **{
+                **kw, "start_index": res.starts, "non_overlapping": False,
+                "hold": tuple(d.name for d in other_model.disturbances) if hold_all else ()})
+        print_table(f"Beside: |e| median / p90, {ps.label or ps.source!r} vs "
+                    f"{beside.label or beside.source!r}, same starts",
+                    ["channel", "this", "beside"],
+                    [[c, f"{_num(res.metrics[c]['median_abs'], 3)} / "
+                         f"{_num(res.metrics[c]['p90_abs'], 3)}",
+                      f"{_num(other.metrics[c]['median_abs'], 3)} / "
+                      f"{_num(other.metrics[c]['p90_abs'], 3)}"]
+                     for c in res.channels if c in other.metrics])
     from acid_cli.validate import residual_section
 
     residuals = residual_section(ds, (model, ps), lo, len(ds))
+    saved = {}
+    if figures is not None and "K" in res.units:     # the figures draw temperatures
+        from acid._io import save_figure
+        from acid.report.validation import error_figure, prediction_figure, yardstick_figure
+
+        draw = {"fig5_prediction": prediction_figure, "fig6_errors": error_figure,
+                **({"fig6b_yardsticks": yardstick_figure} if res.yardsticks else {})}
+        saved = {k: str(save_figure(f(res), figures / f"{k}.png")) for k, f in draw.items()}
+        say(f"figures written to {', '.join(saved.values())}")
     write_summary(json_path, {"command": "validate", "acid_version": __version__,
-                              "inputs": {"data": str(data), "model": str(model_file),
-                                         "params": params}, **res.to_json_dict(),
-                              "residuals": residuals})
+                              "inputs": {"data": str(data), "data_sha256": sha,
+                                         "model": str(model_file), "params": params},
+                              "held_out_fraction_source": part.source,
+                              "in_sample_warning": part.warning, "figures": saved,
+                              **res.to_json_dict(), "residuals": residuals,
+                              **({"beside": {"channels": other.to_json_dict()["channels"]}}
+                                 if other is not None else {})})
 
 
 def _fit_records(ps, data_sha: str) -> Dataset | None:

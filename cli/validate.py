@@ -3,19 +3,14 @@
 from __future__ import annotations
 
 import math
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 import typer
 
-from acid import __version__
-from acid._io import file_sha256, save_figure
-from acid.data import MODEL_CHANNELS, Dataset
-from acid.econ.params import load_any_params, model_family
-from acid.validate import EXOGENOUS_MODES, PLACEMENTS, held_out_part, window_design_text
-from acid.validate import validate as run_validation
+from acid.econ.params import load_any_params
+from acid.ident.validate import EXOGENOUS_MODES, PLACEMENTS
 from acid_cli._common import (
     check_paths,
     handle_errors,
@@ -25,8 +20,6 @@ from acid_cli._common import (
     require,
     require_range,
     say,
-    warn,
-    write_summary,
 )
 
 FIGURES = ("fig5_prediction.png", "fig6_errors.png", "fig6b_yardsticks.png")
@@ -48,8 +41,8 @@ def validate(
                                 help="Prediction steps per start (300 x 5 s = 1500 s)."),
     exogenous: str = typer.Option(
         "hold", "--exogenous",
-        help="T_int/T_shell over a prediction: 'hold' at the start value (paper) or "
-             "'measured' (a model file: all its disturbances)."),
+        help="The model's disturbances over a prediction: 'hold' each at its start value "
+             "(the paper's protocol for T_int/T_shell) or 'measured'."),
     held_out_fraction: float | None = typer.Option(
         None, "--held-out-fraction",
         help="Validate on the last F of the record only. Default: the part after "
@@ -83,15 +76,15 @@ def validate(
              "acid.models): validate that declared model, with --params from `acid fit "
              "--model ...` (default: its declared values)."),
     warmup: int = typer.Option(
-        60, "--warmup", help="Model file with latent states: samples before each start from "
+        60, "--warmup", help="A model with latent states: samples before each start from "
                              "which they are estimated."),
     to_end: bool = typer.Option(
-        False, "--to-end", help="Model file: also start where fewer than --horizon samples "
+        False, "--to-end", help="Also start where fewer than --horizon samples "
                                 "remain (short trips); those predictions stop at the "
                                 "experiment's end."),
     warm_start: str = typer.Option(
         "fit", "--warm-start",
-        help="Model file with latent states: how they are estimated at each start: 'fit' "
+        help="A model with latent states: how they are estimated at each start: 'fit' "
              "(least squares over the --warmup stretch, parameters held), 'ekf' (the "
              "extended Kalman filter with the declared noises, as `acid fit --method pem` "
              "uses, over that stretch) or 'ekf-trip' (the filter from the start of the "
@@ -99,122 +92,43 @@ def validate(
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
-    Errors are in K; figures like the paper's Fig. 5 (one prediction) and Fig. 6 (errors of
-    all starts vs prediction time) go to --out. The model family (the paper's or econ) is
-    read from the parameter file.
+    Errors are k-step prediction errors, k = 1 .. --horizon (K for temperatures); figures
+    like the paper's Fig. 5 (one prediction) and Fig. 6 (errors of all starts vs prediction
+    time) go to --out. The model is read from the parameter file (the paper's or the econ
+    model), or given by --model; every model goes through the same validator
+    (``acid.ident.validate``).
     """
-    from acid.report.validation import error_figure, prediction_figure, yardstick_figure
+    from acid.ident.validate import WARM_STARTS
+    from acid.models.loader import BUILT_IN
+    from acid_cli._declared import is_model_file, model_file_input, validate_declared
 
     if model is not None:
-        return _validate_model_file(data, model, params, json_path, starts, horizon, warmup,
-                                    placement, seed, held_out_fraction, exogenous,
-                                    beside is not None or allow_unstable, non_overlapping,
-                                    yardsticks, to_end, warm_start)
-
-    require(not to_end, "--to-end", "is for a declared model (--model)")
-    require(warm_start == "fit", "--warm-start", "is for a declared model (--model)")
-    check_paths(inputs={"DATA": data, "--params": params_input(params),
-                        "--beside": params_input(beside)},
+        require(is_model_file(model) or model in BUILT_IN, "--model",
+                f"must be a model file FILE.py or a built-in declaration "
+                f"({', '.join(BUILT_IN)}), got {model!r}")
+        require(beside is None and not allow_unstable, "--model",
+                "--beside and --allow-unstable are for parameter files of the paper and "
+                "econ models")
+    check_paths(inputs={"DATA": data, "--model": model_file_input(model),
+                        "--params": params_input(params), "--beside": params_input(beside)},
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
     _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
                    held_out_fraction)
-    p = load_any_params(params, allow_unstable=allow_unstable)
-    families = {model_family(params)} | ({model_family(beside)} if beside else set())
-    channels = MODEL_CHANNELS
-    if "econ" in families:
-        from acid.econ.params import REQUIRED
-
-        channels = tuple(dict.fromkeys(MODEL_CHANNELS + REQUIRED))
-    ds = Dataset.from_hdf5(data, require=channels)
-    data_sha256 = file_sha256(data)
-    part = held_out_part(p.provenance, str(data), data_sha256, held_out_fraction)
-    if part.warning:
-        warn(part.warning)
-
-    t0 = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        result = run_validation(ds, p, starts=starts, horizon=horizon, exogenous=exogenous,
-                                held_out_fraction=part.fraction, placement=placement,
-                                seed=seed, non_overlapping=non_overlapping,
-                                yardsticks=yardsticks)
-    elapsed = time.perf_counter() - t0
-    for w in caught:
-        warn(w.message)
-    fraction_source = part.source
-
-    lo, hi = result.settings["sample_range"]
-    say(f"{data}: {result.n_starts} starts x {result.horizon} steps "
-                  f"({result.horizon_s[-1]:g} s), samples {lo}..{hi - 1} ({fraction_source}), "
-                  f"T_int/T_shell {exogenous}, parameters {p.name!r} ({elapsed * 1e3:.0f} ms)")
-    say(window_design_text(result.window_design))
-    rows = []
-    for name, m in result.metrics.items():
-        rows.append([name, _fmt(m["rmse"]), _fmt(m["mean_abs"]), _fmt(m["median_abs"]),
-                     _fmt(m["p90_abs"]), _fmt(m["p95_abs"]), _fmt(m["max_abs"]),
-                     _fmt(m["fit_percent"], 1), _fmt(m["fit_percent_pooled"], 1)])
-    print_table("Open-loop prediction error, all starts and steps: RMSE and |e| (K), fit (%)",
-                ["channel", "RMSE", "mean", "median", "p90", "p95", "max", "fit",
-                 "fit pooled"], rows)
-    hrows = [[f"{r['time_s']:g}"] + [f"{_fmt(r[c]['mean_abs'], 2)} / {_fmt(r[c]['p95_abs'], 2)}"
-                                     for c in result.channels]
-             for r in result.at_horizon()]
-    if hrows:
-        print_table("Error vs prediction time: mean / p95 of |e| over starts (K)",
-                    ["time (s)", *result.channels], hrows)
-    if result.extra_metrics:
-        print_table("Predicted beyond the paper's channels: |e| over all starts and steps",
-                    ["channel", "unit", "median", "p90", "max"],
-                    [[name, m["unit"], _fmt(m["median_abs"]), _fmt(m["p90_abs"]),
-                      _fmt(m["max_abs"])]
-                     for name, m in result.extra_metrics.items()])
-    if result.yardsticks:
-        yardstick_table(result)
-    residuals = None
-    if model_family(params) == "paper":
-        residuals = residual_section(ds, p, lo, hi)
-    else:
-        note("residual tests (acid.analysis.resid) exist for the paper's model only")
-    other = None
-    if beside:
-        q = load_any_params(beside, allow_unstable=allow_unstable)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the same windows: warned about above
-            other = run_validation(ds, q, starts=starts, horizon=horizon, exogenous=exogenous,
-                                   held_out_fraction=part.fraction, placement=placement,
-                                   seed=seed, non_overlapping=non_overlapping)
-        print_table(f"Beside: |e| median / p90 (K), {p.name!r} vs {q.name!r}, same starts",
-                    ["channel", p.name, q.name],
-                    [[c, f"{_fmt(result.metrics[c]['median_abs'])} / "
-                         f"{_fmt(result.metrics[c]['p90_abs'])}",
-                      f"{_fmt(other.metrics[c]['median_abs'])} / "
-                      f"{_fmt(other.metrics[c]['p90_abs'])}"] for c in result.channels])
-
-    fig5 = save_figure(prediction_figure(result), out / "fig5_prediction.png")
-    fig6 = save_figure(error_figure(result), out / "fig6_errors.png")
-    figures = {"fig5_prediction": str(fig5), "fig6_errors": str(fig6)}
-    if result.yardsticks:
-        fig6b = save_figure(yardstick_figure(result), out / "fig6b_yardsticks.png")
-        figures["fig6b_yardsticks"] = str(fig6b)
-    say(f"figures written to {', '.join(figures.values())}")
-
-    summary = {
-        "command": "validate",
-        "acid_version": __version__,
-        "inputs": {"data": str(data), "data_sha256": data_sha256,
-                   "params": params,
-                   "params_sha256": None if params == "paper" else file_sha256(params)},
-        "held_out_fraction_source": fraction_source,
-        "in_sample_warning": part.warning,
-        "elapsed_s": elapsed,
-        "figures": figures,
-        **result.to_json_dict(),
-    }
-    if residuals is not None:
-        summary["residuals"] = residuals
-    if other is not None:
-        summary["beside"] = {"params": beside, "channels": other.to_json_dict()["channels"]}
-    write_summary(json_path, summary)
+    require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
+    require(warm_start in WARM_STARTS, "--warm-start",
+            f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
+    ps = other = None
+    if model is None:   # a parameter file of the paper's or the econ model names its model
+        ps = load_any_params(params, allow_unstable=allow_unstable).parameter_set()
+        model = ps.model
+        if beside is not None:
+            other = load_any_params(beside, allow_unstable=allow_unstable).parameter_set()
+    validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
+                      warmup=warmup, placement=placement, seed=seed,
+                      held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
+                      non_overlapping=non_overlapping, yardsticks=yardsticks,
+                      to_end=to_end, warm_start=warm_start, values=ps, beside=other,
+                      figures=out)
 
 
 def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
@@ -231,68 +145,6 @@ def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
             f"places the starts evenly: it cannot be combined with --placement {placement}")
     if held_out_fraction is not None:
         require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
-
-
-def _validate_model_file(data, model, params, json_path, starts, horizon, warmup, placement,
-                         seed, held_out_fraction, exogenous, paper_options,
-                         non_overlapping=False, yardsticks=True, to_end=False,
-                         warm_start="fit") -> None:
-    """The declared-model branch (``--model FILE.py``, ``acid_cli._declared``)."""
-    from acid.models.loader import BUILT_IN
-    from acid_cli._declared import is_model_file, model_file_input, validate_declared
-
-    require(is_model_file(model) or model in BUILT_IN, "--model",
-            f"must be a model file FILE.py or a built-in declaration ({', '.join(BUILT_IN)}), "
-            f"got {model!r}")
-    require(not paper_options, "--model",
-            "--beside and --allow-unstable are for the paper/econ families")
-    check_paths(inputs={"DATA": data, "--model": model_file_input(model),
-                        "--params": params_input(params)},
-                outputs={"--json": json_path})
-    _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
-                   held_out_fraction)
-    require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
-    from acid.ident.validate import WARM_STARTS
-
-    require(warm_start in WARM_STARTS, "--warm-start",
-            f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
-    validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
-                      warmup=warmup, placement=placement, seed=seed,
-                      held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
-                      non_overlapping=non_overlapping, yardsticks=yardsticks,
-                      to_end=to_end, warm_start=warm_start)
-
-
-#: Prediction times (s) of the yardstick table, when inside the horizon.
-YARDSTICK_TIMES_S = (60.0, 300.0, 1500.0)
-
-
-def yardstick_table(result) -> None:
-    """The model beside persistence, ARX and subspace: RMSE / p90 |e| (K) per channel and
-    prediction time, and how each yardstick was fitted."""
-    horizon = float(result.horizon_s[-1])
-    times = [t for t in YARDSTICK_TIMES_S if t <= horizon]
-    if horizon not in times:
-        times.append(horizon)
-    table = result.by_horizon(times)
-    keys = [f"{result.horizon_s[int(round(t / result.settings['Ts_s']))]:g}" for t in times]
-    rows = []
-    for c in result.channels:
-        for name, by in table.items():
-            label = "model" if name == "model" else f"{name} (yardstick)"
-            rows.append([c, label] + [f"{_fmt(by[c][k]['rmse_K'], 2)} / "
-                                      f"{_fmt(by[c][k]['p90_K'], 2)}" for k in keys])
-    print_table("Model and yardsticks on the same windows: RMSE / p90 of |e| over the starts "
-                "(K)", ["_channel", "_predictor", *[f"{k} s" for k in keys]], rows)
-    lo, hi = result.settings["yardsticks_fitted_on"]
-    for y in result.yardsticks.values():
-        say(f"  {y.description}")
-    fitted = f"ARX and subspace fitted on samples {lo}..{hi - 1}"
-    if result.settings.get("yardsticks_in_sample"):
-        note(f"{fitted}, the validated samples themselves (no held-out part): in-sample, "
-             "they are favoured; yardsticks are never used for control")
-    else:
-        say(f"  {fitted} (the estimation part); yardsticks are never used for control")
 
 
 def residual_section(ds, params, lo: int, hi: int) -> dict | None:

@@ -909,14 +909,10 @@ CASES: list[Case] = [
     Case("claims-summary-deep", "structure", ("claims", "{w}/s.json"), ("s.json", "nests"),
          _write("s.json", '{"claims": ' + "[" * 50000 + "]" * 50000 + "}")),
 
-    Case("validate-to-end-without-model", "options", (*V, "--to-end"),
-         ("--to-end", "declared model")),
     Case("validate-model-unknown-name", "options",
          (*V[:2], "--model", "car_cabn"), ("--model", "car_cabin", "'car_cabn'")),
     Case("validate-warm-start-unknown", "options",
          (*V, "--model", "car_cabin", "--warm-start", "kalman"), ("--warm-start", "ekf-trip")),
-    Case("validate-warm-start-without-model", "options", (*V, "--warm-start", "ekf"),
-         ("--warm-start", "declared model")),
     # ------------------------------------------------------------------------- year-sweep
     Case("year-sweep-ambient-kelvin", "options",
          ("year-sweep", "--t-amb", "263.15", "--out", "{w}/y"), ("--t-amb 263.15", "degC")),

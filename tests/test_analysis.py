@@ -107,9 +107,9 @@ def test_resid_of_a_wrong_model_fails_whiteness(process_noise_dataset):
 
 def test_fit_result_is_accepted_wherever_parameters_are(model_dataset):
     from acid.ident.fit import fit
+    from acid.ident.validate import validate
     from acid.mpc.nmpc import NMPC
     from acid.params import fitted
-    from acid.validate import validate
 
     est, val = model_dataset.split(0.5)
     result = fit(est)

@@ -15,8 +15,8 @@ from typer.testing import CliRunner
 from acid.econ.params import NAMES, EconParams, identify
 from acid.errors import DataError, IdentifiabilityWarning
 from acid.ident.fit import fit_model
+from acid.ident.validate import validate
 from acid.params import fitted
-from acid.validate import validate
 from acid_cli.main import app
 
 runner = CliRunner()
@@ -92,9 +92,9 @@ def test_validates_beside_the_paper_model_on_held_out_data(econ_hifi_dataset, ec
     assert e.metrics["T_cab"]["median_abs"] < p.metrics["T_cab"]["median_abs"]
     for ch in ("T_cab", "T_evap", "T_ain"):        # the paper's "couple of degrees"
         assert e.metrics[ch]["median_abs"] < 1.5 and e.metrics[ch]["p90_abs"] < 5.0
-    extra = e.extra_metrics
-    assert extra["w_cab"]["unit"] == "g/kg" and extra["w_cab"]["median_abs"] < 0.5
-    assert extra["compressor_energy"]["median_abs"] < 25.0
+    assert e.units[e.channels.index("w_cab")] == "kg/kg"
+    assert e.metrics["w_cab"]["median_abs"] < 0.5e-3
+    assert e.energy["P_comp"]["median_abs"] < 25.0
 
 
 def test_refuses_data_that_cannot_identify_it(econ_model_dataset):
@@ -143,9 +143,19 @@ def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
                               str(tmp_path / "figs"), "--json", str(vj)])
     assert res.exit_code == 0, res.output
     v = json.loads(vj.read_text())
-    assert v["settings"]["model"] == "econ" and "w_cab" in v["extra_channels"]
-    assert v["settings"]["held_out_fraction"] == pytest.approx(0.4)
-    assert set(v["beside"]["channels"]) == {"T_cab", "T_evap", "T_ain"}
+    assert v["settings"]["model"] == "econ" and "w_cab" in v["channels"]
+    n = v["settings"]["data_samples"]
+    assert v["settings"]["sample_range"] == [round(0.6 * n), n]
+    assert v["held_out_fraction_source"] == "params provenance"
+    assert {"T_cab", "T_evap", "T_ain"} <= set(v["beside"]["channels"])
+    assert "T_int" not in v["beside"]["channels"]      # the paper's model, beside
+    # the same file named with --model: one reader, the same numbers
+    vm = tmp_path / "val_model.json"
+    res = runner.invoke(app, ["validate", str(econ_file), "--model", "econ", "--params",
+                              str(out), "--starts", "8", "--horizon", "60", "--out",
+                              str(tmp_path / "figs2"), "--json", str(vm)])
+    assert res.exit_code == 0, res.output
+    assert json.loads(vm.read_text())["channels"] == v["channels"]
 
 
 @pytest.mark.parametrize("args, fragments", [

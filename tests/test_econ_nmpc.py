@@ -167,7 +167,7 @@ def test_sqp_warm_started_reaches_the_interior_point_optimum(econ_truth):
     ip = EconNMPC(econ_truth, _cfg(solver="ipopt", tol=1e-10))
     plant = econ_decl.plant(econ_truth.theta_all)
     plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
-    for k in range(8):
+    for _ in range(8):
         m = plant.measure()
         x = [m[n] for n in ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")]
         u = sqp.make_step(x, 12.0, C2K(30.0))

@@ -23,7 +23,7 @@ from acid.mpc.scenarios import (
     step_bound,
 )
 from acid.params import paper
-from acid.plant.model_plant import ModelPlant
+from acid.plant import ModelPlant
 from acid.units import C2K
 
 P = paper()

@@ -15,7 +15,7 @@ from acid.mpc.estimator import (
 )
 from acid.mpc.nmpc import NMPC, NMPCConfig, model_function, predict
 from acid.params import paper
-from acid.plant.model_plant import ModelPlant
+from acid.plant import ModelPlant
 from acid.units import C2K
 
 P = paper()
@@ -54,11 +54,17 @@ def test_nmpc_with_offset_free_prediction_rides_the_bound_on_a_biased_plant():
     """The model plant with a constant leak of heat into the cabin (a disturbance the
     model does not know): the offset-free NMPC removes the steady offset."""
 
-    class Leaky(ModelPlant):
-        def step(self, W_bl, T_evap_set, v_veh=0.0, **kw):
-            row = super().step(W_bl, T_evap_set, v_veh, **kw)
-            self.T_cab += 0.2
+    def Leaky(params):  # noqa: N802 - a plant, as ModelPlant
+        plant = ModelPlant(params)
+        model_step = plant.step
+
+        def step(W_bl, T_evap_set, v_veh=0.0, **kw):
+            row = model_step(W_bl, T_evap_set, v_veh, **kw)
+            plant.T_cab += 0.2
             return row
+
+        plant.step = step
+        return plant
 
     from acid.mpc.scenarios import closed_loop
 

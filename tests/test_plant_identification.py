@@ -13,9 +13,9 @@ import pytest
 
 from acid.excite import ExcitationSpec, excite
 from acid.ident.fit import fit_model
+from acid.ident.validate import validate
 from acid.params import fitted
 from acid.plant import make_plant
-from acid.validate import validate
 
 pytestmark = pytest.mark.slow
 

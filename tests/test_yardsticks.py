@@ -10,11 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from acid.ident.validate import by_time, validate
 from acid.params import paper
-from acid.validate import VALIDATED_CHANNELS, validate
 from acid.yardsticks import (
     YARDSTICKS,
-    by_horizon,
     evaluate,
     fit_arx,
     moesp_model,
@@ -143,56 +142,35 @@ def test_too_short_an_estimation_part_leaves_the_fitted_ones_out_with_a_warning(
     assert tuple(out) == ("persistence",)
 
 
-def test_by_horizon_reports_rmse_and_p90_at_the_times_inside_the_horizon():
-    e = np.zeros((10, 13, 1))
-    e[:, 12, 0] = np.arange(10.0)
-    t = np.arange(13) * 5.0
-    d = by_horizon(e, t, ("T_cab",), (0.0, 60.0, 300.0))
-    assert set(d["T_cab"]) == {"0", "60"}
-    assert d["T_cab"]["0"] == {"rmse_K": 0.0, "p90_K": 0.0}
+def test_by_time_reports_rmse_and_p90_at_the_times_inside_the_horizon():
+    e = np.zeros((10, 12))             # steps 1 .. 12 of 5 s
+    e[:, 11] = np.arange(10.0)
+    d = by_time({"T_cab": e}, 5.0, (60.0, 300.0))
+    assert set(d["T_cab"]) == {"60"}
     assert d["T_cab"]["60"]["rmse_K"] == pytest.approx(np.sqrt(np.mean(np.arange(10.0) ** 2)))
     assert d["T_cab"]["60"]["p90_K"] == pytest.approx(np.percentile(np.arange(10.0), 90))
+    assert d["T_cab"]["60"]["n"] == 10
 
 
-def test_on_plant_data_persistence_is_exact_at_step_zero(model_dataset):
+def test_on_plant_data_persistence_holds_the_start_value(model_dataset):
     r = validate(model_dataset, paper(), starts=10, horizon=120, held_out_fraction=0.5,
                  yardsticks=True)
     assert set(r.yardsticks) == set(YARDSTICKS)
-    meas = r.measured
-    pers = r.yardsticks["persistence"].predicted
-    assert np.all(pers[:, 0] - meas[:, 0] == 0.0)
-    np.testing.assert_array_equal(pers - meas, meas[:, :1] - meas)
-    table = r.by_horizon()
-    for c in VALIDATED_CHANNELS:
-        assert table["persistence"][c]["0"] == {"rmse_K": 0.0, "p90_K": 0.0}
+    for c in ("T_cab", "T_evap", "T_ain"):   # persistence: the error is y(k0) - y(k0 + k)
+        i = r.channels.index(c)
+        e = r.measured[:, :1, i] - r.measured[:, 1:, i]
+        np.testing.assert_allclose(r.yardsticks["persistence"]["rmse_by_step"][c],
+                                   np.sqrt(np.mean(e ** 2, axis=0)), rtol=1e-12)
+        assert r.yardsticks["persistence"]["by_time"][c]["60"]["rmse_K"] == pytest.approx(
+            np.sqrt(np.mean(e[:, 11] ** 2)))
     # fitted on the first half, the part before the validated samples
     assert r.settings["yardsticks_fitted_on"] == [0, len(model_dataset) // 2]
-    assert r.settings["yardsticks_in_sample"] is False
 
 
-
-def test_the_order_rule_is_the_least_open_loop_error_on_estimation_windows():
-    y, u = linear_data(noise=0.01, seed=2)
-    k0 = np.arange(1100, 1900, 40)
-    held = np.array([False, True])
-    out = evaluate(y, u, np.zeros(len(y), dtype=int), k0, 60, held, (0, 1000))
-    arx, sub = out["arx"].settings, out["subspace"].settings
-    assert len(arx["order_scores"]) == 16 and len(sub["order_scores"]) == 8
-    best = min(arx["order_scores"], key=arx["order_scores"].get)
-    assert best == f"{arx['na']},{arx['nb']}"
-    assert min(sub["order_scores"], key=sub["order_scores"].get) == str(sub["order"])
-    assert "inputs held as in the validation" in arx["rule"]
-
-
-def test_econ_model_yardsticks_get_its_inputs_and_predict_interior_and_shell(
-        econ_model_dataset, econ_truth):
+def test_econ_model_yardsticks_predict_interior_and_shell(econ_model_dataset, econ_truth):
     r = validate(econ_model_dataset, econ_truth, starts=8, horizon=120,
                  held_out_fraction=0.5, yardsticks=True)
-    s = r.yardsticks["arx"].settings
-    assert s["inputs"][:2] == ["W_bl", "T_evap_set"] and "T_int" not in s["inputs"]
-    assert s["held_inputs"] == [n for n in ("v_veh", "T_amb") if n in s["inputs"]]
-    for y in r.yardsticks.values():  # the validated channels only, T_int/T_shell alongside
-        assert y.predicted.shape == r.predicted.shape
-        assert np.all(np.isfinite(y.predicted))
-    assert "v_veh and T_amb are held" in r.window_design["held_disturbances"]
-    assert "T_int and T_shell are predicted" in r.window_design["held_disturbances"]
+    for y in r.yardsticks.values():  # every measured channel, T_int/T_shell included
+        assert {"T_cab", "T_evap", "T_ain", "T_int", "T_shell"} <= set(y["channels"])
+        assert all(np.isfinite(v["rmse"]) for v in y["channels"].values())
+    assert "v_veh and T_amb held" in r.window_design["held_disturbances"]

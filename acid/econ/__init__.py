@@ -5,8 +5,9 @@ is declared once, in :mod:`acid.models.econ` (equations, parameter table, fittin
   JSON) with its ``PowerMap`` (domain, quality); ``identify`` (``acid fit --model econ``):
   acid.ident's staged fit of the declaration;
 * :mod:`acid.econ.model` -- thin names over the declaration for code that passes
-  ``EconParams`` (economic NMPC, steady state, best known plan);
-* :mod:`acid.econ.validate` -- its multi-start windows for :func:`acid.validate.validate`.
+  ``EconParams`` (economic NMPC, steady state, best known plan).
+
+It is validated by acid's one validator, :func:`acid.ident.validate.validate`.
 """
 
 from acid.econ.params import EconParams, PowerMap, load_any_params, model_family

@@ -169,6 +169,14 @@ class EconParams:
             return values[name]
         raise AttributeError(name)
 
+    def parameter_set(self):
+        """These values as ``acid.ident.validate.ParameterSet`` of the declaration
+        ``acid.models.econ`` (what ``acid validate`` runs)."""
+        from acid.ident.validate import ParameterSet
+
+        return ParameterSet(values=self.theta_all, source=self.name, label=self.name,
+                            provenance=self.provenance, model="econ")
+
     @property
     def theta_all(self) -> np.ndarray:
         """Every number as the declared parameter vector of ``acid.models.econ.model``."""

@@ -6,13 +6,21 @@ estimated from the ``warmup`` samples before k (the whole state at k - warmup fi
 measured channels of that stretch with the parameters held, then simulated to k), or their
 declared ``initial`` rule when ``warmup`` is 0. Errors are reported per measured channel,
 overall and at chosen horizons (RMSE, p90 of |e|), with ``acid.metrics``.
+
+This is acid's one validator: the paper's Figs. 5-6 (60 starts x 300 steps, T_int and
+T_shell held), the econ model beside it, and any declared model. Every statistic is a
+k-step prediction error, k = 1 .. horizon (the start sample, where measured states are
+exact by construction, is not scored). ``validate(ds, params)`` takes ``ModelParams``,
+``EconParams``, a fit or a ``ParameterSet`` and finds the declaration from them.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
+import importlib
 import math
+import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,11 +33,15 @@ from acid.errors import ConfigError, DataError
 from acid.ident.data import ModelData
 from acid.ident.fit import PARAMS_FORMAT
 from acid.ident.oe import simulate_windows
-from acid.metrics import fit_percent, max_abs_error, percentile_abs_error, rmse
+from acid.metrics import fit_percent, max_abs_error, rmse
 from acid.models.declaration import Model
 from acid.models.loader import load
 
 PLACEMENTS = ("even", "random")
+#: What the disturbances do over a prediction: held at the start value, or measured.
+EXOGENOUS_MODES = ("hold", "measured")
+#: Most prediction samples (starts x (horizon + 1)) one study may hold (about 1 GB).
+MAX_PREDICTION_SAMPLES = 5_000_000
 #: How latent states at a start are estimated from the warm-up stretch: ``"fit"`` (the
 #: state at its beginning fitted by least squares, then simulated) or ``"ekf"`` (the
 #: extended Kalman filter of ``acid.ident.pem`` run along it, with the declared noises) or
@@ -38,6 +50,8 @@ PLACEMENTS = ("even", "random")
 WARM_STARTS = ("fit", "ekf", "ekf-trip")
 #: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
 REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
+#: Below this standard deviation a measured window counts as constant: fit % undefined.
+CONSTANT_TRUTH_STD = 1e-9
 
 
 @dataclass(frozen=True)
@@ -50,6 +64,8 @@ class ParameterSet:
     provenance: dict = field(default_factory=dict)
     #: how results name these values (default: the model's name and ``source``)
     label: str | None = None
+    #: the declaration these values belong to (a name ``acid.models.load`` knows), if known
+    model: str | None = None
 
 
 def fitted_parameters(result) -> ParameterSet:
@@ -60,20 +76,44 @@ def fitted_parameters(result) -> ParameterSet:
                         source=f"fit of {result.data_source}")
 
 
+def parameter_set(params) -> ParameterSet:
+    """``ModelParams``, ``EconParams`` (their ``parameter_set()``), a ``DeclaredFitResult``
+    or a ``ParameterSet`` as a ``ParameterSet`` naming its model."""
+    if isinstance(params, ParameterSet):
+        return params
+    if hasattr(params, "parameter_set"):
+        return params.parameter_set()
+    if hasattr(params, "experiment_ids"):
+        return dataclasses.replace(fitted_parameters(params), model=params.model)
+    raise DataError(f"expected model parameters (ModelParams, EconParams, a fit or a "
+                    f"ParameterSet), got {type(params).__name__}")
+
+
 def declared_parameters(model: Model) -> ParameterSet:
     return ParameterSet(values=model.values, source="declared values")
 
 
+#: Built-in models whose parameter files predate the declared format (no "format" key):
+#: the class that reads them, with its ``parameter_set()``.
+_LEGACY_FILES = {"paper": ("acid.params", "ModelParams"),
+                 "econ": ("acid.econ.params", "EconParams")}
+
+
 def read_parameters(model: Model, path: str | Path) -> ParameterSet:
     """A parameter file written by ``acid fit --model FILE`` for this model (one-line
-    ``DataError`` when it is not one, or names parameters the model lacks)."""
+    ``DataError`` when it is not one, or names parameters the model lacks); for the paper's
+    and the econ model, also their own files (params.json, ``"model": "econ"``): the one
+    reader ``acid validate --model NAME --params FILE`` uses for every model."""
+    from acid._readers import load_json
+
     path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{path}: parameter file not found")
-    try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: not valid JSON ({type(exc).__name__})") from None
+    d = load_json(path, "parameter file", DataError, top=None)
+    legacy = _LEGACY_FILES.get(model.name)
+    if isinstance(d, dict) and "format" not in d and legacy is not None:
+        # the paper's params.json and the econ model's file: their classes read them
+        module, cls = legacy
+        return getattr(importlib.import_module(module), cls).from_json_dict(
+            d, source=str(path)).parameter_set()
     if not isinstance(d, dict) or d.get("format") != PARAMS_FORMAT:
         raise DataError(f"{path}: not a parameter file of a declared model (no \"format\": "
                         f"\"{PARAMS_FORMAT}\"; write one with acid fit --model FILE.py)")
@@ -108,10 +148,16 @@ def read_parameters(model: Model, path: str | Path) -> ParameterSet:
 
 @dataclass(frozen=True)
 class DeclaredValidation:
-    """Open-loop errors of a declared model (frozen; printing lives in the CLI).
+    """Open-loop errors of a declared model (frozen; printing lives in the CLI, figures in
+    ``acid.report.validation``).
 
     ``errors[channel]`` is (n_starts, horizon): prediction minus measurement at 1..horizon
-    steps ahead (NaN where the channel is not recorded).
+    steps ahead (NaN where the channel is not recorded or the experiment has ended);
+    ``predicted`` and ``measured`` are (n_starts, horizon + 1, channels), step 0 the start
+    (model units: K, kg/s, W...). ``metrics[channel]``: ``rmse``, ``mean_abs``,
+    ``median_abs``, ``p90_abs``, ``p95_abs``, ``max_abs``, ``fit_percent`` (median over
+    the starts of each window's fit, %) and ``fit_percent_pooled``, over steps 1..horizon.
+    ``energy[channel]`` (outputs in W): |error| of each window's energy, % of the measured.
     """
 
     model: str
@@ -129,17 +175,118 @@ class DeclaredValidation:
     #: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}} at ``REPORT_TIMES_S`` (the starts that
     #: reach each time); each yardstick has its own under ``yardsticks[name]["by_time"]``.
     by_time: dict = field(default_factory=dict)
+    predicted: np.ndarray | None = None
+    measured: np.ndarray | None = None
+    start_time: np.ndarray | None = None
+    energy: dict = field(default_factory=dict)
+    #: (n_starts, horizon + 1, inputs) the measured inputs over each window
+    inputs: np.ndarray | None = None
+    input_names: tuple[str, ...] = ()
+    input_units: tuple[str, ...] = ()
+    #: how the study was run: parameters' label and provenance, held disturbances, sample
+    #: range, placement, estimation samples of the yardsticks
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def n_starts(self) -> int:
+        return int(self.starts.size)
+
+    @property
+    def horizon_s(self) -> np.ndarray:
+        """Prediction time of steps 0 .. horizon, s."""
+        return np.arange(self.horizon + 1) * self.Ts
+
+    @property
+    def window_design(self) -> dict:
+        """How the windows lie: start spacing (s), horizon (s), overlap, what is held.
+
+        ``overlap_fraction``: the mean share of a window's ``horizon + 1`` samples that the
+        next window also holds; ``max_windows_per_sample``: the most windows one sample
+        lies in (one event enters that many starts' errors)."""
+        k0, H = np.sort(self.starts), self.horizon
+        gaps = np.diff(k0)
+        shared = np.clip(H + 1 - gaps, 0, None) / (H + 1)
+        cover = np.zeros(int(k0.max()) + H + 2 if k0.size else 1, dtype=int)
+        np.add.at(cover, k0, 1)
+        np.add.at(cover, k0 + H + 1, -1)
+        held = self.settings.get("hold", ())
+        return {"starts": self.n_starts,
+                "non_overlapping": bool(self.settings.get("non_overlapping", False)),
+                "horizon_s": H * self.Ts,
+                "start_spacing_s": ({"min": float(gaps.min() * self.Ts),
+                                     "median": float(np.median(gaps) * self.Ts),
+                                     "max": float(gaps.max() * self.Ts)}
+                                    if gaps.size else None),
+                "overlap_fraction": float(shared.mean()) if shared.size else 0.0,
+                "max_windows_per_sample": int(np.cumsum(cover).max()) if k0.size else 0,
+                "held_disturbances": (
+                    f"{' and '.join(held)} held at their value at each start over its window"
+                    if held else "every disturbance follows its measurement (a preview)")}
+
+    def by_horizon_table(self) -> dict:
+        """{"model" | yardstick: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}}} at
+        ``REPORT_TIMES_S`` and the horizon."""
+        return {"model": self.by_time,
+                **{k: y["by_time"] for k, y in self.yardsticks.items()}}
 
     def to_json_dict(self) -> dict:
         return json_safe({
             "model": self.model, "horizon": self.horizon, "warmup": self.warmup,
             "Ts": self.Ts, "n_starts": int(self.starts.size),
             "starts": self.starts.tolist(),
+            "metrics_over": "all starts, prediction steps 1 .. horizon",
             "channels": {c: {"unit": u, **self.metrics[c]}
                          for c, u in zip(self.channels, self.units, strict=True)},
+            "energy": self.energy, "window_design": self.window_design,
+            "settings": self.settings,
             "by_horizon": list(self.by_horizon), "notes": list(self.notes),
-            "yardsticks": self.yardsticks, "by_time": self.by_time,
+            "yardsticks": {k: {n: v for n, v in y.items() if n != "rmse_by_step"}
+                           for k, y in self.yardsticks.items()},
+            "by_time": self.by_time,
             "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()}})
+
+
+def window_design_text(d: dict) -> str:
+    """``DeclaredValidation.window_design`` in one line (the CLI and the report print it)."""
+    sp = d["start_spacing_s"]
+    spacing = ("one start" if sp is None else
+               f"starts {sp['median']:g} s apart" if sp["min"] == sp["max"] else
+               f"starts {sp['min']:g}..{sp['max']:g} s apart (median {sp['median']:g} s)")
+    return (f"window design: {d['starts']} starts, {spacing}, horizon {d['horizon_s']:g} s; "
+            f"consecutive windows share {100 * d['overlap_fraction']:.0f} % of their samples, "
+            + ("no sample lies in two windows" if d["max_windows_per_sample"] <= 1 else
+               f"a sample lies in up to {d['max_windows_per_sample']} windows") +
+            f"{' (--non-overlapping)' if d['non_overlapping'] else ''}; "
+            f"{d['held_disturbances']}")
+
+
+def validate(ds: Dataset, params, *, held_out_fraction: float | None = None,
+             exogenous: str = "hold", **kw) -> DeclaredValidation:
+    """``validate_model`` for parameters that name their model (``parameter_set``): on the
+    last ``held_out_fraction`` of ``ds`` (the yardsticks fitted on the part before it),
+    every disturbance held at each start (``exogenous="hold"``, the paper's protocol for
+    T_int and T_shell) or measured (``"measured"``)."""
+    if exogenous not in EXOGENOUS_MODES:
+        raise ConfigError(f"--exogenous must be one of {', '.join(EXOGENOUS_MODES)}, got "
+                          f"{exogenous!r}")
+    ps = parameter_set(params)
+    model = load(ps.model)
+    lo = held_out_start(len(ds), held_out_fraction)
+    kw.setdefault("estimation", (0, lo) if lo > 0 else None)
+    kw.setdefault("start_range", (lo, len(ds)))
+    return validate_model(model, ds, ps,
+                          hold=tuple(d.name for d in model.disturbances)
+                          if exogenous == "hold" else (), **kw)
+
+
+def held_out_start(n: int, fraction: float | None) -> int:
+    """The first sample of the last ``fraction`` of ``n`` (0 for the whole record)."""
+    if fraction is None:
+        return 0
+    f = float(fraction)
+    if not (math.isfinite(f) and 0.0 < f <= 1.0):
+        raise ConfigError(f"--held-out-fraction must be in (0, 1], got {fraction}")
+    return int(round(n * (1.0 - f)))
 
 
 def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
@@ -155,7 +302,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
     and T_shell) instead of measured along the prediction. ``start_index``: these start
     samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
-    ``non_overlapping``: starts at least ``horizon + 1`` samples apart (acid.validate's rule).
+    ``non_overlapping``: starts at least ``horizon + 1`` samples apart.
     ``start_range`` (lo, hi): every window inside samples lo .. hi - 1 (e.g. the held-out
     part). ``yardsticks``: persistence, ARX and subspace (``acid.yardsticks``) on the same
     windows, given the same inputs and held disturbances, fitted on ``estimation`` (lo, hi)
@@ -177,6 +324,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     if placement not in PLACEMENTS:
         raise ConfigError(f"placement must be one of {', '.join(PLACEMENTS)}, got "
                           f"{placement!r}")
+    if non_overlapping and placement != "even":
+        raise ConfigError(f"--non-overlapping places the starts evenly: it cannot be "
+                          f"combined with --placement {placement}")
     for name, v, lo in (("starts", starts, 1), ("horizon", horizon, 1), ("warmup", warmup, 0)):
         if int(v) < lo:
             raise ConfigError(f"{name} must be at least {lo}, got {v}")
@@ -188,7 +338,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - reach)
                            for a, b in data.segments] + [np.zeros(0, int)]).astype(int)
     if cand.size == 0:
-        raise DataError(f"{ds.source}: no experiment is longer than warmup + horizon "
+        raise DataError(f"{ds.source}: record too short: no experiment is longer than "
+                        f"warmup + horizon "
                         f"({need_warm} + {reach} + 1 samples)")
     if start_index is not None:
         k0 = np.asarray(start_index, dtype=int)
@@ -197,8 +348,6 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
             raise DataError(f"{ds.source}: start {int(bad[0])} leaves no room for the "
                             f"warm-up and {horizon} steps inside its experiment")
     elif non_overlapping:
-        from acid.validate import _place_non_overlapping
-
         k0 = _place_non_overlapping(cand, starts, horizon)
     elif placement == "even":
         pick = np.unique(np.round(np.linspace(0, cand.size - 1, min(starts, cand.size))))
@@ -206,6 +355,16 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     else:
         k0 = np.sort(np.random.default_rng(seed).choice(cand, min(starts, cand.size),
                                                         replace=False))
+    if start_index is None and k0.size < starts:
+        warnings.warn(f"{ds.source}: only {k0.size} "
+                      + (f"windows of {horizon} steps ({horizon * model.Ts:g} s) fit without "
+                         "overlap (--non-overlapping)" if non_overlapping else
+                         f"distinct start instants fit a {horizon}-step window")
+                      + f"; using {k0.size} instead of {starts}", UserWarning, stacklevel=2)
+    if k0.size * (horizon + 1) > MAX_PREDICTION_SAMPLES:
+        raise ConfigError(f"--starts {k0.size} x --horizon {horizon} steps is "
+                          f"{k0.size * (horizon + 1):.3g} prediction samples, more than "
+                          f"{MAX_PREDICTION_SAMPLES:.0e}: lower --starts or --horizon")
     gaps = np.diff(np.sort(k0))
     notes = [f"window design: {k0.size} starts, spacing "
              + (f"{np.median(gaps) * model.Ts:g} s (median, min {gaps.min() * model.Ts:g} s)"
@@ -259,22 +418,24 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
             else data.censored[idx].reshape(idx.size, -1))
         idx = flat
         notes.append(f"held at their start values: {', '.join(hold)}")
-    Y = simulate_windows(model, data, idx, x0, P)
+    with np.errstate(over="ignore", invalid="ignore"):
+        Y = simulate_windows(model, data, idx, x0, P)
+    if not np.all(np.isfinite(Y[inside])):
+        raise DataError(f"{ds.source}: the predictions with parameters from {params.source} "
+                        "diverge (values beyond the range of floating point): the model is "
+                        "unstable")
     meas = np.where(inside[..., None], data.observed()[idx], np.nan)
-    channels, units, errors, metrics = [], [], {}, {}
+    channels, units, errors, metrics, energy = [], [], {}, {}, {}
     rows = [(c, n) for c, n in data.measured_channels(model)]
     unit_of = {r.name: r.unit for r in model.states + model.outputs}
     for c, name in rows:
         e = (Y[:, 1:, c] - meas[:, 1:, c])
         errors[name] = e
-        ok = np.isfinite(e)
-        m, p = meas[:, 1:, c][ok], Y[:, 1:, c][ok]
         channels.append(name)
         units.append(unit_of[name])
-        metrics[name] = {"rmse": float(rmse(m, p)),
-                         "p90_abs": float(percentile_abs_error(m, p, 90)),
-                         "max_abs": float(max_abs_error(m, p)),
-                         "fit_percent": float(fit_percent(m, p))}
+        metrics[name] = _channel_metrics(meas[:, 1:, c], Y[:, 1:, c])
+        if unit_of[name] == "W" and name in model.output_names:
+            energy[name] = _energy_errors(meas[:, 1:, c], Y[:, 1:, c])
     steps = sorted({h for h in (horizons or _default_horizons(horizon)) if 1 <= h <= horizon})
     by_h = []
     for h in steps:
@@ -292,11 +453,74 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                          estimation or (0, len(data0)), inside)
         if estimation is None:
             notes.append("yardsticks fitted on the whole record (in-sample: favoured)")
+    settings = {"params": params.label or params.source, "model": model.name,
+                "params_provenance": params.provenance, "hold": tuple(hold),
+                "sample_range": [int(lo_r), int(hi_r)], "placement": placement,
+                "seed": seed if placement == "random" else None,
+                "non_overlapping": bool(non_overlapping), "starts_requested": int(starts),
+                "data_source": ds.source, "data_samples": len(ds),
+                "yardsticks_fitted_on": list(estimation or (0, len(data0)))
+                if yardsticks else None}
+    pick = [c for c, _ in rows]
     return DeclaredValidation(model=model.name, channels=tuple(channels), units=tuple(units),
                               starts=k0, horizon=int(horizon), warmup=int(need_warm),
                               Ts=model.Ts, errors=errors, metrics=metrics,
                               by_horizon=tuple(by_h), notes=tuple(notes), yardsticks=ys,
-                              by_time=by_time(errors, model.Ts))
+                              by_time=by_time(errors, model.Ts), predicted=Y[..., pick],
+                              measured=meas[..., pick], start_time=ds.time[k0].copy(),
+                              energy=energy, settings=settings, inputs=data.u[idx],
+                              input_names=tuple(r.name for r in model.inputs),
+                              input_units=tuple(r.unit for r in model.inputs))
+
+
+def _channel_metrics(m: np.ndarray, p: np.ndarray) -> dict:
+    """Pooled |error| statistics of (starts, steps) measured ``m`` and predicted ``p`` (NaN
+    where not scored); ``fit_percent`` the median over starts of each window's fit (NaN
+    for a window whose truth is constant), ``fit_percent_pooled`` one fit over all."""
+    ok = np.isfinite(m) & np.isfinite(p)
+    a, b = m[ok], p[ok]
+    fits = [float(fit_percent(m[s][ok[s]], p[s][ok[s]])) for s in range(m.shape[0])
+            if ok[s].sum() > 1 and np.std(m[s][ok[s]]) > CONSTANT_TRUTH_STD]
+    e = np.abs(b - a)
+    q50, q90, q95 = np.percentile(e, [50.0, 90.0, 95.0]) if e.size else (math.nan,) * 3
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return {"rmse": float(rmse(a, b)), "mean_abs": float(e.mean()) if e.size else math.nan,
+                "median_abs": float(q50), "p90_abs": float(q90), "p95_abs": float(q95),
+                "max_abs": float(max_abs_error(a, b)) if e.size else math.nan,
+                "fit_percent": float(np.median(fits)) if fits else math.nan,
+                "fit_percent_pooled": float(fit_percent(a, b))
+                if e.size and np.std(a) > CONSTANT_TRUTH_STD else math.nan}
+
+
+def _energy_errors(m: np.ndarray, p: np.ndarray) -> dict:
+    """|error| of each window's energy (a power channel, W, summed over the scored steps),
+    % of the measured energy (at least 1 W per step), and the pooled bias, %."""
+    ok = np.isfinite(m) & np.isfinite(p)
+    E_m, E_p = np.where(ok, m, 0.0).sum(axis=1), np.where(ok, p, 0.0).sum(axis=1)
+    rel = 100.0 * np.abs(E_p - E_m) / np.maximum(E_m, ok.sum(axis=1))
+    return {"unit": "% per window", "rmse": float(np.sqrt(np.mean(rel ** 2))),
+            "median_abs": float(np.median(rel)), "p90_abs": float(np.percentile(rel, 90)),
+            "max_abs": float(rel.max()),
+            "bias_pct": float(100.0 * (E_p.sum() - E_m.sum()) / E_m.sum())}
+
+
+def _place_non_overlapping(admissible: np.ndarray, starts: int, horizon: int) -> np.ndarray:
+    """Up to ``starts`` start indices at least ``horizon + 1`` apart (no shared sample),
+    spread evenly over each run of consecutive admissible starts (one run per experiment),
+    shared among the runs in proportion to how many windows each holds."""
+    cut = np.flatnonzero(np.diff(admissible) != 1) + 1
+    runs = [(int(r[0]), int(r[-1])) for r in np.split(admissible, cut) if r.size]
+    cap = np.array([(b - a) // (horizon + 1) + 1 for a, b in runs])
+    n = min(int(starts), int(cap.sum()))
+    share = np.minimum(np.floor(cap * n / cap.sum()).astype(int), cap)
+    for i in np.argsort(-(cap * n / cap.sum() - share), kind="stable"):
+        if share.sum() >= n:
+            break
+        if share[i] < cap[i]:
+            share[i] += 1
+    picks = [np.round(a + np.arange(m) * ((b - a) / (m - 1) if m > 1 else 0)).astype(int)
+             for (a, b), m in zip(runs, share, strict=True) if m > 0]
+    return np.concatenate(picks).astype(int)
 
 
 def by_time(errors: dict, Ts: float, times_s=REPORT_TIMES_S) -> dict:
@@ -347,7 +571,9 @@ def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, ste
             "by_horizon": [{"step": h, **{n: {"rmse": _nan_rms(e[:, h - 1, j]),
                                               "p90_abs": _nan_p90(e[:, h - 1, j])}
                                           for j, (_, n) in enumerate(use)}} for h in steps],
-            "by_time": by_time({n: e[..., j] for j, (_, n) in enumerate(use)}, model.Ts)}
+            "by_time": by_time({n: e[..., j] for j, (_, n) in enumerate(use)}, model.Ts),
+            "rmse_by_step": {n: np.sqrt(np.nanmean(e[..., j] ** 2, axis=0))
+                             for j, (_, n) in enumerate(use)}}
     return out
 
 
@@ -413,3 +639,63 @@ def _warm_start(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np
     out = x_k.copy()
     out[:, latent] = X[:, latent]
     return out
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """Which part of a record a validation uses, why, and whether it is in-sample.
+
+    ``fraction``: the last fraction of the samples (``None``: the whole record); ``source``:
+    "--held-out-fraction", "params provenance" or "whole record"; ``warning``: set when the
+    validated part overlaps the data the parameters were fitted on.
+    """
+
+    fraction: float | None
+    source: str
+    warning: str | None = None
+
+
+def held_out_part(provenance: dict, data: str, data_sha256: str,
+                  requested: float | None = None) -> HeldOut:
+    """The part of ``data`` to validate on, from the fit's provenance (``acid fit`` records
+    ``data_sha256``/``data_file`` and ``estimation_fraction``) and an explicit request.
+
+    Parameters fitted on this file (same SHA-256, or the same path when no hash was
+    recorded) are validated on the part after their estimation fraction; when they were
+    fitted on all of it, or the requested part overlaps the estimation part, the result is
+    in-sample and ``warning`` says so.
+    """
+    prov = provenance if isinstance(provenance, dict) else {}
+    fitted_on, fitted_file = prov.get("data_sha256"), prov.get("data_file")
+    if isinstance(fitted_on, str):
+        same_file = maybe_same = fitted_on == data_sha256
+    else:  # no hash: the recorded path, if any, decides; nothing recorded: maybe this file
+        same_file = isinstance(fitted_file, str) and _same_path(fitted_file, data)
+        maybe_same = same_file or not isinstance(fitted_file, str)
+    est = prov.get("estimation_fraction")
+    est = float(est) if isinstance(est, (int, float)) and not isinstance(est, bool) else None
+    if est is not None and not (math.isfinite(est) and 0.0 < est <= 1.0):
+        est = None
+    if requested is not None:
+        warning = None
+        if same_file and (est is None or float(requested) > 1.0 - est + 1e-12):
+            fitted = "all" if est is None or est >= 1.0 else f"the first {100 * est:g} %"
+            warning = (f"{data}: the validated part (last {100 * float(requested):g} %) "
+                       f"overlaps {fitted} of the record, on which the parameters were "
+                       "fitted: this validation is partly in-sample")
+        return HeldOut(float(requested), "--held-out-fraction", warning)
+    if maybe_same and est is not None and est < 1.0:
+        return HeldOut(1.0 - est, "params provenance")
+    if same_file:
+        return HeldOut(None, "whole record",
+                       f"{data}: the parameters were fitted on this whole record (no held-out "
+                       "part): this validation is in-sample; fit with --estimation-fraction "
+                       "0.5 or validate on another record")
+    return HeldOut(None, "whole record")
+
+
+def _same_path(a: str, b: str) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False

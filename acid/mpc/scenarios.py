@@ -40,8 +40,8 @@ from acid.mpc.estimator import BackoffConfig
 from acid.mpc.icm import ICMConfig, icm_upper_bound
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.params import ModelParams
+from acid.plant import ModelPlant
 from acid.plant.base import Plant
-from acid.plant.model_plant import ModelPlant
 from acid.units import C2K
 
 Progress = Callable[[int, int], None]

@@ -5,7 +5,14 @@ All implement the protocol of ``acid.plant.base.Plant`` (reset / step / measure 
 """
 
 from acid.plant.base import InputSchedule, Measurement, Plant, measurements_to_dataset
-from acid.plant.model_plant import ModelPlant
+
+
+def ModelPlant(params=None, **kw):  # noqa: N802 - the plant's public name since the start
+    """The paper's model as a plant: ``acid.models.paper.plant`` (a ``DeclaredPlant``)."""
+    from acid.models.paper import plant
+
+    return plant(params, **kw)
+
 
 __all__ = ["FMU_PREFIX", "InputSchedule", "Measurement", "ModelPlant", "Plant", "make_plant",
            "measurements_to_dataset"]

@@ -8,9 +8,10 @@ range the climate costs. The road load is the textbook longitudinal balance at t
 
 and the battery supplies P_wheel / eta_drive while the car pulls, and takes back
 f_regen eta_drive |P_wheel| while it brakes; the 12 V base load ``P_aux`` runs throughout.
-The air density follows the ambient (rho = p / (R_air T)): aerodynamic drag is 18 % higher at -10 degC than at 40 degC. Rolling
-resistance is held constant (cold tyres roll harder: left out, so winter traction is, if
-anything, underestimated and the climate's share overestimated).
+The air density follows the ambient (rho = p / (R_air T)): aerodynamic drag is 18 % higher
+at -10 degC than at 40 degC. Rolling resistance is held constant (cold tyres roll harder:
+left out, so winter traction is, if anything, underestimated and the climate's share
+overestimated).
 
 ``RoadLoad()`` is the BMW i3 (60 Ah, 2013-2016, the car of the winter and summer logs): every
 field cites its source (keys of ``datasets/plant/SOURCES.md``) or says *assumption*. Its
