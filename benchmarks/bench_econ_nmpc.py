@@ -31,7 +31,7 @@ import warnings
 
 import numpy as np
 
-from acid.econ.model import STATES
+from acid.models.econ import STATES
 from acid.mpc.cav_study import default_plant_factory, identify_econ
 from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
 from acid.mpc.nmpc import NMPC, NMPCConfig

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.data import Dataset
-from acid.econ import model
 from acid.econ.params import REQUIRED, EconParams
+from acid.models import econ
 
 #: Extra channels: (name, unit, factor from model units).
 EXTRA_CHANNELS = (("T_int", "K", 1.0), ("T_shell", "K", 1.0), ("w_cab", "g/kg", 1e3),
@@ -68,21 +68,24 @@ def predict_windows(ds: Dataset, idx: np.ndarray, p: EconParams,
     k0 = idx[:, 0]
     x0 = np.stack([K["T_cab"][k0], K["T_int"][k0], K["T_shell"][k0], K["T_evap"][k0], w[k0]],
                   axis=-1)
-    tr = model.simulate(x0, W, Tset, v, Ta, p)
-    xs = tr.x[:, :-1, :]                       # states at steps 0 .. H
-    predicted = np.stack([xs[..., 0], xs[..., 3], tr.T_ain], axis=-1)
+    X, Y = econ.model.simulate(x0, np.stack([W, Tset], axis=-1), np.stack([v, Ta], axis=-1),
+                               p.theta_all)
+    y = dict(zip(econ.model.output_names, np.moveaxis(Y, -1, 0), strict=True))
+    P_comp = np.maximum(y["P_comp"], 0.0)      # the map clipped at zero, as a plant does
+    xs = X[:, :-1, :]                          # states at steps 0 .. H
+    predicted = np.stack([xs[..., 0], xs[..., 3], y["T_ain"]], axis=-1)
     measured = np.stack([K["T_cab"][idx], K["T_evap"][idx], K["T_ain"][idx]], axis=-1)
     P_meas = ds.get("P_comp", "W")[idx]
     extra = {}
     for (name, unit, f), pred, meas in zip(
-            EXTRA_CHANNELS, (xs[..., 1], xs[..., 2], xs[..., 4], tr.P_comp),
+            EXTRA_CHANNELS, (xs[..., 1], xs[..., 2], xs[..., 4], P_comp),
             (K["T_int"][idx], K["T_shell"][idx], w[idx], P_meas), strict=True):
         extra[name] = (f * pred, f * meas, unit)
     Ts = float(ds.Ts)
     return EconWindows(predicted=predicted, measured=measured,
                        inputs=np.stack([W, Tset], axis=-1),
                        exogenous=np.stack([xs[..., 1], xs[..., 2]], axis=-1), extra=extra,
-                       energy=(tr.P_comp.sum(axis=1) * Ts, P_meas.sum(axis=1) * Ts))
+                       energy=(P_comp.sum(axis=1) * Ts, P_meas.sum(axis=1) * Ts))
 
 
 def extra_metrics(win: EconWindows) -> dict:
