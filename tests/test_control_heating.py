@@ -3,11 +3,10 @@
 import warnings
 
 import numpy as np
-import pytest
 
 from acid.control.heating import (
-    HeatingControlConfig,
     STATE_KEYS,
+    HeatingControlConfig,
     HeatingNMPC,
     Scenario,
     run_case,

@@ -39,13 +39,13 @@ its end state, and the difference of its tail energy to the rule's is added to i
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
+from acid._io import save_figure, write_json
 from acid.control.ocp import OCP, OCPSpec, SoftBound
 from acid.errors import ConfigError, SolverWarning
 from acid.models.heating_control import COP_FIT, W_BL_HOLD, heating_control_model
@@ -169,7 +169,7 @@ class HeatingNMPC:
             self._w = None
             warnings.warn(f"heating NMPC solve failed ({res.status}); the last move holds",
                           SolverWarning, stacklevel=2)
-        return dict(zip(("Q_hp", "P_heater", "recirc"), map(float, self._last)))
+        return dict(zip(("Q_hp", "P_heater", "recirc"), map(float, self._last), strict=True))
 
 
 class HeatPumpServo:
@@ -252,10 +252,6 @@ def _state(p: HeatingPlant) -> dict:
     return {k: m[k] for k in INITIAL_KEYS}
 
 
-def _rh(T, w) -> float:
-    return float(relative_humidity(T, w))
-
-
 def _tail_energy(end: dict, T_amb: float, T_set: float, v: float, tail_s: float) -> float:
     p = HeatingPlant(config=winter_plant_config(T_amb), mode="nominal")
     p.reset(initial=end)
@@ -330,7 +326,7 @@ def run_case(kind: str, sc: Scenario, cfg: HeatingControlConfig, *, target: floa
                                       * plant.Ts / 3.6e6),
             "mean_T_cab_C": float(K2C(T_cab.mean())), "min_T_cab_C": float(K2C(T_cab.min())),
             "max_T_cab_C": float(K2C(T_cab.max())),
-            "mean_RH": float(np.mean([_rh(a, b) for a, b in zip(T_cab, w)])),
+            "mean_RH": float(np.mean(relative_humidity(T_cab, w))),
             "min_fog_margin_K": float(margin.min()),
             "fog_samples": int(np.sum(margin < 0.0)),
             "mean_recirc": float(np.mean([r["recirc"] for r in rows])),
@@ -429,15 +425,12 @@ def heating_study(cycles=CYCLES, ambients_C=AMBIENTS_C, cfg: HeatingControlConfi
              for a in ambients_C]
     result = {"benchmark": "heating control at equal mean T_cab on the heating plant; "
                            "perfect state and preview; end state charged back",
-              "config": {k: (K2C(v) if k.startswith("T_") else v)
+              "config": {(f"{k}_C" if k.startswith("T_") else k): (K2C(v) if k.startswith("T_")
+                                                                   else v)
                          for k, v in dataclasses.asdict(cfg).items()},
               "cop_fit": COP_FIT, "cases": cases}
     if json_path is not None:
-        tmp = f"{json_path}.tmp"
-        with open(tmp, "w") as f:
-            json.dump(result, f, indent=1, default=float)
-        import os
-        os.replace(tmp, json_path)
+        write_json(json_path, result)
     if png_path is not None:
         plot_study(result, png_path)
     return result
@@ -461,8 +454,7 @@ def plot_study(result: dict, path) -> None:
     ax.set_title("Heating at equal mean cabin temperature (heating plant)")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def heat_pump_map(ambients_C=(-10.0, -5.0, 0.0, 4.0, 7.0), recircs=(0.0, 0.4, 0.8),
@@ -492,5 +484,5 @@ def heat_pump_map(ambients_C=(-10.0, -5.0, 0.0, 4.0, 7.0), recircs=(0.0, 0.4, 0.
         return (d[:, 2] / cop - d[:, 3]) / np.maximum(d[:, 3], 100.0)
 
     s = least_squares(res, [5.0, 0.05, 0.05])
-    return (dict(zip(("COP_0", "COP_amb", "COP_lift"), map(float, s.x))),
+    return (dict(zip(("COP_0", "COP_amb", "COP_lift"), map(float, s.x), strict=True)),
             float(math.sqrt(np.mean(s.fun ** 2))), len(d))

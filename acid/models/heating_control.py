@@ -104,7 +104,7 @@ def output(s):
     _Wcp, T_a1, _Q_hc, T_sup, _T_mix = _air(s)
     cop = fmax(1.0, s.COP_0 + s.COP_amb * (s.T_amb - T0C) - s.COP_lift * (T_a1 - s.T_amb))
     p_w = s.w_cab * s.p_atm / (0.621945 + s.w_cab)
-    x = log(p_w / 611.2)
+    x = log(fmax(p_w, 1.0) / 611.2)   # floored: an iterate may pass through w_cab <= 0
     T_dew = T0C + 243.12 * x / (17.62 - x)
     return {"P_hp": s.Q_hp / cop, "fog_margin": s.T_glass - T_dew, "T_sup": T_sup,
             "T_a1": T_a1}
