@@ -8,8 +8,8 @@ from acid.control.heating import (
     STATE_KEYS,
     HeatingControlConfig,
     HeatingNMPC,
-    Scenario,
     run_case,
+    tune_rule,
     warm_start,
 )
 from acid.models.heating_control import heating_control_model
@@ -42,24 +42,25 @@ def test_control_model_follows_the_plant_open_loop():
             assert abs(y[0] - P) < 0.1 * P
 
 
-def test_nmpc_holds_comfort_without_fogging_and_spends_no_more_than_the_rule():
-    """One short case (HWFET, 0 degC, warm cabin): the NMPC keeps the cabin near its band,
-    never fogs, keeps the fogging margin near its 2 K floor and, with the end state charged
-    back, spends no more than the simple rule at a recirculation share that keeps the same
-    margin (its saving comes from recirculating more while the glass allows it)."""
+def test_nmpc_holds_comfort_without_fogging_and_spends_no_more_than_the_tuned_rule():
+    """One short case (HWFET, 0 degC, from a warm cabin): the NMPC never fogs, keeps the
+    fogging margin near its 2 K floor, keeps the cabin at least as warm on average as the
+    best simple rule of a small search (recirculation share and PI gains; the rule's own
+    choice keeps the margin >= 2 K) and, with the end state charged back, spends no more."""
     cfg = HeatingControlConfig(N=30)
-    sc = Scenario("hwfet", T_AMB, warm_start("hwfet", T_AMB, cfg.T_set, 1800.0), 600.0)
+    sc = warm_start("hwfet", T_AMB, cfg.T_set, 1800.0, 600.0)
+    rule, tried = tune_rule(sc, cfg, recircs=(0.6, 0.8, 0.9), gains=((800.0, 4.0),))
+    assert rule["ok"] and rule["fog_samples"] == 0
+    assert rule["recirc_setting"] == 0.8          # 0.9 brings the glass within 2 K
     hc = HeatingConfig()
     nmpc = HeatingNMPC(heating_control_model(hc, winter_plant_config(T_AMB), Ts=cfg.Ts),
                        cfg, hc.P_heater_max)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         mpc = run_case("nmpc", sc, cfg, target=cfg.T_set, nmpc=nmpc)
-    rule = run_case("rule", sc, cfg, target=cfg.T_set, recirc=0.6)
     assert mpc["fallbacks"] == 0
-    assert mpc["fog_samples"] == 0 and mpc["min_fog_margin_K"] > 1.5
-    assert mpc["mean_T_cab_C"] > 20.5
-    assert rule["fog_samples"] == 0
+    assert mpc["fog_samples"] == 0 and mpc["min_fog_margin_K"] > 1.8
+    assert mpc["mean_T_cab_C"] >= rule["mean_T_cab_C"] - 0.05
     E_mpc = mpc["energy_kWh"] + mpc["tail_kWh"]
     E_rule = rule["energy_kWh"] + rule["tail_kWh"]
-    assert E_mpc <= E_rule * 1.02, (E_mpc, E_rule)
+    assert E_mpc <= E_rule, (E_mpc, E_rule)
