@@ -3,16 +3,18 @@
 import warnings
 
 import numpy as np
+import pytest
 
 from acid.control.heating import (
     STATE_KEYS,
     HeatingControlConfig,
     HeatingNMPC,
+    heat_pump_map,
     run_case,
     tune_rule,
     warm_start,
 )
-from acid.models.heating_control import heating_control_model
+from acid.models.heating_control import COP_FIT, heating_control_model
 from acid.plant.heating import HeatingPlant
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
 from acid.units import C2K
@@ -64,3 +66,12 @@ def test_nmpc_holds_comfort_without_fogging_and_spends_no_more_than_the_tuned_ru
     E_mpc = mpc["energy_kWh"] + mpc["tail_kWh"]
     E_rule = rule["energy_kWh"] + rule["tail_kWh"]
     assert E_mpc <= E_rule, (E_mpc, E_rule)
+
+
+def test_declared_cop_law_is_the_fit_to_the_plant():
+    """The COP law the control model declares (COP_FIT) is what heat_pump_map fits to the
+    heating plant today (a changed plant shows here), within 5 % of power."""
+    fit, rms, n = heat_pump_map()
+    assert n > 50 and rms < 0.06
+    for k, v in fit.items():
+        assert COP_FIT[k] == pytest.approx(v, rel=0.02, abs=2e-4), k
