@@ -79,7 +79,9 @@ def cav_study(
     horizon: int = typer.Option(6, "--horizon", help="Paper NMPC horizon N (steps of 5 s)."),
     econ_horizon: float = typer.Option(120.0, "--econ-horizon",
                                        help="Economic NMPC horizon, s (5 s steps)."),
-    econ_solver: str = typer.Option("fatrop", "--econ-solver", help="'fatrop' or 'ipopt'."),
+    econ_solver: str = typer.Option(
+        "sqp", "--econ-solver",
+        help="'sqp' (warm-started SQP, IPOPT when it fails), 'fatrop' or 'ipopt'."),
     econ_terminal: str = typer.Option(
         "steady", "--econ-terminal",
         help="Terminal cost of D and E: 'steady' (multipliers of the model's optimal steady "
@@ -151,7 +153,7 @@ def cav_study(
         make_scenario,
     )
     from acid.mpc.cav_study import cav_study as run_study
-    from acid.mpc.econ_nmpc import TERMINALS, EconNMPCConfig
+    from acid.mpc.econ_nmpc import ECON_SOLVERS, TERMINALS, EconNMPCConfig
     from acid.plant import make_plant
     from acid.plant.vehicles import vehicle_config, vehicle_label
 
@@ -178,8 +180,8 @@ def cav_study(
     require_range(tail, "--tail", 0.0, MAX_SECONDS, "s")
     require_range(identify_duration, "--identify-duration", 3600.0, MAX_SECONDS, "s")
     require_range(econ_horizon, "--econ-horizon", 10.0, 3600.0, "s")
-    require(econ_solver in ("fatrop", "ipopt"), "--econ-solver",
-            f"must be 'fatrop' or 'ipopt', got {econ_solver!r}")
+    require(econ_solver in ECON_SOLVERS, "--econ-solver",
+            f"must be one of {', '.join(ECON_SOLVERS)}, got {econ_solver!r}")
     require(econ_terminal in TERMINALS, "--econ-terminal",
             f"must be one of {', '.join(TERMINALS)}, got {econ_terminal!r}")
     require_range(coil_max, "--coil-max", 4.0, 15.0, "degC")

@@ -43,6 +43,10 @@ from acid_cli import heating_check  # noqa: E402
 
 app.command(name="heating-check")(heating_check.heating_check)
 
+from acid_cli import heating_control  # noqa: E402
+
+app.command(name="heating-control")(heating_control.heating_control)
+
 from acid_cli import export_fmu  # noqa: E402
 
 app.command(name="export-fmu")(export_fmu.export_fmu)

@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from acid.econ import model
 from acid.errors import ConfigError, ExtrapolationWarning
 from acid.models import econ as econ_decl
 from acid.mpc.best_plan import PlanConfig, best_known_plan
@@ -46,7 +45,7 @@ def test_the_band_is_worth_at_most_what_pinning_costs(plans):
 def test_replaying_the_plan_on_the_model_achieves_its_energy(plans, econ_truth):
     band, _ = plans
     plant = econ_decl.plant(econ_truth.theta_all)
-    plant.reset(dict(zip(model.STATES, band.x[0], strict=True)))
+    plant.reset(dict(zip(econ_decl.STATES, band.x[0], strict=True)))
     E = 0.0
     for k in range(V.size):
         row = plant.step(band.W_bl[k], band.T_evap_set[k], V[k], T_amb=T_AMB)

@@ -105,9 +105,9 @@ def test_ode_with_rk4_integrates_the_declared_derivative():
     assert x[0] == pytest.approx(rk4, rel=1e-14)
 
 
-def test_paper_declaration_steps_as_acid_model(rng):
-    from acid import model as pm
-
+def test_paper_declaration_steps_as_the_papers_equations(rng):
+    """The declaration against eqs. 1-3 and 5 transcribed here from the paper (eq. 3's T_ain
+    substituted in eq. 1)."""
     m = load("paper")
     n = 200
     x = np.c_[rng.uniform(285, 320, n), rng.uniform(270, 290, n)]
@@ -115,11 +115,20 @@ def test_paper_declaration_steps_as_acid_model(rng):
     d = np.c_[rng.uniform(285, 330, n), rng.uniform(285, 340, n)]
     xn, y = m.step(x, u, d)
     p = paper()
-    cab, evap, ain = pm.step(x[:, 0], x[:, 1], u[:, 0], u[:, 1], d[:, 0], d[:, 1], p)
+    g1, g2, g3, g4, g5, g6, g7 = p.gamma
+    t1, t2, t3 = p.tau
+    b1, b2, b3 = p.beta
+    T_cab, T_evap = x.T
+    W_bl, T_evap_set = u.T
+    T_int, T_shell = d.T
+    ain = g6 * T_evap + g7 * W_bl + t3                                            # eq. 3
+    cab = (T_cab + g1 * (T_int - T_cab) + g2 * (T_shell - T_cab)
+           + g3 * (ain - T_cab) * W_bl + t1)                                      # eq. 1
+    evap = g4 * T_evap + g5 * (T_evap - T_evap_set) + t2                          # eq. 2
     np.testing.assert_allclose(xn[:, 0], cab, rtol=0, atol=1e-12 * 300)
     np.testing.assert_allclose(xn[:, 1], evap, rtol=0, atol=1e-12 * 300)
     np.testing.assert_allclose(y[:, 0], ain, rtol=1e-12)
-    np.testing.assert_allclose(y[:, 1], pm.blower_power(u[:, 0], p), rtol=1e-12)
+    np.testing.assert_allclose(y[:, 1], b1 * W_bl**2 + b2 * W_bl + b3, rtol=1e-12)  # eq. 5
     assert m.parameter_names == tuple(p.as_dict())
 
 

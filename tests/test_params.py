@@ -9,8 +9,8 @@ import re
 import numpy as np
 import pytest
 
-from acid import model
 from acid.errors import DataError
+from acid.models.paper import model
 from acid.params import (
     PAPER_BETA,
     PAPER_GAMMA,
@@ -38,19 +38,29 @@ def test_evaporator_settles_near_its_set_point(T_set_C):
     """Eq. 2 with the paper's values tracks the set-point in kelvin (the unit slip check)."""
     p = paper()
     T_set = C2K(T_set_C)
-    assert abs(model.evap_steady_state(T_set, p) - T_set) < 0.5
-    _, T_evap, _ = model.simulate([C2K(30.0), C2K(15.0)], np.full(60, 0.1), np.full(60, T_set),
-                                  C2K(35.0), C2K(40.0), p)
-    assert abs(T_evap[-1] - T_set) < 0.5
+    # eq. 2 is affine in T_evap: T_evap(k+1) = a T_evap + b, fixed point b / (1 - a)
+    b, a1 = (_declared_step(T_evap, T_set, p)["T_evap"] for T_evap in (0.0, 1.0))
+    assert abs(b / (1.0 - (a1 - b)) - T_set) < 0.5
+    x, _ = model.simulate([C2K(30.0), C2K(15.0)], np.tile([0.1, T_set], (60, 1)),
+                          np.tile([C2K(35.0), C2K(40.0)], (60, 1)), p.theta)
+    assert abs(x[-1, model.state_names.index("T_evap")] - T_set) < 0.5
     assert abs(p.gamma[3] + p.gamma[4]) < 1  # stable evaporator pole
 
 
 @pytest.mark.parametrize("T_evap_C", [3.0, 5.0, 10.0])
 def test_inlet_air_is_cool_at_nominal_blower_flow(T_evap_C):
-    T_ain = K2C(model.inlet_air(C2K(T_evap_C), 0.1, paper()))
+    T_ain = K2C(_declared_step(C2K(T_evap_C), C2K(T_evap_C), paper())["T_ain"])
     assert 5.0 <= T_ain <= 20.0
     # the same formula fed with degC gives an absurd supply temperature: the paper's slip
-    assert model.inlet_air(T_evap_C, 0.1, paper()) > 150.0
+    assert _declared_step(T_evap_C, T_evap_C, paper())["T_ain"] > 150.0
+
+
+def _declared_step(T_evap, T_evap_set, p, W_bl=0.1):
+    """The paper's declaration one step from T_cab = 30 degC, T_int = 35, T_shell = 40 degC:
+    the next T_cab, T_evap and the outputs T_ain, P_bl by name, K and W."""
+    x, y = model.step([C2K(30.0), T_evap], [W_bl, T_evap_set], [C2K(35.0), C2K(40.0)], p.theta)
+    return {**dict(zip(model.state_names, x, strict=True)),
+            **dict(zip(model.output_names, y, strict=True))}
 
 
 def test_json_round_trip_keeps_values_units_and_provenance(tmp_path):

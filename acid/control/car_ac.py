@@ -132,20 +132,8 @@ class CarEconNMPC:
     def _guess(self, x0, d) -> np.ndarray:
         """The previous solution shifted by one sample, else the model run at the band's
         middle set-point."""
-        ocp = self.ocp
-        if self._w is not None:
-            w = self._w[ocp.shift_w].copy()
-            w[ocp._ix[0]] = (x0 - ocp.x_offset) / ocp.x_scale
-            return w
-        w = np.zeros(ocp.w.size)
         u = np.array([0.5 * (self.config.T_evap_min + self.config.T_evap_max)])
-        x = np.asarray(x0, dtype=float)
-        w[ocp._ix[0]] = (x - ocp.x_offset) / ocp.x_scale
-        for i in range(ocp.N):
-            w[ocp._iu[i]] = ocp.u_nlp(u)
-            x = self.model.step(x, u, d[i], self.theta)[0]
-            w[ocp._ix[i + 1]] = (x - ocp.x_offset) / ocp.x_scale
-        return w
+        return self.ocp.guess(x0, d, self.theta, u, self._w)
 
     def make_step(self, x, d_preview) -> float:
         """The set-point ``T_evap`` (K) for the next sample from the state ``x`` (nx,) and the

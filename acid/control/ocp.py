@@ -512,6 +512,23 @@ class OCP:
                 return evaluate
         return lambda *args: tuple(np.asarray(a) for a in fn(*args))
 
+    def guess(self, x0, d, theta, u, previous: np.ndarray | None = None) -> np.ndarray:
+        """An initial point for the NLP from the state ``x0`` (nx,): the ``previous`` solution
+        shifted by one stage, else the model run over the previewed ``d`` (N, nd) with the
+        input ``u`` (nu,) held (and parameters ``theta``)."""
+        x = np.asarray(x0, dtype=float)
+        if previous is not None:
+            w = previous[self.shift_w].copy()
+            w[self._ix[0]] = (x - self.x_offset) / self.x_scale
+            return w
+        w = np.zeros(self.w.size)
+        w[self._ix[0]] = (x - self.x_offset) / self.x_scale
+        for i in range(self.N):
+            w[self._iu[i]] = self.u_nlp(u)
+            x = self.model.step(x, u, d[i], theta)[0]
+            w[self._ix[i + 1]] = (x - self.x_offset) / self.x_scale
+        return w
+
     def u_nlp(self, u) -> np.ndarray:
         """Inputs (declared units) as the NLP's scaled variables."""
         return (np.asarray(u, dtype=float) - self.u_offset) * self.u_scale

@@ -4,8 +4,6 @@ is declared once, in :mod:`acid.models.econ` (equations, parameter table, fittin
 * :mod:`acid.econ.params` -- ``EconParams`` (the declaration's table as a value container,
   JSON) with its ``PowerMap`` (domain, quality); ``identify`` (``acid fit --model econ``):
   acid.ident's staged fit of the declaration;
-* :mod:`acid.econ.model` -- thin names over the declaration for code that passes
-  ``EconParams`` (economic NMPC, steady state, best known plan).
 
 It is validated by acid's one validator, :func:`acid.ident.validate.validate`.
 """

@@ -1,4 +1,4 @@
-"""Parameters of the economic model family (:mod:`acid.econ.model`) as a named, unit-carrying table.
+"""Parameters of the econ model (:mod:`acid.models.econ`) as a named, unit-carrying table.
 
 The table is the declaration's (:mod:`acid.models.econ`); every value is identified from data
 by :func:`identify` (``acid fit --model econ``, acid.ident's staged fit); nothing is read from

@@ -39,13 +39,15 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from acid.econ import model
 from acid.econ.params import EconParams
 from acid.errors import ConfigError, ExtrapolationWarning
+from acid.models import econ
+from acid.mpc.econ_nmpc import X_OFFSET as _X_OFF
+from acid.mpc.econ_nmpc import X_SCALE as _X_SCL
 from acid.psychro import humidity_ratio
 from acid.units import C2K, K2C
 
-_X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
+_NX, _NU = econ.model.nx, econ.model.nu
 
 
 @dataclass(frozen=True)
@@ -164,16 +166,16 @@ def best_known_plan(params: EconParams, v_veh, T_amb, config: PlanConfig,
     for msg in params.power_map.outside(v_veh=v, T_amb=Ta):
         warnings.warn(f"plan: power map extrapolated: {msg}", ExtrapolationWarning,
                       stacklevel=2)
-    F = model.casadi_step(params, Ts).map(n)
-    Z = ca.MX.sym("Z", model.NX, n + 1)
-    U = ca.MX.sym("U", model.NU, n)
+    F = _interval_map(params, Ts, n)
+    Z = ca.MX.sym("Z", _NX, n + 1)
+    U = ca.MX.sym("U", _NU, n)
     xoff, xscl = ca.DM(_X_OFF), ca.DM(_X_SCL)
     X = ca.repmat(xoff, 1, n + 1) + ca.repmat(xscl, 1, n + 1) * Z
     D = ca.DM(np.vstack([v, Ta]))
-    Xn, _T_ain, Q_e, P_c, P_b = F(X[:, :n], U, D, ca.DM.zeros(model.NX, n))
+    Xn, Q_e, P_c, P_b = F(X[:, :n], U, D)
     g = [ca.vec((Xn - X[:, 1:]) / ca.repmat(xscl, 1, n)), ca.vec(Q_e) / 1e3]
-    lbg = [np.zeros(model.NX * n), np.zeros(n)]
-    ubg = [np.zeros(model.NX * n), np.full(n, np.inf)]
+    lbg = [np.zeros(_NX * n), np.zeros(n)]
+    ubg = [np.zeros(_NX * n), np.full(n, np.inf)]
     T_cab = X[0, 1:]
     if cfg.pinned:
         g.append(ca.vec(T_cab) - cfg.T_mean)
@@ -189,8 +191,8 @@ def best_known_plan(params: EconParams, v_veh, T_amb, config: PlanConfig,
         ubg.append(np.zeros(n))
     if cfg.cyclic:
         g.append(Z[:, n] - Z[:, 0])
-        lbg.append(np.zeros(model.NX))
-        ubg.append(np.zeros(model.NX))
+        lbg.append(np.zeros(_NX))
+        ubg.append(np.zeros(_NX))
     elif x_start is None:
         raise ConfigError("a non-cyclic plan needs x_start")
     w = ca.vertcat(ca.vec(Z), ca.vec(U))
@@ -206,7 +208,7 @@ def best_known_plan(params: EconParams, v_veh, T_amb, config: PlanConfig,
                                            "max_iter": int(cfg.max_iter),
                                            "mu_strategy": "adaptive"}}
     solver = ca.nlpsol("acid_best_plan", "ipopt", nlp, opts)
-    nz = model.NX * (n + 1)
+    nz = _NX * (n + 1)
     lbx = np.full(w.shape[0], -np.inf)
     ubx = np.full(w.shape[0], np.inf)
     u_lo = np.array([cfg.W_bl_min, cfg.T_evap_set_min])
@@ -215,8 +217,8 @@ def best_known_plan(params: EconParams, v_veh, T_amb, config: PlanConfig,
     ubx[nz:] = np.tile(u_hi, n)
     if x_start is not None:
         z0 = (np.asarray(x_start, dtype=float) - _X_OFF) / _X_SCL
-        lbx[:model.NX] = z0
-        ubx[:model.NX] = z0
+        lbx[:_NX] = z0
+        ubx[:_NX] = z0
     x_g, u_g = _initial_guess(params, v, Ta, cfg, guess, x_start)
     w0 = np.concatenate([((x_g - _X_OFF) / _X_SCL).ravel(), u_g.ravel()])
     t0 = time.perf_counter()
@@ -231,9 +233,9 @@ def best_known_plan(params: EconParams, v_veh, T_amb, config: PlanConfig,
             f"{K2C(cfg.T_low):.2f}-{K2C(cfg.T_high):.2f} degC with mean "
             f"{K2C(cfg.T_mean):.2f} degC cannot be held with the inputs' bounds")
     wv = np.asarray(res["x"]).ravel()
-    x = wv[:nz].reshape(n + 1, model.NX) * _X_SCL + _X_OFF
-    u = np.clip(wv[nz:].reshape(n, model.NU), u_lo, u_hi)
-    _, _, q, pc, pb = (np.asarray(a) for a in F(x[:n].T, u.T, D, ca.DM.zeros(model.NX, n)))
+    x = wv[:nz].reshape(n + 1, _NX) * _X_SCL + _X_OFF
+    u = np.clip(wv[nz:].reshape(n, _NU), u_lo, u_hi)
+    _, q, pc, pb = (np.asarray(a) for a in F(x[:n].T, u.T, D))
     for msg in params.power_map.outside(Q_e=q.ravel(), T_evap=0.5 * (x[:-1, 3] + x[1:, 3])):
         warnings.warn(f"plan: the optimal plan extrapolates the power map: {msg}",
                       ExtrapolationWarning, stacklevel=2)
@@ -250,10 +252,23 @@ def _initial_guess(params, v, Ta, cfg: PlanConfig, guess, x_start):
     n = v.size
     if guess is not None:
         x, u = (np.asarray(a, dtype=float) for a in guess)
-        if x.shape == (n + 1, model.NX) and u.shape == (n, model.NU):
+        if x.shape == (n + 1, _NX) and u.shape == (n, _NU):
             return x, u
     u = np.tile([0.08, cfg.T_evap_set_max], (n, 1))
     x0 = np.asarray(x_start, dtype=float) if x_start is not None else np.array(
         [cfg.T_mean, cfg.T_mean + 2.0, Ta.mean() + 3.0, cfg.T_evap_set_max, 0.008])
-    tr = model.simulate(x0, u[:, 0], u[:, 1], v, Ta, params)
-    return tr.x, u
+    x, _ = econ.model.simulate(x0, u, np.column_stack([v, Ta]), params.theta_all)
+    return x, u
+
+
+def _interval_map(params: EconParams, Ts: float, n: int) -> ca.Function:
+    """``(x (5, n), u (2, n), d (2, n)) -> (x_next, Q_e, P_comp, P_bl)``: the declaration's
+    interval of ``Ts`` s (:func:`acid.models.econ.casadi_interval`, no disturbance) at the
+    numbers of ``params``, mapped over ``n`` samples (P_comp unclipped)."""
+    F = econ.casadi_interval(Ts)
+    x, u, d = ca.SX.sym("x", _NX), ca.SX.sym("u", _NU), ca.SX.sym("d", F.size1_in(2))
+    out = dict(zip(F.name_out(), F(x, u, d, ca.DM(params.theta_all), ca.DM.zeros(_NX)),
+                   strict=True))
+    names = ("x_next", "Q_e", "P_comp", "P_bl")
+    return ca.Function("econ_plan_step", [x, u, d], [out[k] for k in names],
+                       ["x", "u", "d"], list(names)).map(n)

@@ -74,9 +74,9 @@ from acid.comfort import (
     comfort_stats,
     rh_band_distance,
 )
-from acid.econ import model as econ_model
 from acid.econ.params import MAP_INPUTS, EconParams
 from acid.errors import ConfigError, ExtrapolationWarning
+from acid.models.econ import STATES
 from acid.mpc.best_plan import PlanConfig, WholeCyclePlan, best_known_plan
 from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
 from acid.mpc.icm import ICMConfig, icm_upper_bound
@@ -107,7 +107,7 @@ PLAN_VARIANTS = {"cyclic": "cyclic plan, replayed from its periodic state",
 #: The paper's stop-and-go scenario as a study cycle (its 80 s period repeated).
 STOPGO = "stopgo"
 #: the econ model's states, read from the plant by D and E and set by the plan's replay
-_MODEL_STATES = econ_model.STATES
+_MODEL_STATES = STATES
 
 PlantFactory = Callable[[], object]
 Progress = Callable[[int], None]

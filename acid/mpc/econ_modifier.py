@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.econ.params import EconParams
-from acid.models.econ import DT_SCALE, MAP_TERMS
+from acid.models.econ import DT_SCALE, MAP_TERMS, STATES, air_side, parameters
 from acid.mpc.econ_terminal import SteadyStatePrice
 from acid.mpc.pi_baselines import COIL_RANGE, PlantPI
 
@@ -76,9 +76,9 @@ def model_steady_power(econ: EconParams, v: float, T_amb: float, T_cab: float,
     lo, hi = (T_coil, T_coil) if T_coil is not None else coil_range
     price = SteadyStatePrice(econ, [0.05, lo], [0.15, hi])
     ss = price.steady_state(v, T_amb, T_cab, T_cab)
-    from acid.econ import model
-
-    air = model.air_side(ss.x[0], ss.x[3], ss.x[4], ss.u[0], T_amb, econ)
+    x = dict(zip(STATES, ss.x, strict=True))
+    air = air_side(parameters(econ.theta_all), x["T_cab"], x["T_evap"], x["w_cab"], ss.u[0],
+                   T_amb)
     return ss.power_W, float(ss.u[1]), float(air.Q_coil)
 
 

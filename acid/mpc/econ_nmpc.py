@@ -1,6 +1,6 @@
 """Economic NMPC on the identified econ model (beyond the paper).
 
-At every update k it solves, on the model of :mod:`acid.econ.model` (the same functions the
+At every update k it solves, on the econ declaration :mod:`acid.models.econ` (the equations the
 fit used), over a horizon of intervals ``dt_0 .. dt_{N-1}`` (default 24 x 5 s = 120 s; a
 non-uniform grid such as 6 x 5 s + 3 x 10 s + 4 x 15 s is allowed, the model being
 continuous-time)::
@@ -27,7 +27,7 @@ of several minutes), so what the plan leaves in the states at its end is priced 
 ``lam`` J per unit state (K, kg/kg), recomputed every update (``terminal``):
 
 * ``"heat"``: ``lam = pi dH/dx``, ``H`` the model's heat content
-  (:func:`acid.econ.model.heat_content`) and ``pi`` the marginal electric energy per joule of
+  (:func:`acid.models.econ.heat_content`) and ``pi`` the marginal electric energy per joule of
   cooling, ``dP_comp/dQ_e`` of the power map at the current operating point;
 * ``"steady"`` (default): the multipliers of the model's optimal steady state at the horizon's
   mean speed and ambient (the economic-MPC terminal cost of the rotated-cost literature,
@@ -61,7 +61,8 @@ solve the same NLP. The NLP is built once through
 :class:`acid.mpc.solver.NLPSolver` (issue 13): generated C compiled at first use and cached
 per user when a C compiler works (``compiled="auto"``; CasADi otherwise, the same algorithm),
 with a wall-clock cap per solve only when ``max_solve_s`` asks for one. The identified
-parameters are NLP *parameters* (:func:`acid.econ.model.parameter_vector`), so one compiled
+parameters are NLP *parameters* (the declaration's vector,
+``EconParams.theta_all``), so one compiled
 solver serves every parameter set
 of the same horizon and options. Variables are ordered stage by stage ``[x_0, u_0, s_0, x_1,
 ...., x_N]`` and constraints per stage so that **fatrop** detects the optimal-control
@@ -85,9 +86,10 @@ import casadi as ca
 import numpy as np
 
 from acid.control.ocp import OCP, OCPSpec, SoftBound
-from acid.econ import model
 from acid.econ.params import EconParams
 from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
+from acid.models import econ
+from acid.models.econ import STATES
 from acid.models.econ import model as ECON_MODEL
 from acid.mpc.econ_terminal import SteadyStatePrice
 from acid.mpc.estimator import EstimatorConfig, OffsetFreeEstimator
@@ -96,10 +98,17 @@ from acid.mpc.solver import NLPSolver
 from acid.psychro import humidity_ratio
 from acid.units import C2K
 
-_NX, _NU = model.NX, model.NU
-#: NLP variable scaling (acid.econ.model: one source for the NMPC, steady state and bound)
-_X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
-_U_OFF, _U_SCL = model.U_OFFSET, model.U_SCALE
+_NX, _NU, _ND = ECON_MODEL.nx, ECON_MODEL.nu, ECON_MODEL.nd
+#: Scaling of the NLPs' variables on the econ model, one source for the NMPC, its optimal
+#: steady state and the best known plan: z = (x - X_OFFSET) / X_SCALE in ``STATES`` order,
+#: w = (u - U_OFFSET) / U_SCALE in (W_bl, T_evap_set) order (K, kg/kg, kg/s)
+X_OFFSET = np.array([293.15, 293.15, 293.15, 278.15, 0.008])
+X_SCALE = np.array([1.0, 1.0, 1.0, 1.0, 1e-3])
+U_OFFSET = np.array([0.1, 278.15])
+U_SCALE = np.array([0.01, 1.0])
+_X_OFF, _X_SCL, _U_OFF, _U_SCL = X_OFFSET, X_SCALE, U_OFFSET, U_SCALE
+#: what the NMPC reads of the declaration's interval (``acid.models.econ.casadi_interval``)
+INTERVAL_OUTPUTS = ("x_next", "T_ain", "Q_e", "P_comp", "P_bl")
 #: solvers of the economic NMPC: SQP (sqpmethod + qrqp, warm-started with the shifted
 #: multipliers, checked for convergence), fatrop, IPOPT (always inside CasADi)
 ECON_SOLVERS = ("sqp", "fatrop", "ipopt")
@@ -346,20 +355,14 @@ def stage_means(profile, k: int, intervals, Ts: float) -> np.ndarray:
 
 def econ_interval(dt: float) -> ca.Function:
     """``(x[5], u[2], d[2], p[np], dist[5]) -> (x_next, T_ain, Q_e, P_comp, P_bl)``: one
-    interval of ``dt`` s of the econ model (RK4 with inputs and disturbances held; means over
-    the interval; ``dist`` additive terms on the state derivatives) as a function of the
-    econ declaration's parameter vector (``acid.models.econ.model``'s table order)."""
-    x, u, d = ca.SX.sym("x", _NX), ca.SX.sym("u", _NU), ca.SX.sym("d", model.ND)
-    p, w = ca.SX.sym("p", ECON_MODEL.np), ca.SX.sym("dist", _NX)
-    ps = model.symbolic_parameters(p)
-    r = model.step(ca.vertsplit(x), ca.vertsplit(u), ca.vertsplit(d), ps, dt,
-                   dist=ca.vertsplit(w))
-    Q_e = model.refrigerant_heat(r.Q_coil, x[3], r.x[3], dt, ps)
-    return ca.Function("econ_interval", [x, u, d, p, w],
-                       [ca.vertcat(*r.x), r.T_ain, Q_e,
-                        model.compressor_power(Q_e, r.T_evap, d[0], d[1], ps.power_map),
-                        model.blower_power(u[0], ps)],
-                       ["x", "u", "d", "p", "dist"], ["x_next", "T_ain", "Q_e", "P_comp", "P_bl"])
+    interval of ``dt`` s of the econ declaration (:func:`acid.models.econ.casadi_interval`:
+    RK4 with inputs and disturbances held; means over the interval; ``dist`` additive terms
+    on the state derivatives) with the outputs the NMPC names (``INTERVAL_OUTPUTS``)."""
+    F = econ.casadi_interval(dt)
+    args = [ca.SX.sym(n, F.size1_in(i)) for i, n in enumerate(F.name_in())]
+    out = dict(zip(F.name_out(), F(*args), strict=True))
+    return ca.Function("econ_interval", args, [out[n] for n in INTERVAL_OUTPUTS],
+                       F.name_in(), list(INTERVAL_OUTPUTS))
 
 
 def _at_parameters(F: ca.Function, theta: np.ndarray) -> ca.Function:
@@ -392,7 +395,7 @@ def ocp_spec(config: EconNMPCConfig) -> OCPSpec:
                                 per_second=True,
                                 expr=lambda s: s.w_cab - humidity_ratio(s.T_cab, rh,
                                                                         s.p_atm)))
-    states, inputs = model.STATES, ("W_bl", "T_evap_set")
+    states, inputs = STATES, ("W_bl", "T_evap_set")
     return OCPSpec(
         N=cfg.N, stage_cost=econ_stage_cost, intervals=cfg.intervals,
         interval_model=econ_interval,
@@ -438,8 +441,10 @@ class EconNMPC:
         builder over the econ declaration."""
         cfg, p, N = self.config, self.params, self.N
         ocp = self._ocp = OCP(ECON_MODEL, ocp_spec(cfg))
-        self._theta = ocp.theta(dict(zip(ECON_MODEL.parameter_names,
-                                         model.parameter_vector(p), strict=True)))
+        self._theta = ocp.theta(dict(zip(ECON_MODEL.parameter_names, p.theta_all,
+                                         strict=True)))
+        # the parameters and constants by name (numbers), as the declaration's functions read
+        self._s = econ.parameters(p.theta_all)
         self._ns = ocp.ns
         self._solver = _make_solver(ocp.nlp, ocp.equality, cfg, cfg.solver)
         self._fallback_nlp: NLPSolver | None = None
@@ -452,11 +457,11 @@ class EconNMPC:
                                            if cfg.RH_max is not None else {})})
         # terminal price dP_comp/dQ_e at an operating point (CasADi derivative of the map)
         q, te, vv, ta = (ca.SX.sym(n) for n in ("Q_e", "T_evap", "v", "T_amb"))
-        P = model.compressor_power(q, te, vv, ta, p.power_map)
+        P = econ.compressor_power(self._s, q, te, vv, ta)
         self._dPdQ = ca.Function("dPdQ", [q, te, vv, ta], [ca.jacobian(P, q)])
         xs = ca.SX.sym("x", _NX)
         self._dH = ca.Function("dH", [xs, vv], [ca.gradient(
-            model.heat_content(ca.vertsplit(xs), vv, p), xs)])
+            econ.heat_content(self._s, ca.vertsplit(xs), vv), xs)])
         self._steady = (SteadyStatePrice(p, cfg.u_min, cfg.u_max)
                         if cfg.terminal == "steady" else None)
         self._steps = {dt: _at_parameters(econ_interval(dt), self._theta)
@@ -465,7 +470,7 @@ class EconNMPC:
         self.estimator = None
         if cfg.offset_free:  # f(x, u, v, d) -> x_next: one sample of the model, d = dist
             xs, us, vs, ds = (ca.SX.sym(n, k) for n, k in (("x", _NX), ("u", _NU),
-                                                          ("v", model.ND), ("d", _NX)))
+                                                          ("v", _ND), ("d", _NX)))
             f = ca.Function("econ_f", [xs, us, vs, ds], [self._step0(xs, us, vs, ds)[0]])
             self.estimator = OffsetFreeEstimator(f, config=cfg.estimator,
                                                  compiled=cfg.compiled)
@@ -626,9 +631,9 @@ class EconNMPC:
         X = w[self._ix] * _X_SCL + _X_OFF
         Uc = np.clip(w[self._iu] * _U_SCL + _U_OFF, cfg.u_min, cfg.u_max)
         Q_e = np.asarray(Q_e).ravel()
-        P_bl = model.blower_power(Uc[:, 0], self.params)
+        P_bl = econ.blower_power(self._s, Uc[:, 0])
         T_ev = 0.5 * (X[:-1, 3] + X[1:, 3])
-        P_c = np.asarray(model.compressor_power(Q_e, T_ev, v, Ta, self.params.power_map))
+        P_c = np.asarray(econ.compressor_power(self._s, Q_e, T_ev, v, Ta))
         if ok:
             self._warn_outside(Q_e=Q_e, T_evap=T_ev)
         return EconSolution(

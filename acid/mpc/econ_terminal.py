@@ -33,12 +33,11 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from acid.econ import model
 from acid.econ.params import EconParams
 from acid.errors import SolverWarning
+from acid.models.econ import model as econ_model
 
-_X_OFF, _X_SCL = model.X_OFFSET, model.X_SCALE
-_U_OFF, _U_SCL = model.U_OFFSET, model.U_SCALE
+_NX, _NU = econ_model.nx, econ_model.nu
 #: speed spacing of the grid, m/s
 GRID_DV = 2.0
 
@@ -76,28 +75,30 @@ class SteadyStatePrice:
 
     def __init__(self, params: EconParams, u_min, u_max):
         from acid.control.ocp import OCP  # (acid.mpc.econ_nmpc imports this module)
-        from acid.models.econ import model as econ_model
-        from acid.mpc.econ_nmpc import EconNMPCConfig, _at_parameters, econ_interval, ocp_spec
+        from acid.mpc import econ_nmpc as nmpc
 
         self.params = params
         self.u_min, self.u_max = np.asarray(u_min, float), np.asarray(u_max, float)
         # the economic NMPC's own problem: the steady state of its builder (the input
         # bounds, which may pin an input here, are applied per solve: u_min, u_max)
-        cfg = EconNMPCConfig(intervals=(params.Ts, params.Ts), terminal="none",
-                             stage_functions=False, compiled=False)
-        self._ocp = OCP(econ_model, ocp_spec(cfg))
-        self._theta = model.parameter_vector(params)
+        cfg = nmpc.EconNMPCConfig(intervals=(params.Ts, params.Ts), terminal="none",
+                                  stage_functions=False, compiled=False)
+        self._ocp = OCP(econ_model, nmpc.ocp_spec(cfg))
+        # the NMPC's variable scaling (K, kg/kg, kg/s)
+        self._x_off, self._x_scl = nmpc.X_OFFSET, nmpc.X_SCALE
+        self._u_off, self._u_scl = nmpc.U_OFFSET, nmpc.U_SCALE
+        self._theta = params.theta_all
         nlp = self._ocp.steady_state_nlp()
         self._solver = ca.nlpsol("acid_econ_steady", "ipopt", nlp, {
             "print_time": False, "ipopt": {"print_level": 0, "sb": "yes", "tol": 1e-10,
                                            "max_iter": 200}})
         self._sides = self._ocp.steady_state_sides
         self._cost_scale = cfg.cost_scale
-        F = _at_parameters(econ_interval(params.Ts), self._theta)
-        xs, us = ca.SX.sym("x", model.NX), ca.SX.sym("u", model.NU)
-        d = ca.SX.sym("d", model.ND)
-        out = F(xs, us, d, ca.DM.zeros(model.NX))
-        self._power = ca.Function("power", [xs, us, d], [out[3] + out[4]])
+        F = nmpc._at_parameters(nmpc.econ_interval(params.Ts), self._theta)
+        xs, us = ca.SX.sym("x", _NX), ca.SX.sym("u", _NU)
+        d = ca.SX.sym("d", econ_model.nd)
+        out = dict(zip(F.name_out(), F(xs, us, d, ca.DM.zeros(_NX)), strict=True))
+        self._power = ca.Function("power", [xs, us, d], [out["P_comp"] + out["P_bl"]])
         self._F = F
         lo, hi = params.power_map.domain.get("v_veh", (0.0, 36.0))
         n = max(2, int(np.ceil((hi - lo) / GRID_DV)) + 1)
@@ -110,30 +111,31 @@ class SteadyStatePrice:
         """Solve the steady-state NLP once (module docstring).
 
         ``dist`` : optional (5,) additive disturbances on the state derivatives (K/s,
-        kg/kg/s), as in :func:`acid.econ.model.step`; ``guess`` a nearby solution.
+        kg/kg/s), as in :func:`acid.models.econ.casadi_interval`; ``guess`` a nearby solution.
         """
-        dist = np.zeros(model.NX) if dist is None else np.asarray(dist, dtype=float)
+        dist = np.zeros(_NX) if dist is None else np.asarray(dist, dtype=float)
+        x_off, x_scl, u_off, u_scl = self._x_off, self._x_scl, self._u_off, self._u_scl
         if guess is not None:
-            w0 = np.concatenate(((guess.x - _X_OFF) / _X_SCL, (guess.u - _U_OFF) / _U_SCL))
+            w0 = np.concatenate(((guess.x - x_off) / x_scl, (guess.u - u_off) / u_scl))
         else:
-            x0 = np.array([T_cab_max, T_cab_max, 0.5 * (T_cab_max + T_amb), _U_OFF[1], 0.008])
-            w0 = np.concatenate(((x0 - _X_OFF) / _X_SCL, np.zeros(model.NU)))
-        lbx = np.concatenate((np.full(model.NX, -np.inf), (self.u_min - _U_OFF) / _U_SCL))
-        ubx = np.concatenate((np.full(model.NX, np.inf), (self.u_max - _U_OFF) / _U_SCL))
+            x0 = np.array([T_cab_max, T_cab_max, 0.5 * (T_cab_max + T_amb), u_off[1], 0.008])
+            w0 = np.concatenate(((x0 - x_off) / x_scl, np.zeros(_NU)))
+        lbx = np.concatenate((np.full(_NX, -np.inf), (self.u_min - u_off) / u_scl))
+        ubx = np.concatenate((np.full(_NX, np.inf), (self.u_max - u_off) / u_scl))
         # the band on T_cab and Q_e >= 0 (ocp_spec's soft bounds, hard here), limits 0
         limits = np.array([T_cab_max, T_cab_min, 0.0][:len(self._sides)])
-        lbg = np.concatenate((np.zeros(model.NX),
+        lbg = np.concatenate((np.zeros(_NX),
                               [-np.inf if s == "hi" else 0.0 for s in self._sides]))
-        ubg = np.concatenate((np.zeros(model.NX),
+        ubg = np.concatenate((np.zeros(_NX),
                               [0.0 if s == "hi" else np.inf for s in self._sides]))
         res = self._solver(x0=w0, p=np.concatenate(([v_veh, T_amb], self._theta, dist,
                                                     limits)),
                            lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         ok = bool(self._solver.stats().get("success", False))
         wv = np.asarray(res["x"]).ravel()
-        x = wv[:model.NX] * _X_SCL + _X_OFF
-        u = wv[model.NX:] * _U_SCL + _U_OFF
-        lam = np.asarray(res["lam_g"]).ravel()[:model.NX] / _X_SCL / self._cost_scale
+        x = wv[:_NX] * x_scl + x_off
+        u = wv[_NX:] * u_scl + u_off
+        lam = np.asarray(res["lam_g"]).ravel()[:_NX] / x_scl / self._cost_scale
         return SteadyState(v_veh=float(v_veh), T_amb=float(T_amb), x=x, u=u,
                            power_W=float(self._power(x, u, [v_veh, T_amb])), lam=lam,
                            success=ok)
@@ -156,9 +158,9 @@ class SteadyStatePrice:
                         f"{key[0] - 273.15:.1f} degC ambient and band {key[1] - 273.15:.2f}-"
                         f"{key[2] - 273.15:.2f} degC; its neighbours' multipliers are used",
                         SolverWarning, stacklevel=3)
-                lams.append(ss.lam if ss.success else np.full(model.NX, np.nan))
+                lams.append(ss.lam if ss.success else np.full(_NX, np.nan))
             lam = np.array(lams)
-            for j in range(model.NX):  # a failed point takes its neighbours' value
+            for j in range(_NX):  # a failed point takes its neighbours' value
                 ok = np.isfinite(lam[:, j])
                 lam[:, j] = (np.interp(self.v_grid, self.v_grid[ok], lam[ok, j])
                              if ok.any() else 0.0)
@@ -169,4 +171,4 @@ class SteadyStatePrice:
                  ) -> np.ndarray:
         """(5,) multipliers at speed ``v_veh`` (linear in speed, held outside the grid)."""
         lam = self.grid(T_amb, T_cab_min, T_cab_max)
-        return np.array([np.interp(v_veh, self.v_grid, lam[:, j]) for j in range(model.NX)])
+        return np.array([np.interp(v_veh, self.v_grid, lam[:, j]) for j in range(_NX)])

@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acid import model
 from acid.claims import STUDIES, claim
 from acid.errors import ConfigError
+from acid.models import paper
 from acid.mpc.estimator import BackoffConfig
 from acid.mpc.icm import ICMConfig, icm_upper_bound
 from acid.mpc.nmpc import NMPC, NMPCConfig
@@ -440,8 +440,11 @@ def unavoidable_first_step_violation(params: ModelParams, config: NMPCConfig, T_
     No input can cool more in one step (eq. 1 is increasing in T_ain and, for T_ain below
     T_cab, decreasing in W_bl; T_evap(0) is given), so no controller can do better.
     """
-    T_ain = model.inlet_air(T_evap0, config.W_bl_max, params)
-    T1 = model.cabin_step(T_cab0, T_int, T_shell, T_ain, config.W_bl_max, params)
+    # eqs. 1-3 of the declaration (eq. 3's T_ain substituted in eq. 1); eq. 2's set-point
+    # does not reach T_cab(k+1)
+    x_next, _ = paper.model.step([T_cab0, T_evap0], [config.W_bl_max, config.T_evap_set_min],
+                                 [T_int, T_shell], params.theta)
+    T1 = x_next[paper.model.state_names.index("T_cab")]
     return max(0.0, float(T1 - T_cab_max1))
 
 

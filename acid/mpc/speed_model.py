@@ -45,9 +45,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acid import model
 from acid.claims import TABLE_II
 from acid.errors import ConfigError, DataError
+from acid.models.paper import compressor_power
 from acid.mpc.nmpc import NMPC, NMPCConfig
 from acid.params import ModelParams
 
@@ -144,7 +144,7 @@ def fit_speed_efficiency(P_comp, W_bl, T_ain, v_veh, T_amb, c_p: float = TABLE_I
         raise ConfigError(f"speed efficiency form must be one of {FORMS}, got {form!r}")
     P, W, Ta, v = (np.asarray(a, dtype=float).ravel() for a in (P_comp, W_bl, T_ain, v_veh))
     Tamb = np.broadcast_to(np.asarray(T_amb, dtype=float), P.shape)
-    q = model.air_heat_flow(W, Ta, Tamb, c_p)  # eq. 4 numerator, W
+    q = compressor_power(W, Ta, Tamb, c_p, 1.0)  # eq. 4's numerator (eta_cop = 1), W
     m = np.isfinite(P) & np.isfinite(q) & np.isfinite(v) & (P > p_min) & (q > 0)
     if m.sum() < 10:
         raise DataError(f"speed efficiency fit: only {int(m.sum())} usable samples "

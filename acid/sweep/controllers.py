@@ -176,7 +176,9 @@ def _hint_name(hint) -> str:
 
 
 # ------------------------------------------------------------------------- built-ins
-SOLVERS = ("fatrop", "ipopt")
+#: the paper NMPC's solvers (acid.mpc.nmpc.SOLVERS), the default first: warm-started SQP
+#: (qrqp, generated C) with fatrop as its fallback
+SOLVERS = ("sqp", "fatrop", "ipopt")
 BOUNDS = ("setpoint", "band-high")
 
 
@@ -200,7 +202,8 @@ class PaperNMPCConfig:
         this controller's mean cabin temperature equals that one's (``bound`` is the start).
     tol_K : tolerance of the match, K.
     max_iter : closed-loop runs the match may take.
-    solver : ``"fatrop"`` or ``"ipopt"``.
+    solver : ``"sqp"`` (default: warm-started SQP, fatrop when it fails), ``"fatrop"`` or
+        ``"ipopt"``.
     """
 
     horizon: int = 6
@@ -208,7 +211,7 @@ class PaperNMPCConfig:
     match: str = ""
     tol_K: float = 0.02
     max_iter: int = 8
-    solver: str = "fatrop"
+    solver: str = "sqp"
 
     def __post_init__(self):
         _check_nmpc_options(self.horizon, self.solver)
@@ -260,7 +263,8 @@ class ICMControllerConfig:
     v_slow, v_fast : at or below ``v_slow`` the bound is the band's top, at or above
         ``v_fast`` its bottom, m/s.
     fall_rate, rise_rate : rate limits of the bound, K/s.
-    solver : ``"fatrop"`` or ``"ipopt"``.
+    solver : ``"sqp"`` (default: warm-started SQP, fatrop when it fails), ``"fatrop"`` or
+        ``"ipopt"``.
     """
 
     horizon: int = 6
@@ -268,7 +272,7 @@ class ICMControllerConfig:
     v_fast: float = 20.0
     fall_rate: float = 0.1
     rise_rate: float = 0.2
-    solver: str = "fatrop"
+    solver: str = "sqp"
 
     def __post_init__(self):
         _check_nmpc_options(self.horizon, self.solver)

@@ -178,7 +178,7 @@ class EconController:
     def _simulate(ctx: ScenarioContext, mpc, T_cab_max: float) -> ControllerRun:
         """The closed loop ``u = mpc.make_step(x, previews); plant.step(u)`` from the
         scenario's start with the upper cabin bound ``T_cab_max`` (K)."""
-        from acid.econ.model import STATES
+        from acid.models.econ import STATES
         from acid.mpc.econ_nmpc import stage_means
         from acid.sweep.controllers import direct_loop, rh_into_info
 
@@ -256,7 +256,7 @@ class PlanController:
             return self._run(ctx)
 
     def _run(self, ctx: ScenarioContext) -> ControllerRun:
-        from acid.econ.model import STATES
+        from acid.models.econ import STATES
         from acid.mpc.econ_terminal import SteadyStatePrice
         from acid.sweep.scenario import tail_energy_J
 
