@@ -52,7 +52,7 @@ def test_the_package_of_a_declared_model_is_plain_c_and_says_what_it_is(car):
     assert meta["model"] == "car_cabin" and meta["ref_per_stage"] == ["T_cab"]
     assert meta["parameters"] == dict(zip(ctrl.model.parameter_names, ctrl.model.values,
                                           strict=True))
-    assert "#define ACID_OCP_NX 3" in (out / "acid_ocp.h").read_text()
+    assert f"#define ACID_OCP_NX {ctrl.model.nx}" in (out / "acid_ocp.h").read_text()
 
 
 @needs_cc

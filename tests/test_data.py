@@ -472,6 +472,7 @@ def test_every_map_key_is_read_and_documented(tmp_path):
 
     d = {"description": "my car", "time": {"column": "t_ms", "unit": "ms"}, "Ts": 1.0,
          "resample": "centered", "sep": ";", "encoding": "cp1252", "decimal": ",",
+         "drop_incomplete_end": True,   # this log ends complete: nothing is dropped
          "channels": {
              "T_cab": {"column": "Cabin °C", "unit": "degC", "censored_above": 39.0,
                        "censored_below": 10.0, "note": "roof sensor"},
