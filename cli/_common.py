@@ -85,24 +85,34 @@ def handle_errors(func: Callable) -> Callable:
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
+        def interrupted():
+            err_console.print(Text.assemble(("interrupted", "bold red"),
+                                            ": stopped, no partial output was kept"),
+                              highlight=False)
+            return typer.Exit(code=guard.exit_code)
+
         with InterruptGuard() as guard:
             try:
                 kwargs = {k: resolve_examples(v) for k, v in kwargs.items()}
                 return func(*args, **kwargs)
             except AcidError as exc:
+                if guard.signum is not None:  # what the interrupt left behind, not the cause
+                    raise interrupted() from None
                 error_line(exc)
                 raise typer.Exit(code=exc.exit_code) from None
             except KeyboardInterrupt:
-                err_console.print(Text.assemble(("interrupted", "bold red"),
-                                                ": stopped, no partial output was kept"),
-                                  highlight=False)
-                raise typer.Exit(code=guard.exit_code) from None
+                raise interrupted() from None
             except (typer.Exit, typer.Abort, ClickException):
                 raise
             except MemoryError:
                 error_line("out of memory: the requested size is too large for this machine")
                 raise typer.Exit(code=2) from None
             except Exception as exc:
+                # a KeyboardInterrupt raised inside a C extension's call comes back as some
+                # other exception (CasADi's SWIG layer: a NotImplementedError about the
+                # arguments); once a signal arrived, the command was interrupted
+                if guard.signum is not None:
+                    raise interrupted() from None
                 if os.environ.get(DEBUG_ENV):
                     raise
                 error_line(f"internal error ({exc.__class__.__name__}: {exc}); this is a bug "

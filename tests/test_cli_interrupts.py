@@ -82,3 +82,28 @@ def test_sigkill_mid_write_damages_nothing_and_the_next_run_cleans_up(tmp_path):
     assert again.exit_code == 0, again.output
     assert sorted(os.listdir(tmp_path)) == ["x.h5"]
     assert len(Dataset.from_hdf5(out)) == 120
+
+
+def test_an_interrupt_turned_into_another_exception_by_a_c_extension_is_still_an_interrupt(
+        capsys):
+    """CasADi's SWIG layer turns a KeyboardInterrupt raised while it converts arguments into a
+    NotImplementedError about the arguments: once a signal has arrived, that is an interrupt
+    (exit 130, one line), not an internal error (it was, under load, in reproduce's NMPC
+    stage)."""
+    import typer
+
+    from acid_cli._common import handle_errors
+
+    @handle_errors
+    def command():
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)  # the handler raises KeyboardInterrupt here
+        except KeyboardInterrupt:
+            raise NotImplementedError("Wrong number or type of arguments") from None
+
+    with pytest.raises(typer.Exit) as exc:
+        command()
+    assert exc.value.exit_code == 130
+    err = capsys.readouterr().err
+    assert "interrupted" in err and "internal error" not in err
