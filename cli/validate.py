@@ -25,6 +25,8 @@ from acid_cli._common import (
 FIGURES = ("fig5_prediction.png", "fig6_errors.png", "fig6b_yardsticks.png")
 #: Largest --starts and --horizon accepted.
 MAX_STARTS, MAX_HORIZON = 100_000, 1_000_000
+#: --warmup's default and largest value, s (the default: 60 samples of the paper's 5 s).
+DEFAULT_WARMUP_S, MAX_WARMUP_S = 300.0, 7 * 86400.0
 
 
 def _fmt(v: float, digits: int = 3) -> str:
@@ -75,9 +77,11 @@ def validate(
         help="A model file FILE.py or a built-in declaration (paper, econ, cabin3; "
              "acid.models): validate that declared model, with --params from `acid fit "
              "--model ...` (default: its declared values)."),
-    warmup: int = typer.Option(
-        60, "--warmup", help="A model with latent states: samples before each start from "
-                             "which they are estimated."),
+    warmup: float = typer.Option(
+        DEFAULT_WARMUP_S, "--warmup",
+        help="A model with latent states: the stretch before each start from which they are "
+             "estimated, s (whole samples of the data's Ts, rounded up; default 300 s = 60 "
+             "samples of 5 s)."),
     to_end: bool = typer.Option(
         False, "--to-end", help="Also start where fewer than --horizon samples "
                                 "remain (short trips); those predictions stop at the "
@@ -114,7 +118,7 @@ def validate(
                 outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
     _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
                    held_out_fraction)
-    require_range(warmup, "--warmup", 0, MAX_HORIZON, "samples")
+    require_range(warmup, "--warmup", 0.0, MAX_WARMUP_S, "s")
     require(warm_start in WARM_STARTS, "--warm-start",
             f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
     ps = other = None
@@ -124,11 +128,29 @@ def validate(
         if beside is not None:
             other = load_any_params(beside, allow_unstable=allow_unstable).parameter_set()
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
-                      warmup=warmup, placement=placement, seed=seed,
+                      warmup=warmup_samples(warmup, _sample_time(data)),
+                      placement=placement, seed=seed,
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
                       non_overlapping=non_overlapping, yardsticks=yardsticks,
                       to_end=to_end, warm_start=warm_start, values=ps, beside=other,
                       figures=out)
+
+
+def warmup_samples(warmup_s: float, Ts: float) -> int:
+    """``--warmup`` (s) as whole samples of ``Ts`` (s): rounded up, said in one note when it
+    is not a multiple of ``Ts``."""
+    n = math.ceil(warmup_s / Ts - 1e-9)
+    if not math.isclose(n * Ts, warmup_s, rel_tol=1e-9, abs_tol=1e-9):
+        note(f"--warmup {warmup_s:g} s is not a whole number of samples of {Ts:g} s: "
+             f"{n} samples ({n * Ts:g} s) are used")
+    return n
+
+
+def _sample_time(data: Path) -> float:
+    """The sample time of the dataset ``data``, s (``DataError`` naming the file)."""
+    from acid.data import Dataset
+
+    return Dataset.from_hdf5(data, min_samples=2).Ts
 
 
 def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,

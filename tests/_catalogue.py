@@ -565,6 +565,8 @@ CASES: list[Case] = [
     Case("validate-non-overlapping-random", "options",
          (*V, "--non-overlapping", "--placement", "random"), ("--non-overlapping",)),
     Case("validate-exogenous", "options", (*V, "--exogenous", "guess"), ("--exogenous",)),
+    Case("validate-warmup-negative", "options", (*V, "--warmup", "-5"), ("--warmup", "] s")),
+    Case("validate-warmup-nan", "options", (*V, "--warmup", "nan"), ("--warmup",)),
     Case("fit-estimation-fraction-zero", "options",
          ("fit", D, "--out", "{w}/q.json", "--estimation-fraction", "0"),
          ("--estimation-fraction",)),

@@ -179,7 +179,7 @@ def test_cli_fits_car_cabin_by_name_and_validates_to_the_trips_end_with_yardstic
                               "--oe-window", "120", *fixes, "--out", str(tmp_path / "p.json")])
     assert res.exit_code == 0, res.output
     res = runner.invoke(app, ["validate", str(val), "--model", "car_cabin", "--params",
-                              str(tmp_path / "p.json"), "--starts", "8", "--warmup", "30",
+                              str(tmp_path / "p.json"), "--starts", "8", "--warmup", "150",
                               "--to-end", "--exogenous", "measured",
                               "--json", str(tmp_path / "v.json")])
     assert res.exit_code == 0, res.output

@@ -4,6 +4,7 @@ accepted (hidden), and what every plant-driving command takes."""
 from __future__ import annotations
 
 import re
+import typing
 
 import pytest
 import typer
@@ -128,3 +129,51 @@ def test_every_plant_driving_command_takes_the_ambient():
         if CANONICAL["plant configuration"] in names:
             assert CANONICAL["refrigerant"] in names, (
                 f"acid {cmd_name} takes --plant-config but no --refrigerant")
+
+
+#: what an option's help text says it counts or measures: one kind per option name across
+#: commands (the first unit the help names: "steps of 5 s" is a count, "s (whole samples)" a
+#: time)
+UNIT_KINDS: dict[str, str] = {
+    "count": r"\b(samples?|steps?)\b",
+    "time": r"(?<![\w'])(s|seconds?|min|minutes?|h|hours?)(?=[\s.,;:)]|$)",
+    "temperature": r"degC|°C|(?<![\w'])K(?=[\s.,;:)]|$)",
+}
+
+
+def unit_kind(help_text: str) -> str | None:
+    """The kind of quantity ``help_text`` states first (None: none stated)."""
+    found = {kind: m.start() for kind, pattern in UNIT_KINDS.items()
+             if (m := re.search(pattern, help_text))}
+    return min(found, key=found.get) if found else None
+
+
+def test_unit_kind_reads_help_texts():
+    assert unit_kind("Warm-up before the cycle, s.") == "time"
+    assert unit_kind("samples before each start") == "count"
+    assert unit_kind("the stretch before each start, s (whole samples of Ts)") == "time"
+    assert unit_kind("Prediction steps per start (300 x 5 s = 1500 s).") == "count"
+    assert unit_kind("Ambient temperature, degC (default: the plant's).") == "temperature"
+    assert unit_kind("the plant's configuration") is None
+
+
+def _is_number(p) -> bool:
+    """Whether option ``p`` takes a number (``float``, ``int``, or either or None)."""
+    annotation = p.type_descriptor.annotation
+    return bool({int, float} & {annotation, *typing.get_args(annotation)})
+
+
+def test_one_option_name_has_one_unit_across_commands():
+    """``--warmup`` in samples on one command and in seconds on another is one name for two
+    things: every number option that several commands share states one kind of unit."""
+    kinds: dict[str, dict[str, str]] = {}
+    for cmd_name, cmd in _commands().items():
+        for p in _options(cmd):
+            if not _is_number(p):
+                continue
+            kind = unit_kind(" ".join((p.help or "").split()))
+            if kind is not None:
+                kinds.setdefault(_long_names(p)[0], {})[cmd_name] = kind
+    mixed = {name: by for name, by in kinds.items() if len(set(by.values())) > 1}
+    assert not mixed, mixed
+    assert set(kinds["--warmup"].values()) == {"time"}

@@ -54,7 +54,7 @@ def test_fit_and_validate_a_users_model_file(record, tmp_path):
 
     vjson = tmp_path / "val.json"
     res = runner.invoke(app, ["validate", str(record), "--model", str(model), "--params",
-                              str(out), "--starts", "5", "--horizon", "100", "--warmup", "30",
+                              str(out), "--starts", "5", "--horizon", "100", "--warmup", "150",
                               "--json", str(vjson)])
     assert res.exit_code == 0, res.output
     assert "in-sample" in " ".join(res.output.split())

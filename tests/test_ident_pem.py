@@ -133,7 +133,7 @@ def test_cli_fits_by_prediction_error_with_an_evaluation_cap_and_validates_with_
     assert fit["method"] == "pem" and fit["output_error"]["nfev"] <= 4
     assert not fit["output_error"]["converged"] and "did not converge" in res.output
     res = runner.invoke(app, ["validate", str(path), "--model", str(src), "--params",
-                              str(tmp_path / "p.json"), "--starts", "4", "--warmup", "100",
+                              str(tmp_path / "p.json"), "--starts", "4", "--warmup", "500",
                               "--horizon", "50", "--warm-start", "ekf", "--no-yardsticks"])
     assert res.exit_code == 0, res.output
     assert "extended Kalman filter" in res.output
