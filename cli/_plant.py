@@ -19,6 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import typer
 
 from acid.errors import ConfigError
@@ -141,12 +142,32 @@ def plant_identity(config, label: str) -> dict:
             "T_amb_C": round(float(K2C(config.T_amb)), 6)}
 
 
+def recorded_identity(identity: dict, ds) -> dict:
+    """``identity`` with the ambient the record ``ds`` ran at: when its ``T_amb`` channel
+    varies (``acid excite --model econ``, ``--t-amb-range``), ``T_amb_C`` is None and
+    ``T_amb_range_C`` gives the lowest and highest value recorded (degC), instead of the
+    configuration's nominal ambient, which did not run."""
+    if "T_amb" not in ds.channels:
+        return identity
+    t = np.asarray(ds.get("T_amb", "degC"), dtype=float)
+    lo, hi = float(np.min(t)), float(np.max(t))
+    if hi - lo < 0.05:
+        return identity
+    return {**identity, "T_amb_C": None, "T_amb_range_C": [round(lo, 3), round(hi, 3)]}
+
+
 def identity_line(identity: dict) -> str:
     """``plant_identity`` as one line for the run's output."""
     amb = identity["T_amb_C"]
+    span = identity.get("T_amb_range_C")
     refrigerant = identity["refrigerant"] or "not modelled by this plant"
-    return (f"vehicle {identity['vehicle']}, refrigerant {refrigerant}"
-            + ("" if amb is None else f", ambient {amb:g} degC"))
+    if amb is not None:
+        ambient = f", ambient {amb:g} degC"
+    elif span is not None:
+        ambient = f", ambient varied {span[0]:.1f}..{span[1]:.1f} degC"
+    else:
+        ambient = ""
+    return f"vehicle {identity['vehicle']}, refrigerant {refrigerant}{ambient}"
 
 
 def config_input(spec) -> Path | None:

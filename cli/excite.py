@@ -30,6 +30,7 @@ from acid_cli._plant import (
     plant_choice,
     plant_identity,
     plant_overrides,
+    recorded_identity,
     refrigerant_option,
 )
 
@@ -210,6 +211,7 @@ def excite(
     elapsed = time.perf_counter() - t0
     ds.validate()
     ds.to_hdf5(out)
+    identity = recorded_identity(identity, ds)
     print_table(f"{out}: {len(ds)} samples, {ds.duration:g} s at Ts = {ds.Ts:g} s, "
                 f"plant {plant} ({identity_line(identity)}), seed {seed}",
                 ["channel", "unit", "min", "mean", "max"], _summary_rows(ds))

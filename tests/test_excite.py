@@ -288,6 +288,12 @@ def test_cli_excite_model_econ(tmp_path):
     assert res.exit_code == 0, res.output
     ds = Dataset.from_hdf5(out)
     assert np.ptp(ds["v_veh"]) > 5.0 and 28.0 <= ds["T_amb"].min() <= ds["T_amb"].max() <= 35.0
+    # the identity says the ambient that ran, not the configuration's nominal 30 degC
+    lo, hi = float(ds["T_amb"].min()), float(ds["T_amb"].max())
+    text = " ".join(res.output.split())
+    assert f"ambient varied {lo:.1f}..{hi:.1f} degC" in text and "ambient 30 degC" not in text
+    d = json.loads(js.read_text())
+    assert d["T_amb_C"] is None and d["T_amb_range_C"] == pytest.approx([lo, hi], abs=1e-3)
     res = runner.invoke(app, ["excite", "--model", "thermal", "--out", str(tmp_path / "x.h5")])
     assert_one_line_error(res, "--model", "thermal")
 
