@@ -17,7 +17,7 @@ import functools
 import math
 import os
 import re
-import sys
+import time
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
@@ -262,25 +262,81 @@ def params_input(spec: str | None) -> str | None:
 
 
 # ------------------------------------------------------------------------ progress, io
+#: When stderr is not a terminal, a progress line at least this often while the work moves, s.
+PLAIN_EVERY_S = 30.0
+
+
+def progress_is_plain() -> bool:
+    """Whether progress goes out as plain lines (stderr is a log, a pipe or CI: no terminal
+    to redraw a bar on)."""
+    return not err_console.is_terminal
+
+
+class ProgressLines:
+    """Progress as plain lines on stderr, for logs (``| tee``, CI), where a redrawn bar is
+    swallowed: ``description: done/total (pct %), elapsed s[: label]``, one line each tenth of
+    the work, at the end, and at least every ``PLAIN_EVERY_S`` while the count moves.
+
+    Call it as ``update(done, total=None, label=None)``; ``label`` names what just finished
+    (a cycle, a controller, a scenario)."""
+
+    def __init__(self, description: str, total: int | None):
+        self.description, self.total = description, total
+        self._t0 = self._last_t = time.monotonic()
+        self._last_done, self._last_tenth = None, -1
+
+    def __call__(self, done: int, total: int | None = None, label: str | None = None) -> None:
+        if total is not None:
+            self.total = total
+        if done == self._last_done:
+            return
+        now = time.monotonic()
+        tenth = int(10 * done / self.total) if self.total else -1
+        if (label is None and tenth <= self._last_tenth and now - self._last_t < PLAIN_EVERY_S
+                and not (self.total and done >= self.total)):
+            return
+        self._last_done, self._last_tenth, self._last_t = done, tenth, now
+        self.line(f"{done}/{self.total} ({100 * done / self.total:.0f} %)" if self.total
+                  else f"{done}", label, now)
+
+    def line(self, text: str, label: str | None = None, now: float | None = None) -> None:
+        """One line ``description: text, elapsed s[: label]`` on stderr."""
+        elapsed = (time.monotonic() if now is None else now) - self._t0
+        err_console.print(Text(f"{self.description}: {text}, {elapsed:.0f} s"
+                               + (f": {label}" if label else "")),
+                          soft_wrap=True, highlight=False)
+
+
 @contextmanager
 def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator[Callable]:
-    """A rich progress bar; yields ``update(done, total)`` for library callbacks.
+    """Progress of a long run; yields ``update(done, total=None, label=None)`` for library
+    callbacks.
 
-    Disabled (a no-op) when ``enabled`` is False or stderr is not a terminal and CI is set.
+    A rich bar on a terminal; plain lines (``ProgressLines``) when stderr is not one (a log,
+    ``| tee``, CI); a no-op when ``enabled`` is False.
     """
     if not enabled:
-        yield lambda done, total=None: None
+        yield lambda done, total=None, label=None: None
+        return
+    if progress_is_plain():
+        yield ProgressLines(description, total)   # its first line at the first update
         return
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
                   TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                  TimeRemainingColumn(), console=err_console, transient=False,
-                  disable=not sys.stderr.isatty()) as prog:
+                  TimeRemainingColumn(), console=err_console, transient=False) as prog:
         task = prog.add_task(escape(description), total=total)
 
-        def update(done: int, total_: int | None = None) -> None:
+        def update(done: int, total_: int | None = None, label: str | None = None) -> None:
             prog.update(task, completed=done, total=total_ if total_ is not None else total)
 
         yield update
+
+
+def timed_lines(description: str) -> Callable[[str], None]:
+    """``say(message)`` for a library's progress messages, each line with the time since this
+    call (``description: message, 12 s``), on stderr."""
+    lines = ProgressLines(description, None)
+    return lines.line
 
 
 def write_summary(path: Path | None, summary: dict) -> None:

@@ -15,6 +15,7 @@ from acid_cli._common import (
     require,
     require_range,
     say,
+    timed_lines,
     write_summary,
 )
 
@@ -56,7 +57,8 @@ def heating_control(
     check_paths(outputs={"--json": json_path, "--out": png})
     out.mkdir(parents=True, exist_ok=True)
     result = heating_study(cycles, tuple(t_amb), HeatingControlConfig(N=horizon),
-                           png_path=png, progress=say, tail_s=tail, warmup_s=warmup)
+                           png_path=png, progress=timed_lines("heating-control"), tail_s=tail,
+                           warmup_s=warmup)
     rows = []
     for case in result["cases"]:
         for name in CONTROLLERS:

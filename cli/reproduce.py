@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
@@ -16,11 +15,13 @@ from acid.outdir import claim
 from acid.pipeline import run_pipeline
 from acid.reproduce import ReproduceOptions, build_stages, is_quick, write_outputs
 from acid_cli._common import (
+    ProgressLines,
     check_paths,
     err_console,
     handle_errors,
     note,
     print_table,
+    progress_is_plain,
     say,
     warn,
     write_summary,
@@ -50,7 +51,8 @@ def reproduce(
     Stages are cached by their inputs under OUT/stages, so a second run redoes only what
     changed (one line names what it reused; a cached record that fails its integrity check
     is recomputed, with one line). Writes OUT/report.html (self-contained) and
-    OUT/summary.json. A run into a folder another run is using stops with one line.
+    OUT/summary.json. A run into a folder another run is using stops with one line. Into a
+    log (no terminal) each stage prints a line when it starts, as it moves and when it ends.
     """
     check_paths(outputs={"--json": json_path},
                 folders={"--out": (out, ("report.html", "summary.json"))})
@@ -68,27 +70,8 @@ def reproduce(
 
 def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
     t0 = time.perf_counter()
-    with Progress(TextColumn("[bold]{task.description:<48}"), BarColumn(),
-                  TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
-                  console=err_console, disable=not sys.stderr.isatty()) as prog:
-        tasks = {s.name: prog.add_task(s.title, total=1, start=False) for s in stages}
-
-        def on_start(name: str) -> None:
-            prog.start_task(tasks[name])
-
-        def on_progress(name: str, done: int, total: int) -> None:
-            prog.update(tasks[name], completed=done, total=max(total, 1))
-
-        def on_done(outcome) -> None:
-            label = "cached" if outcome.cached else f"{outcome.seconds:.1f} s"
-            prog.update(tasks[outcome.name], completed=1, total=1,
-                        description=f"{outcome.title} ({label})")
-
-        outcomes = run_pipeline(stages, out, jobs=jobs, on_start=on_start,
-                                on_progress=on_progress, on_done=on_done, force=force,
-                                scheduler=scheduler,
-                                notice=lambda msg: err_console.print(Text(msg), highlight=False,
-                                                                    soft_wrap=True))
+    run = _run_with_lines if progress_is_plain() else _run_with_bars
+    outcomes = run(stages, out, jobs, scheduler, force, _notice)
     elapsed = time.perf_counter() - t0
     reused = [o.name for o in outcomes.values() if o.cached]
     if reused:
@@ -115,3 +98,53 @@ def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
     say(f"report: {html}\nsummary: {summary_path}\ntotal {elapsed:.1f} s")
     if json_path is not None:
         write_summary(json_path, summary)
+
+
+def _notice(message: str) -> None:
+    """The pipeline's notices (a cache record recomputed) as literal lines on stderr."""
+    err_console.print(Text(message), highlight=False, soft_wrap=True)
+
+
+def _run_with_bars(stages, out, jobs, scheduler, force, notice):
+    """The stages on a terminal: one rich bar per stage."""
+    with Progress(TextColumn("[bold]{task.description:<48}"), BarColumn(),
+                  TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
+                  console=err_console) as prog:
+        tasks = {s.name: prog.add_task(s.title, total=1, start=False) for s in stages}
+
+        def on_start(name: str) -> None:
+            prog.start_task(tasks[name])
+
+        def on_progress(name: str, done: int, total: int) -> None:
+            prog.update(tasks[name], completed=done, total=max(total, 1))
+
+        def on_done(outcome) -> None:
+            label = "cached" if outcome.cached else f"{outcome.seconds:.1f} s"
+            prog.update(tasks[outcome.name], completed=1, total=1,
+                        description=f"{outcome.title} ({label})")
+
+        return run_pipeline(stages, out, jobs=jobs, on_start=on_start,
+                            on_progress=on_progress, on_done=on_done, force=force,
+                            scheduler=scheduler, notice=notice)
+
+
+def _run_with_lines(stages, out, jobs, scheduler, force, notice):
+    """The stages into a log (stderr not a terminal): a line when a stage starts, its progress
+    as plain lines (``ProgressLines``: each tenth, at least every 30 s), a line when it ends."""
+    titles = {s.name: s.title for s in stages}
+    lines: dict[str, ProgressLines] = {}
+
+    def on_start(name: str) -> None:
+        lines[name] = ProgressLines(f"stage {titles[name]}", None)
+        lines[name].line("started")
+
+    def on_progress(name: str, done: int, total: int) -> None:
+        if name in lines:
+            lines[name](done, max(total, 1))
+
+    def on_done(outcome) -> None:
+        _notice(f"stage {outcome.title}: "
+                + ("cached" if outcome.cached else f"done in {outcome.seconds:.1f} s"))
+
+    return run_pipeline(stages, out, jobs=jobs, on_start=on_start, on_progress=on_progress,
+                        on_done=on_done, force=force, scheduler=scheduler, notice=notice)

@@ -68,7 +68,7 @@ def year_sweep(
     n = len(year.plan_tasks(ambients, cycles, vehicles, switch_over, refrigerant))
     with claim(out, "acid year-sweep"), progress_bar("year sweep", total=n) as update:
         result = year.year_sweep(ambients, cycles, vehicles, switch_over, refrigerant, jobs=jobs,
-                                 progress=lambda done, total, label: update(done, total))
+                                 progress=update)
         rows = result.rows()
         buf = io.StringIO()
         writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
