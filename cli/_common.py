@@ -23,7 +23,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import typer
-from rich.console import Console
+from rich.console import Console, ConsoleDimensions
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
@@ -39,8 +39,30 @@ try:  # typer >= 0.2x vendors click
 except ImportError:  # pragma: no cover - older typer on top of click
     from click.exceptions import ClickException
 
-console = Console()
-err_console = Console(stderr=True)
+#: Columns of tables and text when no terminal gives a width (CI, a detached run) and COLUMNS
+#: is not set: rich's 80 would cut table cells short ("6.97e-…", "defa…") in the log.
+LOG_COLUMNS = 120
+
+
+class _Console(Console):
+    """A rich console that renders ``LOG_COLUMNS`` wide, not 80, when no terminal says its
+    width (a log: nothing there to wrap for, and a cut cell is a lost number)."""
+
+    @property
+    def size(self) -> ConsoleDimensions:
+        size = Console.size.fget(self)
+        if (self._width is None and size.width == 80 and "COLUMNS" not in os.environ
+                and not self.is_terminal):
+            return ConsoleDimensions(LOG_COLUMNS, size.height)
+        return size
+
+    @size.setter
+    def size(self, new_size: tuple[int, int]) -> None:
+        Console.size.fset(self, new_size)
+
+
+console = _Console()
+err_console = _Console(stderr=True)
 
 #: Set to show the traceback of an unexpected error (a bug) instead of one line.
 DEBUG_ENV = "ACID_DEBUG"
