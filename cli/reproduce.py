@@ -46,7 +46,9 @@ def reproduce(
                                           help="Also write the summary here (it is always "
                                                "written to OUT/summary.json)."),
 ) -> None:
-    """Sweep (Table I), excite, fit, validate (Figs. 5-6) and NMPC checks (Figs. 7-10).
+    """Every stage of the paper and beyond it, cached, into one report and summary.json.
+
+    Stages: {stages}.
 
     Stages are cached by their inputs under OUT/stages, so a second run redoes only what
     changed (one line names what it reused; a cached record that fails its integrity check
@@ -66,6 +68,11 @@ def reproduce(
     stages = build_stages(opts)
     with claim(out, "acid reproduce"):
         _reproduce(out, opts, stages, jobs, scheduler, force, json_path)
+
+
+# --help lists the stages that run, as the pipeline declares them
+reproduce.__doc__ = reproduce.__doc__.replace(
+    "{stages}", "; ".join(s.title for s in build_stages(ReproduceOptions())))
 
 
 def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:
