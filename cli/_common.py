@@ -39,20 +39,20 @@ try:  # typer >= 0.2x vendors click
 except ImportError:  # pragma: no cover - older typer on top of click
     from click.exceptions import ClickException
 
-#: Columns of tables and text when no terminal gives a width (CI, a detached run) and COLUMNS
-#: is not set: rich's 80 would cut table cells short ("6.97e-…", "defa…") in the log.
+#: Columns of tables and text when the output is not a terminal (a log, a pipe, CI) and
+#: COLUMNS is not set: rich's 80 (or the width of the terminal acid was started from) would
+#: cut table cells short ("6.97e-…", "defa…") in the log, and make it depend on that terminal.
 LOG_COLUMNS = 120
 
 
 class _Console(Console):
-    """A rich console that renders ``LOG_COLUMNS`` wide, not 80, when no terminal says its
-    width (a log: nothing there to wrap for, and a cut cell is a lost number)."""
+    """A rich console that renders ``LOG_COLUMNS`` wide into a log (a cut cell is a lost
+    number); on a terminal, or with COLUMNS set, as rich does."""
 
     @property
     def size(self) -> ConsoleDimensions:
         size = Console.size.fget(self)
-        if (self._width is None and size.width == 80 and "COLUMNS" not in os.environ
-                and not self.is_terminal):
+        if self._width is None and "COLUMNS" not in os.environ and not self.is_terminal:
             return ConsoleDimensions(LOG_COLUMNS, size.height)
         return size
 

@@ -103,3 +103,18 @@ def test_import_notes_data_already_at_Ts(model_dataset, tmp_path):
     res = _acid("import", src, "--map", cmap, "--out", tmp_path / "run.h5")
     assert res.exit_code == 0, res.output
     assert "note:" in res.output and "not resampled" in " ".join(res.output.split())
+
+
+def test_a_table_into_a_log_keeps_every_cell(capsys, monkeypatch):
+    """Into a log (no terminal, COLUMNS unset) tables are ``LOG_COLUMNS`` wide: rich's 80
+    cut every cell of cav-study's 14-column table to '0.…'."""
+    from acid_cli._common import LOG_COLUMNS, print_table
+
+    monkeypatch.delenv("COLUMNS", raising=False)
+    print_table("energies", [f"column {i}" for i in range(9)], [["0.123456"] * 9])
+    out = capsys.readouterr().out
+    assert "…" not in out and out.count("0.123456") == 9   # 100 columns: cut at 80
+    assert max(len(line) for line in out.splitlines()) <= LOG_COLUMNS
+    monkeypatch.setenv("COLUMNS", "60")                # the user's width wins
+    print_table("energies", ["a", "b"], [["1", "2"]])
+    assert max(len(line) for line in capsys.readouterr().out.splitlines()) <= 60
