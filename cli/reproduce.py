@@ -54,7 +54,7 @@ def reproduce(
     changed (one line names what it reused; a cached record that fails its integrity check
     is recomputed, with one line). Writes OUT/report.html (self-contained) and
     OUT/summary.json. A run into a folder another run is using stops with one line. Into a
-    log (no terminal) each stage prints a line when it starts, as it moves and when it ends.
+    log (no terminal) each stage prints a line when it is queued, as it moves and when it ends.
     """
     check_paths(outputs={"--json": json_path},
                 folders={"--out": (out, ("report.html", "summary.json"))})
@@ -136,14 +136,15 @@ def _run_with_bars(stages, out, jobs, scheduler, force, notice):
 
 
 def _run_with_lines(stages, out, jobs, scheduler, force, notice):
-    """The stages into a log (stderr not a terminal): a line when a stage starts, its progress
-    as plain lines (``ProgressLines``: each tenth, at least every 30 s), a line when it ends."""
+    """The stages into a log (stderr not a terminal): a line when a stage is queued, its
+    progress as plain lines (``ProgressLines``: each tenth, at least every 30 s), a line when
+    it ends."""
     titles = {s.name: s.title for s in stages}
     lines: dict[str, ProgressLines] = {}
 
     def on_start(name: str) -> None:
         lines[name] = ProgressLines(f"stage {titles[name]}", None)
-        lines[name].line("started")
+        lines[name].line("queued")   # submitted: it runs when a worker is free
 
     def on_progress(name: str, done: int, total: int) -> None:
         if name in lines:

@@ -72,11 +72,11 @@ def test_reproduce_into_a_log_names_each_stage_as_it_starts_moves_and_ends(tmp_p
     _run_with_lines(stages, tmp_path, 1, None, False, print)
     err = capsys.readouterr().err
     for title in ("first stage", "second stage"):
-        assert re.search(rf"^stage {title}: started, \d+ s$", err, re.M)
+        assert re.search(rf"^stage {title}: queued, \d+ s$", err, re.M)
         moved = _lines(err, f"stage {title}")
         assert [int(m["done"]) for m in moved] == [1, 2, 3, 4]
         assert re.search(rf"^stage {title}: done in \d+\.\d s$", err, re.M)
-    assert err.index("first stage: done") < err.index("second stage: started")
+    assert err.index("first stage: done") < err.index("second stage: queued")
     _run_with_lines(stages, tmp_path, 1, None, False, print)   # again: from the cache
     err = capsys.readouterr().err
     assert "stage first stage: cached" in err and "stage second stage: cached" in err
