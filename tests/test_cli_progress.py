@@ -80,3 +80,26 @@ def test_reproduce_into_a_log_names_each_stage_as_it_starts_moves_and_ends(tmp_p
     _run_with_lines(stages, tmp_path, 1, None, False, print)   # again: from the cache
     err = capsys.readouterr().err
     assert "stage first stage: cached" in err and "stage second stage: cached" in err
+
+
+def test_a_study_of_several_cycles_moves_in_plant_steps_not_per_cycle(monkeypatch):
+    """reproduce's longest stage (where the energy is: UDDS and SC03 in one process) reported
+    only 1/2 and 2/2: a log was silent for a whole cycle. It counts plant steps over both."""
+    from types import SimpleNamespace
+
+    import acid.mpc.cav_study as cs
+    from acid.params import paper
+
+    def study_cycle(params, econ, name, config, plant_factory, progress=None):
+        for _ in range(3):
+            progress(100)                              # one run of 100 plant steps
+        return name
+
+    monkeypatch.setattr(cs, "study_cycle", study_cycle)
+    monkeypatch.setattr(cs, "estimated_steps", lambda config, n, Ts: 300)
+    econ = SimpleNamespace(name="econ", provenance={}, power_map=SimpleNamespace(domain={}))
+    seen = []
+    cs.cav_study(paper(), ["udds", "sc03"], cs.StudyConfig(), econ=econ,
+                 plant_factory=lambda: None, progress=lambda done, total: seen.append(
+                     (done, total)))
+    assert seen == [(100 * i, 600) for i in range(1, 7)] + [(600, 600)]

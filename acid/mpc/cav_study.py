@@ -1093,7 +1093,8 @@ def cav_study(params: ModelParams, cycles, config: StudyConfig | None = None,
     econ_summary : its identification summary, for the report.
     plant_factory : builds the plant (default the high-fidelity plant).
     jobs : cycles studied in parallel processes (``--cycle all``).
-    progress : ``progress(done, total)`` in plant steps (one cycle) or cycles (several).
+    progress : ``progress(done, total)`` in plant steps (in this process: one cycle, or
+        several with ``jobs`` 1) or cycles (several cycles in parallel processes).
     """
     config = config or StudyConfig()
     names = available_cycles() if cycles == "all" else (
@@ -1108,22 +1109,18 @@ def cav_study(params: ModelParams, cycles, config: StudyConfig | None = None,
         econ, econ_summary = identify_econ(plant_factory)
     out: dict[str, CycleStudy] = {}
     if len(names) == 1 or jobs <= 1:
+        # in this process: progress in plant steps over every cycle (a log line per run)
         done = [0]
-        if len(names) == 1:
-            sc = make_scenario(names[0], params.Ts, 303.15, config.stopgo_s)
-            total = estimated_steps(config, sc.n, params.Ts)
+        total = sum(estimated_steps(config, make_scenario(name, params.Ts, 303.15,
+                                                          config.stopgo_s).n, params.Ts)
+                    for name in names)
 
-            def tick(steps):
-                done[0] += steps
-                if progress is not None:
-                    progress(min(done[0], total), total)
-        else:
-            def tick(steps):
-                pass
-        for i, name in enumerate(names):
+        def tick(steps):
+            done[0] += steps
+            if progress is not None:
+                progress(min(done[0], total), total)
+        for name in names:
             out[name] = study_cycle(params, econ, name, config, plant_factory, progress=tick)
-            if len(names) > 1 and progress is not None:
-                progress(i + 1, len(names))
     else:
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
@@ -1135,8 +1132,7 @@ def cav_study(params: ModelParams, cycles, config: StudyConfig | None = None,
                 if progress is not None:
                     progress(i + 1, len(names))
         out = {name: out[name] for name in names}
-    if progress is not None and len(names) == 1:
-        total = estimated_steps(config, out[names[0]].scenario.n, params.Ts)
+    if progress is not None and (len(names) == 1 or jobs <= 1):
         progress(total, total)
     summary = dict(econ_summary or {}, name=econ.name, provenance=econ.provenance,
                    power_map_domain={k: list(v) for k, v in econ.power_map.domain.items()})
