@@ -12,10 +12,10 @@
   white and independent of the inputs; Ljung-Box portmanteau p-values beside them.
 
 Predictions never cross an experiment boundary. Temperatures are kelvin inside the results;
-``to_frame()`` and ``plot()`` show degC (the edge). Parameters are ``ModelParams`` or what
-``acid.fit`` returns; a declared model's fit result or parameter file (``acid fit --model``)
-goes to :mod:`acid.ident.analysis`: every channel it measures, in its declared unit, and
-every declared input in ``resid``.
+``to_frame()`` and ``plot()`` show degC (the edge). The functions are
+:mod:`acid.ident.analysis`'s, for any declared model (``ModelParams``, ``EconParams``, a fit,
+a parameter file): every channel it measures, in its declared unit, and every declared
+input in ``resid``.
 """
 
 from __future__ import annotations
@@ -26,14 +26,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acid._io import json_safe
-from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.metrics import fit_percent, rmse
-from acid.params import as_params
 from acid.units import K2C
 
 __all__ = ["PREDICTED_CHANNELS", "RESIDUAL_INPUTS", "CompareResult", "PredictionResult",
-           "ResidualResult", "compare", "predict", "resid"]
+           "ResidualResult", "compare", "predict", "resid"]  # noqa: F822 (__getattr__)
 
 #: Channels the model predicts, in the order of the arrays' last axis.
 PREDICTED_CHANNELS = ("T_cab", "T_evap", "T_ain")
@@ -340,38 +338,18 @@ class ResidualResult:
 
 
 # ----------------------------------------------------------------------- functions
-def predict(data: Dataset, params, k: int | None = 1, *, warmup: int = 0) -> PredictionResult:
-    """k-step-ahead predictions of T_cab, T_evap, T_ain along ``data`` (eqs. 1-3).
-
-    Parameters
-    ----------
-    data : dataset with ``acid.data.MODEL_CHANNELS`` at the model's sample time.
-    params : ``ModelParams`` or the result of ``acid.fit``.
-    k : prediction horizon in samples (>= 1); None simulates every experiment from its first
-        sample (no measured state after that).
-
-    Returns
-    -------
-    PredictionResult (NaN predictions for the first k samples of each experiment).
-
-    A declared model's parameters (a ``DeclaredFitResult``, a parameter file written by
-    ``acid fit --model``) go to :func:`acid.ident.analysis.predict_model` (every measured
-    channel, ``warmup`` samples for latent states).
-    """
-    from acid.ident.analysis import predict_model
-
-    return predict_model(data, _as_declared(params), k, warmup=warmup)
+#: ``predict(data, params, k=1, *, warmup=0)``, ``compare(data, *params, k=None,
+#: labels=None, warmup=0)`` and ``resid(data, params, max_lag=25, k=1, *, warmup=0)`` are
+#: :mod:`acid.ident.analysis`'s, for any declared model's values, fit or parameter file.
+_FUNCTIONS = {"predict": "predict_model", "compare": "compare_models", "resid": "resid_model"}
 
 
-def compare(data: Dataset, *models, k: int | None = None,
-            labels: list[str] | None = None, warmup: int = 0) -> CompareResult:
-    """Fit % per channel of one or more models on ``data`` (MATLAB ``compare``).
+def __getattr__(name):
+    if name in _FUNCTIONS:
+        import acid.ident.analysis
 
-    ``models`` are ``ModelParams`` or fit results; ``k`` as in :func:`predict` (default None:
-    simulation, as MATLAB's default); ``labels`` name them (default: the parameters' names,
-    made unique).
-    """
-    return compare_predictions(models, lambda m: predict(data, m, k, warmup=warmup), k, labels)
+        return getattr(acid.ident.analysis, _FUNCTIONS[name])
+    raise AttributeError(f"module 'acid.analysis' has no attribute {name!r}")
 
 
 def compare_predictions(models, predict_one, k: int | None,
@@ -393,31 +371,6 @@ def compare_predictions(models, predict_one, k: int | None,
                               f"first model {', '.join(next(iter(preds.values())).channels)}")
         preds[label] = pr
     return CompareResult(predictions=preds, horizon=None if k is None else int(k))
-
-
-def resid(data: Dataset, params, max_lag: int = 25, k: int = 1, *,
-          warmup: int = 0) -> ResidualResult:
-    """Residual tests of a model on ``data`` (MATLAB ``resid``).
-
-    Parameters
-    ----------
-    data : dataset (``MODEL_CHANNELS``).
-    params : ``ModelParams`` or the result of ``acid.fit``; a declared model's fit result
-        or parameter file (every measured channel, cross-correlated with every declared
-        input; ``warmup`` as in :func:`predict`).
-    max_lag : M, the largest lag tested (samples).
-    k : horizon of the prediction errors (1: the innovations MATLAB tests).
-
-    Returns
-    -------
-    ResidualResult: autocorrelations (lags 0..M), cross-correlations with W_bl and T_evap_set
-    (lags -M..M), the 99 % band 2.576/sqrt(N) and Ljung-Box tests.
-    """
-    if int(max_lag) < 1:
-        raise ConfigError(f"resid: max_lag must be >= 1, got {max_lag}")
-    from acid.ident.analysis import resid_model
-
-    return resid_model(data, _as_declared(params), max_lag, k, warmup=warmup)
 
 
 def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
@@ -472,21 +425,6 @@ def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
                           autocorrelation=acf, cross_correlation=ccf,
                           band99=float(Z99 / math.sqrt(nv)), n=nv, ljung_box=ljung,
                           inputs=tuple(inputs), channels=pr.channels, settings=settings)
-
-
-def _as_declared(params):
-    """A declared model's parameters as they are; the paper's (``ModelParams``, a params.json,
-    ``None``/"paper") as its declaration (``acid.models.paper``) with those values."""
-    from acid.ident.analysis import is_declared
-
-    if is_declared(params):
-        return params
-    from acid.ident.validate import ParameterSet
-    from acid.models import load
-
-    p = as_params(params)
-    return load("paper"), ParameterSet(values=p.theta, source=p.name,
-                                       provenance=p.provenance, label=p.name)
 
 
 def _edge(values: np.ndarray, unit: str) -> np.ndarray:
