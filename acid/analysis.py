@@ -30,13 +30,9 @@ from acid.errors import ConfigError, DataError
 from acid.metrics import fit_percent, rmse
 from acid.units import K2C
 
-__all__ = ["PREDICTED_CHANNELS", "RESIDUAL_INPUTS", "CompareResult", "PredictionResult",
-           "ResidualResult", "compare", "predict", "resid"]  # noqa: F822 (__getattr__)
-
-#: Channels the model predicts, in the order of the arrays' last axis.
-PREDICTED_CHANNELS = ("T_cab", "T_evap", "T_ain")
-#: Inputs whose cross-correlation with the residuals ``resid`` tests.
-RESIDUAL_INPUTS = ("W_bl", "T_evap_set")
+# compare, predict and resid are served by __getattr__
+__all__ = ["CompareResult", "PredictionResult", "ResidualResult", "compare",  # noqa: F822
+           "predict", "resid"]  # noqa: F822
 #: Two-sided 99 % standard-normal quantile.
 Z99 = 2.5758293035489004
 
@@ -49,14 +45,13 @@ class PredictionResult:
     Attributes
     ----------
     time : (N,) sample times, s.
-    measured, predicted : (N, 3) T_cab, T_evap, T_ain, K (``predicted`` NaN where no
+    measured, predicted : (N, C) the channels, in their units (``predicted`` NaN where no
         prediction exists: the first k samples of each experiment).
     horizon : k, steps (None: simulation from each experiment's first sample).
     Ts : sample time, s.
     model : the parameters' name.
     source : the dataset's source.
-    channels : ``PREDICTED_CHANNELS`` (a declared model: its measured channels).
-    units : the channels' units (empty: kelvin, the paper's model).
+    channels, units : the model's measured channels and their declared units.
     """
 
     time: np.ndarray
@@ -66,13 +61,8 @@ class PredictionResult:
     Ts: float
     model: str
     source: str
-    channels: tuple[str, ...] = PREDICTED_CHANNELS
-    units: tuple[str, ...] = ()
-
-    @property
-    def channel_units(self) -> tuple[str, ...]:
-        """The unit of each channel inside the arrays."""
-        return self.units or ("K",) * len(self.channels)
+    channels: tuple[str, ...]
+    units: tuple[str, ...]
 
     @property
     def valid(self) -> np.ndarray:
@@ -108,27 +98,25 @@ class PredictionResult:
         import pandas as pd
 
         cols = {}
-        for i, (c, u) in enumerate(zip(self.channels, self.channel_units, strict=True)):
+        for i, (c, u) in enumerate(zip(self.channels, self.units, strict=True)):
             cols[c] = _edge(self.measured[:, i], u)
             cols[f"{c}_pred"] = _edge(self.predicted[:, i], u)
         df = pd.DataFrame(cols, index=pd.Index(self.time, name="time_s"))
-        df.attrs.update(units="degC" if not self.units else dict(zip(
-            self.channels, map(_edge_unit, self.channel_units), strict=True)),
-            horizon=self.label, model=self.model)
+        df.attrs.update(units=dict(zip(self.channels, map(_edge_unit, self.units),
+                                       strict=True)), horizon=self.label, model=self.model)
         return df
 
     def plot(self, title: str | None = None):
-        """Measured and predicted T_cab, T_evap, T_ain (degC) over time; returns the figure."""
+        """Measured and predicted channels (temperatures in degC) over time; the figure."""
         return _trace_figure(self.time, self.measured, {self.model: self}, self.channels,
                              title or f"{self.label} prediction ({self.source})",
-                             self.channel_units)
+                             self.units)
 
     def to_json_dict(self) -> dict:
         return json_safe({"horizon": self.horizon, "Ts_s": self.Ts, "model": self.model,
                           "source": self.source, "fit_percent": self.fit_percent,
-                          **({"rmse": self.rmse, "units": dict(zip(
-                              self.channels, self.units, strict=True))} if self.units
-                             else {"rmse_K": self.rmse}),
+                          "rmse": self.rmse, "units": dict(zip(self.channels, self.units,
+                                                               strict=True)),
                           "samples": int(self.valid.sum())})
 
 
@@ -151,7 +139,7 @@ class CompareResult:
         return {label: p.fit_percent for label, p in self.predictions.items()}
 
     def to_frame(self):
-        """DataFrame of fit % (rows: models, columns: T_cab, T_evap, T_ain)."""
+        """DataFrame of fit % (rows: models, columns: the channels)."""
         import pandas as pd
 
         df = pd.DataFrame(self.fit_percent).T
@@ -166,7 +154,7 @@ class CompareResult:
         label = "simulation" if self.horizon is None else f"{self.horizon}-step prediction"
         return _trace_figure(first.time, first.measured, self.predictions, first.channels,
                              title or f"compare: {label} ({first.source})",
-                             first.channel_units)
+                             first.units)
 
     def to_json_dict(self) -> dict:
         return json_safe({"horizon": self.horizon, "fit_percent": self.fit_percent})
@@ -180,14 +168,14 @@ class ResidualResult:
     ----------
     prediction : the k-step predictions the residuals come from (k = 1 by default).
     lags : (M + 1,) autocorrelation lags 0..M; ``cross_lags`` (2M + 1,) -M..M, samples.
-    autocorrelation : (M + 1, 3) normalised autocorrelation of each channel's residual.
-    cross_correlation : (2M + 1, 2, 3) normalised cross-correlation r_ue(tau) of input u
-        (``RESIDUAL_INPUTS``) at t with the residual at t + tau (tau > 0: the residual after
-        the input; significant values at tau < 0 suggest feedback).
+    autocorrelation : (M + 1, C) normalised autocorrelation of each channel's residual.
+    cross_correlation : (2M + 1, I, C) normalised cross-correlation r_ue(tau) of input u
+        at t with the residual at t + tau (tau > 0: the residual after the input;
+        significant values at tau < 0 suggest feedback).
     band99 : half-width of the 99 % band under whiteness/independence, 2.576 / sqrt(N).
     n : residual samples used.
     ljung_box : {channel: {"Q", "p_value", "lags"}} portmanteau test of whiteness.
-    inputs : ``RESIDUAL_INPUTS``.
+    inputs, channels : the model's declared inputs and measured channels.
     """
 
     prediction: PredictionResult
@@ -198,8 +186,8 @@ class ResidualResult:
     band99: float
     n: int
     ljung_box: dict[str, dict[str, float]]
-    inputs: tuple[str, ...] = RESIDUAL_INPUTS
-    channels: tuple[str, ...] = PREDICTED_CHANNELS
+    inputs: tuple[str, ...]
+    channels: tuple[str, ...]
     settings: dict = field(default_factory=dict)
 
     @property

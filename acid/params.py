@@ -9,7 +9,6 @@ in kg/s at Ts = 5 s; beta1..beta3 the blower power curve (eq. 5, W with W_bl in 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -18,7 +17,6 @@ import numpy as np
 from acid.claims import MODEL as _PAPER_MODEL
 from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import DataError
-from acid.models import paper as _paper_model
 from acid.models.paper import PARAMETER_TABLE as _DECLARED_TABLE
 from acid.models.values import ParameterValues
 
@@ -46,16 +44,26 @@ def paper() -> ModelParams:
                                                            "II-B-2, eq. 5, Table II (acid.claims)"})
 
 
-def load_params(spec: str | Path | None, allow_unstable: bool = False) -> ModelParams:
-    """``None`` or ``"paper"`` gives the paper preset; anything else is a params.json path.
+def load_params(spec: str | Path | None, allow_unstable: bool = False,
+                binding: type = ModelParams) -> ModelParams:
+    """``None`` or ``"paper"`` gives the paper preset; anything else is a parameter file of
+    ``binding``'s model (``ParameterValues``: of the model the file names, as its binding).
 
-    Unstable or implausible parameters (``ModelParams.stability_problems``) are refused with
-    a one-line ``DataError`` unless ``allow_unstable``.
+    Implausible values (the declaration's ``checks``) are refused with a one-line
+    ``DataError`` unless ``allow_unstable``.
     """
     if spec is None or str(spec) == "paper":
         return paper()
-    p = ModelParams.from_json(spec)
-    return p if allow_unstable else p.check_stable(str(spec))
+    import acid.econ.params  # noqa: F401 - binds EconParams to its model's files
+
+    p = binding.from_json(spec)
+    return p if allow_unstable else p.check(str(spec))
+
+
+def load_any_params(spec, allow_unstable: bool = False):
+    """``load_params`` for the file of any declared model (``EconParams`` for the econ
+    model's, ``ModelParams`` for the paper's...)."""
+    return load_params(spec, allow_unstable, ParameterValues)
 
 
 def fitted(result, eta_cop: float | None = None, name: str | None = None,
@@ -87,8 +95,6 @@ def as_params(obj) -> ModelParams:
     """
     if isinstance(obj, ModelParams):
         return obj
-    if isinstance(obj, ParameterValues) and obj.declaration is _paper_model.model:
-        return ModelParams(**{f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
     inner = getattr(obj, "params", None)
     if isinstance(inner, ModelParams):
         return inner

@@ -151,7 +151,7 @@ def test_unstable_or_non_kelvin_parameters_are_named(p, fragment):
     problems = p.stability_problems()
     assert problems and fragment in problems[0]
     with pytest.raises(DataError, match="allow-unstable"):
-        p.check_stable("p.json")
+        p.check("p.json")
 
 
 def test_load_params_refuses_unstable_files_unless_allowed(tmp_path):

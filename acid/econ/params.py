@@ -1,13 +1,12 @@
 """The econ model's values (``EconParams``: acid's one parameter class bound to the
 declaration :mod:`acid.models.econ`) and its identification, :func:`identify` (``acid fit
 --model econ``, acid.ident's staged fit); nothing is read from a plant's configuration.
-A parameter file names its model; :func:`load_any_params` reads either family.
+A parameter file names its model; ``acid.params.load_any_params`` reads any.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -16,6 +15,7 @@ from acid.errors import DataError
 from acid.models import econ
 from acid.models.econ import MAP_INPUTS, MAP_TERMS, PowerMap  # noqa: F401 (re-exported)
 from acid.models.values import ParameterValues
+from acid.params import load_any_params  # noqa: F401 (the name cli/validate reads)
 
 if TYPE_CHECKING:
     from acid.ident.fit import DeclaredFitResult
@@ -31,41 +31,6 @@ class EconParams(ParameterValues):
     ``PowerMap`` with the domain of the identification data) and ``p.theta_all``."""
 
     MODEL = MODEL_NAME
-
-
-def model_family(spec) -> str:
-    """``"econ"`` or ``"paper"``: the model family of a parameter spec (path or 'paper')."""
-    if spec is None or str(spec) == "paper":
-        return "paper"
-    from acid._readers import load_json
-
-    d = load_json(spec, "parameter file", DataError, top=None)
-    return MODEL_NAME if isinstance(d, dict) and d.get("model") == MODEL_NAME else "paper"
-
-
-def load_any_params(spec, allow_unstable: bool = False):
-    """The parameters of either family: ``ModelParams`` or ``EconParams``; implausible ones
-    (the declaration's checks) refused unless ``allow_unstable``."""
-    from acid.params import load_params
-
-    if model_family(spec) == MODEL_NAME:
-        p = EconParams.from_json(spec)
-        return p if allow_unstable else p.check(str(spec))
-    return load_params(spec, allow_unstable=allow_unstable)
-
-
-def as_any_params(obj):
-    """``acid.params.as_params`` for both families: ``EconParams`` (or an econ fit result)
-    as is, a path by its family, anything else as the paper's parameters."""
-    from acid.params import as_params
-
-    if isinstance(obj, EconParams):
-        return obj
-    if isinstance(getattr(obj, "params", None), EconParams):
-        return obj.params
-    if isinstance(obj, (str, Path)):
-        return load_any_params(obj)
-    return as_params(obj)
 
 
 # ------------------------------------------------------------------ identification

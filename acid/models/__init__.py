@@ -24,5 +24,5 @@ from acid.models.declaration import (
 from acid.models.loader import BUILT_IN, load
 
 __all__ = ["RK4", "BUILT_IN", "Constant", "Constraint", "DeclarationError", "Group", "Model",
-           "Parameter", "Signal", "State", "cos", "exp", "fabs", "fmax", "fmin", "if_else", "load", "log", "sin",
-           "sqrt"]
+           "Parameter", "Signal", "State", "cos", "exp", "fabs", "fmax", "fmin", "if_else", "load",
+           "log", "sin", "sqrt"]

@@ -28,13 +28,16 @@ import casadi as ca
 import numpy as np
 
 from acid._io import json_safe, write_json
-from acid.errors import DataError
+from acid.errors import AcidError, DataError
 from acid.models.declaration import Model
 from acid.models.loader import BUILT_IN, load
 
 #: The ``format`` key of a parameter file.
 FORMAT = "acid-declared-params"
 _LOADED: dict[str, Model] = {}
+#: {model name: the class bound to it} (``ModelParams``, ``EconParams``): what a file of
+#: that model is read as
+BINDINGS: dict[str, type] = {}
 
 
 def declaration(ref: str | Model) -> Model:
@@ -71,6 +74,10 @@ class ParameterValues:
     provenance: dict
     #: the declaration a binding (``ModelParams``, ``EconParams``) is for
     MODEL: ClassVar[str | None] = None
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        BINDINGS.setdefault(cls.MODEL, cls)
 
     def __init__(self, values=None, *, model=None, constants=None, per_experiment=None,
                  stderr=None, info=None, Ts=None, name=None, provenance=None, **named):
@@ -162,9 +169,6 @@ class ParameterValues:
     def __hash__(self):
         return hash(self._key())
 
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.name!r} of {self.declaration.name!r})"
-
     @property
     def theta(self) -> np.ndarray:
         """Every parameter as one vector, in the declared order."""
@@ -215,8 +219,6 @@ class ParameterValues:
             raise DataError(f"{source}: {problems[0]} (--allow-unstable uses them anyway)")
         return self
 
-    check_stable = check
-
     def parameter_set(self, source: str | None = None):
         """These values as the validator's ``acid.ident.validate.ParameterSet``."""
         from acid.ident.validate import ParameterSet
@@ -254,10 +256,9 @@ class ParameterValues:
             raise DataError(f"{source}: expected a JSON object (a parameter file)")
         named = d.get("model", "paper")
         try:
-            m = declaration(model or cls.MODEL or named)
-        except DataError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - DeclarationError is an AcidError too
+            m = declaration(model or cls.MODEL or (named if named in BUILT_IN or not isinstance(
+                d.get("model_source"), str) else d["model_source"]))
+        except AcidError as exc:   # a model file that is gone or wrong
             raise DataError(f"{source}: {exc}") from None
         if named != m.name:
             raise DataError(f"{source}: parameters of model {named!r}, not {m.name!r}")
@@ -322,7 +323,8 @@ class ParameterValues:
                                 f"{'text' if kind is str else 'JSON object'}, got "
                                 f"{type(d[key]).__name__}")
         try:
-            return cls(vals, model=m, constants=consts, per_experiment=per, stderr=stderr,
+            return (cls if cls.MODEL else BINDINGS.get(m.name, cls))(
+                vals, model=m, constants=consts, per_experiment=per, stderr=stderr,
                        info={**info, **d.get("info", {})},
                        Ts=_number(d.get("Ts", m.Ts), "Ts", source),
                        name=d.get("name", Path(source).stem), provenance=d.get("provenance"))
@@ -363,6 +365,5 @@ def _numbers(value, key: str, n: int, source: str) -> tuple[float, ...]:
 
 
 def _show(value) -> str:
-    text = json.dumps(value) if isinstance(value, (str, int, float, bool, type(None))) else \
-        f"a JSON {'object' if isinstance(value, dict) else type(value).__name__}"
+    text = json.dumps(value)
     return text if len(text) <= 40 else text[:37] + "..."
