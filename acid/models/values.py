@@ -255,6 +255,12 @@ class ParameterValues:
         if not isinstance(d, dict):
             raise DataError(f"{source}: expected a JSON object (a parameter file)")
         named = d.get("model", "paper")
+        for key, kind in (("model", str), ("name", str), ("provenance", dict), ("info", dict),
+                          ("per_experiment", dict)):
+            if key in d and not isinstance(d[key], kind):
+                raise DataError(f"{source}: {key!r} must be a "
+                                f"{'text' if kind is str else 'JSON object'}, got "
+                                f"{type(d[key]).__name__}")
         try:
             m = declaration(model or cls.MODEL or (named if named in BUILT_IN or not isinstance(
                 d.get("model_source"), str) else d["model_source"]))
@@ -317,19 +323,18 @@ class ParameterValues:
             except (KeyError, TypeError, ValueError):
                 raise DataError(f"{source}: per_experiment {n!r} needs 'experiments' and "
                                 "'values' of equal length") from None
-        for key, kind in (("name", str), ("provenance", dict), ("info", dict)):
-            if key in d and not isinstance(d[key], kind):
-                raise DataError(f"{source}: {key!r} must be a "
-                                f"{'text' if kind is str else 'JSON object'}, got "
-                                f"{type(d[key]).__name__}")
         try:
-            return (cls if cls.MODEL else BINDINGS.get(m.name, cls))(
+            out = (cls if cls.MODEL else BINDINGS.get(m.name, cls))(
                 vals, model=m, constants=consts, per_experiment=per, stderr=stderr,
-                       info={**info, **d.get("info", {})},
-                       Ts=_number(d.get("Ts", m.Ts), "Ts", source),
-                       name=d.get("name", Path(source).stem), provenance=d.get("provenance"))
+                info={**info, **d.get("info", {})}, Ts=_number(d.get("Ts", m.Ts), "Ts", source),
+                name=d.get("name", Path(source).stem), provenance=d.get("provenance"))
+            for g in (g for g, grp in m.groups.items() if grp.view is not None):
+                getattr(out, g)   # a view refuses what it cannot show (the map's domain)
+            return out
         except DataError as exc:
             raise DataError(f"{source}: {exc}") from None
+        except (TypeError, ValueError, IndexError, KeyError, AttributeError) as exc:
+            raise DataError(f"{source}: malformed 'info' ({exc})") from None
 
     @classmethod
     def from_json(cls, path: str | Path, model=None) -> ParameterValues:
