@@ -12,10 +12,10 @@
   white and independent of the inputs; Ljung-Box portmanteau p-values beside them.
 
 Predictions never cross an experiment boundary. Temperatures are kelvin inside the results;
-``to_frame()`` and ``plot()`` show degC (the edge). Parameters are ``ModelParams`` or what
-``acid.fit`` returns; a declared model's fit result or parameter file (``acid fit --model``)
-goes to :mod:`acid.ident.analysis`: every channel it measures, in its declared unit, and
-every declared input in ``resid``.
+``to_frame()`` and ``plot()`` show degC (the edge). The functions are
+:mod:`acid.ident.analysis`'s, for any declared model (``ModelParams``, ``EconParams``, a fit,
+a parameter file): every channel it measures, in its declared unit, and every declared
+input in ``resid``.
 """
 
 from __future__ import annotations
@@ -26,19 +26,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acid._io import json_safe
-from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.metrics import fit_percent, rmse
-from acid.params import as_params
 from acid.units import K2C
 
-__all__ = ["PREDICTED_CHANNELS", "RESIDUAL_INPUTS", "CompareResult", "PredictionResult",
-           "ResidualResult", "compare", "predict", "resid"]
-
-#: Channels the model predicts, in the order of the arrays' last axis.
-PREDICTED_CHANNELS = ("T_cab", "T_evap", "T_ain")
-#: Inputs whose cross-correlation with the residuals ``resid`` tests.
-RESIDUAL_INPUTS = ("W_bl", "T_evap_set")
+# compare, predict and resid are served by __getattr__
+__all__ = ["CompareResult", "PredictionResult", "ResidualResult", "compare",  # noqa: F822
+           "predict", "resid"]  # noqa: F822
 #: Two-sided 99 % standard-normal quantile.
 Z99 = 2.5758293035489004
 
@@ -51,14 +45,13 @@ class PredictionResult:
     Attributes
     ----------
     time : (N,) sample times, s.
-    measured, predicted : (N, 3) T_cab, T_evap, T_ain, K (``predicted`` NaN where no
+    measured, predicted : (N, C) the channels, in their units (``predicted`` NaN where no
         prediction exists: the first k samples of each experiment).
     horizon : k, steps (None: simulation from each experiment's first sample).
     Ts : sample time, s.
     model : the parameters' name.
     source : the dataset's source.
-    channels : ``PREDICTED_CHANNELS`` (a declared model: its measured channels).
-    units : the channels' units (empty: kelvin, the paper's model).
+    channels, units : the model's measured channels and their declared units.
     """
 
     time: np.ndarray
@@ -68,13 +61,8 @@ class PredictionResult:
     Ts: float
     model: str
     source: str
-    channels: tuple[str, ...] = PREDICTED_CHANNELS
-    units: tuple[str, ...] = ()
-
-    @property
-    def channel_units(self) -> tuple[str, ...]:
-        """The unit of each channel inside the arrays."""
-        return self.units or ("K",) * len(self.channels)
+    channels: tuple[str, ...]
+    units: tuple[str, ...]
 
     @property
     def valid(self) -> np.ndarray:
@@ -110,27 +98,25 @@ class PredictionResult:
         import pandas as pd
 
         cols = {}
-        for i, (c, u) in enumerate(zip(self.channels, self.channel_units, strict=True)):
+        for i, (c, u) in enumerate(zip(self.channels, self.units, strict=True)):
             cols[c] = _edge(self.measured[:, i], u)
             cols[f"{c}_pred"] = _edge(self.predicted[:, i], u)
         df = pd.DataFrame(cols, index=pd.Index(self.time, name="time_s"))
-        df.attrs.update(units="degC" if not self.units else dict(zip(
-            self.channels, map(_edge_unit, self.channel_units), strict=True)),
-            horizon=self.label, model=self.model)
+        df.attrs.update(units=dict(zip(self.channels, map(_edge_unit, self.units),
+                                       strict=True)), horizon=self.label, model=self.model)
         return df
 
     def plot(self, title: str | None = None):
-        """Measured and predicted T_cab, T_evap, T_ain (degC) over time; returns the figure."""
+        """Measured and predicted channels (temperatures in degC) over time; the figure."""
         return _trace_figure(self.time, self.measured, {self.model: self}, self.channels,
                              title or f"{self.label} prediction ({self.source})",
-                             self.channel_units)
+                             self.units)
 
     def to_json_dict(self) -> dict:
         return json_safe({"horizon": self.horizon, "Ts_s": self.Ts, "model": self.model,
                           "source": self.source, "fit_percent": self.fit_percent,
-                          **({"rmse": self.rmse, "units": dict(zip(
-                              self.channels, self.units, strict=True))} if self.units
-                             else {"rmse_K": self.rmse}),
+                          "rmse": self.rmse, "units": dict(zip(self.channels, self.units,
+                                                               strict=True)),
                           "samples": int(self.valid.sum())})
 
 
@@ -153,7 +139,7 @@ class CompareResult:
         return {label: p.fit_percent for label, p in self.predictions.items()}
 
     def to_frame(self):
-        """DataFrame of fit % (rows: models, columns: T_cab, T_evap, T_ain)."""
+        """DataFrame of fit % (rows: models, columns: the channels)."""
         import pandas as pd
 
         df = pd.DataFrame(self.fit_percent).T
@@ -168,7 +154,7 @@ class CompareResult:
         label = "simulation" if self.horizon is None else f"{self.horizon}-step prediction"
         return _trace_figure(first.time, first.measured, self.predictions, first.channels,
                              title or f"compare: {label} ({first.source})",
-                             first.channel_units)
+                             first.units)
 
     def to_json_dict(self) -> dict:
         return json_safe({"horizon": self.horizon, "fit_percent": self.fit_percent})
@@ -182,14 +168,14 @@ class ResidualResult:
     ----------
     prediction : the k-step predictions the residuals come from (k = 1 by default).
     lags : (M + 1,) autocorrelation lags 0..M; ``cross_lags`` (2M + 1,) -M..M, samples.
-    autocorrelation : (M + 1, 3) normalised autocorrelation of each channel's residual.
-    cross_correlation : (2M + 1, 2, 3) normalised cross-correlation r_ue(tau) of input u
-        (``RESIDUAL_INPUTS``) at t with the residual at t + tau (tau > 0: the residual after
-        the input; significant values at tau < 0 suggest feedback).
+    autocorrelation : (M + 1, C) normalised autocorrelation of each channel's residual.
+    cross_correlation : (2M + 1, I, C) normalised cross-correlation r_ue(tau) of input u
+        at t with the residual at t + tau (tau > 0: the residual after the input;
+        significant values at tau < 0 suggest feedback).
     band99 : half-width of the 99 % band under whiteness/independence, 2.576 / sqrt(N).
     n : residual samples used.
     ljung_box : {channel: {"Q", "p_value", "lags"}} portmanteau test of whiteness.
-    inputs : ``RESIDUAL_INPUTS``.
+    inputs, channels : the model's declared inputs and measured channels.
     """
 
     prediction: PredictionResult
@@ -200,8 +186,8 @@ class ResidualResult:
     band99: float
     n: int
     ljung_box: dict[str, dict[str, float]]
-    inputs: tuple[str, ...] = RESIDUAL_INPUTS
-    channels: tuple[str, ...] = PREDICTED_CHANNELS
+    inputs: tuple[str, ...]
+    channels: tuple[str, ...]
     settings: dict = field(default_factory=dict)
 
     @property
@@ -340,38 +326,18 @@ class ResidualResult:
 
 
 # ----------------------------------------------------------------------- functions
-def predict(data: Dataset, params, k: int | None = 1, *, warmup: int = 0) -> PredictionResult:
-    """k-step-ahead predictions of T_cab, T_evap, T_ain along ``data`` (eqs. 1-3).
-
-    Parameters
-    ----------
-    data : dataset with ``acid.data.MODEL_CHANNELS`` at the model's sample time.
-    params : ``ModelParams`` or the result of ``acid.fit``.
-    k : prediction horizon in samples (>= 1); None simulates every experiment from its first
-        sample (no measured state after that).
-
-    Returns
-    -------
-    PredictionResult (NaN predictions for the first k samples of each experiment).
-
-    A declared model's parameters (a ``DeclaredFitResult``, a parameter file written by
-    ``acid fit --model``) go to :func:`acid.ident.analysis.predict_model` (every measured
-    channel, ``warmup`` samples for latent states).
-    """
-    from acid.ident.analysis import predict_model
-
-    return predict_model(data, _as_declared(params), k, warmup=warmup)
+#: ``predict(data, params, k=1, *, warmup=0)``, ``compare(data, *params, k=None,
+#: labels=None, warmup=0)`` and ``resid(data, params, max_lag=25, k=1, *, warmup=0)`` are
+#: :mod:`acid.ident.analysis`'s, for any declared model's values, fit or parameter file.
+_FUNCTIONS = {"predict": "predict_model", "compare": "compare_models", "resid": "resid_model"}
 
 
-def compare(data: Dataset, *models, k: int | None = None,
-            labels: list[str] | None = None, warmup: int = 0) -> CompareResult:
-    """Fit % per channel of one or more models on ``data`` (MATLAB ``compare``).
+def __getattr__(name):
+    if name in _FUNCTIONS:
+        import acid.ident.analysis
 
-    ``models`` are ``ModelParams`` or fit results; ``k`` as in :func:`predict` (default None:
-    simulation, as MATLAB's default); ``labels`` name them (default: the parameters' names,
-    made unique).
-    """
-    return compare_predictions(models, lambda m: predict(data, m, k, warmup=warmup), k, labels)
+        return getattr(acid.ident.analysis, _FUNCTIONS[name])
+    raise AttributeError(f"module 'acid.analysis' has no attribute {name!r}")
 
 
 def compare_predictions(models, predict_one, k: int | None,
@@ -393,31 +359,6 @@ def compare_predictions(models, predict_one, k: int | None,
                               f"first model {', '.join(next(iter(preds.values())).channels)}")
         preds[label] = pr
     return CompareResult(predictions=preds, horizon=None if k is None else int(k))
-
-
-def resid(data: Dataset, params, max_lag: int = 25, k: int = 1, *,
-          warmup: int = 0) -> ResidualResult:
-    """Residual tests of a model on ``data`` (MATLAB ``resid``).
-
-    Parameters
-    ----------
-    data : dataset (``MODEL_CHANNELS``).
-    params : ``ModelParams`` or the result of ``acid.fit``; a declared model's fit result
-        or parameter file (every measured channel, cross-correlated with every declared
-        input; ``warmup`` as in :func:`predict`).
-    max_lag : M, the largest lag tested (samples).
-    k : horizon of the prediction errors (1: the innovations MATLAB tests).
-
-    Returns
-    -------
-    ResidualResult: autocorrelations (lags 0..M), cross-correlations with W_bl and T_evap_set
-    (lags -M..M), the 99 % band 2.576/sqrt(N) and Ljung-Box tests.
-    """
-    if int(max_lag) < 1:
-        raise ConfigError(f"resid: max_lag must be >= 1, got {max_lag}")
-    from acid.ident.analysis import resid_model
-
-    return resid_model(data, _as_declared(params), max_lag, k, warmup=warmup)
 
 
 def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
@@ -472,21 +413,6 @@ def residual_tests(pr: PredictionResult, u: np.ndarray, inputs: tuple[str, ...],
                           autocorrelation=acf, cross_correlation=ccf,
                           band99=float(Z99 / math.sqrt(nv)), n=nv, ljung_box=ljung,
                           inputs=tuple(inputs), channels=pr.channels, settings=settings)
-
-
-def _as_declared(params):
-    """A declared model's parameters as they are; the paper's (``ModelParams``, a params.json,
-    ``None``/"paper") as its declaration (``acid.models.paper``) with those values."""
-    from acid.ident.analysis import is_declared
-
-    if is_declared(params):
-        return params
-    from acid.ident.validate import ParameterSet
-    from acid.models import load
-
-    p = as_params(params)
-    return load("paper"), ParameterSet(values=p.theta, source=p.name,
-                                       provenance=p.provenance, label=p.name)
 
 
 def _edge(values: np.ndarray, unit: str) -> np.ndarray:

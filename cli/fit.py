@@ -32,7 +32,8 @@ def fit(
     method: str | None = typer.Option(
         None, "--method",
         help="'auto' (ls where every equation allows it, else oe), 'ls' equation-error "
-             "least squares, 'cvx' least squares inside the declared bounds (CVXPY), 'oe' "
+             "least squares, 'cvx' least squares inside the declared bounds and affine "
+             "constraints (CVXPY; the active ones are noted), 'oe' "
              "output error (multi-step simulation error, started from the ls estimate), 'pem' "
              "prediction error (an extended Kalman filter over each whole record)."),
     loss: str = typer.Option("squared", "--loss",

@@ -131,7 +131,9 @@ def _params(name: str, **changes) -> Callable[[Path], None]:
     def make(w: Path) -> None:
         from acid.params import paper
 
-        d = paper().to_json_dict()
+        p = paper()   # the layout users' older params.json files have: groups as lists
+        d = {"gamma": list(p.gamma), "tau": list(p.tau), "beta": list(p.beta), "c_p": p.c_p,
+             "eta_cop": p.eta_cop, "Ts": p.Ts}
         for k, v in changes.items():
             if k.startswith("gamma") and k[5:].isdigit():
                 d["gamma"][int(k[5:]) - 1] = v
@@ -825,7 +827,8 @@ CASES: list[Case] = [
          ("excite", "--plant", "model:{w}/nope.py", "--out", "{w}/x.h5"), ("--plant",
                                                                            "nope.py")),
     Case("validate-model-file-paper-params", "params",
-         (*V[:2], "--model", "{w}/m.py", "--params", P), ("p.json", "declared model"),
+         (*V[:2], "--model", "{w}/m.py", "--params", P),
+         ("p.json", "parameters of model 'paper', not 'mine'"),
          _write("m.py", MODEL_FILE)),
 
 

@@ -14,20 +14,46 @@ from acid.units import C2K
 
 
 def test_params_json_round_trip_and_family(econ_truth, tmp_path):
-    from acid.econ.params import load_any_params, model_family
-    from acid.params import paper
+    from acid.params import load_any_params, paper
 
     path = econ_truth.to_json(tmp_path / "econ.json")
     back = EconParams.from_json(path)
     assert back.values == econ_truth.values and back.C_ew == econ_truth.C_ew
     assert back.power_map.coef == econ_truth.power_map.coef
-    assert model_family(path) == "econ" and isinstance(load_any_params(path), EconParams)
+    assert isinstance(load_any_params(path), EconParams)
     paper_file = paper().to_json(tmp_path / "paper.json")
-    assert model_family(paper_file) == "paper" and model_family("paper") == "paper"
-    with pytest.raises(DataError, match="not an econ parameter file"):
+    assert load_any_params(paper_file) == paper() and load_any_params("paper") == paper()
+    with pytest.raises(DataError, match="parameters of model 'paper', not 'econ'"):
         EconParams.from_json(paper_file)
+    bad = econ_truth.replace(C_cab=-1.0)   # the declaration's checks
+    assert bad.problems() == ["C_cab must be positive, got -1"]
     with pytest.raises(DataError, match="C_cab must be positive"):
-        econ_truth.replace(C_cab=-1.0)
+        load_any_params(bad.to_json(tmp_path / "bad.json"))
+    assert load_any_params(tmp_path / "bad.json", allow_unstable=True).C_cab == -1.0
+
+
+def test_files_written_before_the_one_format_still_load():
+    """An econ parameter file as acid wrote it before (``"model": "econ"``, C_ew, beta and
+    the power map at the top level) and the repository's params.json (gamma/tau/beta
+    lists): the values are the file's, read here independently."""
+    import json
+    from pathlib import Path
+
+    from acid.params import load_params
+
+    root = Path(__file__).parents[1]
+    path = root / "tests" / "references" / "econ_params_before_i19.json"
+    d = json.loads(path.read_text())
+    p = EconParams.from_json(path)
+    assert p.values["C_cab"] == d["parameters"]["C_cab"]["value"]
+    assert p.C_ew == d["C_ew"]["value"] and p.beta == tuple(d["beta"])
+    assert p.power_map.coef == tuple(d["power_map"]["coef"])
+    assert p.power_map.domain["Q_e"] == tuple(d["power_map"]["domain"]["Q_e"])
+    assert p.power_map.quality == d["power_map"]["quality"] and p.name == d["name"]
+    old = json.loads((root / "params.json").read_text())
+    q = load_params(root / "params.json")
+    assert q.gamma == tuple(old["gamma"]) and q.tau == tuple(old["tau"])
+    assert q.beta == tuple(old["beta"]) and q.eta_cop == old["eta_cop"]
 
 
 def test_the_vector_is_the_declared_table(econ_truth):

@@ -68,7 +68,7 @@ def test_parameter_file_round_trip(rng, tmp_path):
     path.write_text(json.dumps(d))
     with pytest.raises(DataError, match="'nope' is not in model 'cabin3'"):
         read_parameters(m, path)
-    with pytest.raises(DataError, match="not a parameter file of a declared model"):
+    with pytest.raises(DataError, match="parameters of model .paper., not .cabin3."):
         bad = tmp_path / "b.json"
         bad.write_text("{}")
         read_parameters(m, bad)

@@ -11,15 +11,7 @@ import pytest
 
 from acid.errors import DataError
 from acid.models.paper import model
-from acid.params import (
-    PAPER_BETA,
-    PAPER_GAMMA,
-    PAPER_TAU,
-    PARAMETER_TABLE,
-    ModelParams,
-    load_params,
-    paper,
-)
+from acid.params import PAPER_BETA, PARAMETER_TABLE, ModelParams, load_params, paper
 from acid.units import C2K, K2C
 
 
@@ -67,7 +59,9 @@ def test_json_round_trip_keeps_values_units_and_provenance(tmp_path):
     p = paper().replace(provenance={"method": "ls", "data_file": "x.h5"})
     path = p.to_json(tmp_path / "params.json", extra={"fit": {"method": "ls"}})
     d = json.loads(path.read_text())
-    assert "kelvin" in d["units"] and d["fit"] == {"method": "ls"}
+    assert d["model"] == "paper" and d["fit"] == {"method": "ls"}
+    assert d["parameters"]["gamma3"] == {"value": 1.2999, "unit": "s/kg", "stderr": None,
+                                         "meaning": PARAMETER_TABLE[2][2]}
     q = ModelParams.from_json(path)
     assert q == p and q.provenance == p.provenance
     assert load_params(path) == p and load_params("paper") == paper() and load_params(None)
@@ -87,7 +81,8 @@ def _write(tmp_path, text):
     ('{"gamma": [1, 2, 3, 4, 5, 6, NaN], "tau": [0, 0, 0]}', "non-finite"),
     ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": ["a", 0, 0]}', "malformed"),
     ('{"gamma": 5, "tau": [0, 0, 0]}', "malformed"),
-    ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": [0, 0, 0], "eta_cop": -1}', "eta_cop"),
+    ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": [0, 0, 0], "beta": [0, 0, 0], "eta_cop": -1}',
+     "eta_cop = -1 is implausible"),
     ('{"gamma": [1, 2, 3, 4, 5, 6, 7], "tau": [0, 0, 0], "units": "degC (Celsius)"}',
      "Celsius"),
     ("[1, 2, 3]", "JSON object"),
@@ -113,17 +108,20 @@ def test_params_are_frozen_and_perturbation_is_seeded():
     a = p.perturbed(0.1, np.random.default_rng(1))
     b = p.perturbed(0.1, np.random.default_rng(1))
     assert a == b and a != p and a.beta == PAPER_BETA
-    assert p.gamma == PAPER_GAMMA and p.tau == PAPER_TAU
+    # the dynamics (eqs. 1-3, eq. 3 substituted into eq. 1) are perturbed, in table order
+    z = np.random.default_rng(1).standard_normal(10)
+    assert np.allclose(a.theta[:10], p.theta[:10] * (1 + 0.1 * z), rtol=0, atol=1e-12)
 
 
-def test_parameter_slices_are_derived_from_the_table():
-    from acid.params import BETA, DYNAMICS, GAMMA, PARAMETER_TABLE, TAU
-
-    names = [row[0] for row in PARAMETER_TABLE]
-    assert names[GAMMA] == [f"gamma{i}" for i in range(1, 8)]
-    assert names[TAU] == ["tau1", "tau2", "tau3"] and names[BETA][0] == "beta1"
-    assert names[DYNAMICS] == names[GAMMA] + names[TAU]
+def test_groups_constants_and_vectors_are_derived_from_the_table():
     p = paper()
+    assert p.gamma == tuple(p.values[f"gamma{i}"] for i in range(1, 8))
+    assert p.tau == (p.tau1, p.tau2, p.tau3) and p.beta[0] == p.beta1
+    assert p.replace(eta_cop=2.5).eta_cop == 2.5 and p.eta_cop == 3.5
+    with pytest.raises(DataError, match="eta_cop = 99 is implausible"):
+        p.replace(eta_cop=99.0)
+    with pytest.raises(DataError, match="no parameter, group or constant 'gamma8'"):
+        p.replace(gamma8=1.0)
     theta = p.theta * 2.0
     q = p.with_theta(theta, name="doubled")
     assert np.array_equal(q.theta, theta) and q.name == "doubled" and q.c_p == p.c_p
@@ -153,7 +151,7 @@ def test_unstable_or_non_kelvin_parameters_are_named(p, fragment):
     problems = p.stability_problems()
     assert problems and fragment in problems[0]
     with pytest.raises(DataError, match="allow-unstable"):
-        p.check_stable("p.json")
+        p.check("p.json")
 
 
 def test_load_params_refuses_unstable_files_unless_allowed(tmp_path):
@@ -173,7 +171,8 @@ def test_load_params_refuses_unstable_files_unless_allowed(tmp_path):
     ("provenance", [1], "'provenance' must be a JSON object"),
 ])
 def test_values_of_the_wrong_type_are_refused_not_iterated(tmp_path, key, value, fragment):
-    d = paper().to_json_dict()
+    p = paper()   # the layout of the files before the one format: groups as lists
+    d = {"gamma": list(p.gamma), "tau": list(p.tau), "beta": list(p.beta), "c_p": p.c_p}
     d[key] = value
     path = _write(tmp_path, json.dumps(d))
     with pytest.raises(DataError, match=re.escape(fragment)):

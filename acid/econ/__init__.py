@@ -8,6 +8,6 @@ is declared once, in :mod:`acid.models.econ` (equations, parameter table, fittin
 It is validated by acid's one validator, :func:`acid.ident.validate.validate`.
 """
 
-from acid.econ.params import EconParams, PowerMap, load_any_params, model_family
+from acid.econ.params import EconParams, PowerMap, load_any_params
 
-__all__ = ["EconParams", "PowerMap", "load_any_params", "model_family"]
+__all__ = ["EconParams", "PowerMap", "load_any_params"]

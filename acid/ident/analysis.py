@@ -15,7 +15,6 @@ their declared units. ``acid.analysis.predict/compare/resid`` route here when gi
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -28,9 +27,9 @@ from acid.analysis import (
     residual_tests,
 )
 from acid.data import Dataset
-from acid.errors import ConfigError, DataError
+from acid.errors import ConfigError
 from acid.ident.data import ModelData
-from acid.ident.fit import PARAMS_FORMAT, DeclaredFitResult
+from acid.ident.fit import DeclaredFitResult
 from acid.ident.oe import simulate_windows
 from acid.ident.validate import (
     ParameterSet,
@@ -38,59 +37,42 @@ from acid.ident.validate import (
     _warm_start,
     declared_parameters,
     fitted_parameters,
-    read_parameters,
 )
 from acid.models.declaration import Model
 from acid.models.loader import BUILT_IN, load
+from acid.models.values import declaration
 
-__all__ = ["compare_models", "is_declared", "predict_model", "resid_model", "resolve"]
-
-
-def is_declared(params) -> bool:
-    """Whether ``params`` belongs to a declared model: a ``DeclaredFitResult``,
-    ``(model, ParameterSet)``, or the path of a declared parameter file."""
-    if isinstance(params, DeclaredFitResult):
-        return True
-    if isinstance(params, tuple):
-        return len(params) == 2 and isinstance(params[1], ParameterSet)
-    if isinstance(params, (str, Path)) and Path(params).suffix == ".json" and \
-            Path(params).is_file():
-        try:
-            return json.loads(Path(params).read_text(encoding="utf-8")).get(
-                "format") == PARAMS_FORMAT
-        except (ValueError, UnicodeDecodeError, AttributeError):
-            return False
-    return False
-
-
-def _model_named(name: str, source: str) -> Model:
-    return load(name if name in BUILT_IN and Path(source).stem == name else source)
+__all__ = ["compare_models", "predict_model", "resid_model", "resolve"]
 
 
 def resolve(params, model: Model | str | None = None) -> tuple[Model, ParameterSet, str]:
-    """(model, parameter set, label) of ``params``: a ``DeclaredFitResult``, a parameter
-    file written by ``acid fit --model``, a ``ParameterSet`` or ``(model, ParameterSet)``;
-    ``model`` (a ``Model``, built-in name or file) overrides the one the parameters name.
-    ``params=None`` with a ``model``: its declared values."""
+    """(model, parameter set, label) of ``params``: values of any declaration
+    (``ModelParams``, ``EconParams``...), a ``DeclaredFitResult``, a parameter file, a
+    ``ParameterSet`` or ``(model, ParameterSet)``; ``model`` (a ``Model``, built-in name or
+    file) overrides the one the parameters name. ``params=None``: the model's declared
+    values, or the paper's preset without a model (as ``"paper"``)."""
+    from acid.models.values import ParameterValues
+    from acid.params import paper
+
     if isinstance(params, tuple):
         model, params = params
+    if (params is None and model is None) or (isinstance(params, str) and params == "paper"):
+        params = paper()
+    if isinstance(getattr(params, "params", None), ParameterValues):
+        params = params.params   # a stage's fit (EconFit)
+    if isinstance(params, ParameterValues):
+        m = load(model) if model is not None else params.declaration
+        ps = params.parameter_set()
+        return m, ps, ps.label
     if isinstance(params, DeclaredFitResult):
-        m = load(model) if model is not None else _model_named(params.model,
-                                                               params.model_source)
+        m = load(model) if model is not None else declaration(
+            params.model if params.model in BUILT_IN and Path(params.model_source).stem ==
+            params.model else params.model_source)
         return m, fitted_parameters(params), f"{m.name} (fit-{params.method})"
     if isinstance(params, (str, Path)):
-        if model is None:
-            try:
-                d = json.loads(Path(params).read_text(encoding="utf-8"))
-            except (OSError, ValueError, UnicodeDecodeError):
-                d = {}
-            if not isinstance(d, dict) or d.get("format") != PARAMS_FORMAT:
-                raise DataError(f"{params}: not a parameter file of a declared model "
-                                "(write one with acid fit --model)")
-            m = _model_named(str(d.get("model")), str(d.get("model_source", "")))
-        else:
-            m = load(model)
-        return m, read_parameters(m, params), f"{m.name} ({Path(params).name})"
+        pv = ParameterValues.from_json(params, model=None if model is None else load(model))
+        m = pv.declaration
+        return m, pv.parameter_set(source=str(params)), f"{m.name} ({Path(params).name})"
     if model is None:
         raise ConfigError("a declared model's parameters need their model (pass model=)")
     m = load(model)

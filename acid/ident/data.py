@@ -3,7 +3,6 @@ experiment structure, and the parameter vector of each sample (per-experiment va
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,7 +158,3 @@ class _Signals:
                             "not a signal of the model") from None
 
     __getitem__ = __getattr__
-
-
-def finite_or(v: float, default: float = math.nan) -> float:
-    return float(v) if math.isfinite(v) else default

@@ -34,7 +34,7 @@ import numpy as np
 import scipy.stats
 
 from acid import __version__
-from acid._io import file_sha256, json_safe, write_json
+from acid._io import file_sha256, json_safe
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.ident import linear, oe
@@ -47,7 +47,6 @@ COVARIANCES = ("hac", "white")
 #: The default of ``fit_model(covariance=...)`` and ``acid fit --covariance``.
 DEFAULT_COVARIANCE = "hac"
 LOSSES = ("squared", "huber")
-PARAMS_FORMAT = "acid-declared-params"
 
 
 @dataclass(frozen=True)
@@ -161,22 +160,21 @@ class DeclaredFitResult:
 
     def write(self, path: str | Path, model: Model, provenance: dict | None = None,
               extra: dict | None = None) -> Path:
-        """The parameter file ``acid validate --model FILE --params`` reads; ``extra`` adds
-        keys (the paper's model adds its ``ModelParams`` keys, read by the controllers)."""
-        params = {}
-        for p, v in zip(model.parameters, self.values, strict=True):
-            est = next((e for e in self.estimates if e.name == p.name and e.experiment is None),
-                       None)
-            params[p.name] = {"value": float(v), "unit": p.unit,
-                              "stderr": est.stderr if est else None,
-                              "status": est.status if est else "per experiment"}
-        d = {"format": PARAMS_FORMAT, "model": self.model, "model_source": self.model_source,
-             "Ts": model.Ts, "parameters": params,
-             "per_experiment": {n: {"experiments": list(self.experiment_ids),
-                                    "values": list(map(float, v))}
-                                for n, v in self.per_experiment.items()},
-             "provenance": provenance or {}, "fit": self.to_json_dict()}
-        return write_json(path, json_safe({**(extra or {}), **d}))
+        """The parameter file (``acid.models.values``' format) with this report as
+        ``fit``; ``extra`` adds keys (the paper's: its ``ModelParams``'s name and eq. 4's
+        COP), never the fitted values and their standard errors."""
+        from acid._io import write_json
+        from acid.models.values import ParameterValues
+
+        values = ParameterValues(
+            self.values, model=model, name=f"fit-{self.method}", provenance=provenance,
+            stderr={e.name: e.stderr for e in self.estimates if e.experiment is None},
+            per_experiment={n: dict(zip(self.experiment_ids, map(float, v), strict=True))
+                            for n, v in self.per_experiment.items()})
+        d = values.to_json_dict()
+        return write_json(path, json_safe({**d, **(extra or {}), "fit": self.to_json_dict(),
+                                           **{k: d[k] for k in ("parameters",
+                                                                "per_experiment")}}))
 
 
 # -------------------------------------------------------------------------- fitter
@@ -273,7 +271,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         pos = [col_pos[(c.index, c.experiment)] for c in reg.columns]
         sol = linear.solve(reg, data, theta[pos], covariance, hac_bandwidth,
                            bounds=(lo[pos], hi[pos]) if ls_method == "cvx" else None,
-                           solver=solver, loss=loss)
+                           solver=solver, loss=loss, constraints=tuple(
+                               linear.affine_rows(model, data, reg.columns, P[0])
+                               if ls_method == "cvx" else ()))
         theta[pos] = sol.theta
         stderr[pos] = sol.stderr
         cov[np.ix_(pos, pos)] = sol.cov
@@ -386,6 +386,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         if outside and method == "ls":
             warn.append(f"least squares leaves the declared bounds ({', '.join(outside)}); "
                         "--method cvx keeps them")
+        active = [a for q in reports.values() for a in q.active_bounds]
+        if active:
+            notes.append("--method cvx: active at the solution: " + "; ".join(active))
         left = sorted({c.name for c, ok in zip(columns, ls_reached, strict=True) if not ok})
         if left:
             notes.append(f"not fitted by equation error (kept at the declared values): "

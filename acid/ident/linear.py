@@ -240,10 +240,57 @@ def combinations(Z: np.ndarray, scale: np.ndarray, labels: tuple[str, ...],
     return ident, out
 
 
+@dataclass(frozen=True)
+class AffineRows:
+    """A declared constraint on a regression's columns: ``min <= A theta + b <= max``."""
+
+    label: str
+    A: np.ndarray      # (rows, columns)
+    b: np.ndarray      # (rows,)
+    min: float
+    max: float
+
+
+def affine_rows(model: Model, data: ModelData, columns: tuple[Column, ...],
+                P: np.ndarray) -> list[AffineRows]:
+    """The model's declared constraints whose free parameters are all ``columns``, as rows
+    over the measured range of the signals each reads (``Constraint.GRID`` points each);
+    ``P`` (np,) the values of the parameters that are not columns."""
+    out = []
+    signals = model.inputs + model.disturbances
+    data_ud = np.hstack([data.u, data.d])
+    for c, g, reads in model.constraints:
+        ud = np.zeros((1, len(signals)))
+        for name in reads:
+            j = [r.name for r in signals].index(name)
+            grid = np.linspace(np.nanmin(data_ud[:, j]), np.nanmax(data_ud[:, j]), c.GRID)
+            ud = np.repeat(ud, grid.size, axis=0)
+            ud[:, j] = np.tile(grid, ud.shape[0] // grid.size)
+        p0 = np.array(P, dtype=float)
+        p0[[col.index for col in columns]] = 0.0
+        J = ca.Function("J", [model._p, model._u, model._d],
+                        [ca.jacobian(g(model._p, model._u, model._d), model._p)])
+        n = ud.shape[0]
+        args = (ud[:, :model.nu].T, ud[:, model.nu:].T)
+        a = np.asarray(J.map(n)(np.tile(p0, (n, 1)).T, *args)).reshape(n, model.np)
+        b = np.asarray(g.map(n)(np.tile(p0, (n, 1)).T, *args)).ravel()
+        used = np.flatnonzero(np.any(a != 0, axis=0))
+        if used.size == 0 or not set(used) <= {col.index for col in columns}:
+            continue
+        exps = sorted({col.experiment for col in columns if col.index in used} - {None})
+        for e in exps or [None]:
+            A = np.column_stack([a[:, col.index] * (col.experiment in (None, e))
+                                 for col in columns])
+            out.append(AffineRows(c.description or "constraint", A, b, c.min, c.max))
+    return out
+
+
 def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: str,
           hac_bandwidth, bounds: tuple[np.ndarray, np.ndarray] | None = None,
-          solver: str | None = None, loss: str = "squared") -> Solution:
-    """Least squares (CVXPY with ``bounds``), covariance (white or HAC), identifiability.
+          solver: str | None = None, loss: str = "squared",
+          constraints: tuple[AffineRows, ...] = ()) -> Solution:
+    """Least squares (CVXPY with ``bounds`` and ``constraints``), covariance (white or
+    HAC), identifiability.
 
     ``reference`` (columns) is where a rank-deficient regression stays closest to.
     ``loss="huber"``: the Huber M-estimate (CVXPY, threshold ``HUBER_M`` robust standard
@@ -268,10 +315,14 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
     lo, hi = bounds if bounds is not None else (np.full(k, -np.inf), np.full(k, np.inf))
     if loss == "huber":
         phi, status, active = _solve_bounded(Z, y, scale, lo, hi, reg.columns, solver, phi,
-                                             huber=True)
+                                             constraints, huber=True)
     elif bounds is not None:
-        if np.any(phi / scale < lo - 1e-12) or np.any(phi / scale > hi + 1e-12):
-            phi, status, active = _solve_bounded(Z, y, scale, lo, hi, reg.columns, solver, phi)
+        rows = [r.A @ (phi / scale) + r.b for r in constraints]
+        if np.any(phi / scale < lo - 1e-12) or np.any(phi / scale > hi + 1e-12) or any(
+                np.any(v < r.min - 1e-12) or np.any(v > r.max + 1e-12)
+                for v, r in zip(rows, constraints, strict=True)):
+            phi, status, active = _solve_bounded(Z, y, scale, lo, hi, reg.columns, solver, phi,
+                                                 constraints)
     theta = phi / scale
     resid = y - X @ theta
     dof = max(n - rank, 1)
@@ -326,10 +377,11 @@ def robust_std(r: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(r - np.median(r))))
 
 
-def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start, huber: bool = False):
+def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start, constraints=(),
+                   huber: bool = False):
     """min ||Z phi - y||^2 (``huber``: the Huber loss of the residuals in robust standard
     deviations, the scale estimated from ``phi_start``'s residuals and once more from the
-    first solution) with lo <= phi / scale <= hi (CVXPY).
+    first solution) with lo <= phi / scale <= hi and the affine ``constraints`` (CVXPY).
 
     Solved for the step from ``phi_start`` in units of its residuals' scale, in the
     orthonormal basis of Z's columns (Z = Q R) when Z has full rank: a kelvin column beside
@@ -353,6 +405,13 @@ def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start, huber: bool 
     phi_expr = to_phi @ w0 + s * (to_phi @ step)
     cons = [phi_expr[j] >= lo[j] * scale[j] for j in range(k) if math.isfinite(lo[j])]
     cons += [phi_expr[j] <= hi[j] * scale[j] for j in range(k) if math.isfinite(hi[j])]
+    for r in constraints:   # rows over the step, each scaled to unit norm
+        G = s * (r.A / scale) @ to_phi
+        norm = np.maximum(np.linalg.norm(G, axis=1), 1e-300)
+        g0 = (r.A / scale) @ (to_phi @ w0) + r.b
+        g = (G / norm[:, None]) @ step
+        cons += ([g >= (r.min - g0) / norm] if math.isfinite(r.min) else []) + \
+            ([g <= (r.max - g0) / norm] if math.isfinite(r.max) else [])
     phi_now = phi_start
     for _ in range(2 if huber else 1):
         r = r0 / s - basis @ step
@@ -376,5 +435,10 @@ def _solve_bounded(Z, y, scale, lo, hi, columns, solver, phi_start, huber: bool 
             if math.isfinite(bound) and abs(theta[j] - bound) <= 1e-6 * (1 + abs(bound)):
                 active.append(f"{c.label} at its {side} {bound:g}")
                 theta[j] = bound
+    for r in constraints:
+        g = r.A @ theta + r.b
+        for bound, side in ((r.min, "min"), (r.max, "max")):
+            if math.isfinite(bound) and np.any(np.abs(g - bound) <= 1e-6 * (1 + abs(bound))):
+                active.append(f"{r.label}: at its {side} {bound:g}")
     word = "Huber loss" if huber else "declared bounds"
     return theta * scale, f"{prob.status} (CVXPY, {word})", tuple(active)

@@ -17,7 +17,6 @@ exact by construction, is not scored). ``validate(ds, params)`` takes ``ModelPar
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import math
 import os
 import warnings
@@ -31,7 +30,6 @@ from acid._io import json_safe
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.ident.data import ModelData
-from acid.ident.fit import PARAMS_FORMAT
 from acid.ident.oe import simulate_windows
 from acid.metrics import fit_percent, max_abs_error, rmse
 from acid.models.declaration import Model
@@ -93,57 +91,13 @@ def declared_parameters(model: Model) -> ParameterSet:
     return ParameterSet(values=model.values, source="declared values")
 
 
-#: Built-in models whose parameter files predate the declared format (no "format" key):
-#: the class that reads them, with its ``parameter_set()``.
-_LEGACY_FILES = {"paper": ("acid.params", "ModelParams"),
-                 "econ": ("acid.econ.params", "EconParams")}
-
-
 def read_parameters(model: Model, path: str | Path) -> ParameterSet:
-    """A parameter file written by ``acid fit --model FILE`` for this model (one-line
-    ``DataError`` when it is not one, or names parameters the model lacks); for the paper's
-    and the econ model, also their own files (params.json, ``"model": "econ"``): the one
-    reader ``acid validate --model NAME --params FILE`` uses for every model."""
-    from acid._readers import load_json
+    """The parameter file ``path`` of ``model`` (``acid.models.values``' one reader: the
+    format ``acid fit`` writes and the layouts before it; one-line ``DataError`` when it is
+    not one or names parameters the model lacks)."""
+    from acid.models.values import ParameterValues
 
-    path = Path(path)
-    d = load_json(path, "parameter file", DataError, top=None)
-    legacy = _LEGACY_FILES.get(model.name)
-    if isinstance(d, dict) and "format" not in d and legacy is not None:
-        # the paper's params.json and the econ model's file: their classes read them
-        module, cls = legacy
-        return getattr(importlib.import_module(module), cls).from_json_dict(
-            d, source=str(path)).parameter_set()
-    if not isinstance(d, dict) or d.get("format") != PARAMS_FORMAT:
-        raise DataError(f"{path}: not a parameter file of a declared model (no \"format\": "
-                        f"\"{PARAMS_FORMAT}\"; write one with acid fit --model FILE.py)")
-    if d.get("model") != model.name:
-        raise DataError(f"{path}: parameters of model {d.get('model')!r}, not "
-                        f"{model.name!r}")
-    par = d.get("parameters")
-    if not isinstance(par, dict):
-        raise DataError(f"{path}: 'parameters' must be a JSON object")
-    values = model.values.copy()
-    names = model.parameter_names
-    for name, row in par.items():
-        if name not in names:
-            raise DataError(f"{path}: parameter {name!r} is not in model {model.name!r}")
-        v = row.get("value") if isinstance(row, dict) else None
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise DataError(f"{path}: parameter {name!r} needs a finite 'value'")
-        values[names.index(name)] = float(v)
-    per = {}
-    for name, row in (d.get("per_experiment") or {}).items():
-        if name not in names:
-            raise DataError(f"{path}: per-experiment parameter {name!r} is not in the model")
-        try:
-            per[name] = {int(e): float(v) for e, v in zip(row["experiments"], row["values"],
-                                                          strict=True)}
-        except (KeyError, TypeError, ValueError):
-            raise DataError(f"{path}: per_experiment {name!r} needs 'experiments' and "
-                            "'values' of equal length") from None
-    prov = d.get("provenance") if isinstance(d.get("provenance"), dict) else {}
-    return ParameterSet(values=values, per_experiment=per, source=str(path), provenance=prov)
+    return ParameterValues.from_json(path, model=model).parameter_set(source=str(path))
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,9 @@ from casadi import cos, exp, fabs, fmax, fmin, if_else, log, sin, sqrt
 from acid.models.declaration import (
     RK4,
     Constant,
+    Constraint,
     DeclarationError,
+    Group,
     Model,
     Parameter,
     Signal,
@@ -21,6 +23,6 @@ from acid.models.declaration import (
 )
 from acid.models.loader import BUILT_IN, load
 
-__all__ = ["RK4", "BUILT_IN", "Constant", "DeclarationError", "Model", "Parameter", "Signal",
-           "State", "cos", "exp", "fabs", "fmax", "fmin", "if_else", "load", "log", "sin",
-           "sqrt"]
+__all__ = ["RK4", "BUILT_IN", "Constant", "Constraint", "DeclarationError", "Group", "Model",
+           "Parameter", "Signal", "State", "cos", "exp", "fabs", "fmax", "fmin", "if_else", "load",
+           "log", "sin", "sqrt"]

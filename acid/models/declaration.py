@@ -95,12 +95,41 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Constant:
-    """A number the equations use that is never estimated."""
+    """A number the equations use that is never estimated; a parameter file may give
+    another value within ``[min, max]`` (e.g. a COP read off the data)."""
 
     name: str
     value: float
     unit: str
     description: str = ""
+    min: float = -math.inf
+    max: float = math.inf
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """An affine constraint ``min <= expr(s) <= max`` on the parameters, imposed by the
+    constrained least squares (``--method cvx``). ``expr`` reads parameters and constants,
+    and may read inputs and disturbances: it is then imposed over the measured range of
+    each (``GRID`` points each, e.g. a power that must stay positive over the blower's
+    range). Checked affine in the parameters by CasADi at declaration."""
+
+    expr: Callable
+    min: float = -math.inf
+    max: float = math.inf
+    description: str = ""
+    GRID = 11
+
+
+@dataclass(frozen=True)
+class Group:
+    """Parameters read and written together under one name (``p.power_map``): ``view``,
+    when given, builds the object shown (``view(coef=values, **info)``) and its other
+    fields are kept with the values (``ParameterValues.info``). Names ``x1, x2, ...`` form
+    the group ``x`` without being declared."""
+
+    names: tuple[str, ...]
+    view: Callable | None = None
 
 
 @dataclass(frozen=True)
@@ -175,7 +204,8 @@ class Model:
                  disturbances=(), outputs=(), constants=(), step: Callable | None = None,
                  ode: Callable | None = None, integrator: RK4 | None = None,
                  output: Callable | None = None, source: str | None = None,
-                 description: str = ""):
+                 description: str = "", constraints=(), groups=None,
+                 checks: Callable | None = None):
         if source is None:  # the file that declares the model
             source = inspect.currentframe().f_back.f_code.co_filename
         self.source = str(source)
@@ -207,6 +237,18 @@ class Model:
         self.continuous = ode is not None
         self._step_fn, self._ode_fn, self._output_fn = step, ode, output
         self._trace()
+        #: ``checks(s) -> [problem, ...]``: what makes values implausible (``s`` by name)
+        self.checks = checks
+        self.groups = {**{g: v for g, v in _numbered_groups(self.parameter_names).items()
+                          if g not in self.all_names},
+                       **{g: v if isinstance(v, Group) else Group(tuple(v))
+                          for g, v in (groups or {}).items()}}
+        for g, grp in self.groups.items():
+            bad = [n for n in grp.names if n not in self.parameter_names]
+            if bad or g in self.all_names:
+                raise self._error(f"group {g!r}: " + (f"unknown parameter {bad[0]!r}" if bad
+                                                      else "a name already declared"))
+        self.constraints = tuple(self._constraint(c) for c in constraints)
 
     # ------------------------------------------------------------- declaration checks
     def _error(self, message: str, user_frame: bool = False) -> DeclarationError:
@@ -323,7 +365,7 @@ class Model:
         return result
 
     def _trace(self) -> None:
-        sym = self._symbols()
+        sym = self._sym = self._symbols()
         state_names = tuple(s.name for s in self.states)
         out_names = tuple(o.name for o in self.outputs)
         y_sampled: dict = {}
@@ -388,6 +430,33 @@ class Model:
         y = h + y_int if out_names else h
         self.F = ca.Function("F", [x, u, d, p], [x_next, y], ["x", "u", "d", "p"],
                              ["x_next", "y"])
+
+    def _constraint(self, c: Constraint) -> tuple:
+        """(constraint, f(p, u, d) -> value, names of the signals it reads), checked affine
+        in the parameters."""
+        if not isinstance(c, Constraint):
+            raise self._error(f"a constraint must be declared as Constraint(...), got "
+                              f"{type(c).__name__}")
+        sym = {k: v for k, v in self._sym.items()
+               if k not in self.state_names + self.output_names + ("next",)}
+        expr = self._call(lambda s: {"constraint": c.expr(s)}, sym,
+                          f"constraint {c.description or 'expr'!r}", ("constraint",))
+        e = expr["constraint"]
+        what = f"constraint {c.description or 'expr'!r}"
+        if not ca.depends_on(e, self._p):
+            raise self._error(f"{what} reads no parameter")
+        if ca.depends_on(ca.jacobian(e, self._p), self._p):
+            raise self._error(f"{what} is not affine in the parameters")
+        try:
+            lo, hi = _numeric(c.min, f"{what} min"), _numeric(c.max, f"{what} max")
+        except TypeError as exc:
+            raise self._error(str(exc)) from None
+        if not lo <= hi or (math.isinf(lo) and math.isinf(hi)):
+            raise self._error(f"{what} needs min <= max, one of them finite")
+        signals = tuple(r.name for r, v in zip(self.inputs + self.disturbances,
+                                               ca.vertsplit(ca.vertcat(self._u, self._d)),
+                                               strict=True) if ca.depends_on(e, v))
+        return c, ca.Function("g", [self._p, self._u, self._d], [e]), signals
 
     # ------------------------------------------------------------------------ views
     @property
@@ -520,6 +589,21 @@ class Model:
                            ("output", self.outputs)):
             lines += [f"{kind} {r.name} [{r.unit}]" for r in rows]
         return lines
+
+
+def _numbered_groups(names) -> dict:
+    """``{"gamma": Group(("gamma1", ..., "gamma7"))}``: names that differ only by a
+    trailing number 1..n form a group."""
+    out = {}
+    for n in names:
+        stem = n.rstrip("0123456789")
+        if stem != n and stem not in out:
+            k = 1
+            while f"{stem}{k}" in names:
+                k += 1
+            if k > 2:
+                out[stem] = Group(tuple(f"{stem}{i}" for i in range(1, k)))
+    return out
 
 
 def _reads(expr, yr, outputs, names) -> bool:

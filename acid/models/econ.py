@@ -49,12 +49,13 @@ are physical signs, wide otherwise.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
-from acid.models.declaration import RK4, Constant, Model, Parameter, Signal, State
+from acid.errors import DataError
+from acid.models.declaration import RK4, Constant, Group, Model, Parameter, Signal, State
 from acid.params import PAPER_BETA
 from acid.params import PARAMETER_TABLE as PAPER_TABLE
 from acid.psychro import H_FG, P_ATM, humidity_ratio
@@ -80,6 +81,64 @@ MAP_TERMS = ("1", "q", "t", "s", "a", "q^2", "q t", "q s", "q a", "t^2", "t s", 
 MAP_NAMES = tuple("f_" + t.replace("^2", "2").replace(" ", "") for t in MAP_TERMS)
 #: The map's inputs and their units (the domain it was identified on).
 MAP_INPUTS = (("Q_e", "W"), ("T_evap", "K"), ("v_veh", "m/s"), ("T_amb", "K"))
+
+@dataclass(frozen=True)
+class PowerMap:
+    """Compressor electric power as a smooth map of the refrigerant-side cooling.
+
+    ``P_comp = Q_e * f(q, t, s, a)`` (W), ``f`` (the inverse COP) a full quadratic in the
+    normalised features (``MAP_TERMS``): ``q = Q_e / 1 kW``, ``t = (T_evap - 5 degC) / 5 K``,
+    ``s = v / 10 m/s``, ``a = (T_amb - 30 degC) / 5 K``.
+
+    Attributes
+    ----------
+    coef : (15,) coefficients of ``f`` in ``MAP_TERMS`` order (dimensionless, W/W).
+    stderr : (15,) their standard errors.
+    domain : {input: (low, high)} for ``MAP_INPUTS``: the range of the identification data;
+        the map is not trusted outside it (:meth:`outside`).
+    quality : fit statistics (``rms_W``, ``rms_pct`` of the mean power, ``max_pct``, ``n``,
+        ``r2``; the ``steady_*`` numbers over near-steady samples only).
+    """
+
+    coef: tuple[float, ...]
+    stderr: tuple[float, ...] = ()
+    domain: dict = field(default_factory=dict)
+    quality: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        coef = tuple(float(c) for c in self.coef)
+        if len(coef) != len(MAP_TERMS) or not all(math.isfinite(c) for c in coef):
+            raise DataError(f"power map needs {len(MAP_TERMS)} finite coefficients")
+        object.__setattr__(self, "coef", coef)
+        object.__setattr__(self, "stderr", tuple(float(c) for c in self.stderr))
+        dom = {k: (float(v[0]), float(v[1])) for k, v in (self.domain or {}).items()}
+        object.__setattr__(self, "domain", dom)
+
+    def outside(self, **values) -> list[str]:
+        """Inputs (``Q_e``, ``T_evap``, ``v_veh``, ``T_amb`` arrays) outside the data's range.
+
+        Returns one phrase per offending input, e.g. ``"v_veh up to 36.1 m/s (data 0-30)"``;
+        a margin of 2 % of the range (at least 0.05 units) is tolerated.
+        """
+        out = []
+        units = dict(MAP_INPUTS)
+        for name, vals in values.items():
+            if name not in self.domain or vals is None:
+                continue
+            lo, hi = self.domain[name]
+            tol = max(0.02 * (hi - lo), 0.05)
+            v = np.asarray(vals, dtype=float)
+            if v.size == 0:
+                continue
+            # what the user reads is in degC (the map works in K)
+            shift, unit = (273.15, "degC") if units[name] == "K" else (0.0, units[name])
+            data = f"(data {lo - shift:.4g}-{hi - shift:.4g})"
+            if v.max() > hi + tol:
+                out.append(f"{name} up to {v.max() - shift:.4g} {unit} {data}")
+            if v.min() < lo - tol:
+                out.append(f"{name} down to {v.min() - shift:.4g} {unit} {data}")
+        return out
+
 
 _inf = math.inf
 #: (name, unit, start, min, max, meaning) of the thermal and humidity parameters.
@@ -281,6 +340,16 @@ def step(s):
             "P_comp": compressor_power(s, Q_e, r.T_evap, s.v_veh, s.T_amb), "P_bl": r.P_bl}
 
 
+def plausibility(s) -> list[str]:
+    """Values the equations cannot use: a capacity, time constant, air mass or NTU that is
+    not positive, a recirculated share outside [0, 1) or an ambient humidity outside [0, 1]."""
+    out = [f"{n} must be positive, got {getattr(s, n):g}"
+           for n in ("C_cab", "C_int", "C_sh", "tau_ew", "M_cab", "ntu_ref") if getattr(s, n) <= 0]
+    if not 0.0 <= s.r_max < 1.0 or not 0.0 <= s.RH_amb <= 1.0:
+        out.append("r_max must lie in [0, 1) and RH_amb in [0, 1]")
+    return out
+
+
 model = Model(
     "econ",
     states=[State(n, u) for n, u in zip(STATES, STATE_UNITS, strict=True)],
@@ -298,6 +367,7 @@ model = Model(
     constants=[Constant("c_p", 1008.0, "J/(kg K)", "specific heat of air (paper Table II)"),
                Constant("h_fg", H_FG, "J/kg", "latent heat of water near 20 degC"),
                Constant("p_atm", P_ATM, "Pa", "standard atmosphere")],
+    groups={"power_map": Group(MAP_NAMES, view=PowerMap)}, checks=plausibility,
     Ts=TS, step=step,
     description="acid's economic model: cabin, interior, shell, evaporator wall, humidity",
 )

@@ -15,7 +15,7 @@ import numpy as np
 
 from acid.claims import MODEL as _PAPER
 from acid.claims import TABLE_II as _TABLE_II
-from acid.models.declaration import Model, Parameter, Signal, State
+from acid.models.declaration import Constant, Constraint, Model, Parameter, Signal, State
 
 #: (name, unit, meaning) of every parameter, in the order of the table.
 PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
@@ -39,6 +39,14 @@ _BOUNDS = {"gamma1": (0.0, math.inf), "gamma2": (0.0, math.inf), "gamma3": (0.0,
            "gamma5": (-math.inf, 0.0), "gamma6": (0.0, math.inf), "gamma7": (0.0, math.inf),
            "beta1": (0.0, math.inf)}
 _VALUES = (*_PAPER.gamma, *_PAPER.tau, *_PAPER.beta)
+#: Table II's range of the blower flow W_bl (kg/s) over which the cabin pole is checked.
+W_BL_RANGE = (_TABLE_II.W_bl_min, _TABLE_II.W_bl_max)
+#: Operating point at which steady temperatures are checked for plausibility (K, kg/s).
+CHECK_T_EVAP_SET, CHECK_W_BL = 278.15, 0.1
+#: A steady temperature outside this range (K) means parameters in another convention.
+PLAUSIBLE_STEADY_K = (200.0, 400.0)
+#: --method cvx keeps the evaporator pole in [0, 1 - margin]: stable, not oscillating.
+EVAP_POLE_MARGIN = 1e-3
 
 
 def step(s):
@@ -61,6 +69,36 @@ def output(s):
     }
 
 
+def plausibility(s) -> list[str]:
+    """Why eqs. 1-3 with the values ``s`` are unstable or not in kelvin (empty if fine).
+
+    * eq. 2: T_evap(k+1) = (gamma4 + gamma5) T_evap(k) + ...: needs |gamma4 + gamma5| < 1;
+    * eq. 1: the cabin pole 1 - gamma1 - gamma2 - gamma3 W_bl must lie inside the unit
+      circle over Table II's W_bl range (linear in W_bl, so both ends suffice);
+    * the steady T_evap at a 5 degC set-point and eq. 3's T_ain there at 0.1 kg/s must be
+      temperatures in kelvin (200-400 K): parameters fitted in degC fail this.
+    """
+    a_evap = s.gamma4 + s.gamma5
+    if not abs(a_evap) < 1.0:
+        return [f"eq. 2 is unstable: gamma4 + gamma5 = {a_evap:.6g}, needs "
+                "|gamma4 + gamma5| < 1"]
+    for W in W_BL_RANGE:
+        pole = 1.0 - s.gamma1 - s.gamma2 - s.gamma3 * W
+        if not abs(pole) < 1.0:
+            return [f"eq. 1 is unstable: the cabin pole 1 - gamma1 - gamma2 - gamma3 W_bl = "
+                    f"{pole:.6g} at W_bl = {W:g} kg/s lies outside the unit circle (gamma1, "
+                    "gamma2, gamma3)"]
+    lo, hi = PLAUSIBLE_STEADY_K
+    T_evap = (s.tau2 - s.gamma5 * CHECK_T_EVAP_SET) / (1.0 - a_evap)
+    T_ain = s.gamma6 * T_evap + s.gamma7 * CHECK_W_BL + s.tau3
+    for name, value, keys in (("steady T_evap", T_evap, "gamma4, gamma5, tau2"),
+                              ("eq. 3 T_ain", T_ain, "gamma6, gamma7, tau3")):
+        if not (math.isfinite(value) and lo <= value <= hi):
+            return [f"{name} = {value:.6g} K at a 5 degC set-point and W_bl = {CHECK_W_BL:g} "
+                    f"kg/s is not a plausible temperature in kelvin ({keys})"]
+    return []
+
+
 model = Model(
     "paper",
     states=[State("T_cab", "K", description="cabin air"),
@@ -72,7 +110,16 @@ model = Model(
     parameters=[Parameter(name, unit, value, *_BOUNDS.get(name, (-math.inf, math.inf)),
                           description=meaning)
                 for (name, unit, meaning), value in zip(PARAMETER_TABLE, _VALUES, strict=True)],
-    Ts=_TABLE_II.Ts, step=step, output=output,
+    # eq. 4 (the controller's cost): a parameter file may give the COP read off P_comp
+    constants=[Constant("c_p", _TABLE_II.c_p, "J/(kg K)", "specific heat of air (Table II)",
+                        900.0, 1100.0),
+               Constant("eta_cop", _TABLE_II.eta_cop, "1", "COP of eq. 4 (Table II)",
+                        0.1, 50.0)],
+    constraints=[Constraint(lambda s: s.gamma4 + s.gamma5, 0.0, 1.0 - EVAP_POLE_MARGIN,
+                            "stable, non-oscillating evaporator pole"),
+                 Constraint(lambda s: s.beta1 * s.W_bl**2 + s.beta2 * s.W_bl + s.beta3, 0.0,
+                            description="P_bl >= 0 over the measured W_bl range")],
+    Ts=_TABLE_II.Ts, step=step, output=output, checks=plausibility,
     description="Wang et al., ACC 2018, eqs. 1-3 and 5 (kelvin convention)",
 )
 
