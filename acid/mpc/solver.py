@@ -305,7 +305,7 @@ class NLPSolver:
         if cf is not None:
             out = self._unpack_compiled(out)
         x, f, lam_x, lam_g, success, status, iters = out
-        success = success and bool(np.all(np.isfinite(x)))
+        success = success and bool(np.isfinite(x.sum()))  # NaN or inf anywhere
         if success and self.verify:
             pr, du = self._residuals(x, p, lam_x, lam_g, lbx, ubx, lbg, ubg)
             if not (pr <= self.verify[0] and du <= self.verify[1]):  # False for NaN too
