@@ -478,6 +478,9 @@ class EconNMPC:
         self._solver = _make_solver(ocp.nlp, ocp.equality, cfg, cfg.solver)
         self._fallback_nlp: NLPSolver | None = None
         self._rescue_nlp: NLPSolver | None = None
+        if cfg.max_solve_s is not None:  # a real-time run builds them now, not mid-run
+            self._rescue_solver()
+            self._fallback_solver()
         self._n_w = ocp.w.size
         self._ix, self._iu, self._is = ocp.w.index("x"), ocp.w.index("u"), ocp._is
         self._lbx, self._ubx = ocp.lbx, ocp.ubx
