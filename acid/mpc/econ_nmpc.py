@@ -461,6 +461,7 @@ class EconNMPC:
                               f"must equal the sample time {params.Ts:g} s")
         self.N = self.config.N
         self._t = np.concatenate(([0.0], np.cumsum(self.config.intervals)))
+        self._uniform = len(set(self.config.intervals)) == 1
         self._build()
         self.reset()
 
@@ -475,6 +476,7 @@ class EconNMPC:
         # the parameters and constants by name (numbers), as the declaration's functions read
         self._s = econ.parameters(p.theta_all)
         self._ns = ocp.ns
+        self._stage_values = ocp.stage_values_evaluator(cfg.compiled)
         self._solver = _make_solver(ocp.nlp, ocp.equality, cfg, cfg.solver)
         self._fallback_nlp: NLPSolver | None = None
         self._rescue_nlp: NLPSolver | None = None
@@ -555,6 +557,10 @@ class EconNMPC:
         """Shifted previous solution (interpolated in time), else a forward simulation."""
         cfg, N = self.config, self.N
         w = np.zeros(self._n_w)
+        if self._w_prev is not None and self._uniform:   # the same as interpolating
+            w = self._w_prev[self._ocp.shift_w]
+            w[self._ix[0]] = (x0 - _X_OFF) / _X_SCL
+            return w
         if self._w_prev is not None:
             wp = self._w_prev
             Xp = wp[self._ix] * _X_SCL + _X_OFF
@@ -681,7 +687,7 @@ class EconNMPC:
             self._lam_prev = (res.lam_g, res.lam_x) if fallback is None else None
         if not np.all(np.isfinite(w)):  # a timeout: report the initial guess's trajectory
             w = self._scaled_guess(x, v, Ta, dist, u_guess)
-        Y, terms = (np.asarray(a) for a in self._ocp.stage_values(w, par))
+        Y, terms = self._stage_values(w, par)
         energy = float(terms.sum())
         Q_e = Y[self._ocp.output_names.index("Q_e")]
         X = w[self._ix] * _X_SCL + _X_OFF
