@@ -16,15 +16,19 @@ What is measured
    compiled) on the same cabin and evaporator states. The whole ``make_step`` wall time is
    taken for each; the compiled and CasADi SQP moves are compared.
 
-Prints median / p95 / max per step, the ratio of the economic NMPC to the paper's NMPC
-(stable across machines and loads) and the issue's target: median at most 20 ms on a 2-core
-machine. Wall-clock numbers on a shared machine are noisy: the ratio is the number to watch.
+Prints median / p95 / max per step, the solves the fallback solver (IPOPT) had to finish,
+the SQP iterations per step (inside CasADi: the generated C does not report them; the
+compiled solver runs the same algorithm), the load average beside each figure, the ratio of
+the economic NMPC to the paper's NMPC (stable across machines and loads) and one verdict
+line against issue 22's target: median at most 2 ms per step, compiled. Wall-clock numbers
+on a shared machine are noisy: the verdict is a line, never an assertion.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import time
 import warnings
@@ -39,7 +43,8 @@ from acid.params import paper
 from acid.signals import drive_cycle
 from acid.units import C2K
 
-TARGET_MS = 20.0
+#: issue 22: the economic NMPC's median step, compiled, ms
+TARGET_MS = 2.0
 
 
 def record(econ, cycle: str, config: EconNMPCConfig | None = None):
@@ -102,31 +107,47 @@ def main() -> None:
             moves[name] = np.array(mpc.log.u)
         results[name] = stats(np.concatenate(runs))
         results[name]["backend"] = mpc.backend
+        results[name]["load"] = os.getloadavg()[0]
+        # the last replay's: solves finished by the fallback solver, iterations per step
+        results[name]["fallbacks"] = int(mpc.solver_fallbacks)
+        results[name]["rescues"] = int(mpc.solver_rescues)
+        its = [s.iterations for s in mpc.log.solutions
+               if s is not None and s.iterations >= 0 and "after" not in s.status]
+        results[name]["iterations_median"] = float(np.median(its)) if its else None
     runs = []
     for _ in range(max(1, args.repeats)):
         paper_mpc.reset()
         runs.append(replay(steps, lambda x, vp, Ta, m: paper_mpc.make_step(
             [m["T_cab"], m["T_evap"]], np.full(7, C2K(24.0)), m["T_int"], m["T_shell"])))
     results["paper_nmpc_peer"] = stats(np.concatenate(runs))
+    results["paper_nmpc_peer"]["load"] = os.getloadavg()[0]
     e, p = results["econ_compiled"], results["paper_nmpc_peer"]
     print(f"machine: {platform.machine()}, python {platform.python_version()}; econ model "
           f"identified in {t_id:.1f} s (power map RMS {summary['power_map']['rms_pct']:.2f} %)")
     print(f"{args.cycle.upper()}: {len(steps)} steps, economic NMPC 24 x 5 s horizon")
     for name, s in results.items():
+        extra = ("" if "fallbacks" not in s else
+                 f"   rescued {s['rescues']}, IPOPT {s['fallbacks']} of {len(steps)}" + (
+                     "" if s["iterations_median"] is None
+                     else f"   iterations median {s['iterations_median']:g}"))
         print(f"  {name:16s} median {s['median_ms']:7.2f} ms   p95 {s['p95_ms']:7.2f} ms   "
-              f"max {s['max_ms']:7.2f} ms   ({s.get('backend', 'compiled')})")
+              f"max {s['max_ms']:7.2f} ms   ({s.get('backend', 'compiled')}, load "
+              f"{s['load']:.1f}){extra}")
     ratio = e["median_ms"] / p["median_ms"]
     print(f"  economic (compiled) / paper NMPC median: {ratio:.1f}x;  CasADi / compiled: "
           f"{results['econ_casadi']['median_ms'] / e['median_ms']:.1f}x;  largest move "
           f"difference compiled vs CasADi: "
           f"{np.max(np.abs(moves['econ_compiled'] - moves['econ_casadi'])):.1e}")
-    verdict = "PASS" if e["median_ms"] <= TARGET_MS else "above"
-    print(f"  target: median <= {TARGET_MS:g} ms -> {verdict} ({e['median_ms']:.2f} ms on "
-          "this machine, now)")
+    met = e["median_ms"] <= TARGET_MS and e["backend"] == "compiled"
+    print(f"VERDICT economic NMPC (issue 22): median {e['median_ms']:.2f} ms per step "
+          f"({e['backend']}), target <= {TARGET_MS:g} ms -> {'MET' if met else 'NOT MET'}; "
+          f"{e['rescues']} of {len(steps)} solves finished by the convexified SQP, "
+          f"{e['fallbacks']} by IPOPT; load "
+          f"{e['load']:.1f} on {os.cpu_count()} cores")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"cycle": args.cycle, "results": results, "ratio_econ_to_paper": ratio,
-                       "target_median_ms": TARGET_MS}, f, indent=1)
+                       "target_median_ms": TARGET_MS, "target_met": met}, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -176,3 +176,33 @@ def test_sqp_warm_started_reaches_the_interior_point_optimum(econ_truth):
         plant.step(u[0], u[1], 12.0, T_amb=C2K(30.0))
     assert sqp.fallbacks == 0 and sqp.solver_fallbacks <= 1
     assert "ipopt after sqp" not in sqp.log.solutions[-1].status
+
+
+
+def _declared_unconverged(solver):
+    """Make ``solver`` (an NLPSolver) report every result as not converged."""
+    solve = solver.solve
+
+    def failing(*args, **kw):
+        res = solve(*args, **kw)
+        return type(res)(**{**res.__dict__, "success": False, "status": "not converged"})
+
+    solver.solve = failing
+
+
+def test_a_failed_sqp_solve_is_finished_by_the_convexified_sqp_at_ipopts_optimum(econ_truth):
+    # the exact-Hessian SQP's failures are nonconvex QPs (qrqp cycling on a bound, steps
+    # between bounds): the rescue solves the same NLP on a convexified Hessian, from the
+    # same guess, before IPOPT; its result must be IPOPT's optimum
+    mpc = EconNMPC(econ_truth, _cfg(solver="sqp"))
+    _declared_unconverged(mpc._solver)
+    sol = mpc.solve(X, 12.0, C2K(30.0))
+    ref = EconNMPC(econ_truth, _cfg(solver="ipopt", tol=1e-10)).solve(X, 12.0, C2K(30.0))
+    assert sol.success and "sqp_convex after sqp" in sol.status
+    assert mpc.solver_rescues == 1 and mpc.solver_fallbacks == 0
+    assert np.max(np.abs(sol.u - ref.u) / (mpc.config.u_max - mpc.config.u_min)) < 1e-6
+    assert sol.objective == pytest.approx(ref.objective, rel=1e-6)
+    off = EconNMPC(econ_truth, _cfg(solver="sqp", sqp_rescue=False))
+    _declared_unconverged(off._solver)
+    assert "ipopt after sqp" in off.solve(X, 12.0, C2K(30.0)).status
+    assert off.solver_rescues == 0 and off.solver_fallbacks == 1

@@ -325,10 +325,13 @@ class OCP:
             U = ca.DM(self.u_offset) + ins[1] / ca.DM(self.u_scale)
             r = self._stage(X, U, ins[2], ins[3], ins[4], ins[5], ins[6], ins[7], ins[8],
                             ins[9], dt, last)
+            # common subexpressions eliminated: the same numbers (bit for bit) from about
+            # half the operations, and so are its derivatives (the NLP's Jacobian and
+            # Hessian, most of an SQP step) and its generated C
             self._stage_fns[key] = ca.Function(
                 f"ocp_stage_{len(self._stage_fns)}", ins,
                 [r["dyn"], ca.vertcat(*r["bounds"]), r["cost"], r["y"],
-                 ca.vertcat(*r["terms"].values(), *r["terms_N"].values())])
+                 ca.vertcat(*r["terms"].values(), *r["terms_N"].values())], {"cse": True})
             self._stage_terms = (tuple(r["terms"]), tuple(r["terms_N"]))
         return self._stage_fns[key]
 
@@ -490,27 +493,13 @@ class OCP:
         """``f(x0, U (nu, N), D (nd, N), Q (nq, N[+1]), theta, dist) -> (X, Y, terms)``
         numpy arrays: :attr:`trajectory` as generated C when ``compiled`` allows and a
         compiler works (about 20x faster per call than inside CasADi), else inside CasADi."""
-        fn = self.trajectory
-        if compiled is not False:
-            from acid.mpc.codegen import CodegenError, compile_function
+        return numeric_evaluator(self.trajectory, compiled)
 
-            try:
-                cf, _ = compile_function(fn)
-            except CodegenError:
-                cf = None   # the solver already noticed a missing compiler
-            if cf is not None:
-                shapes = [fn.size_out(i) for i in range(fn.n_out())]
-
-                def evaluate(*args):
-                    for buf, a in zip(cf.inputs, args, strict=True):
-                        buf[:] = np.asarray(a, dtype=float).ravel(order="F")
-                    if cf.call():
-                        raise RuntimeError("ocp_trajectory: the generated code failed")
-                    return tuple(o.reshape(sh, order="F").copy()
-                                 for o, sh in zip(cf.outputs, shapes, strict=True))
-
-                return evaluate
-        return lambda *args: tuple(np.asarray(a) for a in fn(*args))
+    def stage_values_evaluator(self, compiled: bool | str = "auto") -> Callable:
+        """``f(w, p) -> (Y, terms)`` numpy arrays: :attr:`stage_values` (the outputs and cost
+        terms of the NLP's own stages) as generated C when ``compiled`` allows, else
+        inside CasADi."""
+        return numeric_evaluator(self.stage_values, compiled)
 
     def guess(self, x0, d, theta, u, previous: np.ndarray | None = None) -> np.ndarray:
         """An initial point for the NLP from the state ``x0`` (nx,): the ``previous`` solution
@@ -584,6 +573,31 @@ class OCP:
                                                     ("d", self.ntarget)))
         return ca.Function(name, [x, u, v, d], [self._Fd(x, u, v, ca.DM(theta), d)[0]],
                            ["x", "u", "v", "d"], ["x_next"])
+
+
+def numeric_evaluator(fn: ca.Function, compiled: bool | str = "auto") -> Callable:
+    """``fn`` on numbers, returning numpy arrays of its outputs' shapes: generated C when
+    ``compiled`` allows and a compiler works, else inside CasADi."""
+    if compiled is not False:
+        from acid.mpc.codegen import CodegenError, compile_function
+
+        try:
+            cf, _ = compile_function(fn)
+        except CodegenError:
+            cf = None   # the solver already noticed a missing compiler
+        if cf is not None:
+            shapes = [fn.size_out(i) for i in range(fn.n_out())]
+
+            def evaluate(*args):
+                for buf, a in zip(cf.inputs, args, strict=True):
+                    buf[:] = np.asarray(a, dtype=float).ravel(order="F")
+                if cf.call():
+                    raise RuntimeError(f"{fn.name()}: the generated code failed")
+                return tuple(o.reshape(sh, order="F").copy()
+                             for o, sh in zip(cf.outputs, shapes, strict=True))
+
+            return evaluate
+    return lambda *args: tuple(np.asarray(a) for a in fn(*args))
 
 
 def stage_shift(vec: BlockVector) -> np.ndarray:

@@ -47,10 +47,16 @@ those of the hand-written builder it replaced to about 1e-11
 
 **Solver.** By default (``solver="sqp"``) SQP with the active-set QP solver qrqp,
 warm-started from the previous plan and multipliers shifted by one interval (about 3
-iterations a step against 15-25 for fatrop), each result checked for convergence; a failed
-solve (typically the cold start) is finished by ``fallback_solver`` (IPOPT inside CasADi:
-nothing more to compile), after which SQP starts again from the primal plan with zero
-multipliers. Measured (``benchmarks/bench_compile.py``, 100 UDDS states x 2, interleaved,
+iterations a step against 15-25 for fatrop), each result checked for convergence. A solve
+the exact-Hessian SQP does not converge is finished by the same SQP on a convexified Hessian
+(``sqp_rescue``, ``SQP_RESCUE``: per-block eigenvalues clipped, every QP convex; about 30
+iterations, generated C too), from the same guess and multipliers, and only then by
+``fallback_solver`` (IPOPT inside CasADi), after which SQP starts again from the primal plan
+with zero multipliers. The failures are not NaNs: the exact Hessian is indefinite, so the
+QPs are nonconvex and qrqp cycles on a bound or the steps jump between bounds; measured on
+a UDDS replay on an identified model (274 states), 28 of 274 solves went to IPOPT before
+the rescue, none after (8 rescued), every first move within 7.1e-6 of IPOPT's at 1e-10
+(``notes/i22-solver.md``). Measured (``benchmarks/bench_compile.py``, 100 UDDS states x 2, interleaved,
 load 20 on 2 cores): 15.8 ms per step against fatrop's 42.2 ms as generated C; inside
 CasADi 30.7 ms against 128.8 ms; moves within 1e-6 of IPOPT's at 1e-10
 (``tests/test_econ_nmpc.py``). ``stage_functions=True`` (default) builds the NLP from one
@@ -112,6 +118,11 @@ INTERVAL_OUTPUTS = ("x_next", "T_ain", "Q_e", "P_comp", "P_bl")
 #: solvers of the economic NMPC: SQP (sqpmethod + qrqp, warm-started with the shifted
 #: multipliers, checked for convergence), fatrop, IPOPT (always inside CasADi)
 ECON_SOLVERS = ("sqp", "fatrop", "ipopt")
+#: the SQP with a convexified Hessian that finishes a failed exact-Hessian SQP solve
+#: (``EconNMPCConfig.sqp_rescue``), before ``fallback_solver``
+SQP_RESCUE = "sqp_convex"
+#: iteration limit of the exact-Hessian SQP
+SQP_MAX_ITER = 25
 #: terminal costs of the horizon's end state (module docstring)
 TERMINALS = ("heat", "steady", "none")
 
@@ -142,12 +153,24 @@ def _make_solver(nlp: dict, equality, config: EconNMPCConfig, solver: str) -> NL
             "print_time": False, "calc_lam_p": False,
             "ipopt": {"print_level": 0, "sb": "yes", "tol": config.tol,
                       "max_iter": int(config.max_iter), "bound_relax_factor": 0.0}}
+    elif solver == SQP_RESCUE:
+        # the Lagrangian's Hessian with its negative (and zero) eigenvalues raised to
+        # convexify_margin, block by block: every QP convex, so qrqp neither cycles nor
+        # jumps between bounds (the exact-Hessian SQP's failures); linear convergence
+        # (about 30 iterations), hence a rescue only; qrqp needs more iterations from
+        # zero multipliers (one per slack, to make the QP regular)
+        plugin, opts = "sqpmethod", sqp_options(max_iter=min(int(config.max_iter), 100))
+        opts["convexify_strategy"] = "eigen-clip"
+        opts["qpsol_options"]["max_iter"] = 300
     else:
-        plugin, opts = "sqpmethod", sqp_options(max_iter=min(int(config.max_iter), 50))
+        # converged solves take 3-14 iterations (UDDS replay); a failing one stalls, so
+        # 25 hands it on early
+        plugin, opts = "sqpmethod", sqp_options(max_iter=min(int(config.max_iter),
+                                                             SQP_MAX_ITER))
     return NLPSolver(f"acid_econ_nmpc{'' if solver == 'fatrop' else '_' + solver}", nlp,
                      plugin, opts, compiled=config.compiled,
-                     verify=SQP_ACCEPT if solver == "sqp" else None,
-                     timeout_s=config.max_solve_s)
+                     verify=SQP_ACCEPT if solver in ("sqp", SQP_RESCUE) else None,
+                     timeout_s=config.max_solve_s, kkt_name="acid_econ_nmpc_kkt")
 
 
 @dataclass(frozen=True)
@@ -190,6 +213,11 @@ class EconNMPCConfig:
     stage_functions : build the NLP from one function per stage called over the horizon
         (default; :class:`acid.control.ocp.OCPSpec`): 3.5x less C, 18 against 42 CPU-s of
         compiling for SQP (``benchmarks/bench_compile.py``), steps as fast as inlined.
+    sqp_rescue : with ``solver="sqp"``, finish a solve the exact-Hessian SQP did not
+        converge with the same SQP on a convexified Hessian (``SQP_RESCUE``, from the same
+        guess and multipliers, generated C too) before ``fallback_solver``. The failures
+        are not NaNs: the exact Hessian is indefinite, the QPs nonconvex, and qrqp cycles on
+        a bound or the steps jump between bounds.
     """
 
     intervals: tuple[float, ...] = (5.0,) * 24
@@ -214,6 +242,7 @@ class EconNMPCConfig:
     offset_free: bool = False
     estimator: EstimatorConfig = ECON_ESTIMATOR
     stage_functions: bool = True
+    sqp_rescue: bool = True
 
     def __post_init__(self):
         iv = tuple(float(t) for t in self.intervals)
@@ -279,7 +308,7 @@ class EconNMPCConfig:
                 "fallback_solver": self.fallback_solver, "tol": self.tol,
                 "max_iter": self.max_iter, "compiled": self.compiled,
                 "max_solve_s": self.max_solve_s, "offset_free": self.offset_free,
-                "stage_functions": self.stage_functions,
+                "stage_functions": self.stage_functions, "sqp_rescue": self.sqp_rescue,
                 "estimator": self.estimator.to_json_dict() if self.offset_free else None}
 
 
@@ -432,6 +461,7 @@ class EconNMPC:
                               f"must equal the sample time {params.Ts:g} s")
         self.N = self.config.N
         self._t = np.concatenate(([0.0], np.cumsum(self.config.intervals)))
+        self._uniform = len(set(self.config.intervals)) == 1
         self._build()
         self.reset()
 
@@ -446,8 +476,13 @@ class EconNMPC:
         # the parameters and constants by name (numbers), as the declaration's functions read
         self._s = econ.parameters(p.theta_all)
         self._ns = ocp.ns
+        self._stage_values = ocp.stage_values_evaluator(cfg.compiled)
         self._solver = _make_solver(ocp.nlp, ocp.equality, cfg, cfg.solver)
         self._fallback_nlp: NLPSolver | None = None
+        self._rescue_nlp: NLPSolver | None = None
+        if cfg.max_solve_s is not None:  # a real-time run builds them now, not mid-run
+            self._rescue_solver()
+            self._fallback_solver()
         self._n_w = ocp.w.size
         self._ix, self._iu, self._is = ocp.w.index("x"), ocp.w.index("u"), ocp._is
         self._lbx, self._ubx = ocp.lbx, ocp.ubx
@@ -491,12 +526,24 @@ class EconNMPC:
                                               cfg.fallback_solver)
         return self._fallback_nlp
 
+    def _rescue_solver(self) -> NLPSolver | None:
+        """The convexified SQP (``SQP_RESCUE``) when ``config.sqp_rescue`` asks for it,
+        built at its first use."""
+        cfg = self.config
+        if not (cfg.sqp_rescue and cfg.solver == "sqp"):
+            return None
+        if self._rescue_nlp is None:
+            self._rescue_nlp = _make_solver(self._ocp.nlp, self._ocp.equality, cfg,
+                                            SQP_RESCUE)
+        return self._rescue_nlp
+
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
         """Forget the warm start, the plan, the log, the fallback count and the warnings."""
         self._w_prev = None
         self._lam_prev = None
         self.solver_fallbacks = 0
+        self.solver_rescues = 0
         self._plan = None
         self._plan_age = 0
         self.fallbacks = 0
@@ -510,6 +557,10 @@ class EconNMPC:
         """Shifted previous solution (interpolated in time), else a forward simulation."""
         cfg, N = self.config, self.N
         w = np.zeros(self._n_w)
+        if self._w_prev is not None and self._uniform:   # the same as interpolating
+            w = self._w_prev[self._ocp.shift_w]
+            w[self._ix[0]] = (x0 - _X_OFF) / _X_SCL
+            return w
         if self._w_prev is not None:
             wp = self._w_prev
             Xp = wp[self._ix] * _X_SCL + _X_OFF
@@ -606,6 +657,17 @@ class EconNMPC:
         w0 = self._scaled_guess(x, v, Ta, dist, u_guess)
         res = self._solver.solve(w0, par, self._lbx, self._ubx, lbg, ubg, lam_x0=lam_x0,
                                  lam_g0=lam_g0)
+        rescue = self._rescue_solver() if not res.success and res.status != "timeout" \
+            else None
+        if rescue is not None:   # the same problem, guess and multipliers, convex QPs
+            first = res
+            res = rescue.solve(w0, par, self._lbx, self._ubx, lbg, ubg, lam_x0=lam_x0,
+                               lam_g0=lam_g0)
+            self.solver_rescues += 1
+            res = dataclasses.replace(
+                res, status=f"{res.status} ({SQP_RESCUE} after {cfg.solver}: "
+                            f"{first.status})",
+                solve_time_s=first.solve_time_s + res.solve_time_s)
         fallback = self._fallback_solver() if not res.success and res.status != "timeout" \
             else None
         if fallback is not None:   # the same problem from the same guess
@@ -625,7 +687,7 @@ class EconNMPC:
             self._lam_prev = (res.lam_g, res.lam_x) if fallback is None else None
         if not np.all(np.isfinite(w)):  # a timeout: report the initial guess's trajectory
             w = self._scaled_guess(x, v, Ta, dist, u_guess)
-        Y, terms = (np.asarray(a) for a in self._ocp.stage_values(w, par))
+        Y, terms = self._stage_values(w, par)
         energy = float(terms.sum())
         Q_e = Y[self._ocp.output_names.index("Q_e")]
         X = w[self._ix] * _X_SCL + _X_OFF

@@ -512,6 +512,10 @@ class NMPC:
         # warm start: the previous primal/dual solution shifted by one stage
         self._shift_w, self._shift_g = ocp.shift_w, ocp.shift_g
         self._trajectory = ocp.trajectory_evaluator(cfg.compiled)
+        # what every step reads, computed once (a step's Python overhead is a third of it)
+        self._u_lo, self._u_hi = cfg.u_min, cfg.u_max
+        self._i_T_ain = PAPER_MODEL.output_names.index("T_ain")
+        self._i_P = tuple(ocp.term_names.index(n) for n in ("P_comp", "P_bl"))
 
     def _fallback_solver(self) -> NLPSolver | None:
         """The solver of ``config.fallback_solver`` (None when there is none), built at its
@@ -693,13 +697,12 @@ class NMPC:
         """Eq. 7 at the plan: the trajectory recomputed from the (clipped) plan with the
         declared model, the slacks its actual violations (eqs. 3-5, 7 in W)."""
         cfg = self.config
-        plan = np.clip(self._u_plan(w), cfg.u_min, cfg.u_max)
+        plan = np.minimum(np.maximum(self._u_plan(w), self._u_lo), self._u_hi)
         W, Tset = plan[:, 0], plan[:, 1]
         X, Y, terms = self._trajectory(x, plan.T, D.T, Q.T, self._theta, d)
         T_cab, T_evap = X[0], X[1]
-        T_ain = Y[PAPER_MODEL.output_names.index("T_ain")]
-        P_comp, P_bl = terms[self._ocp.term_names.index("P_comp")], \
-            terms[self._ocp.term_names.index("P_bl")]
+        T_ain = Y[self._i_T_ain]
+        P_comp, P_bl = terms[self._i_P[0]], terms[self._i_P[1]]
         s_cab = np.maximum(np.maximum(T_cab[1:] - ub[1:], lb[1:] - T_cab[1:]), 0.0)
         s_evap = np.maximum(np.maximum(T_evap[1:] - cfg.T_evap_max,
                                        cfg.T_evap_min - T_evap[1:]), 0.0)
@@ -767,7 +770,7 @@ class NMPC:
                 u = sol.u.copy()
         else:
             u = self._fallback(status, pinned)
-        u = np.clip(u, cfg.u_min, cfg.u_max)
+        u = np.minimum(np.maximum(u, self._u_lo), self._u_hi)
         self._applied = (u, v) if measured else None
         # the model's T_cab one step ahead under the applied input (for the back-off)
         self._predicted = (predict(x_hat[0], x_hat[1], u[0], u[1], v[0], v[1], d, self.params,

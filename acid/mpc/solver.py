@@ -186,6 +186,8 @@ class NLPSolver:
         solvers whose own success flag cannot be trusted: CasADi's generated ``sqpmethod``
         returns 0 when it stops at its iteration limit or on a short step. None: trust the
         solver.
+    kkt_name : name of the convergence check's function (default ``NAME_kkt``): solvers of
+        one NLP that give the same name share its compiled library (one build).
     timeout_s : wall-clock cap per solve, s (default None: no cap, the solve runs in the
         caller's thread). Only for a run that must keep a real-time budget (an ECU-like
         run): a cap makes results depend on the machine's load, so offline studies, tests
@@ -200,8 +202,9 @@ class NLPSolver:
 
     def __init__(self, name: str, nlp: dict, plugin: str, options: dict,
                  compiled: bool | str = "auto", verify: tuple[float, float] | None = None,
-                 timeout_s: float | None = None):
+                 timeout_s: float | None = None, kkt_name: str | None = None):
         self.name = name
+        self.kkt_name = kkt_name or f"{name}_kkt"
         self.verify = verify
         self.plugin = plugin
         self.timeout_s = timeout_s
@@ -219,7 +222,7 @@ class NLPSolver:
         self._compiled = None
         self._fn = ca.nlpsol(self.name, self.plugin, self._nlp, self._options)
         self.n_x, self.n_g = self._fn.nnz_in(0), self._fn.nnz_in(4)
-        self._kkt = kkt_function(f"{self.name}_kkt", self._nlp) if self.verify else None
+        self._kkt = kkt_function(self.kkt_name, self._nlp) if self.verify else None
         self._kkt_c = None
         if self._want_compiled is False:
             self.build_info = {"reason": "compiled=False"}
@@ -305,7 +308,7 @@ class NLPSolver:
         if cf is not None:
             out = self._unpack_compiled(out)
         x, f, lam_x, lam_g, success, status, iters = out
-        success = success and bool(np.all(np.isfinite(x)))
+        success = success and bool(np.isfinite(x.sum()))  # NaN or inf anywhere
         if success and self.verify:
             pr, du = self._residuals(x, p, lam_x, lam_g, lbx, ubx, lbg, ubg)
             if not (pr <= self.verify[0] and du <= self.verify[1]):  # False for NaN too
