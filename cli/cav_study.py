@@ -271,6 +271,15 @@ def cav_study(
             line += (f"; F: coil set-point "
                      f"{K2C(st.results['F'].extra['coil_set_point_K']):.2f} °C")
         say(line)
+        if "F" in st.results:
+            spread = {k: st.charge_back_spread_points(k) for k in ("D", "E")
+                      if k in st.results}
+            if any(v is not None for v in spread.values()):
+                say("the same vs F with every end state charged by F's PI loops instead of the "
+                    "paper NMPC: " + ", ".join(
+                        f"{k} {_fmt(st.saving_pct(k, ref='F', pi_charge=True), 2)} %"
+                        for k in spread) + "; charge-back uncertainty " + ", ".join(
+                        f"{k} {_fmt(v, 2)} points" for k, v in spread.items()))
         if st.econ_modifier is not None:
             m = st.econ_modifier
             say("D, E: coil economics corrected from steady plant holds (modifier "

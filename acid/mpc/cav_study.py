@@ -45,6 +45,14 @@ Fairness
   **tail-corrected energy** ``E + tail(end) - tail(start)`` charges each run the measured
   cost of the state it leaves (and credits the state it was given). No plant physics is
   re-derived here.
+* **The charge's own uncertainty.** The same charge with a second continuation, the plant's
+  PI loops at F's coil set-point and the target (an efficient operator where the paper NMPC
+  is not), gives each saving against F once more; the difference is the comparison's
+  charge-back uncertainty (``econ_vs_best_pi_charge_back_spread_points``). On SC03 it is the
+  size of what is judged: F's blower PI starts at its minimum flow, lets the cabin rise
+  0.3 K in the first minute and holds it 0.1 K under the mean afterwards; it ends colder,
+  and the paper NMPC's continuation (a 3-4 degC coil) credits that stored cold at a dearer
+  price than F paid for it (notes/i21-energy.md).
 
 Reported per controller: energy (compressor + blower, ``sum(P) Ts``), tail-corrected energy,
 mean and max T_cab, comfort violation, PMV (:mod:`acid.comfort`), humidity and the RH-band
@@ -502,6 +510,8 @@ class ControllerResult:
     run : the plant run over the cycle.
     tail_end_J, tail_start_J : energy of the common continuation from the end and the start
         state, J (NaN without tails).
+    pi_tail_end_J, pi_tail_start_J : the same with the second continuation (F's PI loops),
+        J (NaN without F or tails).
     comfort : PMV and humidity statistics.
     upper_bound_K : A's constant bound, D's/E's upper band edge or P's/F's cabin set-point
         after tuning (None: B, plan).
@@ -518,10 +528,17 @@ class ControllerResult:
     upper_bound_K: float | None = None
     tuning: tuple = ()
     extra: dict = field(default_factory=dict)
+    pi_tail_end_J: float = math.nan
+    pi_tail_start_J: float = math.nan
 
     @property
     def energy_J(self) -> float:
         return self.run.energy_J
+
+    @property
+    def tail_corrected_pi_J(self) -> float:
+        """``E + tail(end) - tail(start)`` with the second continuation, J (NaN without)."""
+        return self.energy_J + self.pi_tail_end_J - self.pi_tail_start_J
 
     @property
     def tail_corrected_J(self) -> float:
@@ -566,15 +583,26 @@ class CycleStudy:
     rh_band: tuple[float, float] = RH_BAND
     econ_modifier: dict | None = None
 
-    def saving_pct(self, key: str, corrected: bool = True, ref: str = "A") -> float | None:
+    def saving_pct(self, key: str, corrected: bool = True, ref: str = "A",
+                   pi_charge: bool = False) -> float | None:
         """Saving of ``key`` against ``ref`` (A or the best fixed-coil PI ``F``), %,
-        tail-corrected (``E + tail(end) - tail(start)``) unless ``corrected`` is False."""
+        tail-corrected (``E + tail(end) - tail(start)``; ``pi_charge``: with the second
+        continuation, F's PI loops) unless ``corrected`` is False."""
         if ref not in self.results:
             return None
         a, x = self.results[ref], self.results[key]
+        if pi_charge:
+            return _pct(a.tail_corrected_pi_J, x.tail_corrected_pi_J)
         if corrected:
             return _pct(a.tail_corrected_J, x.tail_corrected_J)
         return _pct(a.energy_J, x.energy_J)
+
+    def charge_back_spread_points(self, key: str) -> float | None:
+        """|saving of ``key`` vs F charged by the paper NMPC's continuation - the same charged
+        by F's PI loops|, points: the comparison's charge-back uncertainty."""
+        a = self.saving_pct(key, ref=BEST_PI)
+        b = self.saving_pct(key, ref=BEST_PI, pi_charge=True)
+        return None if a is None or b is None else abs(a - b)
 
     def in_rh_band(self, key: str) -> bool:
         """Whether ``key``'s mean cabin RH lies inside the band."""
@@ -623,9 +651,12 @@ class CycleStudy:
             "energy_with_fan_MJ": run.energy_with_fan_J / 1e6,
             "tail_corrected_energy_MJ": r.tail_corrected_J / 1e6,
             "tail_end_MJ": r.tail_end_J / 1e6, "tail_start_MJ": r.tail_start_J / 1e6,
+            "tail_corrected_energy_pi_MJ": r.tail_corrected_pi_J / 1e6,
             "saving_raw_pct": self.saving_pct(key, corrected=False),
             "saving_tail_corrected_pct": self.saving_pct(key),
             "saving_vs_best_pi_pct": self.saving_pct(key, ref=BEST_PI),
+            "saving_vs_best_pi_pi_charge_pct": self.saving_pct(key, ref=BEST_PI,
+                                                               pi_charge=True),
             "gap_to_best_plan_pct": self.gap_to_best_plan_pct(key),
             "best_plan_spread_pct": self.plan_spread_pct,
             "in_rh_band": in_band, "rh_status": "in RH band" if in_band else "outside RH band",
@@ -657,6 +688,11 @@ class CycleStudy:
             "ranking_in_rh_band": self.ranking(),
             "econ_vs_best_pi_pct": {k: self.saving_pct(k, ref=BEST_PI) for k in ("D", "E")
                                     if k in self.results},
+            "econ_vs_best_pi_pi_charge_pct": {
+                k: self.saving_pct(k, ref=BEST_PI, pi_charge=True) for k in ("D", "E")
+                if k in self.results},
+            "econ_vs_best_pi_charge_back_spread_points": {
+                k: self.charge_back_spread_points(k) for k in ("D", "E") if k in self.results},
             "best_plan_spread_pct": self.plan_spread_pct, "econ_modifier": self.econ_modifier,
             "preview_share_points": self.preview_share_points, "elapsed_s": self.elapsed_s,
             "warnings": list(self.warnings),
@@ -708,6 +744,14 @@ DEFINITIONS = {
     "in_rh_band": "mean cabin RH inside rh_band_pct (RH_BAND_SOURCE); controllers outside "
                   "are not ranked",
     "preview_share_points": "saving of E minus saving of D (tail-corrected), points",
+    "tail_corrected_energy_pi_MJ": "energy + tail(end) - tail(start) with the second "
+                                   "continuation: the plant's PI loops at F's coil set-point, "
+                                   "cabin set-point at the target, cycle mean speed",
+    "saving_vs_best_pi_pi_charge_pct": "saving_vs_best_pi_pct with the end states charged by "
+                                       "that second continuation",
+    "econ_vs_best_pi_charge_back_spread_points": "|saving vs F (paper NMPC continuation) - "
+                                                 "saving vs F (PI continuation)|: the "
+                                                 "comparison's charge-back uncertainty, points",
 }
 
 
@@ -757,6 +801,24 @@ class _CycleRunner:
         ctrl = _PaperBound(self.paper, np.full(self.n_t + self.paper.N + 1, self.target))
         return self.run(ctrl, "tail", state,
                         v=np.full(self.n_t, float(np.mean(self.sc.v)))).energy_J
+
+    def charged_by_pi(self, r: ControllerResult, coil: float, loops, p_atm: float,
+                      cache: dict) -> ControllerResult:
+        """``r`` with its start and end states charged once more by the second continuation:
+        the plant's PI loops at the coil set-point ``coil`` (K, F's), the cabin set-point at
+        the target, the cycle's mean speed, as long as the first (module docstring)."""
+        def tail(state: dict) -> float:
+            key = tuple(sorted((k, float(v)) for k, v in state.items()))
+            if key not in cache:
+                ctrl = _plant_pi(loops, self.sc.Ts, coil, p_atm, self.target)
+                cache[key] = self.run(ctrl, "tail (PI)", state,
+                                      v=np.full(self.n_t, float(np.mean(self.sc.v)))).energy_J
+            return cache[key]
+
+        if self.n_t <= 0:
+            return r
+        return dataclasses.replace(r, pi_tail_end_J=tail(r.run.end),
+                                   pi_tail_start_J=tail(r.run.start))
 
     def result(self, key: str, run: PlantRun, bound: float | None = None, tuning=(),
                extra: dict | None = None, tail_start: float | None = None
@@ -1029,6 +1091,10 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
         guess = results.get("E", results.get("D"))
         results["plan"] = runner.plan(econ, guess.run if guess is not None else None,
                                       corrected=None if modifier is None else econ_ctl)
+    if "F" in results:   # the charge's own uncertainty: a second continuation
+        coil, cache = results["F"].extra["coil_set_point_K"], {}
+        results = {k: runner.charged_by_pi(r, coil, loops, p_atm, cache)
+                   for k, r in results.items()}
     return CycleStudy(scenario=sc, results=results, start_state=runner.start,
                       target_mean_K=runner.target, T_low=config.T_low, T_high=config.T_high,
                       elapsed_s=time.perf_counter() - t0, rh_band=tuple(config.rh_band),
@@ -1045,7 +1111,7 @@ def estimated_steps(config: StudyConfig, n: int, Ts: float = 5.0) -> int:
     n_t = int(round(config.tail_s / Ts))
     pi = 3 * 2 + 8 * 3 if config.baselines else 0
     return (int(round(config.warmup_s / Ts)) + n * (1 + 3 * 3 + 3 * 4 + pi)
-            + (6 + 3 + 8) * n_t)
+            + (6 + 3 + 8 + (9 if config.baselines else 0)) * n_t)
 
 
 def identify_econ(plant_factory: PlantFactory, duration_s: float = 6 * 3600.0,
