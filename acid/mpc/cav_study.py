@@ -34,7 +34,8 @@ Fairness
   replayed once from its optimal periodic state (the plant's other states from the warm-up)
   to spin up what the model does not have, and measured on the second pass; the other plan
   variants start where the controllers do.
-* **Same comfort.** A's bound, D's and E's upper band edge and P's and F's cabin set-point are
+* **Same comfort.** A's bound, D's and E's comfort reference (their comfort price
+  ``comfort_weight``; with 0 their band's upper edge) and P's and F's cabin set-point are
   tuned (secant steps) until the run's mean T_cab over samples 1..n equals B's within
   ``tol_K``; each plan's mean constraint is re-set until its plant replay does. Humidity is
   part of comfort: a controller whose mean cabin RH lies outside :data:`acid.comfort.RH_BAND`
@@ -161,6 +162,13 @@ class StudyConfig:
     modifier_hold_s : length of each of those holds, s (None: as long as the warm-up, at
         least 30 min).
     rh_band : cabin relative-humidity band of the comparison (fractions).
+    comfort_weight : D's and E's comfort price, W/K^2 per second
+        (:class:`acid.mpc.econ_nmpc.EconNMPCConfig`): the reference temperature, not the
+        band's upper edge, is tuned to the target mean, so the economic NMPC holds the mean
+        and lets the cabin float where cooling is dear (at a standstill) against cooling
+        where it is cheap (at speed), as the best known plan does. 0: the band's upper edge
+        is tuned (the previous formulation; it rode the edge at every instant and lost 0.18
+        points to F on SC03). 30 W/K^2: measured in notes/i21-energy.md.
     stopgo_s : length of the stop-and-go scenario (80 s periods), s.
     comfort : PMV assumptions.
     """
@@ -184,6 +192,7 @@ class StudyConfig:
     econ_modifier: bool = True
     modifier_hold_s: float | None = None
     rh_band: tuple[float, float] = RH_BAND
+    comfort_weight: float = 30.0
     stopgo_s: float = 800.0
     comfort: ComfortConfig = field(default_factory=ComfortConfig)
 
@@ -203,6 +212,9 @@ class StudyConfig:
         if not 0.0 <= self.rh_band[0] < self.rh_band[1] <= 1.0:
             raise ConfigError(f"RH band must satisfy 0 <= low < high <= 100 %, got "
                               f"{100 * self.rh_band[0]:g}-{100 * self.rh_band[1]:g} %")
+        if not (math.isfinite(self.comfort_weight) and 0.0 <= self.comfort_weight <= 1e5):
+            raise ConfigError(f"comfort weight must lie in 0..1e5 W/K^2 per second, got "
+                              f"{self.comfort_weight}")
         if not 0.01 <= self.coil_tol_K <= 3.0:
             raise ConfigError(f"coil_tol_K must lie in 0.01..3 K, got {self.coil_tol_K}")
         if not self.econ.T_evap_set_min + 1.0 <= self.coil_max <= C2K(15.0):
@@ -221,6 +233,7 @@ class StudyConfig:
                 "icm": self.icm.to_json_dict(), "plan": self.plan,
                 "baselines": self.baselines, "coil_reset": self.coil_reset.to_json_dict(),
                 "coil_tol_K": self.coil_tol_K, "coil_max_K": self.coil_max,
+                "comfort_weight_W_K2": self.comfort_weight,
                 "econ_modifier": self.econ_modifier, "modifier_hold_s": self.modifier_hold_s,
                 "rh_band_pct": [100 * self.rh_band[0], 100 * self.rh_band[1]],
                 "rh_band_source": RH_BAND_SOURCE, "stopgo_s": self.stopgo_s,
@@ -385,6 +398,10 @@ class _PaperBound:
 class _Econ:
     """The economic NMPC with the cycle's speed and ambient per interval (D, E).
 
+    ``setting`` is what the study tunes to the target mean: the band's upper edge (K), or,
+    with a comfort price (``comfort_weight`` > 0), the price's reference temperature (K) with
+    the whole band as the soft bound.
+
     E's preview reaches past the cycle's end into what the plant does next: the common
     continuation (the tails) at the cycle's mean speed. Holding the cycle's last value there
     instead (most cycles end at a standstill) showed E a stop that never comes, and E stored
@@ -392,8 +409,9 @@ class _Econ:
     (notes/i21-energy.md).
     """
 
-    def __init__(self, mpc: EconNMPC, scenario: Scenario, T_cab_max: float):
-        self.mpc, self.sc, self.T_cab_max = mpc, scenario, float(T_cab_max)
+    def __init__(self, mpc: EconNMPC, scenario: Scenario, setting: float):
+        self.mpc, self.sc, self.setting = mpc, scenario, float(setting)
+        self.comfort = mpc.config.comfort_weight > 0.0
         self.log = mpc.log
         pad = int(math.ceil(mpc.config.horizon_s / scenario.Ts)) + 1
         self.v = np.concatenate((scenario.v, np.full(pad, float(np.mean(scenario.v)))))
@@ -407,9 +425,13 @@ class _Econ:
     def make_step(self, meas: dict, k: int) -> np.ndarray:
         iv, Ts = self.mpc.config.intervals, self.sc.Ts
         x = [meas[n] for n in _MODEL_STATES]
+        if self.comfort:
+            return self.mpc.make_step(x, stage_means(self.v, k, iv, Ts),
+                                      stage_means(self.T_amb, k, iv, Ts),
+                                      T_cab_ref=self.setting)
         return self.mpc.make_step(x, stage_means(self.v, k, iv, Ts),
                                   stage_means(self.T_amb, k, iv, Ts),
-                                  T_cab_max=self.T_cab_max)
+                                  T_cab_max=self.setting)
 
 
 @dataclass
@@ -513,7 +535,8 @@ class ControllerResult:
     pi_tail_end_J, pi_tail_start_J : the same with the second continuation (F's PI loops),
         J (NaN without F or tails).
     comfort : PMV and humidity statistics.
-    upper_bound_K : A's constant bound, D's/E's upper band edge or P's/F's cabin set-point
+    upper_bound_K : A's constant bound, D's/E's upper band edge (their comfort price's
+        reference with ``StudyConfig.comfort_weight``) or P's/F's cabin set-point
         after tuning (None: B, plan).
     tuning : [(bound K, mean T_cab K)] of the tuning iterations.
     extra : controller-specific numbers (the plan's variants, F's coil search, ...).
@@ -1075,11 +1098,17 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
         econ_ctl = modifier.params
     for key, preview in (("D", False), ("E", True)):
         if key in controllers:
-            mpc = EconNMPC(econ_ctl, config.econ.replace(T_cab_min=config.T_low,
-                                                         T_cab_max=config.T_high,
-                                                         preview=preview))
-            results[key] = runner.tuned(key, partial(_Econ, mpc, sc), config.T_low + 0.1,
-                                        config.T_high)
+            mpc = EconNMPC(econ_ctl, config.econ.replace(
+                T_cab_min=config.T_low, T_cab_max=config.T_high, preview=preview,
+                comfort_weight=config.comfort_weight))
+            # tuned: the comfort price's reference (below the band's upper edge: the mean
+            # sits above it where cooling is dear), or the band's upper edge
+            lo, first = config.T_low + 0.1, None
+            if config.comfort_weight > 0:
+                lo, first = config.T_low - 2.0, _comfort_reference(econ_ctl, config, sc,
+                                                                   runner.target)
+            results[key] = runner.tuned(key, partial(_Econ, mpc, sc), lo, config.T_high,
+                                        start=first)
     if config.baselines:
         if "P" in controllers:
             results["P"] = runner.pi("P", config.coil_reset, loops, p_atm)
@@ -1099,6 +1128,21 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
                       target_mean_K=runner.target, T_low=config.T_low, T_high=config.T_high,
                       elapsed_s=time.perf_counter() - t0, rh_band=tuple(config.rh_band),
                       econ_modifier=None if modifier is None else modifier.to_json_dict())
+
+
+def _comfort_reference(econ: EconParams, config: StudyConfig, sc: Scenario,
+                       target: float) -> float:
+    """First guess of D's and E's comfort reference, K: the target less the offset of the
+    model's optimal steady cabin above its reference at the cycle's mean speed and ambient
+    (cooling costs, so the cabin settles above the reference); the tuning refines it."""
+    from acid.mpc.econ_terminal import SteadyStatePrice
+
+    e = config.econ
+    ss = SteadyStatePrice(econ, e.u_min, [e.W_bl_max, config.coil_max],
+                          comfort_weight=config.comfort_weight).steady_state(
+        float(np.mean(sc.v)), float(np.mean(sc.T_amb)), config.T_low, config.T_high,
+        T_cab_ref=target)
+    return float(target - (ss.x[0] - target)) if ss.success else target
 
 
 def _constant_bound(mpc: NMPC, n: int, b: float) -> _PaperBound:
