@@ -226,7 +226,8 @@ class StudyConfig:
         return NMPCConfig(N=int(self.horizon), T_cab_min=self.T_low, T_amb=float(T_amb))
 
     def to_json_dict(self) -> dict:
-        return {"horizon": int(self.horizon), "econ": self.econ.to_json_dict(),
+        return {"horizon": int(self.horizon),
+                "econ": self.econ.replace(comfort_weight=self.comfort_weight).to_json_dict(),
                 "T_low_K": self.T_low, "T_high_K": self.T_high, "T_amb_K": self.T_amb,
                 "warmup_s": self.warmup_s, "warmup_bound_K": self.warmup_bound,
                 "tol_K": self.tol_K, "max_iter": self.max_iter, "tail_s": self.tail_s,
