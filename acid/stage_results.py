@@ -437,7 +437,9 @@ class EnergyController(JsonDataclass):
     ``tail_corrected_energy_MJ`` is the energy with the end state charged back (a common
     continuation from the end and from the start); savings are against controller A and
     against the best fixed-coil PI F, the gap against the best known plan's replay (perfect
-    information, not a bound), all on the tail-corrected energies. ``in_rh_band`` is 1 when
+    information, not a bound), all on the tail-corrected energies;
+    ``saving_vs_best_pi_pi_charge_pct`` the saving against F with the end states charged by
+    F's PI loops instead of the paper NMPC (the charge's own uncertainty). ``in_rh_band`` is 1 when
     the mean cabin RH lies inside the study's band, 0 outside (not ranked), NaN unknown.
     """
 
@@ -446,6 +448,7 @@ class EnergyController(JsonDataclass):
     saving_raw_pct: float = math.nan
     saving_tail_corrected_pct: float = math.nan
     saving_vs_best_pi_pct: float = math.nan
+    saving_vs_best_pi_pi_charge_pct: float = math.nan
     gap_to_best_plan_pct: float = math.nan
     in_rh_band: float = math.nan
     mean_T_cab_K: float = math.nan

@@ -115,6 +115,11 @@ def cav_study(
     coil_max: float = typer.Option(10.0, "--coil-max",
                                    help="Warmest coil set-point of D, E, the plan and F's "
                                         "search, degC (paper Table II: 10)."),
+    comfort_weight: float = typer.Option(
+        30.0, "--comfort-weight",
+        help="D's and E's comfort price, W per K^2 of distance from a reference cabin "
+             "temperature and per second; the reference is tuned to the common mean, the "
+             "band stays a soft bound. 0: tune the band's upper edge instead."),
     baselines: bool = typer.Option(True, "--baselines/--no-baselines",
                                    help="Run the PI baselines P (coil reset) and F (best "
                                         "fixed coil, searched)."),
@@ -185,6 +190,7 @@ def cav_study(
     require(econ_terminal in TERMINALS, "--econ-terminal",
             f"must be one of {', '.join(TERMINALS)}, got {econ_terminal!r}")
     require_range(coil_max, "--coil-max", 4.0, 15.0, "degC")
+    require_range(comfort_weight, "--comfort-weight", 0.0, 1e5, "W/K^2 per second")
     if rh_max is not None:
         require_range(rh_max, "--rh-max", 0.0, 100.0, "%", lo_open=True)
     if t_amb is not None:
@@ -204,7 +210,8 @@ def cav_study(
     config = StudyConfig(horizon=horizon, econ=econ_cfg, T_low=C2K(T_low), T_high=C2K(T_high),
                          T_amb=None if t_amb is None else C2K(t_amb), warmup_s=warmup,
                          tail_s=tail, plan=plan, baselines=baselines,
-                         econ_modifier=econ_modifier, coil_max=C2K(coil_max))
+                         econ_modifier=econ_modifier, coil_max=C2K(coil_max),
+                         comfort_weight=comfort_weight)
     for name in names if cycle == "all" else [cycle]:   # refuse before any long work
         sc = make_scenario(name, p.Ts, 303.15, config.stopgo_s)
         if sc.duration_s < econ_cfg.horizon_s:
@@ -271,6 +278,15 @@ def cav_study(
             line += (f"; F: coil set-point "
                      f"{K2C(st.results['F'].extra['coil_set_point_K']):.2f} °C")
         say(line)
+        if "F" in st.results:
+            spread = {k: st.charge_back_spread_points(k) for k in ("D", "E")
+                      if k in st.results}
+            if any(v is not None for v in spread.values()):
+                say("the same vs F with every end state charged by F's PI loops instead of the "
+                    "paper NMPC: " + ", ".join(
+                        f"{k} {_fmt(st.saving_pct(k, ref='F', pi_charge=True), 2)} %"
+                        for k in spread) + "; charge-back uncertainty " + ", ".join(
+                        f"{k} {_fmt(v, 2)} points" for k, v in spread.items()))
         if st.econ_modifier is not None:
             m = st.econ_modifier
             say("D, E: coil economics corrected from steady plant holds (modifier "

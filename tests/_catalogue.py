@@ -646,6 +646,8 @@ CASES: list[Case] = [
          ("--econ-terminal",)),
     Case("cav-study-coil-max-hot", "options", ("cav-study", "--coil-max", "40"),
          ("--coil-max",)),
+    Case("cav-study-comfort-weight-negative", "options",
+         ("cav-study", "--comfort-weight", "-1"), ("--comfort-weight",)),
     # ------------------------------------------------------------------------- claims
     Case("claims-summary-missing", "files", ("claims", "{w}/none.json"), ("SUMMARY",
                                                                           "none.json")),

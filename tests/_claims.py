@@ -85,7 +85,8 @@ def cav() -> CavStudyStage:
     def ctl(saving, gap):
         return EnergyController(energy_MJ=0.5, tail_corrected_energy_MJ=0.5,
                                 saving_raw_pct=saving, saving_tail_corrected_pct=saving,
-                                saving_vs_best_pi_pct=saving - 7.0, in_rh_band=1.0,
+                                saving_vs_best_pi_pct=saving - 7.0,
+                                saving_vs_best_pi_pi_charge_pct=saving - 6.9, in_rh_band=1.0,
                                 gap_to_best_plan_pct=gap, mean_T_cab_K=297.3, max_T_cab_K=297.4,
                                 pmv_mean=0.1, rh_mean_pct=35.0, w_cab_mean_g_kg=6.5,
                                 mean_T_evap_set_K=280.0, mean_W_bl_kg_s=0.07)

@@ -73,13 +73,42 @@ def test_savings_gaps_and_preview_share_are_what_they_say(study):
         100 * (study.results["A"].energy_J - raw) / study.results["A"].energy_J)
 
 
+def test_the_second_charge_is_fs_pi_loops_run_from_each_state(study):
+    # an independent replay of the second continuation from E's end state: the plant's PI
+    # loops at F's coil set-point and the target, the cycle's mean speed, as long as the tail
+    from acid.mpc.cav_study import Scenario, run_on_plant
+    from acid.mpc.pi_baselines import PlantPI
+    from acid.psychro import P_ATM
+
+    E, F = study.results["E"], study.results["F"]
+    sc, n_t = study.scenario, int(round(SHORT.tail_s / study.scenario.Ts))
+    loops = make_plant("hifi").cfg
+    ctrl = PlantPI(loops, sc.Ts, study.target_mean_K, F.extra["coil_set_point_K"],
+                   float(getattr(loops, "p_atm", P_ATM)))
+    tail = Scenario(name="tail", v=np.full(n_t, float(np.mean(sc.v))),
+                    T_amb=np.resize(sc.T_amb, n_t), Ts=sc.Ts)
+    again = run_on_plant(lambda: make_plant("hifi"), ctrl, E.run.end, tail, "tail")
+    assert E.pi_tail_end_J == pytest.approx(again.energy_J, rel=1e-12)
+    assert E.pi_tail_start_J == pytest.approx(F.pi_tail_start_J)   # the common start
+    e_pi = E.energy_J + E.pi_tail_end_J - E.pi_tail_start_J
+    f_pi = F.energy_J + F.pi_tail_end_J - F.pi_tail_start_J
+    vs_f = study.saving_pct("E", ref="F", pi_charge=True)
+    assert vs_f == pytest.approx(100 * (f_pi - e_pi) / f_pi)
+    assert study.charge_back_spread_points("E") == pytest.approx(
+        abs(study.saving_pct("E", ref="F") - vs_f))
+    d = study.to_json_dict()
+    assert d["econ_vs_best_pi_pi_charge_pct"]["E"] == pytest.approx(vs_f)
+    assert d["controllers"]["E"]["tail_corrected_energy_pi_MJ"] == pytest.approx(e_pi / 1e6)
+
+
 def test_json_has_the_issue_keys(study):
     d = study.to_json_dict()
     json.dumps(d)
     for key in CONTROLLERS:
         c = d["controllers"][key]
         for field in ("energy_MJ", "saving_tail_corrected_pct", "saving_vs_best_pi_pct",
-                      "gap_to_best_plan_pct", "best_plan_spread_pct", "in_rh_band",
+                      "saving_vs_best_pi_pi_charge_pct", "gap_to_best_plan_pct",
+                      "best_plan_spread_pct", "in_rh_band",
                       "pmv_mean", "rh_mean_pct", "mean_T_cab_K", "max_T_cab_K"):
             assert field in c, (key, field)
         assert -3.0 < c["pmv_mean"] < 3.0 and 0.0 < c["rh_mean_pct"] < 100.0

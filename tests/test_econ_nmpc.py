@@ -206,3 +206,33 @@ def test_a_failed_sqp_solve_is_finished_by_the_convexified_sqp_at_ipopts_optimum
     _declared_unconverged(off._solver)
     assert "ipopt after sqp" in off.solve(X, 12.0, C2K(30.0)).status
     assert off.solver_rescues == 0 and off.solver_fallbacks == 1
+
+
+def test_comfort_price_holds_a_reference_and_is_not_counted_as_energy(econ_truth):
+    # band 22-26 degC as a soft bound, the comfort price pulls toward the reference
+    cfg = _cfg(T_cab_max=C2K(26.0), comfort_weight=30.0)
+    mpc = EconNMPC(econ_truth, cfg)
+    cool, warm = (mpc.solve(X, 12.0, C2K(30.0), T_cab_ref=C2K(r)) for r in (23.0, 25.0))
+    assert cool.success and warm.success
+    # a lower reference plans a cooler cabin and costs more energy
+    assert cool.x[-1, 0] < warm.x[-1, 0] - 0.2 and cool.energy_J > warm.energy_J
+    for sol, ref in ((cool, C2K(23.0)), (warm, C2K(25.0))):
+        # energy_J is the electric energy alone (recomputed from the plan's powers, whose
+        # P_comp takes the wall's end-point mean for the interval mean: 1e-3)
+        assert sol.energy_J == pytest.approx(float(np.sum(5.0 * (sol.P_comp + sol.P_bl))),
+                                             rel=1e-3)
+        # the objective adds the comfort price at each stage's start state and the terminal
+        # price (slacks are zero inside the band)
+        price = float(np.sum(5.0 * 30.0 * (sol.x[:-1, 0] - ref) ** 2))
+        term = float(sol.terminal_prices @ (sol.x[-1] - sol.x[0]))
+        assert np.max(sol.slack) < 1e-6
+        assert sol.objective == pytest.approx(sol.energy_J + price + term, rel=1e-5)
+    # without the weight the reference is ignored and the band's edge binds
+    plain = EconNMPC(econ_truth, _cfg(T_cab_max=C2K(24.0))).solve(X, 12.0, C2K(30.0),
+                                                                  T_cab_ref=C2K(23.0))
+    assert plain.success and plain.x[-1, 0] == pytest.approx(C2K(24.0), abs=0.05)
+
+
+def test_comfort_weight_must_be_non_negative():
+    with pytest.raises(ConfigError, match="comfort_weight"):
+        EconNMPCConfig(comfort_weight=-1.0)

@@ -62,3 +62,20 @@ def test_prices_interpolate_the_speed_grid(econ_truth):
     np.testing.assert_allclose(sp(v, C2K(30.0), *BAND), 0.5 * (lam[3] + lam[4]))
     np.testing.assert_allclose(sp(sp.v_grid[2], C2K(30.0), *BAND),
                                sp.steady_state(sp.v_grid[2], C2K(30.0), *BAND).lam, rtol=1e-5)
+
+
+def test_with_a_comfort_price_the_steady_cabin_sits_between_reference_and_edge(econ_truth):
+    # energy + w (T_cab - ref)^2 at steady state: the cabin settles above the reference
+    # (cooling costs) and below the band's upper edge (the price grows with the distance);
+    # a lower reference or a dearer price pulls it down
+    band = (C2K(22.0), C2K(26.0))
+    t = {}
+    for w, ref in ((30.0, 23.0), (30.0, 22.5), (300.0, 23.0)):
+        ss = SteadyStatePrice(econ_truth, U_MIN, U_MAX, comfort_weight=w).steady_state(
+            12.0, C2K(30.0), *band, T_cab_ref=C2K(ref))
+        assert ss.success
+        xn = _next_state(econ_truth, ss.x, ss.u, [12.0, C2K(30.0)], np.zeros(NX))
+        np.testing.assert_allclose(xn, ss.x, atol=1e-7)
+        assert C2K(ref) < ss.x[0] < band[1]
+        t[(w, ref)] = ss.x[0]
+    assert t[(30.0, 22.5)] < t[(30.0, 23.0)] and t[(300.0, 23.0)] < t[(30.0, 23.0)]

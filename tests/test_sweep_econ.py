@@ -18,7 +18,8 @@ SPEC = {"title": "econ", "baseline": "nmpc",
         "defaults": {"cycle": 15.0, "duration_s": 300.0, "warmup_s": 600.0, "tail_s": 120.0},
         "grid": {"ambient_C": [33.0]},
         "controllers": {"E": ECON, "D": {**ECON, "preview": False},
-                        "nmpc": {"match": "E"}}}
+                        "nmpc": {"match": "E"},
+                        "Ec": {**ECON, "comfort_weight": 30.0}}}
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +44,18 @@ def test_preview_cannot_matter_at_constant_speed_and_ambient(table):
     assert table.loc["D", "energy_MJ"] == pytest.approx(table.loc["E", "energy_MJ"], rel=1e-9)
 
 
+def test_a_comfort_price_holds_the_cabin_above_its_reference_inside_the_band(table):
+    # the reference is the scenario's set-point (no match): cooling costs, so the cabin
+    # settles above it, and below the band's edge that E rides (it uses less cooling there
+    # only if it is warmer: it is cooler and uses more energy)
+    c, e = table.loc["Ec"], table.loc["E"]
+    assert c["fallbacks"] == 0 and c["max_comfort_violation_K"] <= 0.1
+    assert 24.0 < c["mean_T_cab_C"] < e["mean_T_cab_C"]
+    assert c["energy_MJ"] > e["energy_MJ"]
+
+
 @pytest.mark.parametrize("bad, message", [
+    ({"comfort_weight": -1.0}, "comfort_weight = -1 must lie in 0..1e5"),
     ({"horizon_s": 10.0}, "horizon_s = 10 must lie in 30..600 s"),
     ({"econ_params": "no/such/econ.json"}, "no such file"),
     ({"identify_hours": 0.1}, "identify_hours"),

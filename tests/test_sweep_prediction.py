@@ -25,7 +25,7 @@ SPEC = {"title": "prediction", "baseline": "F",
             "F": {"type": "pi", "coil": "search", "coil_tol_K": 2.0, "match": "nmpc"},
             "P": {"type": "pi", "coil": "reset", "match": "nmpc"},
             "econ": {"type": "econ", "horizon_s": 30.0, "compiled": False, "match": "nmpc",
-                     **IDENT},
+                     "comfort_weight": 30.0, **IDENT},
             "plan": {"type": "plan", "match": "nmpc", **IDENT}}}
 
 

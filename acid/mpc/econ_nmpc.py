@@ -84,6 +84,7 @@ inputs. Temperatures in K, powers in W, energies in J.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -218,6 +219,12 @@ class EconNMPCConfig:
         guess and multipliers, generated C too) before ``fallback_solver``. The failures
         are not NaNs: the exact Hessian is indefinite, the QPs nonconvex, and qrqp cycles on
         a bound or the steps jump between bounds.
+    comfort_weight : price of the cabin's distance from a reference temperature, W per K^2
+        and per second (0: none, the band alone). With it the stage cost gains
+        ``dt comfort_weight (T_cab - T_cab_ref)^2``, ``T_cab_ref`` a per-stage NLP parameter
+        (``solve``/``make_step``'s ``T_cab_ref``; the band stays a soft bound): comfort as a
+        target held in mean, not an edge ridden at every instant (module docstring).
+    T_cab_ref : the reference temperature when ``comfort_weight`` > 0 and none is passed, K.
     """
 
     intervals: tuple[float, ...] = (5.0,) * 24
@@ -243,6 +250,8 @@ class EconNMPCConfig:
     estimator: EstimatorConfig = ECON_ESTIMATOR
     stage_functions: bool = True
     sqp_rescue: bool = True
+    comfort_weight: float = 0.0
+    T_cab_ref: float = C2K(24.0)
 
     def __post_init__(self):
         iv = tuple(float(t) for t in self.intervals)
@@ -268,6 +277,9 @@ class EconNMPCConfig:
             raise ConfigError(f"compiled must be 'auto', True or False, got {self.compiled!r}")
         if self.max_solve_s is not None and not self.max_solve_s > 0:
             raise ConfigError(f"max_solve_s must be positive or None, got {self.max_solve_s}")
+        if not (math.isfinite(self.comfort_weight) and self.comfort_weight >= 0.0):
+            raise ConfigError(f"comfort_weight must be >= 0 W/K^2 per second, got "
+                              f"{self.comfort_weight}")
 
     @property
     def N(self) -> int:
@@ -309,6 +321,7 @@ class EconNMPCConfig:
                 "max_iter": self.max_iter, "compiled": self.compiled,
                 "max_solve_s": self.max_solve_s, "offset_free": self.offset_free,
                 "stage_functions": self.stage_functions, "sqp_rescue": self.sqp_rescue,
+                "comfort_weight_W_K2": self.comfort_weight,
                 "estimator": self.estimator.to_json_dict() if self.offset_free else None}
 
 
@@ -408,6 +421,17 @@ def econ_stage_cost(s) -> dict:
     return {"E": s.dt * (s.P_comp + s.P_bl)}
 
 
+def comfort_stage_cost(weight: float):
+    """The energy plus the comfort price ``dt weight (T_cab - T_cab_ref)^2`` (J-equivalent;
+    ``weight`` W/K^2 per second, ``T_cab_ref`` a stage parameter, K)."""
+    w = float(weight)
+
+    def cost(s) -> dict:
+        return {**econ_stage_cost(s), "comfort": s.dt * w * (s.T_cab - s.T_cab_ref) ** 2}
+
+    return cost
+
+
 def ocp_spec(config: EconNMPCConfig) -> OCPSpec:
     """The economic NMPC (module docstring) as a configuration of the one optimal-control
     builder (:class:`acid.control.ocp.OCP`) over ``acid.models.econ.model``: the energy
@@ -425,8 +449,11 @@ def ocp_spec(config: EconNMPCConfig) -> OCPSpec:
                                 expr=lambda s: s.w_cab - humidity_ratio(s.T_cab, rh,
                                                                         s.p_atm)))
     states, inputs = STATES, ("W_bl", "T_evap_set")
+    comfort = cfg.comfort_weight > 0.0
     return OCPSpec(
-        N=cfg.N, stage_cost=econ_stage_cost, intervals=cfg.intervals,
+        N=cfg.N, stage_cost=comfort_stage_cost(cfg.comfort_weight) if comfort
+        else econ_stage_cost, stage_parameters=("T_cab_ref",) if comfort else (),
+        intervals=cfg.intervals,
         interval_model=econ_interval,
         input_bounds={"W_bl": (cfg.W_bl_min, cfg.W_bl_max),
                       "T_evap_set": (cfg.T_evap_set_min, cfg.T_evap_set_max)},
@@ -497,7 +524,8 @@ class EconNMPC:
         xs = ca.SX.sym("x", _NX)
         self._dH = ca.Function("dH", [xs, vv], [ca.gradient(
             econ.heat_content(self._s, ca.vertsplit(xs), vv), xs)])
-        self._steady = (SteadyStatePrice(p, cfg.u_min, cfg.u_max)
+        self._steady = (SteadyStatePrice(p, cfg.u_min, cfg.u_max,
+                                         comfort_weight=cfg.comfort_weight)
                         if cfg.terminal == "steady" else None)
         self._steps = {dt: _at_parameters(econ_interval(dt), self._theta)
                        for dt in sorted(set(cfg.intervals))}
@@ -586,14 +614,14 @@ class EconNMPC:
             w[self._ix[i + 1]] = (x - _X_OFF) / _X_SCL
         return w
 
-    def terminal_prices(self, x0, u, v, Ta, T_cab_min: float, T_cab_max: float, dist
-                        ) -> np.ndarray:
+    def terminal_prices(self, x0, u, v, Ta, T_cab_min: float, T_cab_max: float, dist,
+                        T_cab_ref: float | None = None) -> np.ndarray:
         """(5,) prices of the terminal cost ``lam^T (x_N - x_0)``, J per unit state.
 
         ``"heat"``: ``pi dH/dx`` (the heat content's gradient at the last interval's speed);
         ``"steady"``: the multipliers of the optimal steady state at the horizon's mean
         speed and ambient and its last band (:mod:`acid.mpc.econ_terminal`);
-        ``"none"``: zeros.
+        ``"none"``: zeros. ``T_cab_ref``: the comfort price's reference (``comfort_weight``).
         """
         term = self.config.terminal
         if term == "heat":
@@ -602,7 +630,7 @@ class EconNMPC:
         if term == "steady":
             iv = np.asarray(self.config.intervals)
             return self._steady(float(iv @ v) / iv.sum(), float(iv @ Ta) / iv.sum(),
-                                float(T_cab_min), float(T_cab_max))
+                                float(T_cab_min), float(T_cab_max), T_cab_ref=T_cab_ref)
         return np.zeros(_NX)
 
     def price(self, x0, u, v0: float, Ta0: float, dist) -> float:
@@ -616,7 +644,7 @@ class EconNMPC:
 
     # ------------------------------------------------------------------ solve
     def solve(self, x, v_preview, T_amb_preview, T_cab_max=None, T_cab_min=None,
-              dist=None, u_guess=None) -> EconSolution:
+              dist=None, u_guess=None, T_cab_ref=None) -> EconSolution:
         """Solve once from the measured state.
 
         Parameters
@@ -628,6 +656,8 @@ class EconNMPC:
         dist : (5,) additive disturbances on the state derivatives (default zero).
         u_guess : input used for a cold initial guess (default: maximum cooling when the
             cabin is above its band, else mid-range).
+        T_cab_ref : the comfort price's reference, K, scalar or (N,) (``comfort_weight`` > 0;
+            default ``config.T_cab_ref``).
         """
         cfg, N = self.config, self.N
         x = np.asarray(x, dtype=float).reshape(_NX)
@@ -644,10 +674,15 @@ class EconNMPC:
         if u_guess is None:  # a cold start: full cooling when the cabin is above its band
             u_guess = cfg.u_safe if x[0] > ub[0] else 0.5 * (cfg.u_min + cfg.u_max)
         u0 = self._plan[0] if self._plan is not None else u_guess
-        lam = self.terminal_prices(x, u0, v, Ta, lb[-1], ub[-1], dist)
+        ref = None
+        if cfg.comfort_weight > 0.0:
+            ref = np.broadcast_to(np.asarray(cfg.T_cab_ref if T_cab_ref is None else T_cab_ref,
+                                             dtype=float), (N,)).reshape(N, 1)
+        lam = self.terminal_prices(x, u0, v, Ta, lb[-1], ub[-1], dist,
+                                   T_cab_ref=None if ref is None else float(ref[-1, 0]))
         lbg, ubg = self._lbg0, self._ubg0
         par = self._ocp.parameters(self._pvec.copy(), x0=x, dist=dist,
-                                   d=np.column_stack((v, Ta)), lam=lam,
+                                   d=np.column_stack((v, Ta)), lam=lam, q=ref,
                                    bounds={("T_cab", "hi"): ub, ("T_cab", "lo"): lb})
         lam_g0 = lam_x0 = None
         if self._lam_prev is not None and len(set(cfg.intervals)) == 1:
@@ -687,8 +722,8 @@ class EconNMPC:
             self._lam_prev = (res.lam_g, res.lam_x) if fallback is None else None
         if not np.all(np.isfinite(w)):  # a timeout: report the initial guess's trajectory
             w = self._scaled_guess(x, v, Ta, dist, u_guess)
-        Y, terms = self._stage_values(w, par)
-        energy = float(terms.sum())
+        Y, terms = (np.asarray(a) for a in self._stage_values(w, par))
+        energy = float(terms[self._ocp.term_names.index("E")].sum())   # not the comfort price
         Q_e = Y[self._ocp.output_names.index("Q_e")]
         X = w[self._ix] * _X_SCL + _X_OFF
         Uc = np.clip(w[self._iu] * _U_SCL + _U_OFF, cfg.u_min, cfg.u_max)
@@ -716,7 +751,7 @@ class EconNMPC:
 
     # ------------------------------------------------------------ closed loop
     def make_step(self, x, v_preview, T_amb_preview, T_cab_max=None, T_cab_min=None,
-                  dist=None) -> np.ndarray:
+                  dist=None, T_cab_ref=None) -> np.ndarray:
         """One closed-loop update: the input [W_bl, T_evap_set] for the next sample.
 
         Never raises for a solver failure: the fallback (rest of the last plan, else
@@ -736,7 +771,7 @@ class EconNMPC:
         if self.estimator is not None:
             x, dist = self.estimator.update(x, *(self._applied or (None, None)))
         try:
-            sol = self.solve(x, v, Ta, T_cab_max, T_cab_min, dist)
+            sol = self.solve(x, v, Ta, T_cab_max, T_cab_min, dist, T_cab_ref=T_cab_ref)
             ok = sol.success
             status = sol.status
         except (RuntimeError, ValueError, FloatingPointError) as exc:

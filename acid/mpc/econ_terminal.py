@@ -71,9 +71,11 @@ class SteadyStatePrice:
     ----------
     params : identified econ model.
     u_min, u_max : (2,) input bounds [W_bl kg/s, T_evap_set K].
+    comfort_weight : the NMPC's comfort price, W/K^2 per second (0: none); with it the steady
+        state is the optimum of energy plus that price at a reference ``T_cab_ref``.
     """
 
-    def __init__(self, params: EconParams, u_min, u_max):
+    def __init__(self, params: EconParams, u_min, u_max, comfort_weight: float = 0.0):
         from acid.control.ocp import OCP  # (acid.mpc.econ_nmpc imports this module)
         from acid.mpc import econ_nmpc as nmpc
 
@@ -82,7 +84,9 @@ class SteadyStatePrice:
         # the economic NMPC's own problem: the steady state of its builder (the input
         # bounds, which may pin an input here, are applied per solve: u_min, u_max)
         cfg = nmpc.EconNMPCConfig(intervals=(params.Ts, params.Ts), terminal="none",
-                                  stage_functions=False, compiled=False)
+                                  stage_functions=False, compiled=False,
+                                  comfort_weight=float(comfort_weight))
+        self._comfort = cfg.comfort_weight > 0.0
         self._ocp = OCP(econ_model, nmpc.ocp_spec(cfg))
         # the NMPC's variable scaling (K, kg/kg, kg/s)
         self._x_off, self._x_scl = nmpc.X_OFFSET, nmpc.X_SCALE
@@ -107,11 +111,14 @@ class SteadyStatePrice:
         self.failures = 0
 
     def steady_state(self, v_veh: float, T_amb: float, T_cab_min: float, T_cab_max: float,
-                     guess: SteadyState | None = None, dist=None) -> SteadyState:
+                     guess: SteadyState | None = None, dist=None,
+                     T_cab_ref: float | None = None) -> SteadyState:
         """Solve the steady-state NLP once (module docstring).
 
         ``dist`` : optional (5,) additive disturbances on the state derivatives (K/s,
-        kg/kg/s), as in :func:`acid.models.econ.casadi_interval`; ``guess`` a nearby solution.
+        kg/kg/s), as in :func:`acid.models.econ.casadi_interval`; ``guess`` a nearby solution;
+        ``T_cab_ref`` the comfort price's reference, K (with ``comfort_weight``; default the
+        band's upper edge).
         """
         dist = np.zeros(_NX) if dist is None else np.asarray(dist, dtype=float)
         x_off, x_scl, u_off, u_scl = self._x_off, self._x_scl, self._u_off, self._u_scl
@@ -128,7 +135,8 @@ class SteadyStatePrice:
                               [-np.inf if s == "hi" else 0.0 for s in self._sides]))
         ubg = np.concatenate((np.zeros(_NX),
                               [0.0 if s == "hi" else np.inf for s in self._sides]))
-        res = self._solver(x0=w0, p=np.concatenate(([v_veh, T_amb], self._theta, dist,
+        q = [T_cab_max if T_cab_ref is None else T_cab_ref] if self._comfort else []
+        res = self._solver(x0=w0, p=np.concatenate(([v_veh, T_amb], self._theta, dist, q,
                                                     limits)),
                            lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         ok = bool(self._solver.stats().get("success", False))
@@ -140,15 +148,19 @@ class SteadyStatePrice:
                            power_W=float(self._power(x, u, [v_veh, T_amb])), lam=lam,
                            success=ok)
 
-    def grid(self, T_amb: float, T_cab_min: float, T_cab_max: float) -> np.ndarray:
-        """(len(v_grid), 5) multipliers over the speed grid (cached per ambient and band)."""
-        key = (round(float(T_amb), 2), round(float(T_cab_min), 3), round(float(T_cab_max), 3))
+    def grid(self, T_amb: float, T_cab_min: float, T_cab_max: float,
+             T_cab_ref: float | None = None) -> np.ndarray:
+        """(len(v_grid), 5) multipliers over the speed grid (cached per ambient, band and
+        comfort reference)."""
+        ref = None if T_cab_ref is None or not self._comfort else round(float(T_cab_ref), 4)
+        key = (round(float(T_amb), 2), round(float(T_cab_min), 3), round(float(T_cab_max), 3),
+               ref)
         if key not in self._grids:
             lams, guess = [], None
             for v in self.v_grid:
-                ss = self.steady_state(v, *key, guess=guess)
+                ss = self.steady_state(v, *key[:3], guess=guess, T_cab_ref=ref)
                 if not ss.success:
-                    ss = self.steady_state(v, *key)
+                    ss = self.steady_state(v, *key[:3], T_cab_ref=ref)
                 if ss.success:
                     guess = ss
                 else:
@@ -167,8 +179,8 @@ class SteadyStatePrice:
             self._grids[key] = lam
         return self._grids[key]
 
-    def __call__(self, v_veh: float, T_amb: float, T_cab_min: float, T_cab_max: float
-                 ) -> np.ndarray:
+    def __call__(self, v_veh: float, T_amb: float, T_cab_min: float, T_cab_max: float,
+                 T_cab_ref: float | None = None) -> np.ndarray:
         """(5,) multipliers at speed ``v_veh`` (linear in speed, held outside the grid)."""
-        lam = self.grid(T_amb, T_cab_min, T_cab_max)
+        lam = self.grid(T_amb, T_cab_min, T_cab_max, T_cab_ref)
         return np.array([np.interp(v_veh, self.v_grid, lam[:, j]) for j in range(_NX)])

@@ -14,6 +14,9 @@ ambient itself), or a parameter file written by ``acid fit --model econ``.
 
 ``match = "<label>"`` tunes the upper cabin bound the NMPC is given until its mean cabin
 temperature equals that controller's (the fair comparison of ``acid cav-study``).
+``comfort_weight`` (W/K^2 per second, default 0) gives the NMPC ``acid cav-study``'s comfort
+price instead: the band stays a soft bound and the price's reference is what ``match``
+tunes (without ``match``: the scenario's set-point).
 """
 
 from __future__ import annotations
@@ -56,6 +59,8 @@ class EconControllerConfig:
     modifier : correct the model's coil economics from steady holds of the scenario's plant
         first (``acid cav-study``'s D and E; :mod:`acid.mpc.econ_modifier`).
     coil_max_C : warmest coil set-point, degC (``acid cav-study``'s 10 degC, Table II).
+    comfort_weight : the comfort price, W/K^2 per second (0: tune the band's upper edge;
+        ``acid cav-study`` runs 30).
     """
 
     preview: bool = True
@@ -69,6 +74,7 @@ class EconControllerConfig:
     compiled: bool = True
     modifier: bool = True
     coil_max_C: float = 10.0
+    comfort_weight: float = 0.0
 
     def __post_init__(self):
         if not 30.0 <= self.horizon_s <= 600.0:
@@ -82,6 +88,9 @@ class EconControllerConfig:
             raise ConfigError("match needs tol_K > 0 and max_iter in 1..30")
         if not 4.0 <= self.coil_max_C <= 15.0:
             raise ConfigError(f"coil_max_C = {self.coil_max_C:g} must lie in 4..15 degC")
+        if not 0.0 <= self.comfort_weight <= 1e5:
+            raise ConfigError(f"comfort_weight = {self.comfort_weight:g} must lie in 0..1e5 "
+                              "W/K^2 per second")
 
 
 @functools.lru_cache(maxsize=8)
@@ -158,9 +167,11 @@ class EconController:
         mpc = EconNMPC(econ, EconNMPCConfig(intervals=(ctx.Ts,) * n_iv, T_cab_min=cond.T_low,
                                             T_cab_max=cond.T_high, preview=c.preview,
                                             T_evap_set_max=C2K(c.coil_max_C),
-                                            compiled="auto" if c.compiled else False))
+                                            compiled="auto" if c.compiled else False,
+                                            comfort_weight=c.comfort_weight))
+        comfort = c.comfort_weight > 0
         if not c.match:
-            r = self._simulate(ctx, mpc, cond.T_high)
+            r = self._simulate(ctx, mpc, cond.T_set if comfort else cond.T_high)
             r.info.update(info)
             return r
         from acid.mpc.cav_study import tune_mean
@@ -169,15 +180,17 @@ class EconController:
             r = self._simulate(ctx, mpc, b)
             return r.mean_T_cab, r
 
-        b, r, hist = tune_mean(run_at, target, cond.T_low, cond.T_high, c.tol_K, c.max_iter)
+        lo = cond.T_low - 2.0 if comfort else cond.T_low
+        b, r, hist = tune_mean(run_at, target, lo, cond.T_high, c.tol_K, c.max_iter)
         return ControllerRun(r.run, r.end_state,
                              {**r.info, "bound_K": b, "matched_to": c.match,
                               "target_mean_K": target, "tuning_runs": len(hist), **info})
 
     @staticmethod
-    def _simulate(ctx: ScenarioContext, mpc, T_cab_max: float) -> ControllerRun:
+    def _simulate(ctx: ScenarioContext, mpc, setting: float) -> ControllerRun:
         """The closed loop ``u = mpc.make_step(x, previews); plant.step(u)`` from the
-        scenario's start with the upper cabin bound ``T_cab_max`` (K)."""
+        scenario's start with the upper cabin bound, or with a comfort price its reference,
+        at ``setting`` (K)."""
         from acid.models.econ import STATES
         from acid.mpc.econ_nmpc import stage_means
         from acid.sweep.controllers import direct_loop, rh_into_info
@@ -186,14 +199,16 @@ class EconController:
         iv = mpc.config.intervals
         T_amb_preview = np.full(ctx.n + ctx.v_preview.size, ctx.conditions.T_amb)
 
+        key = "T_cab_ref" if mpc.config.comfort_weight > 0 else "T_cab_max"
+
         def make_step(meas, k):
             return mpc.make_step([meas[name] for name in STATES],
                                  stage_means(ctx.v_preview, k, iv, ctx.Ts),
-                                 stage_means(T_amb_preview, k, iv, ctx.Ts),
-                                 T_cab_max=T_cab_max)
+                                 stage_means(T_amb_preview, k, iv, ctx.Ts), **{key: setting})
 
         plant = ctx.make_plant()
-        r = direct_loop(ctx, plant, make_step, "econ", T_cab_max,
+        upper = setting if key == "T_cab_max" else ctx.conditions.T_high   # the band's edge
+        r = direct_loop(ctx, plant, make_step, "econ", upper,
                         step_ms=lambda n: np.asarray(mpc.log.step_time_s[-n:]) * 1e3,
                         fallback=lambda n: np.asarray(mpc.log.fallback[-n:], dtype=bool))
         rh_into_info(r, plant.cfg.p_atm)
