@@ -3,7 +3,9 @@ estimated from a warm-up stretch, parameter files written by the fit."""
 
 from __future__ import annotations
 
+import copy
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -88,6 +90,22 @@ def test_per_experiment_values_are_used_per_start(rng):
     mean = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=30)
     assert mean.metrics["T_cab"]["max_abs"] > 1e-2
     assert any("no fitted value" in n for n in mean.notes)
+
+
+def test_a_fit_of_a_model_declared_without_a_file_keeps_its_declaration(rng):
+    # a model built in Python (a notebook): nothing to load it from by its reference, so
+    # the fit's values, their copies and the validator must use the Model itself
+    m = copy.copy(load("cabin3"))
+    m.name, m.source = "cabin3_notebook", "<notebook>"
+    ds = _cabin3_record(m.values, rng, n=160)
+    res = fit_model(m, ds, method="ls")
+    ps = fitted_parameters(res)
+    assert ps.declaration is m and ps.replace(per_experiment={}).declaration is m
+    val = validate_model(m, ds, ps, starts=4, horizon=40, warmup=30)
+    assert val.metrics["T_cab"]["max_abs"] < 1e-6 and val.settings["params"] == ps.label
+    # pickled (a worker process) without the Model, which holds the user's functions
+    assert pickle.loads(pickle.dumps(res)).declaration is None
+    assert pickle.loads(pickle.dumps(ps)).values == ps.values
 
 
 def test_too_short_a_record_is_one_line(rng):

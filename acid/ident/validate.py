@@ -60,8 +60,9 @@ def fitted_parameters(result) -> ParameterValues:
     per = {n: dict(zip(result.experiment_ids, map(float, v), strict=True))
            for n, v in result.per_experiment.items()}
     builtin = result.model in BUILT_IN and Path(result.model_source).stem == result.model
+    ref = result.model if builtin else result.model_source
     return ParameterValues(np.asarray(result.values, dtype=float), per_experiment=per,
-                           model=result.model if builtin else result.model_source,
+                           model=ref if result.declaration is None else result.declaration,
                            source=f"fit of {result.data_source}")
 
 

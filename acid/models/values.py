@@ -134,7 +134,7 @@ class ParameterValues:
                                       if float(v) != declared[k].value}),
                        ("per_experiment", dict(per_experiment or {})), ("info", info),
                        ("stderr", dict(stderr or {})), ("provenance", dict(provenance or {})),
-                       ("source", source)):
+                       ("source", source), ("_declaration", m)):
             object.__setattr__(self, key, v)
 
     def __setattr__(self, key, value):   # frozen, bindings included
@@ -145,7 +145,12 @@ class ParameterValues:
     # ------------------------------------------------------------------ views
     @property
     def declaration(self) -> Model:
-        return declaration(self.model)
+        """The ``Model`` these values were made for (after unpickling: by its reference)."""
+        m = self.__dict__.get("_declaration")
+        return declaration(self.model) if m is None else m
+
+    def __getstate__(self):   # pickled without the Model (it holds the user's functions)
+        return {k: v for k, v in self.__dict__.items() if k != "_declaration"}
 
     def __getattr__(self, key):   # p.gamma1, p.gamma, p.power_map, p.c_p
         d = self.__dict__
@@ -153,7 +158,7 @@ class ParameterValues:
             raise AttributeError(key)
         if key in d["values"]:
             return d["values"][key]
-        m = declaration(d["model"])
+        m = self.declaration
         grp = m.groups.get(key)
         if grp is not None:
             vals = tuple(d["values"][n] for n in grp.names)
@@ -190,7 +195,7 @@ class ParameterValues:
 
     def replace(self, **changes) -> ParameterValues:
         """A copy with fields, parameters, groups or constants changed by name."""
-        return dataclasses.replace(self, **changes)
+        return dataclasses.replace(self, **{"model": self.declaration, **changes})
 
     def with_theta(self, theta, **changes) -> ParameterValues:
         """A copy with every parameter from the vector ``theta`` (declared order)."""
