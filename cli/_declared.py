@@ -216,8 +216,8 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                       beside=None, figures: Path | None = None) -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors, write
     Figs. 5-6 (and the yardsticks' figure) into ``figures``. ``values``: the parameters
-    (a ``ParameterSet``) when already read (the paper's and the econ model's files);
-    ``beside``: another ``ParameterSet`` of the same model, validated on the same starts."""
+    (``ParameterValues``) when already read (the paper's and the econ model's files);
+    ``beside``: other ``ParameterValues``, validated on the same starts."""
     from acid.ident.validate import (
         declared_parameters,
         held_out_part,
@@ -237,7 +237,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         warn(part.warning)
     frac = part.fraction
     if ps.per_experiment and ps.provenance.get("data_sha256") != sha:
-        ps = dataclasses.replace(ps, per_experiment={})
+        ps = ps.replace(per_experiment={})
         note("per-experiment parameters were fitted on another record: their mean is used")
     lo = int(round(len(ds) * (1.0 - frac))) if frac is not None and frac < 1.0 else 0
     hi, estimation = len(ds), ((0, lo) if lo > 0 else None)
@@ -261,7 +261,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
     if est is not None:
         note(f"yardsticks fitted on the parameters' records ({est.source})")
     say(f"{data}: {res.starts.size} starts x {horizon} steps ({horizon * model.Ts:g} s), model "
-        f"{model.name!r}, parameters from {ps.source}"
+        f"{model.name!r}, parameters from {ps.label}"
         + (f", last {100 * frac:g} % of the record ({part.source})" if frac is not None
            and frac < 1 else ""))
     say(window_design_text(res.window_design))
@@ -317,14 +317,13 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
             "estimation part); yardsticks are never used for control")
     other = None
     if beside is not None:
-        other_model = load(beside.model or model)   # e.g. the paper's beside the econ model
+        other_model = beside.declaration   # e.g. the paper's beside the econ model
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the same windows: warned about above
             other = validate_model(other_model, ds, beside, **{
                 **kw, "start_index": res.starts, "non_overlapping": False,
                 "hold": tuple(d.name for d in other_model.disturbances) if hold_all else ()})
-        print_table(f"Beside: |e| median / p90, {ps.label or ps.source!r} vs "
-                    f"{beside.label or beside.source!r}, same starts",
+        print_table(f"Beside: |e| median / p90, {ps.label!r} vs {beside.label!r}, same starts",
                     ["channel", "this", "beside"],
                     [[c, f"{_num(res.metrics[c]['median_abs'], 3)} / "
                          f"{_num(res.metrics[c]['p90_abs'], 3)}",

@@ -107,7 +107,7 @@ def declared_plant(model_spec: str, spec: ExcitationSpec, params: Path | None,
     if not model_spec:
         raise ConfigError(f"--plant {DECLARED_PREFIX}FILE.py: the model file is missing")
     model = load(model_spec)
-    values = None if params is None else read_parameters(model, params).values
+    values = None if params is None else read_parameters(model, params).theta
     return DeclaredPlant(model, values, **({} if T_amb is None else {"T_amb": C2K(T_amb)}))
 
 

@@ -161,7 +161,7 @@ def _export_declared(model_spec: str, params: str, out: Path, horizon: int, chec
     theta, label = m.values, "declared values"
     if params != "paper":
         ps = read_parameters(m, params)
-        theta = ps.values.copy()
+        theta = ps.theta
         for name, per in ps.per_experiment.items():   # a per-trip value: their mean
             theta[m.parameter_names.index(name)] = float(np.mean(list(per.values())))
         label = Path(params).name

@@ -123,10 +123,10 @@ def validate(
             f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
     ps = other = None
     if model is None:   # a parameter file of the paper's or the econ model names its model
-        ps = load_any_params(params, allow_unstable=allow_unstable).parameter_set()
+        ps = load_any_params(params, allow_unstable=allow_unstable)
         model = ps.model
         if beside is not None:
-            other = load_any_params(beside, allow_unstable=allow_unstable).parameter_set()
+            other = load_any_params(beside, allow_unstable=allow_unstable)
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
                       warmup=warmup_samples(warmup, _sample_time(data)),
                       placement=placement, seed=seed,

@@ -16,6 +16,7 @@ from acid.examples import resolve
 from acid.ident.fit import fit_model
 from acid.ident.validate import fitted_parameters, validate_model
 from acid.models import load
+from acid.models.values import ParameterValues
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT.parent / "shared" / "real-data" / "bmw-i3"
@@ -87,9 +88,7 @@ def test_validation_to_the_trips_end_scores_only_reached_horizons_and_yardsticks
     p = m.values.copy()
     for k, v in truth.items():
         p[m.parameter_names.index(k)] = v
-    from acid.ident.validate import ParameterSet
-
-    ps = ParameterSet(values=p)
+    ps = ParameterValues(p, model=m)
     with pytest.raises(Exception, match="longer than warmup"):
         validate_model(m, val, ps, starts=10, horizon=300, warmup=30)
     # the yardsticks fitted on the estimation trips, placed before the validation trip
@@ -207,9 +206,7 @@ def test_censored_samples_are_neither_fitted_nor_scored(rng):
     p = m.values.copy()
     for k, v in truth.items():
         p[m.parameter_names.index(k)] = v
-    from acid.ident.validate import ParameterSet
-
-    res = validate_model(m, bad, ParameterSet(values=p),
+    res = validate_model(m, bad, ParameterValues(p, model=m),
                          starts=5, horizon=40, warmup=30)
     e = res.errors["T_cab"]
     scored = ~clipped[res.starts[:, None] + np.arange(1, 41)[None, :]]

@@ -11,9 +11,9 @@ from acid.errors import ConfigError
 from acid.excite import ExcitationSpec, excite
 from acid.ident.analysis import predict_model
 from acid.ident.fit import fit_model
-from acid.ident.validate import ParameterSet
 from acid.models import load
 from acid.models.plant import DeclaredPlant
+from acid.models.values import ParameterValues
 
 CABIN3 = load("cabin3")
 
@@ -25,9 +25,9 @@ def record():
     return excite(plant, ExcitationSpec(duration=1500.0, seed=3))   # declared initial rule
 
 
-def wrong() -> ParameterSet:
+def wrong() -> ParameterValues:
     v = CABIN3.values * np.array([1.3, 0.8, 1.2, 0.9, 1.4, 1.0, 0.7, 1.0, 1.2])
-    return ParameterSet(values=v, source="perturbed")
+    return ParameterValues(v, model=CABIN3, source="perturbed")
 
 
 def manual(ds, values, k: int) -> np.ndarray:
@@ -60,7 +60,7 @@ def test_k_step_prediction_equals_a_plain_loop_over_the_model(record):
     ps = wrong()
     pr = predict_model(record, ps, 4, model=CABIN3)
     assert pr.channels == ("T_cab", "T_evap", "T_ain") and pr.units == ("K", "K", "K")
-    ref = manual(record, ps.values, 4)
+    ref = manual(record, ps.theta, 4)
     assert np.all(np.isnan(pr.predicted[:4])) and pr.valid[4:].all()
     np.testing.assert_allclose(pr.predicted[4:], ref[4:], rtol=0, atol=1e-9)
     assert max(pr.fit_percent.values()) < 99.9               # the perturbed model errs

@@ -12,8 +12,9 @@ from acid.data import Dataset
 from acid.ident.data import ModelData
 from acid.ident.fit import fit_model
 from acid.ident.pem import filter_states, noise_parameters
-from acid.ident.validate import ParameterSet, validate_model
+from acid.ident.validate import validate_model
 from acid.models import Model, load
+from acid.models.values import ParameterValues
 
 TRUTH = {"C": 30.0, "UA": 60.0, "sigma_T": 0.01, "sigma_y": 0.05, "sigma_Q": 15.0}
 
@@ -96,7 +97,7 @@ def test_filter_at_validation_starts_follows_the_unmeasured_load(rng, tmp_path):
     # much nearer the truth than where it started
     assert np.abs(x[:, 1] - Q[k0]).mean() < 0.3 * np.abs(300.0 - Q[k0]).mean()
     # and the open-loop predictions from those states beat the least-squares warm start
-    ps = ParameterSet(values=p)
+    ps = ParameterValues(p, model=m)
     kw = dict(start_index=k0[:3], horizon=40, warmup=240)
     ekf = validate_model(m, ds, ps, warm_start="ekf", **kw)
     assert any("extended Kalman filter" in n for n in ekf.notes)

@@ -3,7 +3,9 @@ estimated from a warm-up stretch, parameter files written by the fit."""
 
 from __future__ import annotations
 
+import copy
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -12,13 +14,13 @@ from acid.data import Dataset
 from acid.errors import DataError
 from acid.ident.fit import fit_model
 from acid.ident.validate import (
-    ParameterSet,
     declared_parameters,
     fitted_parameters,
     read_parameters,
     validate_model,
 )
 from acid.models import load
+from acid.models.values import ParameterValues
 
 
 def _cabin3_record(p, rng, n=300, T_int0=315.0):
@@ -61,7 +63,7 @@ def test_parameter_file_round_trip(rng, tmp_path):
     res = fit_model(m, ds, method="ls")          # only T_ain's parameters: quick
     path = res.write(tmp_path / "p.json", m, {"data_sha256": "x"})
     ps = read_parameters(m, path)
-    np.testing.assert_allclose(ps.values, res.values)
+    np.testing.assert_allclose(ps.theta, res.values)
     assert ps.per_experiment == {"Q_sol": {0: pytest.approx(m.parameter("Q_sol").value)}}
     d = json.loads(path.read_text())
     d["parameters"]["nope"] = {"value": 1.0}
@@ -80,7 +82,7 @@ def test_per_experiment_values_are_used_per_start(rng):
     i = m.parameter_names.index("Q_sol")
     p0[i], p1[i] = 100.0, 1200.0
     ds = Dataset.concatenate([_cabin3_record(p0, rng, n=150), _cabin3_record(p1, rng, n=150)])
-    ps = ParameterSet(values=m.values, per_experiment={"Q_sol": {0: 100.0, 1: 1200.0}})
+    ps = ParameterValues(model=m, per_experiment={"Q_sol": {0: 100.0, 1: 1200.0}})
     good = validate_model(m, ds, ps, starts=6, horizon=50, warmup=30)
     assert good.metrics["T_cab"]["max_abs"] < 1e-6
     fitted = fitted_parameters(fit_model(m, ds, method="ls"))     # Q_sol kept as declared
@@ -88,6 +90,22 @@ def test_per_experiment_values_are_used_per_start(rng):
     mean = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=30)
     assert mean.metrics["T_cab"]["max_abs"] > 1e-2
     assert any("no fitted value" in n for n in mean.notes)
+
+
+def test_a_fit_of_a_model_declared_without_a_file_keeps_its_declaration(rng):
+    # a model built in Python (a notebook): nothing to load it from by its reference, so
+    # the fit's values, their copies and the validator must use the Model itself
+    m = copy.copy(load("cabin3"))
+    m.name, m.source = "cabin3_notebook", "<notebook>"
+    ds = _cabin3_record(m.values, rng, n=160)
+    res = fit_model(m, ds, method="ls")
+    ps = fitted_parameters(res)
+    assert ps.declaration is m and ps.replace(per_experiment={}).declaration is m
+    val = validate_model(m, ds, ps, starts=4, horizon=40, warmup=30)
+    assert val.metrics["T_cab"]["max_abs"] < 1e-6 and val.settings["params"] == ps.label
+    # pickled (a worker process) without the Model, which holds the user's functions
+    assert pickle.loads(pickle.dumps(res)).declaration is None
+    assert pickle.loads(pickle.dumps(ps)).values == ps.values
 
 
 def test_too_short_a_record_is_one_line(rng):

@@ -10,7 +10,7 @@ from their declared ``initial`` rule or, with ``warmup`` W > 0, from the state f
 first W samples (``acid.ident.validate``'s warm start). ``k=None`` simulates each experiment
 from its first predicted sample. Channels: every state and output the dataset measures, in
 their declared units. ``acid.analysis.predict/compare/resid`` route here when given a
-``DeclaredFitResult``, a ``ParameterSet`` or a declared parameter file.
+``DeclaredFitResult``, ``ParameterValues`` or a declared parameter file.
 """
 
 from __future__ import annotations
@@ -32,26 +32,25 @@ from acid.ident.data import ModelData
 from acid.ident.fit import DeclaredFitResult
 from acid.ident.oe import simulate_windows
 from acid.ident.validate import (
-    ParameterSet,
     _parameters_at,
     _warm_start,
     declared_parameters,
     fitted_parameters,
+    read_parameters,
 )
 from acid.models.declaration import Model
-from acid.models.loader import BUILT_IN, load
-from acid.models.values import declaration
+from acid.models.loader import load
+from acid.models.values import ParameterValues
 
 __all__ = ["compare_models", "predict_model", "resid_model", "resolve"]
 
 
-def resolve(params, model: Model | str | None = None) -> tuple[Model, ParameterSet, str]:
-    """(model, parameter set, label) of ``params``: values of any declaration
-    (``ModelParams``, ``EconParams``...), a ``DeclaredFitResult``, a parameter file, a
-    ``ParameterSet`` or ``(model, ParameterSet)``; ``model`` (a ``Model``, built-in name or
-    file) overrides the one the parameters name. ``params=None``: the model's declared
-    values, or the paper's preset without a model (as ``"paper"``)."""
-    from acid.models.values import ParameterValues
+def resolve(params, model: Model | str | None = None) -> tuple[Model, ParameterValues, str]:
+    """(model, values, label) of ``params``: ``ParameterValues`` of any declaration
+    (``ModelParams``, ``EconParams``...), a ``DeclaredFitResult``, a parameter file or
+    ``(model, values)``; ``model`` (a ``Model``, built-in name or file) overrides the one the
+    parameters name. ``params=None``: the model's declared values, or the paper's preset
+    without a model (as ``"paper"``)."""
     from acid.params import paper
 
     if isinstance(params, tuple):
@@ -60,27 +59,20 @@ def resolve(params, model: Model | str | None = None) -> tuple[Model, ParameterS
         params = paper()
     if isinstance(getattr(params, "params", None), ParameterValues):
         params = params.params   # a stage's fit (EconFit)
-    if isinstance(params, ParameterValues):
-        m = load(model) if model is not None else params.declaration
-        ps = params.parameter_set()
-        return m, ps, ps.label
     if isinstance(params, DeclaredFitResult):
-        m = load(model) if model is not None else declaration(
-            params.model if params.model in BUILT_IN and Path(params.model_source).stem ==
-            params.model else params.model_source)
-        return m, fitted_parameters(params), f"{m.name} (fit-{params.method})"
+        pv = fitted_parameters(params)
+        m = pv.declaration if model is None else load(model)
+        return m, pv, f"{m.name} (fit-{params.method})"
     if isinstance(params, (str, Path)):
-        pv = ParameterValues.from_json(params, model=None if model is None else load(model))
-        m = pv.declaration
-        return m, pv.parameter_set(source=str(params)), f"{m.name} ({Path(params).name})"
-    if model is None:
-        raise ConfigError("a declared model's parameters need their model (pass model=)")
-    m = load(model)
-    ps = declared_parameters(m) if params is None else params
-    if not isinstance(ps, ParameterSet):
-        raise ConfigError(f"parameters of model {m.name!r}: expected a fit result, a "
-                          f"parameter file or a ParameterSet, got {type(ps).__name__}")
-    return m, ps, ps.label or f"{m.name} ({ps.source})"
+        pv = read_parameters(None if model is None else load(model), params)
+        return pv.declaration, pv, f"{pv.declaration.name} ({Path(params).name})"
+    if params is None:
+        params = declared_parameters(load(model))
+    if not isinstance(params, ParameterValues):
+        raise ConfigError(f"expected a fit result, a parameter file or ParameterValues, got "
+                          f"{type(params).__name__}")
+    m = params.declaration if model is None else load(model)
+    return m, params, params.name if params.source is None else f"{m.name} ({params.source})"
 
 
 def _state_track(model: Model, data: ModelData, P: np.ndarray, first: np.ndarray,

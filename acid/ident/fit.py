@@ -126,6 +126,11 @@ class DeclaredFitResult:
     #: state are left out)
     one_step_fit: dict = field(default_factory=dict)
     loss: str = "squared"
+    #: the ``Model`` fitted (``fitted_parameters`` binds the values to it)
+    declaration: Model | None = field(default=None, repr=False, compare=False)
+
+    def __getstate__(self):   # pickled without the Model (it holds the user's functions)
+        return {k: v for k, v in self.__dict__.items() if k != "declaration"}
 
     def value(self, name: str, experiment: int | None = None) -> float:
         """The fitted value of ``name``; a per-experiment one of the experiment index
@@ -429,7 +434,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     return DeclaredFitResult(
         simulation_fit=simulation_fit(model, data, P_fit, oe_window),
         one_step_fit=one_step_fit(model, data, forms, P_fit),
-        loss=loss, model=model.name, model_source=model.source, method=method,
+        loss=loss, model=model.name, model_source=model.source, method=method, declaration=model,
         estimates=tuple(estimates), equations=tuple(reports.values()), values=values,
         per_experiment=per_experiment, experiment_ids=data.experiment_ids,
         covariance=cov, covariance_names=tuple(c.label for c in columns),

@@ -412,7 +412,7 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
                if res.innovations.size else math.nan,
                "condition": res.condition, "n_parameters": len(columns)}
     return DeclaredFitResult(
-        model=model.name, model_source=model.source, method="pem",
+        model=model.name, model_source=model.source, method="pem", declaration=model,
         estimates=tuple(estimates), equations=(), values=values, per_experiment=per,
         experiment_ids=data.experiment_ids, covariance=res.cov,
         covariance_names=tuple(c.label for c in columns), covariance_kind="hessian",

@@ -245,7 +245,7 @@ def fit_stages(model: Model | str, ds: Dataset, stages, *, covariance: str = "ha
         p.name, p.unit, p.value, p.value, math.nan, (math.nan, math.nan), "fixed")
         for p in model.parameters)
     return DeclaredFitResult(
-        model=model.name, model_source=model.source, method="staged",
+        model=model.name, model_source=model.source, method="staged", declaration=model,
         estimates=estimates, equations=tuple(reports.values()), values=values,
         per_experiment={}, experiment_ids=data.experiment_ids, covariance=cov,
         covariance_names=tuple(cov_names), covariance_kind=covariance,

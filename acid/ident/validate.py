@@ -11,7 +11,8 @@ This is acid's one validator: the paper's Figs. 5-6 (60 starts x 300 steps, T_in
 T_shell held), the econ model beside it, and any declared model. Every statistic is a
 k-step prediction error, k = 1 .. horizon (the start sample, where measured states are
 exact by construction, is not scored). ``validate(ds, params)`` takes ``ModelParams``,
-``EconParams``, a fit or a ``ParameterSet`` and finds the declaration from them.
+``EconParams`` (any ``acid.models.values.ParameterValues``) or a fit and finds the
+declaration from them.
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ from acid.ident.data import ModelData
 from acid.ident.oe import simulate_windows
 from acid.metrics import fit_percent, max_abs_error, rmse
 from acid.models.declaration import Model
-from acid.models.loader import load
+from acid.models.loader import BUILT_IN, load
+from acid.models.values import ParameterValues
 
 PLACEMENTS = ("even", "random")
 #: What the disturbances do over a prediction: held at the start value, or measured.
@@ -52,52 +54,38 @@ REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
 CONSTANT_TRUTH_STD = 1e-9
 
 
-@dataclass(frozen=True)
-class ParameterSet:
-    """Values for a declared model: the table (np,) and per-experiment values by id."""
-
-    values: np.ndarray
-    per_experiment: dict = field(default_factory=dict)   # {name: {experiment id: value}}
-    source: str = "declared"
-    provenance: dict = field(default_factory=dict)
-    #: how results name these values (default: the model's name and ``source``)
-    label: str | None = None
-    #: the declaration these values belong to (a name ``acid.models.load`` knows), if known
-    model: str | None = None
-
-
-def fitted_parameters(result) -> ParameterSet:
-    """The values of a ``DeclaredFitResult`` (per-experiment ones by experiment id)."""
+def fitted_parameters(result) -> ParameterValues:
+    """The values of a ``DeclaredFitResult`` (per-experiment ones by experiment id), bound
+    to the fit's model (a built-in by name, else its file)."""
     per = {n: dict(zip(result.experiment_ids, map(float, v), strict=True))
            for n, v in result.per_experiment.items()}
-    return ParameterSet(values=np.asarray(result.values, dtype=float), per_experiment=per,
-                        source=f"fit of {result.data_source}")
+    builtin = result.model in BUILT_IN and Path(result.model_source).stem == result.model
+    ref = result.model if builtin else result.model_source
+    return ParameterValues(np.asarray(result.values, dtype=float), per_experiment=per,
+                           model=ref if result.declaration is None else result.declaration,
+                           source=f"fit of {result.data_source}")
 
 
-def parameter_set(params) -> ParameterSet:
-    """``ModelParams``, ``EconParams`` (their ``parameter_set()``), a ``DeclaredFitResult``
-    or a ``ParameterSet`` as a ``ParameterSet`` naming its model."""
-    if isinstance(params, ParameterSet):
+def as_values(params) -> ParameterValues:
+    """``ModelParams``, ``EconParams`` or any ``ParameterValues`` as is; a
+    ``DeclaredFitResult`` as its ``fitted_parameters``."""
+    if isinstance(params, ParameterValues):
         return params
-    if hasattr(params, "parameter_set"):
-        return params.parameter_set()
     if hasattr(params, "experiment_ids"):
-        return dataclasses.replace(fitted_parameters(params), model=params.model)
-    raise DataError(f"expected model parameters (ModelParams, EconParams, a fit or a "
-                    f"ParameterSet), got {type(params).__name__}")
+        return fitted_parameters(params)
+    raise DataError(f"expected model parameters (ParameterValues such as ModelParams or "
+                    f"EconParams, or a fit), got {type(params).__name__}")
 
 
-def declared_parameters(model: Model) -> ParameterSet:
-    return ParameterSet(values=model.values, source="declared values")
+def declared_parameters(model: Model) -> ParameterValues:
+    return ParameterValues(model=model, source="declared values")
 
 
-def read_parameters(model: Model, path: str | Path) -> ParameterSet:
-    """The parameter file ``path`` of ``model`` (``acid.models.values``' one reader: the
+def read_parameters(model: Model | None, path: str | Path) -> ParameterValues:
+    """The parameter file ``path`` of ``model`` (None: the one it names; the one reader: the
     format ``acid fit`` writes and the layouts before it; one-line ``DataError`` when it is
     not one or names parameters the model lacks)."""
-    from acid.models.values import ParameterValues
-
-    return ParameterValues.from_json(path, model=model).parameter_set(source=str(path))
+    return ParameterValues.from_json(path, model=model).replace(source=str(path))
 
 
 @dataclass(frozen=True)
@@ -216,15 +204,15 @@ def window_design_text(d: dict) -> str:
 
 def validate(ds: Dataset, params, *, held_out_fraction: float | None = None,
              exogenous: str = "hold", **kw) -> DeclaredValidation:
-    """``validate_model`` for parameters that name their model (``parameter_set``): on the
+    """``validate_model`` for parameters that name their model (``as_values``): on the
     last ``held_out_fraction`` of ``ds`` (the yardsticks fitted on the part before it),
     every disturbance held at each start (``exogenous="hold"``, the paper's protocol for
     T_int and T_shell) or measured (``"measured"``)."""
     if exogenous not in EXOGENOUS_MODES:
         raise ConfigError(f"--exogenous must be one of {', '.join(EXOGENOUS_MODES)}, got "
                           f"{exogenous!r}")
-    ps = parameter_set(params)
-    model = load(ps.model)
+    ps = as_values(params)
+    model = ps.declaration
     lo = held_out_start(len(ds), held_out_fraction)
     kw.setdefault("estimation", (0, lo) if lo > 0 else None)
     kw.setdefault("start_range", (lo, len(ds)))
@@ -243,7 +231,7 @@ def held_out_start(n: int, fraction: float | None) -> int:
     return int(round(n * (1.0 - f)))
 
 
-def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None = None, *,
+def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: int = 60,
                    placement: str = "even", seed: int = 0,
                    horizons: tuple[int, ...] | None = None, hold: tuple[str, ...] = (),
@@ -271,7 +259,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     if unknown:
         raise ConfigError(f"hold: {unknown[0]!r} is not a disturbance of model "
                           f"{model.name!r}")
-    params = params or declared_parameters(model)
+    params = declared_parameters(model) if params is None else params
     if warm_start not in WARM_STARTS:
         raise ConfigError(f"warm_start must be one of {', '.join(WARM_STARTS)}, got "
                           f"{warm_start!r}")
@@ -375,7 +363,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
     with np.errstate(over="ignore", invalid="ignore"):
         Y = simulate_windows(model, data, idx, x0, P)
     if not np.all(np.isfinite(Y[inside])):
-        raise DataError(f"{ds.source}: the predictions with parameters from {params.source} "
+        raise DataError(f"{ds.source}: the predictions with parameters from {params.label} "
                         "diverge (values beyond the range of floating point): the model is "
                         "unstable")
     meas = np.where(inside[..., None], data.observed()[idx], np.nan)
@@ -407,7 +395,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterSet | None 
                          estimation or (0, len(data0)), inside)
         if estimation is None:
             notes.append("yardsticks fitted on the whole record (in-sample: favoured)")
-    settings = {"params": params.label or params.source, "model": model.name,
+    settings = {"params": params.label, "model": model.name,
                 "params_provenance": params.provenance, "hold": tuple(hold),
                 "sample_range": [int(lo_r), int(hi_r)], "placement": placement,
                 "seed": seed if placement == "random" else None,
@@ -545,9 +533,10 @@ def _default_horizons(H: int) -> tuple[int, ...]:
     return tuple(sorted({1, max(H // 10, 1), max(H // 4, 1), max(H // 2, 1), H}))
 
 
-def _parameters_at(model: Model, data: ModelData, params: ParameterSet, k0, notes) -> np.ndarray:
-    P = np.tile(params.values, (k0.size, 1))
-    names = model.parameter_names
+def _parameters_at(model: Model, data: ModelData, params: ParameterValues, k0, notes) -> np.ndarray:
+    if tuple(params.values) != tuple(model.parameter_names):
+        raise ConfigError(f"{params.label}: parameters of another model than {model.name!r}")
+    P = np.tile(params.theta, (k0.size, 1))
     for i, p in enumerate(model.parameters):
         if not p.per_experiment:
             continue
@@ -558,7 +547,7 @@ def _parameters_at(model: Model, data: ModelData, params: ParameterSet, k0, note
         if not known.all():
             notes.append(f"{p.name}: no fitted value for experiment(s) "
                          f"{sorted(set(ids[~known].tolist()))}; the table value "
-                         f"{params.values[names.index(p.name)]:.6g} {p.unit} is used")
+                         f"{params.values[p.name]:.6g} {p.unit} is used")
     return P
 
 

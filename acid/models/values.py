@@ -61,7 +61,8 @@ class ParameterValues:
     """Values of a declared model (module docstring). ``values``: {name: value} of every
     parameter, in its declared unit; ``constants``: the declared constants given another
     value; ``per_experiment``: {name: {experiment id: value}}; ``stderr``: {name: standard
-    error}; ``info``: {group: what its view keeps beside the values}; ``Ts``: s."""
+    error}; ``info``: {group: what its view keeps beside the values}; ``Ts``: s;
+    ``source``: where they come from when results should say it (a file, a fit)."""
 
     model: str
     values: dict
@@ -72,6 +73,7 @@ class ParameterValues:
     Ts: float
     name: str
     provenance: dict
+    source: str | None
     #: the declaration a binding (``ModelParams``, ``EconParams``) is for
     MODEL: ClassVar[str | None] = None
 
@@ -80,7 +82,8 @@ class ParameterValues:
         BINDINGS.setdefault(cls.MODEL, cls)
 
     def __init__(self, values=None, *, model=None, constants=None, per_experiment=None,
-                 stderr=None, info=None, Ts=None, name=None, provenance=None, **named):
+                 stderr=None, info=None, Ts=None, name=None, provenance=None, source=None,
+                 **named):
         m = declaration(model or self.MODEL)
         names = m.parameter_names
         vals = dict(zip(names, m.values.tolist(), strict=True))
@@ -130,7 +133,8 @@ class ParameterValues:
                        ("constants", {k: float(v) for k, v in consts.items()
                                       if float(v) != declared[k].value}),
                        ("per_experiment", dict(per_experiment or {})), ("info", info),
-                       ("stderr", dict(stderr or {})), ("provenance", dict(provenance or {}))):
+                       ("stderr", dict(stderr or {})), ("provenance", dict(provenance or {})),
+                       ("source", source), ("_declaration", m)):
             object.__setattr__(self, key, v)
 
     def __setattr__(self, key, value):   # frozen, bindings included
@@ -141,7 +145,12 @@ class ParameterValues:
     # ------------------------------------------------------------------ views
     @property
     def declaration(self) -> Model:
-        return declaration(self.model)
+        """The ``Model`` these values were made for (after unpickling: by its reference)."""
+        m = self.__dict__.get("_declaration")
+        return declaration(self.model) if m is None else m
+
+    def __getstate__(self):   # pickled without the Model (it holds the user's functions)
+        return {k: v for k, v in self.__dict__.items() if k != "_declaration"}
 
     def __getattr__(self, key):   # p.gamma1, p.gamma, p.power_map, p.c_p
         d = self.__dict__
@@ -149,7 +158,7 @@ class ParameterValues:
             raise AttributeError(key)
         if key in d["values"]:
             return d["values"][key]
-        m = declaration(d["model"])
+        m = self.declaration
         grp = m.groups.get(key)
         if grp is not None:
             vals = tuple(d["values"][n] for n in grp.names)
@@ -170,6 +179,11 @@ class ParameterValues:
         return hash(self._key())
 
     @property
+    def label(self) -> str:
+        """How results name these values: their ``source``, else their name."""
+        return self.source or self.name
+
+    @property
     def theta(self) -> np.ndarray:
         """Every parameter as one vector, in the declared order."""
         return np.array(list(self.values.values()))
@@ -181,7 +195,7 @@ class ParameterValues:
 
     def replace(self, **changes) -> ParameterValues:
         """A copy with fields, parameters, groups or constants changed by name."""
-        return dataclasses.replace(self, **changes)
+        return dataclasses.replace(self, **{"model": self.declaration, **changes})
 
     def with_theta(self, theta, **changes) -> ParameterValues:
         """A copy with every parameter from the vector ``theta`` (declared order)."""
@@ -218,14 +232,6 @@ class ParameterValues:
         if problems:
             raise DataError(f"{source}: {problems[0]} (--allow-unstable uses them anyway)")
         return self
-
-    def parameter_set(self, source: str | None = None):
-        """These values as the validator's ``acid.ident.validate.ParameterSet``."""
-        from acid.ident.validate import ParameterSet
-
-        return ParameterSet(values=self.theta, per_experiment=self.per_experiment,
-                            source=source or self.name, label=None if source else self.name,
-                            provenance=self.provenance, model=self.declaration.name)
 
     # ------------------------------------------------------------------- I/O
     def to_json_dict(self) -> dict:
