@@ -8,8 +8,8 @@ import json
 
 import pytest
 
-from acid.reproduce import HEATING_YEAR, ReproduceOptions, build_stages, stage_heating
 from acid.report.sections import sections_for
+from acid.reproduce import HEATING_YEAR, ReproduceOptions, build_stages, stage_heating
 from acid.stage_results import HeatingStage, StudyResults
 
 

@@ -24,8 +24,8 @@ Rows have the structure of ``acid.plant.check`` (``CheckRow``; groups):
 (m) the published cold-chamber test of seven EVs [ADAC2022] (-10 degC soak, heat to 20 degC
     at standstill, hold, switch off), on the plant with the i3's coolant heater: cabin after
     40 min inside the cars' range, time to 20 degC not below the fastest car's, the energy of
-    the heat-up as the ADAC counted it (until 20 degC or 40 min), power to hold 20 degC, cabin 5 and 30 min after switching off no warmer than the
-    best-insulated cars'.
+    the heat-up as the ADAC counted it (until 20 degC or 40 min), power to hold 20 degC, cabin
+    5 and 30 min after switching off no warmer than the best-insulated cars'.
 
 References: ``datasets/plant/SOURCES.md``.
 """
@@ -365,6 +365,7 @@ def check_adac() -> tuple[list[CheckRow], dict]:
     reached = i20 is not None and i20 <= i_end
     E20 = float(P[:i20 if reached else i_end].sum() * 5.0 / 3.6e6)
     E_node = float(P[:i20].sum() * 5.0 / 3.6e6) if i20 is not None else math.nan
+    end = "20 degC reached" if reached else f"{T40:.1f} degC at {ADAC_HEATUP_MIN:g} min"
     hold = float(P[60 * 12:].mean() / 1e3)
     q = HeatingPlant(h, cfg, mode="direct")
     q.reset({k: v for k, v in p.measure().items() if k not in ("T_amb", "T_evap")})
@@ -389,8 +390,7 @@ def check_adac() -> tuple[list[CheckRow], dict]:
                     ADAC_E20_KWH[0] <= E20 <= ADAC_E20_KWH[1], "m",
                     f"as the ADAC counted it: until the cabin air (the mean of driver, rear "
                     f"and footwell air) reads 20 degC or {ADAC_HEATUP_MIN:g} min have passed "
-                    f"({'20 degC reached' if reached else f'{T40:.1f} degC at {ADAC_HEATUP_MIN:g} min'}"
-                    f"; {E_node:.2f} kWh until the cabin air reaches 20 degC)"),
+                    f"({end}; {E_node:.2f} kWh until the cabin air reaches 20 degC)"),
            CheckRow("cold chamber: power to hold 20 degC at -10 degC (60-90 min)", hold,
                     f"{ADAC_HOLD_KW[0]:g}-{ADAC_HOLD_KW[1]:g} kW {ref}", "kW",
                     ADAC_HOLD_KW[0] <= hold <= ADAC_HOLD_KW[1], "m")]
