@@ -63,6 +63,9 @@ CYCLES = ("udds", "hwfet")
 #: The smallest heater power commanded, W (below it the heater and its pump stay off).
 P_HEATER_ON = 50.0
 AMBIENTS_C = (-10.0, 0.0, 7.0)
+#: Below the band's lower edge by more than this (K) the NMPC's solve starts from a fresh
+#: guess with the heater at ``COLD_GUESS_HEATER`` (W) (``HeatingNMPC.make_step``).
+COLD_GUESS_K, COLD_GUESS_HEATER = 2.0, 3000.0
 
 
 @dataclass(frozen=True)
@@ -163,7 +166,14 @@ class HeatingNMPC:
         ocp = self.ocp
         d = np.asarray(d_preview, dtype=float).reshape(ocp.N, self.model.nd)
         par = ocp.parameters(self._par.copy(), x0=x, d=d)
-        guess = ocp.guess(x, d, self.theta, np.array([1500.0, 0.0, 0.3]), self._w)
+        # far below the band (a pull-up) the solve starts afresh with the heater on: the
+        # heater core gives nothing while the coolant is colder than the inner condenser's
+        # air (max(0, ...)), so from a plan with the heater off its gradient is zero and the
+        # solver never finds it (found from a -10 degC cold soak: heater never used)
+        cold = x[0] < self.T_lo - COLD_GUESS_K
+        guess = ocp.guess(x, d, self.theta,
+                          np.array([1500.0, COLD_GUESS_HEATER if cold else 0.0, 0.3]),
+                          None if cold else self._w)
         res = self._solver.solve(guess, par, ocp.lbx, ocp.ubx, ocp.lbg, ocp.ubg)
         if res.success:
             self._w = res.x
