@@ -14,6 +14,8 @@ Stages (cached by their inputs, see :mod:`acid.pipeline`):
               (A paper NMPC, B ICM, D/E economic NMPC without/with preview, P/F PI baselines,
               the best known plan)
     plant_check  the high-fidelity plant's credentials against published references
+    heating   winter (issue 25): the heating plant's credentials that need no logs and the
+              whole year at three ambients (acid's own checks, not the paper's)
 
 ``sweep`` and the chain excite -> fit -> (validate, mpc) are independent, so ``--jobs 2``
 runs them side by side. Each stage returns its typed result (:mod:`acid.stage_results`) as
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import platform
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -321,6 +324,42 @@ def stage_plant_check(workdir: Path, inputs: dict, config: dict, progress) -> di
     return PlantCheckStage.of(d).to_json_dict()
 
 
+#: the whole-year points the report's heating section shows: three ambients (heating with
+#: and without the heat pump, and cooling), one cycle, acid's default vehicle
+HEATING_YEAR = {"ambients_C": [-10.0, 5.0, 30.0], "cycles": ["udds"], "vehicles": ["default"]}
+
+
+def stage_heating(workdir: Path, inputs: dict, config: dict, progress) -> dict:
+    """Winter (issue 25): the heating plant's credentials that need no logs (``acid
+    heating-check``) and the whole year at three ambients (``acid year-sweep``), with its
+    figure. acid's own checks; a few seconds of CPU."""
+    from acid.plant.check_heating import heating_check
+    from acid.plant.year import year_sweep
+    from acid.report.year import year_figure
+    from acid.stage_results import HeatingStage, PlantCredential, YearShare
+    from acid.units import K2C
+
+    check = heating_check(None, progress=lambda: progress(1, 3))
+    year = year_sweep(config["ambients_C"], config["cycles"], config["vehicles"],
+                      progress=lambda done, total, _label: progress(2, 3))
+    write_figure_index(workdir, [save_report_figure(
+        year_figure(year), workdir, "year_share",
+        "Winter and summer: the share of range the climate costs against ambient (one pass "
+        "of the cycle from a soak; heat pump and coolant heater alone below the "
+        f"switch-over at {year.switch_C:g} degC, the A/C above)")])
+    progress(3, 3)
+    rows = tuple(PlantCredential(name=r.name, group=r.group, reference=r.reference,
+                                 unit=r.unit, value=math.nan if r.value is None else r.value,
+                                 passed=r.passed, note=r.note, info=r.info)
+                 for r in check.rows if r.passed is not None or r.info)
+    points = tuple(YearShare(T_amb_C=K2C(p.T_amb_K), cycle=p.cycle, vehicle=p.vehicle,
+                             heating=p.heating, E_climate_kWh=p.E_climate_kWh,
+                             E_heater_kWh=p.E_heater_kWh, share=p.share,
+                             T_cab_mean_C=K2C(p.T_cab_mean_K)) for p in year.points)
+    return HeatingStage(passed=all(r.passed is not False for r in rows), checks=rows,
+                        year=points, switch_over_C=year.switch_C).to_json_dict()
+
+
 def build_stages(opts: ReproduceOptions) -> list[Stage]:
     """The stage graph of the reproduction."""
     return [
@@ -347,6 +386,7 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
                           "tail_s": opts.cav_tail_s, "econ_horizon_s": opts.econ_horizon_s,
                           "compiled": opts.econ_compiled}, depends=("fit", "econ")),
         Stage("plant_check", "plant credentials (acid plant-check)", stage_plant_check, {}),
+        Stage("heating", "winter: heating credentials and the year", stage_heating, HEATING_YEAR),
     ]
 
 

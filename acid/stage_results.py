@@ -586,6 +586,34 @@ class PlantCheckStage(StageResult):
                    search_note=str(d.get("search_note") or ""))
 
 
+@dataclass(frozen=True)
+class YearShare(JsonDataclass):
+    """One point of the whole-year sweep (issue 25): the climate's energy over one pass of
+    ``cycle`` from a soak at ``T_amb_C`` and the share of range it costs (0-1)."""
+
+    T_amb_C: float
+    cycle: str
+    vehicle: str
+    heating: str          # "heat pump", "heater only", or "-" (cooling)
+    E_climate_kWh: float
+    E_heater_kWh: float
+    share: float
+    T_cab_mean_C: float
+
+
+@stage_result("heating")
+@dataclass(frozen=True)
+class HeatingStage(StageResult):
+    """Winter (issue 25): the heating plant's credentials that need no logs
+    (``acid heating-check`` without ``--logs``) and the whole-year sweep at a few ambients
+    (``acid year-sweep``). acid's own checks, not the paper's claims."""
+
+    passed: bool
+    checks: tuple[PlantCredential, ...]
+    year: tuple[YearShare, ...] = ()
+    switch_over_C: float = math.nan
+
+
 # ------------------------------------------------------------------------- reading
 @dataclass(frozen=True)
 class StudyResults:
@@ -614,7 +642,7 @@ class StudyResults:
 
 
 __all__ = ["STAGE_RESULTS", "CavComparisonSummary", "CavStudyStage", "ChannelErrors",
-           "EconStage", "EnergyController", "EnergyCycle",
+           "EconStage", "EnergyController", "EnergyCycle", "HeatingStage", "YearShare",
            "ClosedLoopSummary", "Estimate", "ExcitationStage", "FitStage", "JsonDataclass",
            "MpcStage", "PlantCheckStage", "PlantCredential", "StageResult",
            "StudyResults", "SweepStage", "TimingSummary", "ValidationStage", "field_type",

@@ -34,6 +34,10 @@ def heating_control(
                                  help="Common warm-up (production controller, cold soak), s."),
     tail: float = typer.Option(1200.0, "--tail",
                                help="Common continuation measuring the end-state cost, s."),
+    pull_up: float = typer.Option(0.0, "--pull-up",
+                                  help="Pull-up allowance from a cold soak (with --warmup 0), "
+                                       "s: the rule's comfort test looks at the cabin after "
+                                       "it."),
     out: Path = typer.Option(Path("reports/heating-control"), "--out",
                              help="Folder for the figure."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
@@ -53,10 +57,11 @@ def heating_control(
     require_range(horizon, "--horizon", 2, 600, integer=True)
     require_range(warmup, "--warmup", 0.0)
     require_range(tail, "--tail", 0.0)
+    require_range(pull_up, "--pull-up", 0.0, 3600.0, "s")
     png = out / "heating_control.png"
     check_paths(outputs={"--json": json_path, "--out": png})
     out.mkdir(parents=True, exist_ok=True)
-    result = heating_study(cycles, tuple(t_amb), HeatingControlConfig(N=horizon),
+    result = heating_study(cycles, tuple(t_amb), HeatingControlConfig(N=horizon, pull_up_s=pull_up),
                            png_path=png, progress=timed_lines("heating-control"), tail_s=tail,
                            warmup_s=warmup)
     rows = []
@@ -66,12 +71,14 @@ def heating_control(
             rows.append([case["cycle"], f"{case['T_amb_C']:+.0f}", name,
                          f"{r['energy_charged_kWh']:.3f}", f"{r['saving_vs_rule_pct']:+.1f}",
                          f"{r['mean_T_cab_C']:.2f}", f"{100 * r['mean_RH']:.0f}",
-                         f"{r['min_fog_margin_K']:.2f}", str(r["fog_samples"])])
+                         f"{r['min_fog_margin_K']:.2f}", str(r["fog_samples"]),
+                         f"{r['E_hp_kWh']:.3f}", f"{r['E_heater_kWh']:.3f}",
+                         f"{r['defrost_s']:.0f}"])
         say(f"{case['cycle']} {case['T_amb_C']:+.0f} degC: preview's share of the NMPC's "
             f"saving {case['preview_share_pct']:.0f} %")
     print_table("acid heating-control (end state charged back)",
                 ["_cycle", "T_amb", "_controller", "kWh", "vs rule %", "T_cab", "RH %",
-                 "fog margin K", "fogged"], rows)
+                 "fog margin K", "fogged", "HP kWh", "heater kWh", "defrost s"], rows)
     result["acid_version"] = __version__
     write_summary(json_path, result)
     say(f"figure written to {png}")

@@ -699,6 +699,8 @@ CASES: list[Case] = [
          ("--json", "adir")),
     Case("heating-control-ambient-out-of-range", "options",
          ("heating-control", "--t-amb", "40", "--out", "{w}/hc"), ("--t-amb", "40")),
+    Case("heating-control-negative-pull-up", "options",
+         ("heating-control", "--pull-up", "-5", "--out", "{w}/hc"), ("--pull-up", "-5")),
     Case("heating-control-unknown-cycle", "options",
          ("heating-control", "--cycle", "nope", "--out", "{w}/hc"), ("--cycle", "nope")),
     Case("heating-control-json-is-a-folder", "output",

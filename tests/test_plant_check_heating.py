@@ -66,6 +66,13 @@ def test_cold_chamber_against_the_adac_test(result):
     assert rows["cold chamber: cabin 30 min after switching off"].passed
     assert rows["cold chamber: cabin 5 min after switching off"].passed
     assert d["E20_kWh"] > 0.0 and d["t20_min"] > 0.0
+    # the energy as the ADAC counted it: the heat-up ends at 20 degC or after 40 min
+    if d["reached_in_heatup"]:
+        assert d["E20_kWh"] == d["E_to_20_kWh"] and d["t20_min"] <= 40.0
+    else:
+        assert d["t20_min"] > 40.0 and d["T40_C"] < 20.0
+        assert d["E20_kWh"] < d["E_to_20_kWh"]
+    assert rows["cold chamber: electric energy of the heat-up to 20 degC"].passed
 
 
 @needs_logs

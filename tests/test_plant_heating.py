@@ -251,3 +251,20 @@ def test_pump_off_stops_the_heater_core():
     off = p.step(0.08, 0.0, 0.0, P_heater=3000.0, recirc=1.0, pump=False)
     assert off["Q_hc"] == 0.0 and off["P_heater"] == 0.0
     assert p.measure()["T_cool"] < C2K(60.0)  # the loop loses heat, gains none
+
+
+def test_heat_pump_restarts_after_a_defrost_with_the_condenser_colder_than_the_coil():
+    # found on a long drive at -10 degC (acid heating-control, 3 h 15 min on the road): the
+    # defrost warms the outdoor coil to +3.7 degC while fresh air cools the idle inner
+    # condenser to -9.6 degC; the heat pump restarting at full speed must heat, not fail
+    cfg = winter_plant_config(C2K(-10.0))
+    p = HeatingPlant(HeatingConfig(), cfg, mode="direct")
+    for _ in range(240):  # a cold coil first: the cycle's last solution far below 0 degC
+        p.step(0.07, 0.0, 0.0, N_hp=cfg.N_max, P_heater=0.0, recirc=0.0)
+    # the end of a defrost: ice gone, coil warm, condenser cold, compressor stopped
+    p.defrost, p.t_def, p.T_ow, p.T_icw, p.M_fr, p.N = True, 197.5, C2K(3.7), C2K(-9.6), 0.0, 0.0
+    rows = [p.step(0.07, 0.0, 0.0, N_hp=cfg.N_max, P_heater=3000.0, recirc=0.0)
+            for _ in range(12)]
+    assert rows[0]["defrosting"] > 0.0
+    assert all(math.isfinite(r["Q_cond"]) and r["Q_cond"] >= 0.0 for r in rows)
+    assert rows[-1]["Q_cond"] > 1000.0 and rows[-1]["defrosting"] == 0.0

@@ -38,6 +38,7 @@ from acid.stage_results import (
     CavStudyStage,
     EconStage,
     FitStage,
+    HeatingStage,
     MpcStage,
     PlantCheckStage,
     StudyResults,
@@ -418,10 +419,10 @@ validate_registry()
 
 #: The stages whose claims a ``--quick`` run judges: the NMPC checks run the same scenarios,
 #: horizons and criteria as in the full study (only their timing is repeated less), and the
-#: plant check is not shortened at all. Every other stage is shortened (a 300 s sweep, 12
-#: starts x 120 steps, shorter records, warm-ups, tails and horizons), so its claims are
-#: "not judged (quick run)".
-QUICK_RUN_JUDGES: tuple[type, ...] = (MpcStage, PlantCheckStage)
+#: plant check and the heating stage are not shortened at all. Every other stage is
+#: shortened (a 300 s sweep, 12 starts x 120 steps, shorter records, warm-ups, tails and
+#: horizons), so its claims are "not judged (quick run)".
+QUICK_RUN_JUDGES: tuple[type, ...] = (MpcStage, PlantCheckStage, HeatingStage)
 QUICK_RUN_REASON = "--quick shortens this stage; run without --quick to judge it"
 
 

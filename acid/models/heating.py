@@ -16,6 +16,7 @@ through what is logged, with the interior and the shell latent:
 Heat flows (W)::
 
     T_hc    = T_cool + eta_heater P_heater / G_cool     coolant at the heater core
+    G_hc    = G_lo + (G_hi - G_lo) sat((T_cool - T_c0) / dT_w)   the automatic blower
     Q_hc    = G_hc (T_hc - T_cab)                       heater core -> supply air -> cabin
     Q_vent  = G_vent (T_amb - T_cab)                    fresh-air share and infiltration
     Q_int   = UA_int (T_int - T_cab)                    interior surfaces -> cabin air
@@ -28,12 +29,17 @@ Heat flows (W)::
     C_int dT_int/dt     = -Q_int
     C_shell dT_shell/dt = Q_out - Q_shell
 
-and the supply air, an output fitted where the outlets are logged:
-``T_ain = T_cab + eps_sup (T_hc - T_cab)``. ``G_hc`` is the heater core's effectiveness
-times the blower's flow and c_p (the blower level is not logged: held constant), ``eps_sup``
-that effectiveness seen at the outlets (with the duct losses), so ``G_hc / eps_sup`` is the
-blower's W c_p. ``Q_occ`` (occupants and sun, not logged) is a per-trip parameter; a trip the
-fit never saw gets the mean over the fitted trips.
+and the supply air at the outlets (logged), a measured state that follows the heater core's
+air with the lag ``tau_sup`` of the ducts and the outlet sensors:
+``tau_sup dT_ain/dt = T_cab + eps_sup (T_hc - T_cab) - T_ain``. ``G_hc`` is the heater core's
+effectiveness times the blower's flow and c_p, ``eps_sup`` that effectiveness seen at the
+outlets (with the duct losses). The blower is not logged; an automatic unit holds it low until
+the coolant is warm (cold-air prevention, as the heating plant's production controller does:
+``T_coldair``), so ``G_hc`` rises from ``G_lo`` to ``G_hi`` as the coolant goes from ``T_c0``
+to ``T_c0 + dT_w``. (Held constant, the fit could not serve both the warm-up and the hold:
+the coolant fitted at -2 %; a latent blower followed by a filter, or a blower following the
+cabin error, predicted worse: notes/i25-winter.md.) ``Q_occ`` (occupants and sun, not
+logged) is a per-trip parameter; a trip the fit never saw gets the mean over the fitted trips.
 
 Ranges: the cabin ones are ``car_cabin``'s (``acid/models/SOURCES.md``: Fayazbakhsh2013,
 Marcos2014, TorregrosaJaime2015, Wang2018); the heating ones are those of the heating plant's
@@ -44,8 +50,13 @@ cited parameters (``datasets/plant/SOURCES.md``, ``acid.plant.heating_config``):
   channel is unusable); fixed.
 * ``C_cool``: about 2 l of 50 % glycol (3.5 kJ/(kg K) [ASHRAE-F]) with the heater and core
   metal; the logs' first minutes give 8.5-11 kJ/K [Steinstraeter2020]: range 3-40 kJ/K.
-* ``G_hc``: effectiveness 0.4-0.9 [Steinstraeter2020, ChangWang1997] of 0.03-0.15 kg/s of
-  blower air [Wang2018 Table II, Fayazbakhsh2013] at 1.008 kJ/(kg K): 10-160 W/K.
+* ``G_lo``, ``G_hi``: effectiveness 0.4-0.9 [Steinstraeter2020, ChangWang1997] of 0.01-0.15
+  kg/s of blower air (the lowest level to full) [Wang2018 Table II, Fayazbakhsh2013] at 1.008
+  kJ/(kg K): 5-160 W/K.
+* ``T_c0``, ``dT_w``: where the blower leaves its lowest level and how many K of coolant it
+  takes to reach its highest: 0-60 degC and 2-40 K (the heating plant's production
+  controller, an assumption there, uses 30 degC of the warmest source and 15 K).
+* ``tau_sup``: the outlets' lag behind the heater core (ducts, outlet sensors): 5-300 s.
 * ``eps_sup``: the effectiveness at the outlets, 0.2-1 (the logs bound it to 0.4-0.65 while
   holding [Steinstraeter2020]).
 * ``G_vent``: 0-50 % fresh air of that flow plus infiltration of 0-6 air changes per hour
@@ -53,12 +64,13 @@ cited parameters (``datasets/plant/SOURCES.md``, ``acid.plant.heating_config``):
 * ``UA_cool``: insulated hoses, heater and pump to the under-hood air: 0-30 W/K (the plant's
   5 W/K is an assumption; the logs' return line loses about 0.25 K at 0.17 kg/s).
 * ``eta_heater``: 0.98 (resistive/PTC element, electronics' losses), fixed: with ``C_cool``
-  and ``G_hc`` free it is not separable from them.
+  and the blower's ``G_lo``/``G_hi`` free it is not separable from them.
 * ``UA_shell``: the winter shell with its trim (``R_trim``, ``A_glass``): 10-300 W/K.
 * ``Q_occ``: 0-2 occupants (about 100 W each) and winter sun through ~2 m^2 of glazing:
   -300-1500 W [Fayazbakhsh2013, Marcos2014].
 """
 
+import casadi as ca
 import numpy as np
 
 from acid.models import RK4, Model, Parameter, Signal, State
@@ -68,8 +80,14 @@ def _heater_core(s):
     return s.T_cool + s.eta_heater * s.P_heater / s.G_cool
 
 
+def _blower(s):
+    x = ca.fmin(ca.fmax((s.T_cool - s.T_c0) / s.dT_w, 0.0), 1.0)
+    return s.G_lo + (s.G_hi - s.G_lo) * x
+
+
 def ode(s):
-    q_hc = s.G_hc * (_heater_core(s) - s.T_cab)
+    t_hc = _heater_core(s)
+    q_hc = _blower(s) * (t_hc - s.T_cab)
     q_vent = s.G_vent * (s.T_amb - s.T_cab)
     q_int = s.UA_int * (s.T_int - s.T_cab)
     q_shell = s.UA_shell * (s.T_shell - s.T_cab)
@@ -78,13 +96,10 @@ def ode(s):
     return {
         "T_cool": (s.eta_heater * s.P_heater - q_hc - q_loss) / (1e3 * s.C_cool),
         "T_cab": (q_hc + q_vent + q_int + q_shell + s.Q_occ) / (1e3 * s.C_cab),
+        "T_ain": (s.T_cab + s.eps_sup * (t_hc - s.T_cab) - s.T_ain) / s.tau_sup,
         "T_int": -q_int / (1e3 * s.C_int),
         "T_shell": (q_out - q_shell) / (1e3 * s.C_shell),
     }
-
-
-def output(s):
-    return {"T_ain": s.T_cab + s.eps_sup * (_heater_core(s) - s.T_cab)}
 
 
 def _interior_start(m):
@@ -101,6 +116,7 @@ model = Model(
     "heating",
     states=[State("T_cool", "K", description="coolant at the heater inlet (logged)"),
             State("T_cab", "K", description="cabin air (logged)"),
+            State("T_ain", "K", description="supply air: the outlets' mean (logged)"),
             State("T_int", "K", measured=False, initial=_interior_start,
                   description="interior (seats, dashboard, panels), lumped; not logged"),
             State("T_shell", "K", measured=False, initial=_shell_start,
@@ -108,16 +124,24 @@ model = Model(
     inputs=[Signal("P_heater", "W", "coolant heater electric power (logged)")],
     disturbances=[Signal("T_amb", "K", "ambient air (logged)"),
                   Signal("v_veh", "m/s", "vehicle speed (logged)")],
-    outputs=[Signal("T_ain", "K", "supply air: the outlets' mean (logged)")],
     parameters=[
         Parameter("C_cool", "kJ/K", 10.0, 3.0, 40.0, description="coolant loop, heater, core"),
         Parameter("C_cab", "kJ/K", 10.0, 3.0, 40.0, description="cabin air and trims"),
         Parameter("C_int", "kJ/K", 60.0, 20.0, 200.0, description="interior, lumped"),
         Parameter("C_shell", "kJ/K", 80.0, 20.0, 300.0, description="shell and glazing"),
-        Parameter("G_hc", "W/K", 50.0, 10.0, 160.0,
-                  description="heater core -> cabin: effectiveness x blower flow x c_p"),
+        Parameter("G_lo", "W/K", 20.0, 5.0, 160.0,
+                  description="heater core -> cabin, blower at its lowest: effectiveness x "
+                              "flow x c_p"),
+        Parameter("G_hi", "W/K", 90.0, 10.0, 160.0,
+                  description="heater core -> cabin, blower at its highest"),
+        Parameter("T_c0", "K", 293.15, 273.15, 333.15,
+                  description="coolant where the blower leaves its lowest level"),
+        Parameter("dT_w", "K", 15.0, 2.0, 40.0,
+                  description="coolant rise from the lowest to the highest blower level"),
         Parameter("eps_sup", "1", 0.5, 0.2, 1.0,
                   description="heater-core effectiveness seen at the outlets"),
+        Parameter("tau_sup", "s", 30.0, 5.0, 300.0,
+                  description="outlets' lag behind the heater core (ducts, sensors)"),
         Parameter("G_vent", "W/K", 15.0, 0.0, 80.0,
                   description="fresh-air share and infiltration x c_p"),
         Parameter("UA_int", "W/K", 80.0, 10.0, 300.0, description="interior <-> cabin air"),
@@ -135,7 +159,7 @@ model = Model(
         Parameter("Q_occ", "W", 150.0, -300.0, 1500.0, per_experiment=True,
                   description="occupants and sun into the cabin, per trip"),
     ],
-    Ts=5.0, ode=ode, integrator=RK4(substeps=2), output=output,
+    Ts=5.0, ode=ode, integrator=RK4(substeps=2),
     description="cabin heating from logged channels: coolant, cabin air, supply air; latent "
                 "interior and shell",
 )

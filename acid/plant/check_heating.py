@@ -23,9 +23,9 @@ Rows have the structure of ``acid.plant.check`` (``CheckRow``; groups):
     the dew point, fixed full recirculation fogs it;
 (m) the published cold-chamber test of seven EVs [ADAC2022] (-10 degC soak, heat to 20 degC
     at standstill, hold, switch off), on the plant with the i3's coolant heater: cabin after
-    40 min inside the cars' range, time to 20 degC not below the fastest car's, energy to 20
-    degC, power to hold 20 degC, cabin 5 and 30 min after switching off no warmer than the
-    best-insulated cars'.
+    40 min inside the cars' range, time to 20 degC not below the fastest car's, the energy of
+    the heat-up as the ADAC counted it (until 20 degC or 40 min), power to hold 20 degC, cabin
+    5 and 30 min after switching off no warmer than the best-insulated cars'.
 
 References: ``datasets/plant/SOURCES.md``.
 """
@@ -332,7 +332,17 @@ def check_fog() -> list[CheckRow]:
 #: 25 min; Fiat 500e just over 30 min; Renault Zoe, VW e-Up, Tesla Model Y 14 / 10 / 15 degC
 #: after 40 min; 1.5-2.3 kWh to 20 degC; 1.5-2 kW to hold 20 degC; the best insulated (iX,
 #: ID.3) 16 / 15 degC 5 min and 10 / 9 degC 30 min after switching off.
+#:
+#: What the ADAC measured (its report as quoted by krafthand.de): a car counted as heated up
+#: when the air at the driver's seat, on the rear bench and in the footwell all read 20 degC,
+#: the energy is the one "to warm the cabin air on average (im Mittel) to +20 degC", and the
+#: heat-up lasted at most 40 min: the three cars that never reached 20 degC have their
+#: energies too (Zoe 1.8, e-Up 2.0, Model Y 1.6 kWh, with 14 / 10 / 15 degC at 40 min), so
+#: their energy is that of the 40-min heat-up. Here: the plant's cabin air (one well-mixed
+#: node, the mean of those three points), the electric energy from switching on until it
+#: reads 20 degC or 40 min have passed, whichever is first (``ADAC_HEATUP_MIN``).
 ADAC_T_AMB_C, ADAC_SET_C = -10.0, 20.0
+ADAC_HEATUP_MIN = 40.0
 ADAC_T20_FASTEST_MIN = 12.5
 ADAC_T40_SLOWEST_C = 10.0
 ADAC_E20_KWH = (1.5, 2.3)
@@ -351,7 +361,11 @@ def check_adac() -> tuple[list[CheckRow], dict]:
     i20 = int(np.argmax(T >= ADAC_SET_C)) if (T >= ADAC_SET_C).any() else None
     t20 = i20 * 5.0 / 60.0 if i20 is not None else math.nan
     T40 = float(T[40 * 12])
-    E20 = float(P[:i20].sum() * 5.0 / 3.6e6) if i20 is not None else math.nan
+    i_end = int(round(ADAC_HEATUP_MIN * 12))
+    reached = i20 is not None and i20 <= i_end
+    E20 = float(P[:i20 if reached else i_end].sum() * 5.0 / 3.6e6)
+    E_node = float(P[:i20].sum() * 5.0 / 3.6e6) if i20 is not None else math.nan
+    end = "20 degC reached" if reached else f"{T40:.1f} degC at {ADAC_HEATUP_MIN:g} min"
     hold = float(P[60 * 12:].mean() / 1e3)
     q = HeatingPlant(h, cfg, mode="direct")
     q.reset({k: v for k, v in p.measure().items() if k not in ("T_amb", "T_evap")})
@@ -366,13 +380,17 @@ def check_adac() -> tuple[list[CheckRow], dict]:
                     T40 >= ADAC_T40_SLOWEST_C, "m",
                     f"20 degC after {t20:.1f} min (iX 12.5, ID.3/Kona ~25, 500e ~30)"),
            CheckRow("cold chamber: time to 20 degC", t20,
-                    f">= {ADAC_T20_FASTEST_MIN:g} min (fastest: BMW iX) {ref}", "min",
-                    i20 is not None and t20 >= ADAC_T20_FASTEST_MIN, "m"),
-           CheckRow("cold chamber: electric energy to 20 degC", E20,
+                    f">= {ADAC_T20_FASTEST_MIN:g} min (fastest: BMW iX), or not within "
+                    f"{ADAC_HEATUP_MIN:g} min (Zoe, e-Up, Model Y) {ref}", "min",
+                    i20 is not None and t20 >= ADAC_T20_FASTEST_MIN, "m",
+                    "" if reached else f"not reached within the {ADAC_HEATUP_MIN:g}-min "
+                    "heat-up"),
+           CheckRow("cold chamber: electric energy of the heat-up to 20 degC", E20,
                     f"{ADAC_E20_KWH[0]:g}-{ADAC_E20_KWH[1]:g} kWh {ref}", "kWh",
                     ADAC_E20_KWH[0] <= E20 <= ADAC_E20_KWH[1], "m",
-                    "ADAC: until driver, rear and footwell air reach 20 degC; here the cabin "
-                    "air node"),
+                    f"as the ADAC counted it: until the cabin air (the mean of driver, rear "
+                    f"and footwell air) reads 20 degC or {ADAC_HEATUP_MIN:g} min have passed "
+                    f"({end}; {E_node:.2f} kWh until the cabin air reaches 20 degC)"),
            CheckRow("cold chamber: power to hold 20 degC at -10 degC (60-90 min)", hold,
                     f"{ADAC_HOLD_KW[0]:g}-{ADAC_HOLD_KW[1]:g} kW {ref}", "kW",
                     ADAC_HOLD_KW[0] <= hold <= ADAC_HOLD_KW[1], "m")]
@@ -380,8 +398,8 @@ def check_adac() -> tuple[list[CheckRow], dict]:
         out.append(CheckRow(f"cold chamber: cabin {m} min after switching off", T_off[m],
                             f"<= {best:g} degC (best insulated: iX, ID.3) {ref}", "degC",
                             T_off[m] <= best, "m"))
-    return out, {"t20_min": t20, "T40_C": T40, "E20_kWh": E20, "hold_kW": hold,
-                 "T_off_C": T_off}
+    return out, {"t20_min": t20, "T40_C": T40, "E20_kWh": E20, "reached_in_heatup": reached,
+                 "E_to_20_kWh": E_node, "hold_kW": hold, "T_off_C": T_off}
 
 
 def heating_check(logs: Path | None = None, progress: Callable[[], None] | None = None

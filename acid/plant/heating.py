@@ -386,6 +386,7 @@ class HeatingPlant(Plant):
                         N_cmd = cap if cap > c.N_min else c.N_min
             if cut:
                 N_cmd = 0.0
+            restart = N == 0.0
             N = N_cmd + (N - N_cmd) * a_N
             if N < 1.0 and N_cmd == 0.0:
                 N = 0.0
@@ -401,7 +402,15 @@ class HeatingPlant(Plant):
             # ---------------------------------------------------------- heat pump cycle
             Q_def = P_def = 0.0
             if N > 0.0:
-                T_e, T_c, _m, Q_e, Q_c, P_c, _w, _ps, p_c, _it = self._solve(N, T_ow, T_icw,
+                # a restart after a defrost finds the outdoor coil (warmed by the defrost)
+                # warmer than the inner condenser (cooled by the fresh air meanwhile): the
+                # cycle's solver needs a lift, so the condenser side is taken at least 1 K
+                # above the coil for the seconds until the wall warms past it; a restart
+                # solves from the walls, not from the saturation temperatures of the last run
+                T_cw = T_icw if T_icw > T_ow + 1.0 else T_ow + 1.0
+                if restart:
+                    T_e, T_c = T_ow - 3.0, T_cw + 3.0
+                T_e, T_c, _m, Q_e, Q_c, P_c, _w, _ps, p_c, _it = self._solve(N, T_ow, T_cw,
                                                                              T_e, T_c)
                 G_oa0, P_fan = G_oa_on, P_fan_on
             else:

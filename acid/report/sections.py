@@ -271,3 +271,7 @@ def _plant_check(r: PlantCheckStage) -> ReportSection:
         + ((r.search_note,) if r.search_note else ()),
         header=("group", "credential", "reference", "plant", "check", "note"),
         rows=rows)
+
+
+# the heating section (issue 25) registers itself on import (acid/report/heating.py)
+from acid.report import heating as _heating  # noqa: E402, F401
