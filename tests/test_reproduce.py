@@ -26,7 +26,7 @@ FIGURES = ("stages/sweep/fig3_speed_sweep.png", "stages/validate/fig5_prediction
            "stages/mpc/fig10_cav_comparison.png", "stages/econ/fig_econ_errors.png",
            "stages/cav/energy.png", "stages/cav/cav_udds.png", "stages/cav/cav_sc03.png",
            "stages/plant_check/plant_check_energy.png",
-           "stages/plant_check/plant_check_service.png")
+           "stages/plant_check/plant_check_service.png", "stages/heating/year_share.png")
 
 
 @pytest.fixture(scope="module")
