@@ -662,7 +662,8 @@ class NMPC:
             u0 = np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
             lbx[self._iu[0]] = self._u_nlp(u0)
             ubx[self._iu[0]] = self._u_nlp(u0)
-        D = np.column_stack((Ti, Tsh))
+        D = np.empty((N, 2))   # [T_int, T_shell] per stage
+        D[:, 0], D[:, 1] = Ti, Tsh
         Q = (self._Q_default if T_amb is None and eta_cop is None else
              np.column_stack((np.full(N + 1, amb), eta, np.full(N + 1, self.params.c_p))))
         pv = self._ocp.parameters(self._pvec, x0=x, dist=d, d=D, q=Q, bounds={
@@ -721,7 +722,7 @@ class NMPC:
                                        cfg.T_evap_min - T_evap[1:]), 0.0)
         objective = float(P_comp.sum() + P_bl.sum()
                           + cfg.slack_penalty * (s_cab.sum() + s_evap.sum()))
-        return MPCSolution(u=np.array([W[0], Tset[0]]), T_cab=T_cab, T_evap=T_evap,
+        return MPCSolution(u=plan[0].copy(), T_cab=T_cab, T_evap=T_evap,
                            T_ain=T_ain, W_bl=W, T_evap_set=Tset, P_comp=P_comp, P_bl=P_bl,
                            slack_cab=s_cab, slack_evap=s_evap, objective=objective,
                            status=status, success=success, iterations=iterations,
@@ -750,7 +751,7 @@ class NMPC:
         v = np.array([np.ravel(T_int)[0], np.ravel(T_shell)[0]], dtype=float)
         sol, d, x_hat = None, np.zeros(_NX), x
         margin = (0.0, 0.0)
-        measured = bool(np.all(np.isfinite(x)) and np.all(np.isfinite(v)))
+        measured = bool(np.isfinite(x).all() and np.isfinite(v).all())
         if not measured:
             status, ok = f"non-finite measurement (x = {x.tolist()}, v = {v.tolist()})", False
         else:
