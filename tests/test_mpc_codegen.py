@@ -180,6 +180,24 @@ def test_large_sources_are_compiled_at_the_large_level(monkeypatch):
     assert codegen.cflags("x" * 100)[0] == codegen.LARGE_OPT_FLAG == "-O1"
 
 
+def test_a_build_for_the_host_cpu_is_keyed_by_that_cpu(monkeypatch):
+    """-march=native code must not be served to another CPU from a shared cache: the CPU
+    the compiler resolves enters the key; a compiler that resolves none builds generic."""
+    cc = find_compiler()
+    source = "int f(void) { return 0; }\n"
+    cpu = codegen.host_cpu(tuple(cc))
+    if not cpu:
+        pytest.skip(f"{cc[0]} does not resolve -march=native here")
+    assert cpu.startswith("-march=") and "-march=native" not in cpu.split()
+    assert "-march=native" in codegen.cflags(source, cc)
+    key = codegen.build_key(source, cc, [])
+    monkeypatch.setattr(codegen, "host_cpu", lambda cc: "-march=othercpu -mavx2")
+    assert codegen.build_key(source, cc, []) != key
+    monkeypatch.setattr(codegen, "host_cpu", lambda cc: "")
+    assert "-march=native" not in codegen.cflags(source, cc)
+    assert codegen.build_key(source, cc, []) != key
+
+
 def test_a_fatrop_solver_library_names_no_install_path():
     mpc = NMPC(paper(), NMPCConfig(solver="fatrop"))
     assert mpc.backend == "compiled"

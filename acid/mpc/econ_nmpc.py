@@ -138,6 +138,12 @@ ECON_ESTIMATOR = EstimatorConfig(sigma_x=(0.01, 0.01, 0.01, 0.05, 1e-5),
                                  sigma_d0=(1e-2, 1e-3, 1e-3, 5e-2, 1e-5))
 
 
+def _per_interval(value, N: int) -> np.ndarray:
+    """``value`` (a scalar or (N,) values) as (N,) floats (read-only when broadcast)."""
+    a = np.asarray(value, dtype=float)
+    return a if a.shape == (N,) else np.broadcast_to(a, (N,))
+
+
 def _make_solver(nlp: dict, equality, config: EconNMPCConfig, solver: str) -> NLPSolver:
     """The one place the NLP becomes a solver: :class:`acid.mpc.solver.NLPSolver` (generated,
     compiled C when ``config.compiled`` allows and a compiler works, else CasADi; IPOPT
@@ -489,6 +495,13 @@ class EconNMPC:
         self.N = self.config.N
         self._t = np.concatenate(([0.0], np.cumsum(self.config.intervals)))
         self._uniform = len(set(self.config.intervals)) == 1
+        # the power map (a view rebuilt on each attribute access) and, per input, the range
+        # inside which PowerMap.outside has nothing to say (its 2 % margin included)
+        self._power_map = params.power_map
+        self._map_ok = {}
+        for name, (lo, hi) in self._power_map.domain.items():
+            tol = max(0.02 * (hi - lo), 0.05)
+            self._map_ok[name] = (lo - tol, hi + tol)
         self._build()
         self.reset()
 
@@ -504,6 +517,10 @@ class EconNMPC:
         self._s = econ.parameters(p.theta_all)
         self._ns = ocp.ns
         self._stage_values = ocp.stage_values_evaluator(cfg.compiled)
+        self._i_E, self._i_Q_e = ocp.term_names.index("E"), ocp.output_names.index("Q_e")
+        # the steady terminal price's interval weights (mean speed and ambient)
+        self._iv = np.asarray(cfg.intervals, dtype=float)
+        self._iv_sum = self._iv.sum()
         self._solver = _make_solver(ocp.nlp, ocp.equality, cfg, cfg.solver)
         self._fallback_nlp: NLPSolver | None = None
         self._rescue_nlp: NLPSolver | None = None
@@ -628,8 +645,8 @@ class EconNMPC:
             pi = self.price(x0, u, v[0], Ta[0], dist)
             return pi * np.asarray(self._dH(x0, v[-1])).ravel()
         if term == "steady":
-            iv = np.asarray(self.config.intervals)
-            return self._steady(float(iv @ v) / iv.sum(), float(iv @ Ta) / iv.sum(),
+            iv, n = self._iv, self._iv_sum
+            return self._steady(float(iv @ v) / n, float(iv @ Ta) / n,
                                 float(T_cab_min), float(T_cab_max), T_cab_ref=T_cab_ref)
         return np.zeros(_NX)
 
@@ -637,7 +654,7 @@ class EconNMPC:
         """Terminal price pi = dP_comp/dQ_e at the current operating point, W/W (>= 0.05)."""
         out = self._step0(x0, u, [v0, Ta0], dist)
         Q_e = float(out[2])
-        q_lo, q_hi = self.params.power_map.domain.get("Q_e", (Q_e, Q_e))
+        q_lo, q_hi = self._power_map.domain.get("Q_e", (Q_e, Q_e))
         Q_e = float(np.clip(Q_e, max(q_lo, 1.0), q_hi))
         T_ev = 0.5 * (float(x0[3]) + float(np.asarray(out[0]).ravel()[3]))
         return float(max(float(self._dPdQ(Q_e, T_ev, v0, Ta0)), 0.05))
@@ -661,12 +678,10 @@ class EconNMPC:
         """
         cfg, N = self.config, self.N
         x = np.asarray(x, dtype=float).reshape(_NX)
-        v = np.broadcast_to(np.asarray(v_preview, dtype=float), (N,)).copy()
-        Ta = np.broadcast_to(np.asarray(T_amb_preview, dtype=float), (N,)).copy()
-        ub = np.broadcast_to(np.asarray(cfg.T_cab_max if T_cab_max is None else T_cab_max,
-                                        dtype=float), (N,))
-        lb = np.broadcast_to(np.asarray(cfg.T_cab_min if T_cab_min is None else T_cab_min,
-                                        dtype=float), (N,))
+        v = _per_interval(v_preview, N).copy()
+        Ta = _per_interval(T_amb_preview, N).copy()
+        ub = _per_interval(cfg.T_cab_max if T_cab_max is None else T_cab_max, N)
+        lb = _per_interval(cfg.T_cab_min if T_cab_min is None else T_cab_min, N)
         if np.any(lb >= ub):
             raise ConfigError("comfort band is empty: T_cab_min must be below T_cab_max")
         dist = np.zeros(_NX) if dist is None else np.asarray(dist, dtype=float).reshape(_NX)
@@ -685,7 +700,7 @@ class EconNMPC:
                                    d=np.column_stack((v, Ta)), lam=lam, q=ref,
                                    bounds={("T_cab", "hi"): ub, ("T_cab", "lo"): lb})
         lam_g0 = lam_x0 = None
-        if self._lam_prev is not None and len(set(cfg.intervals)) == 1:
+        if self._lam_prev is not None and self._uniform:
             lam_g0, lam_x0 = self._lam_prev
             if cfg.solver == "sqp":   # the multipliers shifted with the plan
                 lam_g0, lam_x0 = lam_g0[self._ocp.shift_g], lam_x0[self._ocp.shift_w]
@@ -723,10 +738,10 @@ class EconNMPC:
         if not np.all(np.isfinite(w)):  # a timeout: report the initial guess's trajectory
             w = self._scaled_guess(x, v, Ta, dist, u_guess)
         Y, terms = (np.asarray(a) for a in self._stage_values(w, par))
-        energy = float(terms[self._ocp.term_names.index("E")].sum())   # not the comfort price
-        Q_e = Y[self._ocp.output_names.index("Q_e")]
+        energy = float(terms[self._i_E].sum())   # not the comfort price
+        Q_e = Y[self._i_Q_e]
         X = w[self._ix] * _X_SCL + _X_OFF
-        Uc = np.clip(w[self._iu] * _U_SCL + _U_OFF, cfg.u_min, cfg.u_max)
+        Uc = np.minimum(np.maximum(w[self._iu] * _U_SCL + _U_OFF, cfg.u_min), cfg.u_max)
         Q_e = np.asarray(Q_e).ravel()
         P_bl = econ.blower_power(self._s, Uc[:, 0])
         T_ev = 0.5 * (X[:-1, 3] + X[1:, 3])
@@ -741,8 +756,21 @@ class EconNMPC:
             solve_time_s=res.solve_time_s)
 
     def _warn_outside(self, **inputs) -> None:
-        """One ExtrapolationWarning per power-map input (per reset) that leaves its data."""
-        for msg in self.params.power_map.outside(**inputs):
+        """One ExtrapolationWarning per power-map input (per reset) that leaves its data.
+
+        Inputs already warned about, and inputs inside their range (the cheap test, each
+        step), are not passed to PowerMap.outside (which formats the messages)."""
+        check = {}
+        for name, vals in inputs.items():
+            ok = self._map_ok.get(name)
+            if ok is None or vals is None or name in self.extrapolation:
+                continue
+            v = np.asarray(vals, dtype=float)
+            if v.size and not (ok[0] <= v.min() and v.max() <= ok[1]):
+                check[name] = v
+        if not check:
+            return
+        for msg in self._power_map.outside(**check):
             name = msg.split(" ")[0]
             if name not in self.extrapolation:
                 self.extrapolation.append(name)
@@ -790,7 +818,7 @@ class EconNMPC:
                 self._plan_age += 1
             else:
                 u = cfg.u_safe.copy()
-        u = np.clip(u, cfg.u_min, cfg.u_max)
+        u = np.minimum(np.maximum(u, cfg.u_min), cfg.u_max)   # np.clip, faster
         self._applied = (u, np.array([v[0], Ta[0]]))
         self.log.disturbance.append(None if dist is None else np.asarray(dist, float).copy())
         self.log.u.append(u)

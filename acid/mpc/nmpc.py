@@ -287,6 +287,10 @@ class NMPCConfig:
         }
 
 
+#: plausible kelvin range as two names (a step's fast test before _check_kelvin's)
+_T_LO, _T_HI = T_PLAUSIBLE_K
+
+
 def _check_kelvin(values, name: str) -> None:
     """Refuse non-finite or implausible temperatures (K) with a one-line message."""
     a = np.asarray(values, dtype=float)
@@ -516,6 +520,14 @@ class NMPC:
         self._u_lo, self._u_hi = cfg.u_min, cfg.u_max
         self._i_T_ain = PAPER_MODEL.output_names.index("T_ain")
         self._i_P = tuple(ocp.term_names.index(n) for n in ("P_comp", "P_bl"))
+        # the stage parameters [T_amb, eta_cop, c_p] of a step given neither T_amb nor
+        # eta_cop (the paper's case): the same every step, so built (and read-only) once
+        eta = self._preview(self.params.eta_cop, N + 1, "eta_cop")
+        self._eta_default = eta.copy()
+        self._Q_default = np.column_stack((np.full(N + 1, cfg.T_amb), eta,
+                                           np.full(N + 1, self.params.c_p)))
+        self._eta_default.setflags(write=False)
+        self._Q_default.setflags(write=False)
 
     def _fallback_solver(self) -> NLPSolver | None:
         """The solver of ``config.fallback_solver`` (None when there is none), built at its
@@ -638,8 +650,8 @@ class NMPC:
         Ti = self._preview(T_int, N, "T_int")
         Tsh = self._preview(T_shell, N, "T_shell")
         amb = cfg.T_amb if T_amb is None else float(T_amb)
-        eta = self._preview(self.params.eta_cop if eta_cop is None else eta_cop, N + 1,
-                            "eta_cop")
+        eta = (self._eta_default if eta_cop is None
+               else self._preview(eta_cop, N + 1, "eta_cop"))
         d = np.zeros(_NX) if disturbance is None else np.asarray(disturbance, float)
         self._check_inputs(x, ub, lb, Ti, Tsh, amb, eta, d)
         lbx, ubx = self._lbx0, self._ubx0
@@ -650,8 +662,10 @@ class NMPC:
             u0 = np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
             lbx[self._iu[0]] = self._u_nlp(u0)
             ubx[self._iu[0]] = self._u_nlp(u0)
-        D = np.column_stack((Ti, Tsh))
-        Q = np.column_stack((np.full(N + 1, amb), eta, np.full(N + 1, self.params.c_p)))
+        D = np.empty((N, 2))   # [T_int, T_shell] per stage
+        D[:, 0], D[:, 1] = Ti, Tsh
+        Q = (self._Q_default if T_amb is None and eta_cop is None else
+             np.column_stack((np.full(N + 1, amb), eta, np.full(N + 1, self.params.c_p))))
         pv = self._ocp.parameters(self._pvec, x0=x, dist=d, d=D, q=Q, bounds={
             ("T_cab", "hi"): ub[1:], ("T_cab", "lo"): lb[1:]})
         w0 = self._initial_guess(x, D, Q, u_prev, d)
@@ -708,7 +722,7 @@ class NMPC:
                                        cfg.T_evap_min - T_evap[1:]), 0.0)
         objective = float(P_comp.sum() + P_bl.sum()
                           + cfg.slack_penalty * (s_cab.sum() + s_evap.sum()))
-        return MPCSolution(u=np.array([W[0], Tset[0]]), T_cab=T_cab, T_evap=T_evap,
+        return MPCSolution(u=plan[0].copy(), T_cab=T_cab, T_evap=T_evap,
                            T_ain=T_ain, W_bl=W, T_evap_set=Tset, P_comp=P_comp, P_bl=P_bl,
                            slack_cab=s_cab, slack_evap=s_evap, objective=objective,
                            status=status, success=success, iterations=iterations,
@@ -737,11 +751,12 @@ class NMPC:
         v = np.array([np.ravel(T_int)[0], np.ravel(T_shell)[0]], dtype=float)
         sol, d, x_hat = None, np.zeros(_NX), x
         margin = (0.0, 0.0)
-        measured = bool(np.all(np.isfinite(x)) and np.all(np.isfinite(v)))
+        measured = bool(np.isfinite(x).all() and np.isfinite(v).all())
         if not measured:
             status, ok = f"non-finite measurement (x = {x.tolist()}, v = {v.tolist()})", False
         else:
-            _check_kelvin(x, "state x = [T_cab, T_evap]")
+            if not (_T_LO <= x.min() and x.max() <= _T_HI):  # x is finite here
+                _check_kelvin(x, "state x = [T_cab, T_evap]")
             if self.estimator is not None:
                 u_v = self._applied if self._applied is not None else (None, None)
                 x_hat, d = self.estimator.update(x, *u_v)
