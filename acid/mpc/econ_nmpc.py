@@ -56,9 +56,9 @@ with zero multipliers. The failures are not NaNs: the exact Hessian is indefinit
 QPs are nonconvex and qrqp cycles on a bound or the steps jump between bounds; measured on
 a UDDS replay on an identified model (274 states), 28 of 274 solves went to IPOPT before
 the rescue, none after (8 rescued), every first move within 7.1e-6 of IPOPT's at 1e-10
-(``notes/i22-solver.md``). Measured (``benchmarks/bench_compile.py``, 100 UDDS states x 2, interleaved,
-load 20 on 2 cores): 15.8 ms per step against fatrop's 42.2 ms as generated C; inside
-CasADi 30.7 ms against 128.8 ms; moves within 1e-6 of IPOPT's at 1e-10
+(``notes/i22-solver.md``). Measured (``benchmarks/bench_econ_nmpc.py``, the same replay,
+quiet 2-core machine): median step 1.93-2.04 ms as generated C against IPOPT's 38-42 ms;
+compiled and CasADi moves identical; moves within 1e-6 of IPOPT's at 1e-10
 (``tests/test_econ_nmpc.py``). ``stage_functions=True`` (default) builds the NLP from one
 function per stage called over the horizon: 18 CPU-s of compiling against 42 (SQP) or 53
 (fatrop) inlined, steps as fast. ``solver="fatrop"`` (the previous default) or ``"ipopt"``
