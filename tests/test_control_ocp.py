@@ -149,3 +149,41 @@ def test_the_trajectory_as_generated_c_equals_casadis():
     for a, b in zip(fast(*args), slow(*args), strict=True):
         assert a.shape == b.shape
         np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-9)
+
+
+def test_stage_functions_are_differentiated_only_by_the_decision_variables(econ_truth):
+    """The stage function leaves its parameters out of its derivatives (``is_diff_in``):
+    the NLP's constraint Jacobian and Lagrangian Hessian must still equal those of the
+    inlined form (CasADi SX, which knows nothing of it) at a point on the model's
+    trajectory; and no derivative is taken by a parameter."""
+    from acid.models.econ import model as econ_model
+    from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, ocp_spec
+
+    cfg = EconNMPCConfig(compiled=False, solver="ipopt", comfort_weight=30.0)
+    mpc = EconNMPC(econ_truth, cfg)
+    x0 = np.array([299.0, 301.0, 306.0, 281.0, 0.009])
+    v, Ta = np.linspace(5.0, 15.0, cfg.N), np.full(cfg.N, 306.0)
+    w = mpc._scaled_guess(x0, v, Ta, np.zeros(5), cfg.u_safe)
+    lam = np.full(5, 0.3)
+    p = mpc._ocp.parameters(mpc._pvec.copy(), x0=x0, dist=np.zeros(5),
+                            d=np.column_stack((v, Ta)), lam=lam,
+                            q=np.full((cfg.N, 1), 297.15),
+                            bounds={("T_cab", "hi"): np.full(cfg.N, cfg.T_cab_max),
+                                    ("T_cab", "lo"): np.full(cfg.N, cfg.T_cab_min)})
+    rng = np.random.default_rng(3)
+    derivatives = {}
+    for stage_functions in (True, False):
+        nlp = OCP(econ_model, ocp_spec(cfg.replace(stage_functions=stage_functions))).nlp
+        assert nlp["p"].shape[0] == p.size
+        lam_g = rng.standard_normal(nlp["g"].shape[0])
+        rng = np.random.default_rng(3)   # the same multipliers for both forms
+        L = nlp["f"] + ca.dot(ca.DM(lam_g), nlp["g"])
+        H = ca.Function("H", [nlp["x"], nlp["p"]], [ca.hessian(L, nlp["x"])[0]])
+        J = ca.Function("J", [nlp["x"], nlp["p"]], [ca.jacobian(nlp["g"], nlp["x"])])
+        derivatives[stage_functions] = [np.asarray(ca.densify(F(w, p))) for F in (H, J)]
+        assert np.all(np.isfinite(derivatives[stage_functions][0]))
+    for a, b in zip(derivatives[True], derivatives[False], strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9 * np.abs(b).max())
+    F = mpc._ocp._stage_function(cfg.intervals[0], False)
+    # inputs: x, u, s, d, theta, dist, q, qN, lim, xn
+    assert [F.is_diff_in(i) for i in range(F.n_in())] == [True] * 3 + [False] * 6 + [True]

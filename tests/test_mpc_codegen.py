@@ -178,6 +178,11 @@ def test_large_sources_are_compiled_at_the_large_level(monkeypatch):
     monkeypatch.setattr(codegen, "LARGE_SOURCE", 100)
     assert codegen.cflags("x" * 99)[0] == codegen.OPT_FLAG
     assert codegen.cflags("x" * 100)[0] == codegen.LARGE_OPT_FLAG == "-O1"
+    # a function called on every control step is built at the small sources' level, and
+    # that build has a key of its own
+    assert codegen.cflags("x" * 100, hot=True)[0] == codegen.OPT_FLAG
+    cc = find_compiler()
+    assert codegen.build_key("x" * 100, cc, [], hot=True) != codegen.build_key("x" * 100, cc, [])
 
 
 def test_a_build_for_the_host_cpu_is_keyed_by_that_cpu(monkeypatch):

@@ -49,6 +49,13 @@ from acid.control.layout import BlockVector
 from acid.errors import ConfigError
 from acid.models.declaration import Model
 
+#: the stage function's inputs that are decision variables (states, inputs, slacks, next
+#: state): the only ones it is differentiated by (CasADi ``is_diff_in``); previews,
+#: parameters, disturbances and limits are NLP parameters, and leaving their seeds out of
+#: the derivative functions makes the Lagrangian's Hessian and the constraint Jacobian
+#: (most of an SQP step) cheaper
+_DECISION_INPUTS = frozenset({"x", "u", "s", "xn"})
+
 
 @dataclass(frozen=True)
 class SoftBound:
@@ -317,10 +324,10 @@ class OCP:
         key = (dt, last)
         if key not in self._stage_fns:
             m, nq = self.model, len(self.spec.stage_parameters)
-            ins = [ca.SX.sym(n, k) for n, k in (
-                ("x", m.nx), ("u", m.nu), ("s", self.ns), ("d", m.nd), ("theta", m.np),
-                ("dist", self.ntarget), ("q", nq), ("qN", nq), ("lim", self.ns),
-                ("xn", m.nx))]
+            names = ("x", "u", "s", "d", "theta", "dist", "q", "qN", "lim", "xn")
+            ins = [ca.SX.sym(n, k) for n, k in zip(names, (
+                m.nx, m.nu, self.ns, m.nd, m.np, self.ntarget, nq, nq, self.ns, m.nx),
+                strict=True)]
             X = ca.DM(self.x_offset) + ca.DM(self.x_scale) * ins[0]
             U = ca.DM(self.u_offset) + ins[1] / ca.DM(self.u_scale)
             r = self._stage(X, U, ins[2], ins[3], ins[4], ins[5], ins[6], ins[7], ins[8],
@@ -331,7 +338,8 @@ class OCP:
             self._stage_fns[key] = ca.Function(
                 f"ocp_stage_{len(self._stage_fns)}", ins,
                 [r["dyn"], ca.vertcat(*r["bounds"]), r["cost"], r["y"],
-                 ca.vertcat(*r["terms"].values(), *r["terms_N"].values())], {"cse": True})
+                 ca.vertcat(*r["terms"].values(), *r["terms_N"].values())],
+                {"cse": True, "is_diff_in": [n in _DECISION_INPUTS for n in names]})
             self._stage_terms = (tuple(r["terms"]), tuple(r["terms_N"]))
         return self._stage_fns[key]
 

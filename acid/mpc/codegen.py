@@ -108,10 +108,12 @@ LOCK_WAIT_S = 1800.0
 VERIFY_WALL_S = 300.0
 
 
-def cflags(source: str = "", cc: list[str] | None = None) -> tuple[str, ...]:
-    """The compiler flags of a build of ``source`` (see :data:`LARGE_OPT_FLAG`) by the
+def cflags(source: str = "", cc: list[str] | None = None, hot: bool = False
+           ) -> tuple[str, ...]:
+    """The compiler flags of a build of ``source`` (see :data:`LARGE_OPT_FLAG`; ``hot``: a
+    function called on every control step, :data:`OPT_FLAG` whatever its size) by the
     compiler ``cc`` (:data:`HOST_CFLAGS` when it resolves them for this CPU)."""
-    large = LARGE_OPT_FLAG is not None and len(source) >= LARGE_SOURCE
+    large = not hot and LARGE_OPT_FLAG is not None and len(source) >= LARGE_SOURCE
     host = HOST_CFLAGS if cc is not None and host_cpu(tuple(cc)) else ()
     return (LARGE_OPT_FLAG if large else OPT_FLAG, *host, *BASE_CFLAGS)
 
@@ -263,12 +265,12 @@ def host_cpu(cc: tuple[str, ...]) -> str:
     return ""
 
 
-def build_key(source: str, cc: list[str], libs: list[str]) -> str:
+def build_key(source: str, cc: list[str], libs: list[str], hot: bool = False) -> str:
     """Cache key: SHA-256 of the source, the CasADi version, the compiler's identity, the
     flags, the host CPU they target (:func:`host_cpu`) and the linked solver libraries (by
     name: no install path enters it)."""
     h = hashlib.sha256()
-    flags = cflags(source, cc)
+    flags = cflags(source, cc, hot)
     cpu = host_cpu(tuple(cc)) if HOST_CFLAGS[0] in flags else ""
     for part in (source, ca.__version__, _compiler_identity(tuple(cc)), " ".join(flags), cpu,
                  " ".join(libs)):
@@ -495,14 +497,15 @@ def run_compiler(cmd: list[str], wall_s: float = COMPILE_WALL_S) -> tuple[int, s
     return proc.returncode, out, cpu
 
 
-def _compile(source: str, cc: list[str], flags: list[str], lib: Path) -> float:
+def _compile(source: str, cc: list[str], flags: list[str], lib: Path, hot: bool = False
+             ) -> float:
     """Compile ``source`` into ``lib`` atomically (temporary name, then rename); returns
     the compiler's CPU seconds."""
     with tempfile.TemporaryDirectory(prefix="acid-cg-") as tmp:
         src = Path(tmp) / f"{lib.stem}.c"
         src.write_text(source)
         with atomic_path(lib) as out:
-            cmd = [*cc, *cflags(source, cc), str(src), "-o", str(out), *flags, "-lm"]
+            cmd = [*cc, *cflags(source, cc, hot), str(src), "-o", str(out), *flags, "-lm"]
             code, text, cpu = run_compiler(cmd)
             if code != 0 or not out.is_file() or out.stat().st_size == 0:
                 msg = text.strip().splitlines()
@@ -516,7 +519,7 @@ def _compile(source: str, cc: list[str], flags: list[str], lib: Path) -> float:
 
 
 def compiled_library(fn: ca.Function, name: str | None = None, cc: list[str] | None = None,
-                     directory: Path | None = None) -> tuple[Path, dict]:
+                     directory: Path | None = None, hot: bool = False) -> tuple[Path, dict]:
     """The compiled shared library of ``fn`` from the cache, building it when needed.
 
     Returns (library path, build info: key, compiler, wall and CPU seconds spent compiling
@@ -529,17 +532,18 @@ def compiled_library(fn: ca.Function, name: str | None = None, cc: list[str] | N
     name = name or fn.name()
     source = generate_source(fn, name)
     libs = runtime_libraries(source)
-    key = build_key(source, cc, libs)
+    key = build_key(source, cc, libs, hot)
     folder = Path(directory) if directory is not None else cache_dir()
     try:
-        return _cached_build(fn, name, source, cc, libs, key, folder)
+        return _cached_build(fn, name, source, cc, libs, key, folder, hot)
     except CodegenError:
         raise
     except (OSError, AcidError) as exc:  # the folder, a file in its place, the lock ...
         raise _cache_fault(folder, exc) from None
 
 
-def _cached_build(fn, name, source, cc, libs, key, folder: Path) -> tuple[Path, dict]:
+def _cached_build(fn, name, source, cc, libs, key, folder: Path, hot: bool = False
+                  ) -> tuple[Path, dict]:
     lib = folder / f"{name}-{key}.so"
     manifest = folder / f"{name}-{key}.json"
     info = {"key": key, "compiler": _compiler_identity(tuple(cc)), "compile_s": 0.0,
@@ -566,7 +570,7 @@ def _cached_build(fn, name, source, cc, libs, key, folder: Path) -> tuple[Path, 
                 with contextlib.suppress(FileNotFoundError):
                     f.unlink()
         t0 = time.perf_counter()
-        info["compile_cpu_s"] = _compile(source, cc, link_flags(libs), lib)
+        info["compile_cpu_s"] = _compile(source, cc, link_flags(libs), lib, hot)
         info["compile_s"] = time.perf_counter() - t0
         data = lib.read_bytes()
         bad = elf_problem(data) or load_in_child(lib, name, libs, fn.n_in())
@@ -576,7 +580,7 @@ def _cached_build(fn, name, source, cc, libs, key, folder: Path) -> tuple[Path, 
             raise CodegenError(f"the freshly compiled {lib.name} is not usable ({bad})")
         meta = {"name": name, "sha256": _sha256(data), "verified": _sha256(data),
                 "casadi": ca.__version__, "compiler": info["compiler"],
-                "flags": [*cflags(source, cc), *(f"-l{n}" for n in libs)],
+                "flags": [*cflags(source, cc, hot), *(f"-l{n}" for n in libs)],
                 "created": time.strftime("%Y-%m-%dT%H:%M:%S"),
                 "source_bytes": len(source), "compile_cpu_s": info["compile_cpu_s"],
                 "compile_wall_s": info["compile_s"]}
@@ -688,15 +692,17 @@ class CompiledFunction:
 
 
 def compile_function(fn: ca.Function, name: str | None = None, cc: list[str] | None = None,
-                     directory: Path | None = None) -> tuple[CompiledFunction, dict]:
+                     directory: Path | None = None, hot: bool = False
+                     ) -> tuple[CompiledFunction, dict]:
     """``fn`` as generated, compiled (or cached), verified and loaded C; see the module
-    docstring.
+    docstring. ``hot``: a function called on every control step (the economic NMPC's SQP),
+    built at :data:`OPT_FLAG` whatever its size (:func:`cflags`).
 
     Returns (CompiledFunction, build info). Raises :class:`CodegenError` with a one-line
     reason when anything fails; a corrupted cache entry is rebuilt once (reported in
     ``info["repaired"]``), and a library that verifies but does not load is rebuilt once.
     """
-    lib, info = compiled_library(fn, name, cc, directory)
+    lib, info = compiled_library(fn, name, cc, directory, hot)
     preload_libraries(info["libraries"])
     try:
         return CompiledFunction(fn, lib, name), info
@@ -708,6 +714,6 @@ def compile_function(fn: ca.Function, name: str | None = None, cc: list[str] | N
                     f.unlink()
         except OSError as exc:
             raise _cache_fault(lib.parent, exc) from None
-        lib, info2 = compiled_library(fn, name, cc, directory)
+        lib, info2 = compiled_library(fn, name, cc, directory, hot)
         info2["repaired"] = f"cache entry {lib.name} did not load ({first}); rebuilt"
         return CompiledFunction(fn, lib, name), info2

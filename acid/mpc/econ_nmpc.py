@@ -177,7 +177,8 @@ def _make_solver(nlp: dict, equality, config: EconNMPCConfig, solver: str) -> NL
     return NLPSolver(f"acid_econ_nmpc{'' if solver == 'fatrop' else '_' + solver}", nlp,
                      plugin, opts, compiled=config.compiled,
                      verify=SQP_ACCEPT if solver in ("sqp", SQP_RESCUE) else None,
-                     timeout_s=config.max_solve_s, kkt_name="acid_econ_nmpc_kkt")
+                     timeout_s=config.max_solve_s, kkt_name="acid_econ_nmpc_kkt",
+                     hot=solver == "sqp")
 
 
 @dataclass(frozen=True)

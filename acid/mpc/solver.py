@@ -192,6 +192,9 @@ class NLPSolver:
         caller's thread). Only for a run that must keep a real-time budget (an ECU-like
         run): a cap makes results depend on the machine's load, so offline studies, tests
         and sweeps never set one.
+    hot : the solver runs on every control step: its C is built at the optimisation level
+        of small sources whatever its size (:func:`acid.mpc.codegen.cflags`); a rescue
+        that runs on a few steps keeps the cheaper build.
 
     Attributes
     ----------
@@ -202,8 +205,10 @@ class NLPSolver:
 
     def __init__(self, name: str, nlp: dict, plugin: str, options: dict,
                  compiled: bool | str = "auto", verify: tuple[float, float] | None = None,
-                 timeout_s: float | None = None, kkt_name: str | None = None):
+                 timeout_s: float | None = None, kkt_name: str | None = None,
+                 hot: bool = False):
         self.name = name
+        self.hot = hot
         self.kkt_name = kkt_name or f"{name}_kkt"
         self.verify = verify
         self.plugin = plugin
@@ -234,7 +239,7 @@ class NLPSolver:
             # the generated solver reports failure through its return code
             gen = ca.nlpsol(self.name, self.plugin, self._nlp,
                             dict(self._options, error_on_fail=True))
-            self._compiled, info = compile_function(gen)
+            self._compiled, info = compile_function(gen, hot=self.hot)
         except CodegenError as exc:
             self.build_info = {"reason": str(exc)}
             _notice_once(f"{self.plugin}:{exc}",
