@@ -74,7 +74,9 @@ from acid.errors import AcidError
 #: all). Measured on the economic NMPC's solver (6.8 MB of C, ``benchmarks/bench_compile.py``,
 #: both levels in one run on a loaded 2-core machine): -O1 compiles in 0.56x the CPU seconds
 #: of -O2 (56 against 100) for steps 2.1 % slower and identical moves, so -O1 is better
-#: end to end below about 10^5 steps per build
+#: end to end below about 10^5 steps per build. A function called on every control step
+#: (``hot``, the economic NMPC's SQP: 1.4 MB of C, 10 CPU-s at -O2 against 5.6 at -O1, steps
+#: 6 % faster) is built at OPT_FLAG whatever its size.
 LARGE_OPT_FLAG: str | None = "-O1"
 #: optimisation level of the other (small, seconds to compile) sources
 OPT_FLAG = "-O2"

@@ -57,11 +57,13 @@ QPs are nonconvex and qrqp cycles on a bound or the steps jump between bounds; m
 a UDDS replay on an identified model (274 states), 28 of 274 solves went to IPOPT before
 the rescue, none after (8 rescued), every first move within 7.1e-6 of IPOPT's at 1e-10
 (``notes/i22-solver.md``). Measured (``benchmarks/bench_econ_nmpc.py``, the same replay,
-quiet 2-core machine): median step 1.93-2.04 ms as generated C against IPOPT's 38-42 ms;
+quiet 2-core machine): median step 1.77 ms as generated C against IPOPT's 32 ms;
 compiled and CasADi moves identical; moves within 1e-6 of IPOPT's at 1e-10
 (``tests/test_econ_nmpc.py``). ``stage_functions=True`` (default) builds the NLP from one
-function per stage called over the horizon: 18 CPU-s of compiling against 42 (SQP) or 53
-(fatrop) inlined, steps as fast. ``solver="fatrop"`` (the previous default) or ``"ipopt"``
+function per stage called over the horizon, differentiated only by the decision variables:
+its SQP compiles in 10 CPU-s at -O2 (it runs every step: ``hot``) against 32 at -O1 and
+154 at -O2 inlined, and steps 1.2x faster than inlined (``benchmarks/bench_compile.py``).
+``solver="fatrop"`` (the previous default) or ``"ipopt"``
 solve the same NLP. The NLP is built once through
 :func:`_make_solver`, which hands it to
 :class:`acid.mpc.solver.NLPSolver` (issue 13): generated C compiled at first use and cached
@@ -219,8 +221,8 @@ class EconNMPCConfig:
         disturbances on the five state derivatives) and predict with them held.
     estimator : its tuning (``ECON_ESTIMATOR``).
     stage_functions : build the NLP from one function per stage called over the horizon
-        (default; :class:`acid.control.ocp.OCPSpec`): 3.5x less C, 18 against 42 CPU-s of
-        compiling for SQP (``benchmarks/bench_compile.py``), steps as fast as inlined.
+        (default; :class:`acid.control.ocp.OCPSpec`): SQP compiled in 10 CPU-s (-O2)
+        against 32 (-O1) inlined, steps 1.2x faster (``benchmarks/bench_compile.py``).
     sqp_rescue : with ``solver="sqp"``, finish a solve the exact-Hessian SQP did not
         converge with the same SQP on a convexified Hessian (``SQP_RESCUE``, from the same
         guess and multipliers, generated C too) before ``fallback_solver``. The failures
