@@ -26,7 +26,7 @@ import typer
 from rich.console import Console, ConsoleDimensions
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-from rich.table import Table
+from rich.table import Column, Table
 from rich.text import Text
 
 from acid._io import check_writable_file, write_json
@@ -334,8 +334,9 @@ def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator
     """Progress of a long run; yields ``update(done, total=None, label=None)`` for library
     callbacks.
 
-    A rich bar on a terminal; plain lines (``ProgressLines``) when stderr is not one (a log,
-    ``| tee``, CI); a no-op when ``enabled`` is False.
+    A rich bar on a terminal, with the last ``label`` after it (literally: user text);
+    plain lines (``ProgressLines``) when stderr is not one (a log, ``| tee``, CI); a no-op
+    when ``enabled`` is False.
     """
     if not enabled:
         yield lambda done, total=None, label=None: None
@@ -343,13 +344,17 @@ def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator
     if progress_is_plain():
         yield ProgressLines(description, total)   # its first line at the first update
         return
+    last = TextColumn("{task.fields[label]}", markup=False,   # the bar keeps its room
+                      table_column=Column(no_wrap=True, overflow="ellipsis",
+                                          max_width=max(16, err_console.width // 3)))
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
                   TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                  TimeRemainingColumn(), console=err_console, transient=False) as prog:
-        task = prog.add_task(escape(description), total=total)
+                  TimeRemainingColumn(), last, console=err_console, transient=False) as prog:
+        task = prog.add_task(escape(description), total=total, label="")
 
         def update(done: int, total_: int | None = None, label: str | None = None) -> None:
-            prog.update(task, completed=done, total=total_ if total_ is not None else total)
+            prog.update(task, completed=done, total=total_ if total_ is not None else total,
+                        **({"label": one_line(label)} if label else {}))
 
         yield update
 
