@@ -25,7 +25,14 @@ from pathlib import Path
 import typer
 from rich.console import Console, ConsoleDimensions
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 from rich.table import Column, Table
 from rich.text import Text
 
@@ -330,7 +337,8 @@ class ProgressLines:
 
 
 @contextmanager
-def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator[Callable]:
+def progress_bar(description: str, total: int | None,
+                 enabled: bool = True) -> Iterator[Callable]:
     """Progress of a long run; yields ``update(done, total=None, label=None)`` for library
     callbacks.
 
@@ -348,7 +356,7 @@ def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator
                       table_column=Column(no_wrap=True, overflow="ellipsis",
                                           max_width=max(16, err_console.width // 3)))
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
-                  TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
+                  MofNCompleteColumn(), TimeElapsedColumn(),   # "0/?" until a total is known
                   TimeRemainingColumn(), last, console=err_console, transient=False) as prog:
         task = prog.add_task(escape(description), total=total, label="")
 
@@ -357,6 +365,24 @@ def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator
                         **({"label": one_line(label)} if label else {}))
 
         yield update
+
+
+def chained_steps(update: Callable, after: int) -> tuple[Callable, Callable[[str], None]]:
+    """One progress (``update`` of ``progress_bar``) over a library's steps, then ``after``
+    steps of the command's own: ``(library, step)``, ``library(done, total, label)`` the
+    library's callback (its total learnt from its calls), ``step(label)`` after each of the
+    command's steps."""
+    count = {"done": 0, "total": after}
+
+    def library(done: int, total: int, label: str | None = None) -> None:
+        count["done"], count["total"] = done, total + after
+        update(done, count["total"], label)
+
+    def step(label: str) -> None:
+        count["done"] += 1
+        update(count["done"], count["total"], label)
+
+    return library, step
 
 
 def timed_lines(description: str) -> Callable[[str], None]:

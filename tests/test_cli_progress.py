@@ -120,3 +120,18 @@ def test_a_bar_on_a_terminal_names_the_last_finished_step_literally(monkeypatch)
     last = out.strip().splitlines()[-1]
     assert "sweep [b]x[/b]" in last and "2/3" in last
     assert last.endswith("grid scenario #1 (params = 'p[red]x.json')")
+
+
+def test_validate_into_a_log_names_each_step(model_dataset, tmp_path):
+    """``acid validate``'s windows, residual tests and figures, one line each (before: none
+    until the report); the report itself comes after them."""
+    data = model_dataset.to_hdf5(tmp_path / "d.h5")
+    res = CliRunner().invoke(app, ["validate", str(data), "--starts", "20", "--horizon", "120",
+                                   "--no-yardsticks", "--out", str(tmp_path / "figs")])
+    assert res.exit_code == 0, res.output
+    got = _lines(res.output, "validate paper")
+    assert [(int(m["done"]), int(m["total"])) for m in got] == [(i, 5) for i in range(1, 6)]
+    assert [m["label"] for m in got] == [
+        "20 starts placed", "20 windows of 120 steps simulated", "errors scored",
+        "one-step residuals tested", "2 figures drawn"]
+    assert res.output.index("2 figures drawn") < res.output.index("Open-loop prediction error")
