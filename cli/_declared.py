@@ -283,7 +283,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         residuals = residual_tests(ds, (model, ps), lo, len(ds))
         step("one-step residuals tested")
         saved = _save_figures(res, figures)
-        step(f"{len(saved)} figures drawn")
+        step(f"{len(saved)} figures drawn" if saved else "no figures (no temperature)")
     for w in caught:
         warn(w.message)
     if est is not None:
