@@ -25,8 +25,15 @@ from pathlib import Path
 import typer
 from rich.console import Console, ConsoleDimensions
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-from rich.table import Table
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Column, Table
 from rich.text import Text
 
 from acid._io import check_writable_file, write_json
@@ -330,12 +337,14 @@ class ProgressLines:
 
 
 @contextmanager
-def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator[Callable]:
+def progress_bar(description: str, total: int | None,
+                 enabled: bool = True) -> Iterator[Callable]:
     """Progress of a long run; yields ``update(done, total=None, label=None)`` for library
     callbacks.
 
-    A rich bar on a terminal; plain lines (``ProgressLines``) when stderr is not one (a log,
-    ``| tee``, CI); a no-op when ``enabled`` is False.
+    A rich bar on a terminal, with the last ``label`` after it (literally: user text);
+    plain lines (``ProgressLines``) when stderr is not one (a log, ``| tee``, CI); a no-op
+    when ``enabled`` is False.
     """
     if not enabled:
         yield lambda done, total=None, label=None: None
@@ -343,15 +352,37 @@ def progress_bar(description: str, total: int, enabled: bool = True) -> Iterator
     if progress_is_plain():
         yield ProgressLines(description, total)   # its first line at the first update
         return
+    last = TextColumn("{task.fields[label]}", markup=False,   # the bar keeps its room
+                      table_column=Column(no_wrap=True, overflow="ellipsis",
+                                          max_width=max(16, err_console.width // 3)))
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
-                  TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                  TimeRemainingColumn(), console=err_console, transient=False) as prog:
-        task = prog.add_task(escape(description), total=total)
+                  MofNCompleteColumn(), TimeElapsedColumn(),   # "0/?" until a total is known
+                  TimeRemainingColumn(), last, console=err_console, transient=False) as prog:
+        task = prog.add_task(escape(description), total=total, label="")
 
         def update(done: int, total_: int | None = None, label: str | None = None) -> None:
-            prog.update(task, completed=done, total=total_ if total_ is not None else total)
+            prog.update(task, completed=done, total=total_ if total_ is not None else total,
+                        **({"label": one_line(label)} if label else {}))
 
         yield update
+
+
+def chained_steps(update: Callable, after: int) -> tuple[Callable, Callable[[str], None]]:
+    """One progress (``update`` of ``progress_bar``) over a library's steps, then ``after``
+    steps of the command's own: ``(library, step)``, ``library(done, total, label)`` the
+    library's callback (its total learnt from its calls), ``step(label)`` after each of the
+    command's steps."""
+    count = {"done": 0, "total": after}
+
+    def library(done: int, total: int, label: str | None = None) -> None:
+        count["done"], count["total"] = done, total + after
+        update(done, count["total"], label)
+
+    def step(label: str) -> None:
+        count["done"] += 1
+        update(count["done"], count["total"], label)
+
+    return library, step
 
 
 def timed_lines(description: str) -> Callable[[str], None]:

@@ -12,7 +12,16 @@ from acid import __version__
 from acid._io import file_sha256
 from acid.data import MODEL_CHANNELS, Dataset
 from acid.errors import ConfigError
-from acid_cli._common import note, print_table, require_range, say, warn, write_summary
+from acid_cli._common import (
+    chained_steps,
+    note,
+    print_table,
+    progress_bar,
+    require_range,
+    say,
+    warn,
+    write_summary,
+)
 
 #: Largest --fit-starts accepted.
 MAX_STARTS = 1000
@@ -226,6 +235,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         window_design_text,
     )
     from acid.models import load
+    from acid_cli.validate import residual_section, residual_tests
 
     model = load(model_file)
     ps = values if values is not None else declared_parameters(model) \
@@ -252,10 +262,28 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
           "seed": seed, "non_overlapping": non_overlapping, "start_range": (lo, hi),
           "hold": tuple(d.name for d in model.disturbances) if hold_all else (),
           "to_end": to_end, "warm_start": warm_start}
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        res = validate_model(model, ds, ps, yardsticks=yardsticks, estimation=estimation,
-                             **kw)
+    # the work first, with its progress (a bar on a terminal: nothing else is printed while
+    # it moves), then the report
+    with progress_bar(f"validate {model.name}", None) as update:
+        library, step = chained_steps(update, after=2 + (beside is not None))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = validate_model(model, ds, ps, yardsticks=yardsticks,
+                                 estimation=estimation, progress=library, **kw)
+        other = None
+        if beside is not None:
+            other_model = beside.declaration   # e.g. the paper's beside the econ model
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the same windows: warned about below
+                other = validate_model(other_model, ds, beside, **{
+                    **kw, "start_index": res.starts, "non_overlapping": False,
+                    "hold": tuple(d.name for d in other_model.disturbances)
+                    if hold_all else ()})
+            step(f"beside: {beside.label} validated on the same starts")
+        residuals = residual_tests(ds, (model, ps), lo, len(ds))
+        step("one-step residuals tested")
+        saved = _save_figures(res, figures)
+        step(f"{len(saved)} figures drawn" if saved else "no figures (no temperature)")
     for w in caught:
         warn(w.message)
     if est is not None:
@@ -315,14 +343,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
     elif yardsticks:
         say(f"  ARX and subspace fitted on samples {estimation[0]}..{estimation[1] - 1} (the "
             "estimation part); yardsticks are never used for control")
-    other = None
-    if beside is not None:
-        other_model = beside.declaration   # e.g. the paper's beside the econ model
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the same windows: warned about above
-            other = validate_model(other_model, ds, beside, **{
-                **kw, "start_index": res.starts, "non_overlapping": False,
-                "hold": tuple(d.name for d in other_model.disturbances) if hold_all else ()})
+    if other is not None:
         print_table(f"Beside: |e| median / p90, {ps.label!r} vs {beside.label!r}, same starts",
                     ["channel", "this", "beside"],
                     [[c, f"{_num(res.metrics[c]['median_abs'], 3)} / "
@@ -330,17 +351,8 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                       f"{_num(other.metrics[c]['median_abs'], 3)} / "
                       f"{_num(other.metrics[c]['p90_abs'], 3)}"]
                      for c in res.channels if c in other.metrics])
-    from acid_cli.validate import residual_section
-
-    residuals = residual_section(ds, (model, ps), lo, len(ds))
-    saved = {}
-    if figures is not None and "K" in res.units:     # the figures draw temperatures
-        from acid._io import save_figure
-        from acid.report.validation import error_figure, prediction_figure, yardstick_figure
-
-        draw = {"fig5_prediction": prediction_figure, "fig6_errors": error_figure,
-                **({"fig6b_yardsticks": yardstick_figure} if res.yardsticks else {})}
-        saved = {k: str(save_figure(f(res), figures / f"{k}.png")) for k, f in draw.items()}
+    residuals = residual_section(residuals)
+    if saved:
         say(f"figures written to {', '.join(saved.values())}")
     write_summary(json_path, {"command": "validate", "acid_version": __version__,
                               "inputs": {"data": str(data), "data_sha256": sha,
@@ -350,6 +362,19 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                               **res.to_json_dict(), "residuals": residuals,
                               **({"beside": {"channels": other.to_json_dict()["channels"]}}
                                  if other is not None else {})})
+
+
+def _save_figures(res, figures: Path | None) -> dict[str, str]:
+    """Figs. 5-6 of the validation ``res`` (and the yardsticks' figure) into ``figures``,
+    when it has temperatures to draw: ``{name: path}``."""
+    if figures is None or "K" not in res.units:     # the figures draw temperatures
+        return {}
+    from acid._io import save_figure
+    from acid.report.validation import error_figure, prediction_figure, yardstick_figure
+
+    draw = {"fig5_prediction": prediction_figure, "fig6_errors": error_figure,
+            **({"fig6b_yardsticks": yardstick_figure} if res.yardsticks else {})}
+    return {k: str(save_figure(f(res), figures / f"{k}.png")) for k, f in draw.items()}
 
 
 def _fit_records(ps, data_sha: str) -> Dataset | None:

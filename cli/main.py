@@ -23,7 +23,21 @@ from acid_cli._common import ClickException, error_line  # noqa: E402
 from acid_cli._options import canonical_args  # noqa: E402
 
 
-class AcidCommand(TyperCommand):
+class FlagsTakeNoValue:
+    """Help without a value type after a flag: typer 0.29's rich help writes ``<bool>`` after
+    every flag (``--quick <bool>``, ``--help <bool>``) as if it took a value. A flag's empty
+    metavar is its type column (typer shows the metavar there when one is set); its plain
+    help and parsing never read it. Mixed into every command and the group (``--version``)."""
+
+    def get_params(self, ctx):
+        params = super().get_params(ctx)
+        for p in params:
+            if getattr(p, "is_flag", False) and p.metavar is None:
+                p.metavar = ""
+        return params
+
+
+class AcidCommand(FlagsTakeNoValue, TyperCommand):
     """A command that also accepts the retired option names of ``acid_cli._options.ALIASES``
     (hidden: rewritten to their canonical names before parsing, absent from ``--help``)."""
 
@@ -39,7 +53,7 @@ class AcidTyper(typer.Typer):
         return super().command(*args, cls=cls or AcidCommand, **kwargs)
 
 
-class AcidGroup(TyperGroup):
+class AcidGroup(FlagsTakeNoValue, TyperGroup):
     """Typer's group, with usage errors (unknown option, bad integer, missing argument) as one
     ``error:`` line naming the option, like every other acid error, instead of a panel."""
 

@@ -169,18 +169,25 @@ def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
         require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
 
 
-def residual_section(ds, params, lo: int, hi: int) -> dict | None:
-    """One-step residual tests (``acid.analysis.resid``) on the validated samples, with what
-    they mean; returns their JSON summary (None when the part is too short)."""
+def residual_tests(ds, params, lo: int, hi: int):
+    """One-step residual tests (``acid.analysis.resid``) on the validated samples: their
+    result, or (a ``str``) why they were skipped (the part is too short)."""
     from acid.analysis import resid
     from acid.errors import DataError
 
     try:
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
-            r = resid(ds.window(lo, hi), params)
+            return resid(ds.window(lo, hi), params)
     except DataError as exc:
-        note(f"residual tests skipped: {exc}")
+        return str(exc)
+
+
+def residual_section(r) -> dict | None:
+    """Print the residual tests ``r`` (``residual_tests``) with what they mean; returns
+    their JSON summary (None when they were skipped)."""
+    if isinstance(r, str):
+        note(f"residual tests skipped: {r}")
         return None
     rows = []
     for i, c in enumerate(r.channels):

@@ -103,3 +103,35 @@ def test_a_study_of_several_cycles_moves_in_plant_steps_not_per_cycle(monkeypatc
                  plant_factory=lambda: None, progress=lambda done, total: seen.append(
                      (done, total)))
     assert seen == [(100 * i, 600) for i in range(1, 7)] + [(600, 600)]
+
+
+def test_a_bar_on_a_terminal_names_the_last_finished_step_literally(monkeypatch):
+    import io
+
+    from rich.console import Console
+
+    term = Console(file=io.StringIO(), force_terminal=True, width=150, stderr=True)
+    monkeypatch.setattr(common, "err_console", term)
+    assert not progress_is_plain()
+    with progress_bar("sweep [b]x[/b]", 3) as update:
+        update(1, label="grid scenario #1 (params = 'p[red]x.json')")
+        update(2)                                      # no label: the last one stays
+    out = re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", term.file.getvalue())
+    last = out.strip().splitlines()[-1]
+    assert "sweep [b]x[/b]" in last and "2/3" in last
+    assert last.endswith("grid scenario #1 (params = 'p[red]x.json')")
+
+
+def test_validate_into_a_log_names_each_step(model_dataset, tmp_path):
+    """``acid validate``'s windows, residual tests and figures, one line each (before: none
+    until the report); the report itself comes after them."""
+    data = model_dataset.to_hdf5(tmp_path / "d.h5")
+    res = CliRunner().invoke(app, ["validate", str(data), "--starts", "20", "--horizon", "120",
+                                   "--no-yardsticks", "--out", str(tmp_path / "figs")])
+    assert res.exit_code == 0, res.output
+    got = _lines(res.output, "validate paper")
+    assert [(int(m["done"]), int(m["total"])) for m in got] == [(i, 5) for i in range(1, 6)]
+    assert [m["label"] for m in got] == [
+        "20 starts placed", "20 windows of 120 steps simulated", "errors scored",
+        "one-step residuals tested", "2 figures drawn"]
+    assert res.output.index("2 figures drawn") < res.output.index("Open-loop prediction error")

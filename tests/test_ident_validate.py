@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import json
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -145,3 +146,30 @@ def test_non_overlapping_starts_and_the_window_design(rng):
     assert "no overlap" in res.notes[0] and res.notes[0].startswith("window design: 7 starts")
     dense = validate_model(m, ds, starts=60, horizon=50, warmup=20)
     assert "overlapping" in dense.notes[0]
+
+
+@pytest.mark.parametrize("warm_start", ["fit", "ekf"])
+def test_progress_names_each_step_and_changes_no_number(rng, warm_start):
+    """``acid validate``'s progress comes from this callback: bit-identical results with and
+    without it (latent states warm-started, disturbances held, yardsticks)."""
+    m = load("cabin3")
+    ds = _cabin3_record(m.values, rng, n=400)
+    kw = {"starts": 40, "horizon": 60, "warmup": 20, "hold": ("T_amb",), "yardsticks": True,
+          "warm_start": warm_start}
+    seen = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        quiet = validate_model(m, ds, **kw)
+        told = validate_model(m, ds, progress=lambda *a: seen.append(a), **kw)
+    assert [(d, t) for d, t, _ in seen] == [(i, 5) for i in range(1, 6)]
+    assert [label.split(" (")[0] for _, _, label in seen] == [
+        "40 starts placed", "latent states estimated", "40 windows of 60 steps simulated",
+        "errors scored", "yardsticks predicted"]
+    assert seen[-1][2] == "yardsticks predicted (persistence, arx, subspace)"
+    for name in ("starts", "predicted", "measured", "inputs", "start_time"):
+        a, b = getattr(quiet, name), getattr(told, name)
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), name
+    for c in quiet.errors:
+        assert quiet.errors[c].tobytes() == told.errors[c].tobytes(), c
+    assert json.dumps(quiet.to_json_dict(), sort_keys=True) == json.dumps(
+        told.to_json_dict(), sort_keys=True)

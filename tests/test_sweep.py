@@ -34,7 +34,8 @@ def dask_sweep(tmp_path_factory):
     with DaskExecutor(workers=2) as ex:
         assert ex.kind == "local" and ex.workers == 2
         first = run_sweep(spec, out, executor=ex, figures=True,
-                          on_progress=lambda done, total: seen.append((done, total)))
+                          on_progress=lambda done, total, label: seen.append((done, total,
+                                                                             label)))
         second = run_sweep(spec, out, workers=2)  # nothing to run: no cluster is started
         yield spec, out, first, second, seen, ex.address
 
@@ -42,7 +43,10 @@ def dask_sweep(tmp_path_factory):
 def test_four_scenarios_run_on_two_workers_and_stream_to_disk(dask_sweep):
     spec, out, first, _, seen, _ = dask_sweep
     assert first.computed == 4 and first.reused == 0
-    assert seen[-1] == (4, 4)
+    assert [s[:2] for s in seen] == [(i, 4) for i in range(1, 5)]
+    assert sorted(s[2] for s in seen) == [  # each line names its scenario as the spec does
+        "grid scenario #1 (ambient_C = 28)", "grid scenario #2 (ambient_C = 32)",
+        "grid scenario #3 (ambient_C = 36)", "scenarios #1: failed"]
     assert len(list((out / "scenarios").glob("*.json"))) == 4
     df = first.table
     assert len(df) == 4 * 3 and set(df["controller"]) == {"nmpc", "icm", "fragile"}

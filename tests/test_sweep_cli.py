@@ -208,3 +208,34 @@ def test_a_worker_that_dies_while_the_cluster_starts_is_one_line(tmp_path):
     assert len(lines) == 1 and lines[0].startswith("error: the local Dask cluster"), text
     assert "did not start" in lines[0] and "--jobs 1" in lines[0]
     assert not (tmp_path / "o" / "results.csv").exists()
+
+
+def test_each_progress_line_names_the_scenario_that_finished(tmp_path, monkeypatch):
+    """Into a log, one line per finished scenario: how many of how many, and which one as
+    the spec gives it (user text, printed literally: a ``[red]`` in a file name stays), and
+    whether it failed."""
+    import contextlib
+    import re
+
+    import acid.sweep.runner
+    from acid.executor import InlineExecutor
+    from acid.params import paper
+
+    monkeypatch.setattr(acid.sweep.runner, "open_executor",
+                        lambda *a, **k: contextlib.nullcontext(InlineExecutor()))
+    paper().to_json(tmp_path / "p[red]x.json")
+    spec = tmp_path / "s.toml"
+    spec.write_text('title = "lines"\nplugins = ["_sweep_plugin"]\n'
+                    '[defaults]\ncycle = 10.0\nduration_s = 60.0\nwarmup_s = 0.0\n'
+                    '[grid]\nambient_C = [30.0]\nparams = ["paper", "p[red]x.json"]\n'
+                    '[[scenarios]]\nambient_C = 41.0\n'
+                    '[controllers.nominal]\n[controllers.fragile]\nabove_C = 40.0\n')
+    res = runner.invoke(app, ["sweep", str(spec), "--out", str(tmp_path / "o"),
+                              "--no-figures"])
+    assert res.exit_code == 0, res.output
+    lines = [m.groups() for m in re.finditer(
+        r"^sweep lines: (\d)/(\d) \(\d+ %\), \d+ s: (.+)$", res.output, re.M)]
+    assert lines == [
+        ("1", "3", "grid scenario #1 (ambient_C = 30, params = 'paper')"),
+        ("2", "3", "grid scenario #2 (ambient_C = 30, params = 'p[red]x.json')"),
+        ("3", "3", "scenarios #1: failed")], res.output

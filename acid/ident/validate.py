@@ -21,6 +21,7 @@ import dataclasses
 import math
 import os
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -238,7 +239,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                    start_index=None, non_overlapping: bool = False,
                    start_range: tuple[int, int] | None = None, yardsticks: bool = False,
                    estimation: tuple[int, int] | None = None,
-                   to_end: bool = False, warm_start: str = "fit") -> DeclaredValidation:
+                   to_end: bool = False, warm_start: str = "fit",
+                   progress: Callable[[int, int, str], None] | None = None
+                   ) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
 
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
@@ -253,6 +256,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     of 300 x 5 s); its prediction stops there, and the errors per prediction time count only
     the starts that reach it (short trips). Censored samples (a ``<channel>_censored`` mask)
     are neither scored nor used by the warm-up. ``warm_start``: one of ``WARM_STARTS``.
+    ``progress``: ``progress(done, total, label)`` after each step (starts placed, latent
+    states estimated, windows simulated, errors scored, yardsticks), ``label`` saying what
+    finished; it reads nothing back, so every number is the same with or without it.
     """
     model = load(model)
     unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
@@ -275,6 +281,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     data = ModelData.of(model, ds, min_samples=2)
     latent = [i for i, s in enumerate(model.states) if not s.measured]
     need_warm = warmup if latent else 0
+    step = _Steps(progress, 3 + bool(latent and need_warm > 0) + bool(yardsticks))
     lo_r, hi_r = start_range or (0, len(data))
     reach = max(1, horizon // 25) if to_end else horizon
     cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - reach)
@@ -307,6 +314,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
         raise ConfigError(f"--starts {k0.size} x --horizon {horizon} steps is "
                           f"{k0.size * (horizon + 1):.3g} prediction samples, more than "
                           f"{MAX_PREDICTION_SAMPLES:.0e}: lower --starts or --horizon")
+    step(f"{k0.size} starts placed")
     gaps = np.diff(np.sort(k0))
     notes = [f"window design: {k0.size} starts, spacing "
              + (f"{np.median(gaps) * model.Ts:g} s (median, min {gaps.min() * model.Ts:g} s)"
@@ -331,6 +339,10 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                         f"estimated from the {need_warm} samples ({need_warm * model.Ts:g} s) "
                         "before each start" + (" by the extended Kalman filter"
                                                if warm_start == "ekf" else "")))
+        step("latent states estimated (" + {"fit": "least squares over the warm-up",
+                                            "ekf": "Kalman filter over the warm-up",
+                                            "ekf-trip": "Kalman filter from each trip's "
+                                                        "start"}[warm_start] + ")")
     elif latent:
         notes.append("latent states started from their declared initial rule")
     idx = k0[:, None] + np.arange(horizon + 1)[None, :]
@@ -362,6 +374,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
         notes.append(f"held at their start values: {', '.join(hold)}")
     with np.errstate(over="ignore", invalid="ignore"):
         Y = simulate_windows(model, data, idx, x0, P)
+    step(f"{k0.size} windows of {horizon} steps simulated")
     if not np.all(np.isfinite(Y[inside])):
         raise DataError(f"{ds.source}: the predictions with parameters from {params.label} "
                         "diverge (values beyond the range of floating point): the model is "
@@ -389,10 +402,12 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                          "p90_abs": float(np.percentile(np.abs(e), 90)) if e.size
                          else math.nan, "n": int(e.size)}
         by_h.append(row)
+    step("errors scored")
     ys = {}
     if yardsticks:
         ys = _yardsticks(model, data0, rows, k0, horizon, hold, steps,
                          estimation or (0, len(data0)), inside)
+        step(f"yardsticks predicted ({', '.join(ys) or 'none'})")
         if estimation is None:
             notes.append("yardsticks fitted on the whole record (in-sample: favoured)")
     settings = {"params": params.label, "model": model.name,
@@ -413,6 +428,19 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                               energy=energy, settings=settings, inputs=data.u[idx],
                               input_names=tuple(r.name for r in model.inputs),
                               input_units=tuple(r.unit for r in model.inputs))
+
+
+class _Steps:
+    """``progress(done, total, label)`` once per finished step of a validation (a no-op
+    without a callback)."""
+
+    def __init__(self, progress: Callable[[int, int, str], None] | None, total: int):
+        self.progress, self.total, self.done = progress, total, 0
+
+    def __call__(self, label: str) -> None:
+        self.done += 1
+        if self.progress is not None:
+            self.progress(self.done, self.total, label)
 
 
 def _channel_metrics(m: np.ndarray, p: np.ndarray) -> dict:

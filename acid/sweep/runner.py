@@ -91,7 +91,7 @@ class SweepResult:
 def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
               scheduler: str | None = None, executor: Executor | None = None,
               force: bool = False, retry_failed: bool = False, figures: bool = True,
-              on_progress: Callable[[int, int], None] | None = None,
+              on_progress: Callable[[int, int, str], None] | None = None,
               on_start: Callable[[int, int, str], None] | None = None) -> SweepResult:
     """Run ``spec`` into ``out``; see the module docstring.
 
@@ -103,7 +103,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
     force : run every scenario again, ignoring earlier records.
     retry_failed : run scenarios again whose earlier record is an error.
     figures : write the summary figures.
-    on_progress : ``on_progress(done, total)`` after each scenario that ran now.
+    on_progress : ``on_progress(done, total, label)`` after each scenario that ran now;
+        ``label`` names it as the spec gives it (``finished_label``).
     on_start : ``on_start(to_run, reused, where)`` once the executor is up.
     """
     t0 = time.perf_counter()
@@ -225,9 +226,18 @@ def _execute(spec, todo, store, ex: Executor, on_progress, on_start,
             done += 1
             failed += record["status"] != "ok"
             if on_progress is not None:
-                on_progress(done, len(todo))
+                on_progress(done, len(todo), finished_label(t, record["status"]))
         ex.pump()
     return done, failed, ex.describe()
 
 
-__all__ = ["run_sweep", "SweepResult", "check_out_folder"]
+def finished_label(task, status: str) -> str:
+    """What a progress line says of a scenario that just finished: where the spec gives it
+    (``grid scenario #3 (ambient_C = 32.0, cycle = "udds")``, ``scenarios #2``; its conditions
+    when it was built without a spec) and, unless it ran, ``failed`` (a controller raised) or
+    ``lost`` (its worker ended; run again next time). User text: print it literally."""
+    where = task.scenario.origin or f"scenario {task.index + 1} ({task.scenario.label})"
+    return where + {"ok": "", "lost": ": lost (its worker ended)"}.get(status, ": failed")
+
+
+__all__ = ["run_sweep", "SweepResult", "check_out_folder", "finished_label"]
