@@ -43,6 +43,11 @@ def _exit_now(signum: int, frame=None) -> None:
     os._exit(128 + signum)
 
 
+def exit_interrupted() -> None:
+    """Leave quietly after a Ctrl-C that no command's guard received: 130, one line."""
+    _exit_now(signal.SIGINT)
+
+
 def _in_worker_process() -> bool:
     """True while a process that multiprocessing spawned from acid (a Dask worker) imports
     the ``acid`` script as ``__mp_main__`` (its ``sys.argv`` is then the parent's): its

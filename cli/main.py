@@ -52,6 +52,16 @@ class AcidTyper(typer.Typer):
     def command(self, *args, cls=None, **kwargs):
         return super().command(*args, cls=cls or AcidCommand, **kwargs)
 
+    def __call__(self, *args, **kwargs):
+        # Ctrl-C after start-up but before a command's InterruptGuard (typer building the
+        # command tree: a fraction of a second, seconds on a busy machine) arrives as a
+        # KeyboardInterrupt outside every command: the same quiet exit as during start-up
+        # (130, one line), nothing having been written yet
+        try:
+            return super().__call__(*args, **kwargs)
+        except KeyboardInterrupt:
+            _signals.exit_interrupted()
+
 
 class AcidGroup(FlagsTakeNoValue, TyperGroup):
     """Typer's group, with usage errors (unknown option, bad integer, missing argument) as one

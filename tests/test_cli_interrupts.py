@@ -107,3 +107,20 @@ def test_an_interrupt_turned_into_another_exception_by_a_c_extension_is_still_an
     assert exc.value.exit_code == 130
     err = capsys.readouterr().err
     assert "interrupted" in err and "internal error" not in err
+
+
+def test_ctrl_c_while_typer_builds_the_commands_exits_quietly(tmp_path):
+    """The gap between start-up and a command's guard (typer building the command tree,
+    seconds on a busy machine): a KeyboardInterrupt there is the same quiet exit 130, not a
+    traceback. Provoked deterministically by raising it from typer's get_command."""
+    code = ("import typer.main as tm\n"
+            "def interrupted(*a, **k):\n"
+            "    raise KeyboardInterrupt\n"
+            "tm.get_command = interrupted\n"
+            "from acid_cli.main import app\n"
+            "app()\n")
+    p = subprocess.run([sys.executable, "-c", code, *LONG, "--out", str(tmp_path / "x.h5")],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 130, p.stderr
+    assert p.stderr.strip() == "interrupted", p.stderr
+    assert list(tmp_path.iterdir()) == []
