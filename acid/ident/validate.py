@@ -581,34 +581,55 @@ def _parameters_at(model: Model, data: ModelData, params: ParameterValues, k0, n
 
 def _warm_start(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np.ndarray:
     """The state at each start: fit the state at k - W to the measured channels over the
-    W samples before k (parameters held), simulate to k; measured states as measured."""
+    W samples before k (parameters held), simulate to k; measured states as measured.
+
+    Each channel's residuals are divided by its standard deviation over every warm-up
+    stretch (one weight per channel for all starts); with these weights held, start s's
+    residuals depend on its own state only, so the joint least-squares problem is
+    separable: each start is solved as its own small problem (``_fit_initial_states``),
+    at a cost linear in the number of starts and with the joint solve's estimate.
+    """
     idx = (k0 - W)[:, None] + np.arange(W + 1)[None, :]
-    n, nx = k0.size, model.nx
     chan = [c for c, _ in data.measured_channels(model)]
     meas = data.observed()[idx][:, :W][..., chan]
     obs = np.isfinite(meas)
-    meas = np.nan_to_num(meas)
     scale = np.array([max(float(np.std(meas[..., i][obs[..., i]])), 1e-6)
                       for i in range(len(chan))])
-    z0 = data.initial_states(model, k0 - W).ravel()
-
-    def resid(z):
-        Y = simulate_windows(model, data, idx[:, :W], z.reshape(n, nx), P)[..., chan]
-        return ((Y - meas) / scale)[obs]
-
-    def jac(z):
-        _, J = simulate_windows(model, data, idx[:, :W], z.reshape(n, nx), P, free=())
-        J = J[:, :, chan, :] / scale[None, None, :, None]              # (n, W, C, nx)
-        full = np.zeros(J.shape[:3] + (n * nx,))
-        for s in range(n):
-            full[s, :, :, s * nx:(s + 1) * nx] = J[s]
-        return full[obs]
-
-    sol = scipy.optimize.least_squares(resid, z0, jac=jac, method="trf", x_scale="jac",
-                                       max_nfev=50)
-    X = simulate_windows(model, data, idx, sol.x.reshape(n, nx), P)[:, -1, :nx]
+    z = _fit_initial_states(model, data, P, idx[:, :W], meas, chan, scale,
+                            data.initial_states(model, k0 - W))
+    X = simulate_windows(model, data, idx, z, P)[:, -1, :model.nx]
     out = x_k.copy()
     out[:, latent] = X[:, latent]
+    return out
+
+
+def _fit_initial_states(model: Model, data: ModelData, P, idx, meas, chan, scale,
+                        x_first) -> np.ndarray:
+    """The initial state (nw, nx) of each window ``idx`` (nw, W) that minimises its
+    ``chan`` channels' squared errors against ``meas`` (nw, W, C; NaN unobserved), each
+    divided by ``scale`` (C,), from ``x_first`` (nw, nx), parameters ``P`` held.
+
+    One trust-region reflective least-squares problem per window with its exact (W C, nx)
+    CasADi Jacobian: the windows share nothing, so their estimates are those of the one
+    joint problem (whose Jacobian is block diagonal), at a cost linear in their number; a
+    window's estimate does not depend on the other windows.
+    """
+    obs = np.isfinite(meas)
+    meas = np.nan_to_num(meas)
+    out = np.empty_like(x_first, dtype=float)
+    for s in range(idx.shape[0]):
+        win, Ps, ok = idx[[s]], P[[s]], obs[s]
+
+        def resid(z):
+            Y = simulate_windows(model, data, win, z[None], Ps)[0][:, chan]
+            return ((Y - meas[s]) / scale)[ok]
+
+        def jac(z):
+            _, J = simulate_windows(model, data, win, z[None], Ps, free=())
+            return (J[0][:, chan, :] / scale[None, :, None])[ok]           # (W C, nx)
+
+        out[s] = scipy.optimize.least_squares(resid, x_first[s], jac=jac, method="trf",
+                                              x_scale="jac", max_nfev=50).x
     return out
 
 
