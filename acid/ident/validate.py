@@ -618,19 +618,25 @@ def _fit_initial_states(model: Model, data: ModelData, P, idx, meas, chan, scale
     meas = np.nan_to_num(meas)
     out = np.empty_like(x_first, dtype=float)
     for s in range(idx.shape[0]):
-        win, Ps, ok = idx[[s]], P[[s]], obs[s]
-
-        def resid(z):
-            Y = simulate_windows(model, data, win, z[None], Ps)[0][:, chan]
-            return ((Y - meas[s]) / scale)[ok]
-
-        def jac(z):
-            _, J = simulate_windows(model, data, win, z[None], Ps, free=())
-            return (J[0][:, chan, :] / scale[None, :, None])[ok]           # (W C, nx)
-
-        out[s] = scipy.optimize.least_squares(resid, x_first[s], jac=jac, method="trf",
-                                              x_scale="jac", max_nfev=50).x
+        out[s] = _fit_window(model, data, idx[[s]], P[[s]], meas[s], obs[s], chan, scale,
+                             x_first[s])
     return out
+
+
+def _fit_window(model: Model, data: ModelData, win, Ps, target, ok, chan, scale,
+                x0) -> np.ndarray:
+    """One window's initial state (nx,): :func:`_fit_initial_states` for ``win`` (1, W)."""
+
+    def resid(z):
+        Y = simulate_windows(model, data, win, z[None], Ps)[0][:, chan]
+        return ((Y - target) / scale)[ok]
+
+    def jac(z):
+        _, J = simulate_windows(model, data, win, z[None], Ps, free=())
+        return (J[0][:, chan, :] / scale[None, :, None])[ok]           # (W C, nx)
+
+    return scipy.optimize.least_squares(resid, x0, jac=jac, method="trf", x_scale="jac",
+                                        max_nfev=50).x
 
 
 @dataclass(frozen=True)
