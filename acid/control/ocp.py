@@ -610,13 +610,21 @@ def numeric_evaluator(fn: ca.Function, compiled: bool | str = "auto") -> Callabl
     return lambda *args: tuple(np.asarray(a) for a in fn(*args))
 
 
-def stage_shift(vec: BlockVector) -> np.ndarray:
+def stage_shift(vec: BlockVector, hold: int = 0) -> np.ndarray:
     """Index permutation that shifts a stage-wise vector by one stage (``v[perm]``): each
     block at stage ``i`` takes its value at stage ``i + 1``; each block's last stage keeps
-    its own value (the last input is repeated; the terminal state is kept)."""
+    its own value (the last input is repeated; the terminal state is kept).
+
+    ``hold``: the last ``hold`` stages before each block's last one also keep their own
+    values, and the stage before them is the one repeated. Without a terminal cost the
+    optimal plan ends in an arc tied to the horizon's end (the cooling stops before it),
+    which a plain shift moves one stage early, so the next solve spends its QP iterations
+    moving it back; held in place, it is already where the next optimum has it."""
     perm = np.arange(vec.size)
     for b in vec.blocks:
         idx = vec.index(b)
-        perm[idx[:-1]] = idx[1:]
+        n = idx.shape[0] - 1 - int(hold)   # stages that take their successor's value
+        if n > 0:
+            perm[idx[:n]] = idx[1:n + 1]
     return perm
 
