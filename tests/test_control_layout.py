@@ -83,6 +83,15 @@ def test_the_nmpc_holds_its_plans_end_arc_for_fewer_iterations_and_the_same_move
     assert iterations[2] < 0.95 * iterations[0], iterations
 
 
+@pytest.mark.parametrize("hold", [-1, 1.5, "2", True])
+def test_a_warm_start_hold_that_is_no_stage_count_is_one_line(hold):
+    from acid.errors import ConfigError
+    from acid.mpc.nmpc import NMPCConfig
+
+    with pytest.raises(ConfigError, match="warm_start_hold"):
+        NMPCConfig(warm_start_hold=hold)
+
+
 def test_the_nmpc_index_maps_come_from_its_layout():
     mpc = NMPC(paper())
     w, g = mpc._w, mpc._g

@@ -249,7 +249,8 @@ class NMPCConfig:
                               f"got {self.fallback_solver!r}")
         if int(self.N) < 2:
             raise ConfigError(f"horizon N must be at least 2, got {self.N}")
-        if int(self.warm_start_hold) != self.warm_start_hold or self.warm_start_hold < 0:
+        hold = self.warm_start_hold
+        if isinstance(hold, bool) or not isinstance(hold, (int, np.integer)) or hold < 0:
             raise ConfigError(f"warm_start_hold must be a whole number of stages >= 0, got "
                               f"{self.warm_start_hold}")
         if not (self.W_bl_min < self.W_bl_max and self.T_evap_set_min < self.T_evap_set_max):
