@@ -40,8 +40,9 @@ _API = {
     "from_mat": ("acid.data", "from_mat"), "drive_cycle": ("acid.signals", "drive_cycle"),
     "import_logs": ("acid.data", "import_logs"), "example": ("acid.examples", "resolve"),
     # parameters
-    "ModelParams": ("acid.params", "ModelParams"), "paper_params": ("acid.params", "paper"),
-    "load_params": ("acid.params", "load_params"),
+    "ModelParams": ("acid.models.params", "ModelParams"),
+    "paper_params": ("acid.models.params", "paper"),
+    "load_params": ("acid.models.params", "load_params"),
     # excitation
     "ExcitationSpec": ("acid.excite", "ExcitationSpec"), "excite": ("acid.excite", "excite"),
     "make_schedule": ("acid.excite", "make_schedule"),
@@ -53,23 +54,23 @@ _API = {
     "ModelPlant": ("acid.plant", "ModelPlant"),
     "HeatingPlant": ("acid.plant.heating", "HeatingPlant"),
     "HeatingConfig": ("acid.plant.heating_config", "HeatingConfig"),
-    "FmuPlant": ("acid.plant.fmu", "FmuPlant"), "FmuMap": ("acid.plant.fmu", "FmuMap"),
-    "export_fmu": ("acid.plant.fmu_export", "export_fmu"),
+    "FmuPlant": ("acid.plant.fmi.plant", "FmuPlant"), "FmuMap": ("acid.plant.fmi.plant", "FmuMap"),
+    "export_fmu": ("acid.plant.fmi.export", "export_fmu"),
     "speed_sweep": ("acid.plant.sweep", "speed_sweep"),
     # identification and validation
     "fit": ("acid.ident.fit", "fit"), "FitResult": ("acid.ident.fit", "DeclaredFitResult"),
     "validate": ("acid.ident.validate", "validate"),
     "ValidationResult": ("acid.ident.validate", "DeclaredValidation"),
-    "predict": ("acid.analysis", "predict"), "compare": ("acid.analysis", "compare"),
-    "resid": ("acid.analysis", "resid"),
+    "predict": ("acid.ident.analysis", "predict"), "compare": ("acid.ident.analysis", "compare"),
+    "resid": ("acid.ident.analysis", "resid"),
     # declared models (acid.models) and the identification derived from them (acid.ident)
     "Model": ("acid.models", "Model"), "load_model": ("acid.models", "load"),
     "fit_model": ("acid.ident.fit", "fit_model"),
     "validate_model": ("acid.ident.validate", "validate_model"),
     # control
-    "NMPC": ("acid.mpc.nmpc", "NMPC"), "NMPCConfig": ("acid.mpc.nmpc", "NMPCConfig"),
-    "closed_loop": ("acid.mpc.scenarios", "closed_loop"),
-    "mpc_check": ("acid.mpc.scenarios", "mpc_check"),
+    "NMPC": ("acid.control.nmpc", "NMPC"), "NMPCConfig": ("acid.control.nmpc", "NMPCConfig"),
+    "closed_loop": ("acid.studies.scenarios", "closed_loop"),
+    "mpc_check": ("acid.studies.scenarios", "mpc_check"),
 }
 
 __all__ = ["__version__", *_API]

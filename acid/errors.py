@@ -47,3 +47,7 @@ class CodegenWarning(UserWarning):
 
 class InSampleWarning(UserWarning):
     """A model is validated on (part of) the data it was fitted on."""
+
+
+class MovedWarning(FutureWarning):
+    """An old import path of a module that moved (``acid._compat``): works for one release."""

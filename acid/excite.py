@@ -8,7 +8,7 @@ through it and returns a ``Dataset`` whose metadata carries the spec, the seed, 
 its configuration.
 
 What each model family needs (``MODEL_PRESETS``): the paper's model (eqs. 1-5) is identified
-at one speed and ambient; the economic model (:mod:`acid.econ`) has vehicle speed and ambient
+at one speed and ambient; the economic model (:mod:`acid.models.econ`) has vehicle speed and ambient
 temperature in its compressor power map and its shell and humidity balances, so its data must
 vary them (``speed_bounds``, ``T_amb_bounds``) and should contain near-steady operating points
 (``steady_fraction``: some input steps held long enough for the interior to settle).
@@ -269,7 +269,7 @@ _SPEC_UNITS = {"W_bl_bounds": "kg/s", "T_evap_set_bounds": "degC", "min_dwell": 
 
 #: What each model family needs from an excitation (``acid excite --model NAME``): the
 #: paper's model is identified at one speed and ambient; the economic model
-#: (:mod:`acid.econ`) needs vehicle speed and ambient variation and near-steady holds.
+#: (:mod:`acid.models.econ`) needs vehicle speed and ambient variation and near-steady holds.
 #: Ranges: speed 0-36 m/s covers every shipped drive cycle (WLTC class 3 peaks at 36.5 m/s,
 #: within the power map's 2 % tolerance); ambient 25-40 degC is where cabin cooling is the load.
 MODEL_PRESETS: dict[str, dict] = {
@@ -289,7 +289,7 @@ def spec_for_model(model: str, **options) -> ExcitationSpec:
 
 def uses_exogenous_schedule(plant: Plant) -> bool:
     """Whether the plant takes T_int / T_shell from the schedule: the model plant, and a
-    declared model (``acid.models.plant.DeclaredPlant``) with them among its disturbances."""
+    declared model (``acid.plant.declared.DeclaredPlant``) with them among its disturbances."""
     return getattr(plant, "name", "") == "model" or bool(
         {"T_int", "T_shell"} & set(getattr(plant, "disturbance_names", ())))
 

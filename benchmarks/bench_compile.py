@@ -40,9 +40,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_econ_nmpc import record  # noqa: E402
 
-from acid.mpc import codegen  # noqa: E402
-from acid.mpc.cav_study import default_plant_factory, identify_econ  # noqa: E402
-from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig  # noqa: E402
+from acid.control.codegen import build as codegen  # noqa: E402
+from acid.control.econ.nmpc import EconNMPC, EconNMPCConfig  # noqa: E402
+from acid.studies.cav_study import default_plant_factory, identify_econ  # noqa: E402
 from acid.units import C2K  # noqa: E402
 
 
@@ -51,7 +51,7 @@ def _truth():
     sys.path.insert(0, str(Path(__file__).parent.parent / "tests"))
     from conftest import ECON_MAP, ECON_TRUTH
 
-    from acid.econ.params import EconParams, PowerMap
+    from acid.models.econ_params import EconParams, PowerMap
 
     domain = {"Q_e": (-500.0, 6000.0), "T_evap": (270.0, 290.0), "v_veh": (0.0, 35.0),
               "T_amb": (290.0, 320.0)}

@@ -11,7 +11,7 @@ What is measured
    a warmed-up state; every measured state and preview is recorded.
 3. The recorded sequence is replayed, in order (so every solve warm-starts from the previous
    one, as in closed loop), through: the economic NMPC with its SQP as compiled C
-   (``acid.mpc.codegen``; the first run compiles it, then it is cached) and inside CasADi,
+   (``acid.control.codegen.build``; the first run compiles it, then it is cached) and inside CasADi,
    the same NLP with IPOPT, and the peer: the paper's NMPC (N = 6, its default SQP,
    compiled) on the same cabin and evaporator states. The whole ``make_step`` wall time is
    taken for each; the compiled and CasADi SQP moves are compared.
@@ -35,12 +35,12 @@ import warnings
 
 import numpy as np
 
+from acid.control.econ.nmpc import EconNMPC, EconNMPCConfig, stage_means
+from acid.control.nmpc import NMPC, NMPCConfig
 from acid.models.econ import STATES
-from acid.mpc.cav_study import default_plant_factory, identify_econ
-from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, stage_means
-from acid.mpc.nmpc import NMPC, NMPCConfig
-from acid.params import paper
+from acid.models.params import paper
 from acid.signals import drive_cycle
+from acid.studies.cav_study import default_plant_factory, identify_econ
 from acid.units import C2K
 
 #: issue 22: the economic NMPC's median step, compiled, ms

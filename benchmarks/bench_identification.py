@@ -40,7 +40,7 @@ def run_library(plant: str, method: str) -> dict[str, float]:
     from acid.excite import ExcitationSpec, excite
     from acid.ident.fit import fit_model
     from acid.ident.validate import validate
-    from acid.params import fitted
+    from acid.models.params import fitted
     from acid.plant import make_plant
 
     times = {}

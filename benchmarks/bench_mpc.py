@@ -42,15 +42,15 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from acid.mpc.nmpc import NMPC, NMPCConfig
-from acid.mpc.scenarios import (
+from acid.control.nmpc import NMPC, NMPCConfig
+from acid.models.params import ModelParams, paper
+from acid.studies.scenarios import (
     BOUND_STEPS,
     MODEL_T_INT,
     MODEL_T_SHELL,
     run_model_scenario,
     step_bound,
 )
-from acid.params import ModelParams, paper
 
 # the peer's model: the paper's eqs. 1-5 transcribed independently of acid's declaration
 sys.path.insert(0, str(Path(__file__).parent.parent / "tests"))

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from acid._io import write_json
 from acid.executor import DaskExecutor, usable_cores
-from acid.sweep import run_sweep, spec_from_dict
+from acid.studies.sweep import run_sweep, spec_from_dict
 
 SPEC = {
     "title": "bench",

@@ -93,7 +93,7 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     fixes = parse_fix(fix)
     start, ref = None, None
     if paper is not None:
-        from acid.params import load_params
+        from acid.models.params import load_params
 
         ref = load_params(paper.reference, allow_unstable=True)
         start = ref.as_dict()
@@ -189,9 +189,9 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
 
 
 def _paper_file(result, est: Dataset, prov: dict, paper: PaperOptions):
-    """The params.json keys of the paper's model (``acid.params.ModelParams``, what the
+    """The params.json keys of the paper's model (``acid.models.params.ModelParams``, what the
     controllers read) and eq. 4's COP read off P_comp, beside the declared parameter file."""
-    from acid.params import eta_cop_of, fitted
+    from acid.models.params import eta_cop_of, fitted
 
     eta, se = eta_cop_of(est)
     params = fitted(result, eta_cop=eta if paper.use_eta_cop else None,
@@ -235,7 +235,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         window_design_text,
     )
     from acid.models import load
-    from acid_cli.validate import residual_section, residual_tests
+    from acid_cli._residuals import residual_section, residual_tests
 
     model = load(model_file)
     ps = values if values is not None else declared_parameters(model) \

@@ -1,5 +1,5 @@
 """``acid fit --model econ``: the econ model's branch of ``acid fit`` (table, files), over
-acid.ident's staged fit of the econ declaration (``acid.econ.params.identify``)."""
+acid.ident's staged fit of the econ declaration (``acid.ident.econ.identify``)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 from acid import __version__
 from acid.data import Dataset
-from acid.econ.params import REQUIRED, identify
+from acid.ident.econ import REQUIRED, identify
 from acid_cli._common import note, print_table, say, warn, write_summary
 
 

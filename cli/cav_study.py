@@ -18,7 +18,7 @@ import typer
 from acid import __version__
 from acid._io import file_sha256, save_figure
 from acid.errors import ConfigError
-from acid.params import load_params
+from acid.models.params import load_params
 from acid.units import C2K, K2C
 from acid_cli._common import (
     check_paths,
@@ -147,8 +147,11 @@ def cav_study(
     and cav_CYCLE.png (trajectories of A, E, F and the plan) to --out.
     """
     from acid.comfort import RH_BAND_SOURCE
-    from acid.econ.params import EconParams
-    from acid.mpc.cav_study import (
+    from acid.control.econ.nmpc import ECON_SOLVERS, TERMINALS, EconNMPCConfig
+    from acid.models.econ_params import EconParams
+    from acid.plant import make_plant
+    from acid.plant.vehicles import vehicle_config, vehicle_label
+    from acid.studies.cav_study import (
         CONTROLLERS,
         STOPGO,
         StudyConfig,
@@ -157,10 +160,7 @@ def cav_study(
         identify_econ,
         make_scenario,
     )
-    from acid.mpc.cav_study import cav_study as run_study
-    from acid.mpc.econ_nmpc import ECON_SOLVERS, TERMINALS, EconNMPCConfig
-    from acid.plant import make_plant
-    from acid.plant.vehicles import vehicle_config, vehicle_label
+    from acid.studies.cav_study import cav_study as run_study
 
     names = available_cycles()
     if cycle != "all" and cycle not in names:

@@ -6,63 +6,63 @@ validation, control, and the whole paper.
 
 from __future__ import annotations
 
-from acid_cli.main import app
 
-# isort: split
-from acid_cli import (  # noqa: E402
-    excite,
-    fit,
-    import_data,
-    mpc_check,
-    reproduce,
-    speed_sweep,
-    validate,
-)
+def register(app) -> None:
+    """Add every sub-command to ``app`` (``acid_cli.main.app``), in pipeline order."""
+    from acid_cli import (
+        excite,
+        fit,
+        import_data,
+        mpc_check,
+        reproduce,
+        speed_sweep,
+        validate,
+    )
 
-app.command(name="speed-sweep")(speed_sweep.speed_sweep)
-app.command(name="excite")(excite.excite)
-app.command(name="import")(import_data.import_data)
-app.command(name="fit")(fit.fit)
-app.command(name="validate")(validate.validate)
-app.command(name="mpc-check")(mpc_check.mpc_check)
-app.command(name="reproduce")(reproduce.reproduce)
+    app.command(name="speed-sweep")(speed_sweep.speed_sweep)
+    app.command(name="excite")(excite.excite)
+    app.command(name="import")(import_data.import_data)
+    app.command(name="fit")(fit.fit)
+    app.command(name="validate")(validate.validate)
+    app.command(name="mpc-check")(mpc_check.mpc_check)
+    app.command(name="reproduce")(reproduce.reproduce)
 
-from acid_cli import cav_study  # noqa: E402
+    from acid_cli import cav_study
 
-app.command(name="cav-study")(cav_study.cav_study)
+    app.command(name="cav-study")(cav_study.cav_study)
 
-from acid_cli import claims  # noqa: E402
+    from acid_cli import claims
 
-app.command(name="claims")(claims.claims)
+    app.command(name="claims")(claims.claims)
 
-from acid_cli import plant_check  # noqa: E402
+    from acid_cli import plant_check
 
-app.command(name="plant-check")(plant_check.plant_check)
+    app.command(name="plant-check")(plant_check.plant_check)
 
-from acid_cli import heating_check  # noqa: E402
+    from acid_cli import heating_check
 
-app.command(name="heating-check")(heating_check.heating_check)
+    app.command(name="heating-check")(heating_check.heating_check)
 
-from acid_cli import heating_control  # noqa: E402
+    from acid_cli import heating_control
 
-app.command(name="heating-control")(heating_control.heating_control)
+    app.command(name="heating-control")(heating_control.heating_control)
 
-from acid_cli import export_fmu  # noqa: E402
+    from acid_cli import export_fmu
 
-app.command(name="export-fmu")(export_fmu.export_fmu)
+    app.command(name="export-fmu")(export_fmu.export_fmu)
 
-from acid_cli import export_c  # noqa: E402
+    from acid_cli import export_c
 
-app.command(name="export-c")(export_c.export_c_cmd)
+    app.command(name="export-c")(export_c.export_c_cmd)
 
-from acid_cli import sweep  # noqa: E402
+    from acid_cli import sweep
 
-app.command(name="sweep")(sweep.sweep)
+    app.command(name="sweep")(sweep.sweep)
 
-from acid_cli import examples  # noqa: E402
+    from acid_cli import examples
 
-app.command(name="examples")(examples.examples)
+    app.command(name="examples")(examples.examples)
 
-from acid_cli import year_sweep  # noqa: E402
+    from acid_cli import year_sweep
 
-app.command(name="year-sweep")(year_sweep.year_sweep)
+    app.command(name="year-sweep")(year_sweep.year_sweep)

@@ -78,7 +78,7 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
         raise ConfigError(f"--plant-config: file not found: {plant_config}")
     model_params = None
     if choice.kind == "model":
-        from acid.params import load_params
+        from acid.models.params import load_params
 
         model_params = load_params(params, allow_unstable=allow_unstable)
     extra = {} if refrigerant is None else plant_overrides(refrigerant=refrigerant)
@@ -97,7 +97,7 @@ def declared_plant(model_spec: str, spec: ExcitationSpec, params: Path | None,
     values of ``--params`` (a parameter file of ``acid fit --model``) or its declared ones."""
     from acid.ident.validate import read_parameters
     from acid.models import load
-    from acid.models.plant import DeclaredPlant
+    from acid.plant.declared import DeclaredPlant
 
     for flag, given in (("--plant-config", plant_config), ("--fmu-map", fmu_map),
                         ("--noise", spec.noise != 0.0)):

@@ -9,11 +9,11 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256
+from acid.control.codegen.build import CodegenError, find_compiler
+from acid.control.codegen.export_paper import check_export, export_c
+from acid.control.nmpc import NMPCConfig
 from acid.errors import ConfigError
-from acid.mpc.codegen import CodegenError, find_compiler
-from acid.mpc.export import check_export, export_c
-from acid.mpc.nmpc import NMPCConfig
-from acid.params import load_params
+from acid.models.params import load_params
 from acid_cli._common import (
     check_paths,
     handle_errors,
@@ -147,8 +147,8 @@ def _export_declared(model_spec: str, params: str, out: Path, horizon: int, chec
     """``acid export-c --model NAME|FILE.py``: the tracking NMPC of a declared model."""
     import numpy as np
 
-    from acid.control.export import FILES as MODEL_FILES
-    from acid.control.export import TrackingController, check_model_export, export_model_c
+    from acid.control.codegen.export import FILES as MODEL_FILES
+    from acid.control.codegen.export import TrackingController, check_model_export, export_model_c
     from acid.ident.validate import read_parameters
     from acid.models.loader import load
 

@@ -41,7 +41,7 @@ def export_fmu(
     Drive it with `--plant fmu:OUT.fmu --fmu-map OUT.toml`.
     """
     from acid.plant.config import PlantConfig
-    from acid.plant.fmu_export import export_fmu as run_export
+    from acid.plant.fmi.export import export_fmu as run_export
     from acid.plant.vehicles import vehicle_label
 
     if fmi_version not in (2, 3):

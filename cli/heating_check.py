@@ -16,7 +16,7 @@ from acid_cli._common import (
     say,
     write_summary,
 )
-from acid_cli.plant_check import _fmt, _verdict
+from acid_cli.plant_check import format_value, verdict_text
 
 #: Where the real winter logs live in the project's shared folder (acid never ships them).
 DEFAULT_LOGS = Path("../shared/real-data/bmw-i3-winter")
@@ -36,7 +36,7 @@ def heating_check(
     Sources of every reference: datasets/plant/SOURCES.md.
     """
     from acid.errors import DataError
-    from acid.plant.check_heating import heating_check as run_check
+    from acid.studies.credentials.heating import heating_check as run_check
 
     check_paths(outputs={"--json": json_path})
     if logs is not None:
@@ -57,10 +57,10 @@ def heating_check(
             update(done[0], 14)
 
         result = run_check(logs, progress=tick)
-    rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r), r.note]
+    rows = [[r.group, r.name, format_value(r.value), r.unit, r.reference, verdict_text(r), r.note]
             for r in result.rows]
     print_table("acid heating-check", ["_", "_check", "value", "_unit", "_reference",
-                                       "_verdict", "_note"], rows)
+                                       "verdict_text", "_note"], rows)
     summary = result.to_json_dict()
     summary.update(acid_version=__version__, logs=str(logs) if logs is not None else None)
     write_summary(json_path, summary)

@@ -120,7 +120,7 @@ def _required(spec: str | None) -> tuple[str, ...]:
 
         return MODEL_CHANNELS
     if spec == "econ":
-        from acid.econ.params import REQUIRED
+        from acid.ident.econ import REQUIRED
 
         return REQUIRED
     names = tuple(n.strip() for n in spec.split(",") if n.strip())

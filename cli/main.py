@@ -111,7 +111,9 @@ def main(version: bool = typer.Option(False, "--version", callback=_version, is_
     """acid: identify, validate and control vehicle A/C systems."""
 
 
-# Sub-commands register themselves here, one line each (keep this list sorted by pipeline).
-from acid_cli import commands  # noqa: E402,F401  (registers the sub-commands on ``app``)
+# The sub-commands, one line each in acid_cli.commands (sorted by pipeline).
+from acid_cli.commands import register  # noqa: E402
+
+register(app)
 
 _signals.end_startup()

@@ -11,12 +11,12 @@ import typer
 
 from acid import __version__
 from acid._io import file_sha256, save_figure
-from acid.claims import STUDIES
+from acid.control.nmpc import SOLVERS, NMPCConfig
 from acid.errors import ConfigError
-from acid.mpc.nmpc import SOLVERS, NMPCConfig
-from acid.mpc.scenarios import PLANT_BACKOFF
-from acid.mpc.scenarios import mpc_check as run_check
-from acid.params import load_params
+from acid.models.params import load_params
+from acid.paper import STUDIES
+from acid.studies.scenarios import PLANT_BACKOFF
+from acid.studies.scenarios import mpc_check as run_check
 from acid.units import K2C
 from acid_cli._common import (
     check_paths,

@@ -35,7 +35,7 @@ from acid_cli._plant import (
 )
 
 
-def _fmt(v) -> str:
+def format_value(v) -> str:
     if v == math.inf:
         return "not reached"
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
@@ -43,7 +43,7 @@ def _fmt(v) -> str:
     return f"{v:.4g}"
 
 
-def _verdict(row) -> str:
+def verdict_text(row) -> str:
     if row.info:
         return "info"
     return "n/a" if row.passed is None else ("PASS" if row.passed else "FAIL")
@@ -67,9 +67,9 @@ def plant_check(
     Sources of every reference: datasets/plant/SOURCES.md.
     """
     from acid.errors import ConfigError
-    from acid.plant.check import build_plant
-    from acid.plant.check import plant_check as run_check
     from acid.report.plant import plant_check_figures
+    from acid.studies.credentials.plant import build_plant
+    from acid.studies.credentials.plant import plant_check as run_check
     from acid.units import C2K
 
     check_paths(inputs={"--plant-config": config_input(config), **plant_inputs(plant, fmu_map)},
@@ -90,20 +90,20 @@ def plant_check(
     with progress_bar("plant check", total=13) as update:
         result = run_check(the_plant, progress=update, nominal_factory=nominal)
 
-    rows = [[r.group, r.name, _fmt(r.value), r.unit, r.reference, _verdict(r)]
+    rows = [[r.group, r.name, format_value(r.value), r.unit, r.reference, verdict_text(r)]
             for r in result.rows]
     identity = plant_identity(getattr(the_plant, "cfg", None),
                               choice.spec if choice.kind != "hifi"
                               else "default" if config is None else str(config))
     say(identity_line(identity))
     print_table(f"acid plant-check: {result.plant}",
-                ["_", "_check", "value", "_unit", "_reference", "_verdict"], rows)
-    from acid.plant.check import SEARCH_NOTE
+                ["_", "_check", "value", "_unit", "_reference", "verdict_text"], rows)
+    from acid.studies.credentials.plant import SEARCH_NOTE
 
     say(SEARCH_NOTE)
-    console.print(f"cop_steady_30C_standstill = {_fmt(result.cop_steady_30C_standstill)}, "
+    console.print(f"cop_steady_30C_standstill = {format_value(result.cop_steady_30C_standstill)}, "
                   f"cop_gain_25_vs_0_equal_load_pct = "
-                  f"{_fmt(result.cop_gain_25_vs_0_equal_load_pct)} %")
+                  f"{format_value(result.cop_gain_25_vs_0_equal_load_pct)} %")
     summary = result.to_json_dict()
     summary.update(acid_version=__version__, **choice.to_json_dict(), **identity,
                    config_path=None if config_input(config) is None else str(config_input(config)),

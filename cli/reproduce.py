@@ -13,7 +13,7 @@ from acid.claims import Verdict, contradictions, counts, headline_rows, load_sum
 from acid.errors import ConfigError
 from acid.outdir import claim
 from acid.pipeline import run_pipeline
-from acid.reproduce import ReproduceOptions, build_stages, is_quick, write_outputs
+from acid.studies.reproduce import ReproduceOptions, build_stages, is_quick, write_outputs
 from acid_cli._common import (
     ProgressLines,
     check_paths,

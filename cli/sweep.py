@@ -41,7 +41,7 @@ def _range(d: dict, key: str, digits: int) -> str:
 @handle_errors
 def sweep(
     spec_path: Path = typer.Argument(..., metavar="SPEC.toml",
-                                     help="Sweep specification (TOML; see `acid.sweep.spec`)."),
+                                     help="Sweep specification (TOML)."),
     out: Path | None = typer.Option(None, "--out",
                                     help="Output folder (default: reports/sweep/NAME for "
                                          "NAME.toml)."),
@@ -79,8 +79,8 @@ def sweep(
     """
     from acid.executor import check_scheduler_address
     from acid.outdir import claim
-    from acid.sweep import load_spec
-    from acid.sweep.runner import check_out_folder
+    from acid.studies.sweep import load_spec
+    from acid.studies.sweep.runner import check_out_folder
 
     if out is None:
         if not spec_path.stem.strip("." + "/\\"):
@@ -120,7 +120,7 @@ def sweep(
 
 def _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path,
          header) -> None:
-    from acid.sweep import run_sweep
+    from acid.studies.sweep import run_sweep
 
     n = len(spec.scenarios)
     with progress_bar(f"sweep {spec.title}", total=n) as update:

@@ -3,23 +3,19 @@
 from __future__ import annotations
 
 import math
-import warnings
 from pathlib import Path
 
-import numpy as np
 import typer
 
-from acid.econ.params import load_any_params
 from acid.ident.validate import EXOGENOUS_MODES, PLACEMENTS
+from acid.models.econ_params import load_any_params
 from acid_cli._common import (
     check_paths,
     handle_errors,
     note,
     params_input,
-    print_table,
     require,
     require_range,
-    say,
 )
 
 FIGURES = ("fig5_prediction.png", "fig6_errors.png", "fig6b_yardsticks.png")
@@ -27,10 +23,6 @@ FIGURES = ("fig5_prediction.png", "fig6_errors.png", "fig6b_yardsticks.png")
 MAX_STARTS, MAX_HORIZON = 100_000, 1_000_000
 #: --warmup's default and largest value, s (the default: 60 samples of the paper's 5 s).
 DEFAULT_WARMUP_S, MAX_WARMUP_S = 300.0, 7 * 86400.0
-
-
-def _fmt(v: float, digits: int = 3) -> str:
-    return "n/a" if v is None or not math.isfinite(v) else f"{v:.{digits}f}"
 
 
 @handle_errors
@@ -167,40 +159,3 @@ def _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
             f"places the starts evenly: it cannot be combined with --placement {placement}")
     if held_out_fraction is not None:
         require_range(held_out_fraction, "--held-out-fraction", 0.0, 1.0, lo_open=True)
-
-
-def residual_tests(ds, params, lo: int, hi: int):
-    """One-step residual tests (``acid.analysis.resid``) on the validated samples: their
-    result, or (a ``str``) why they were skipped (the part is too short)."""
-    from acid.analysis import resid
-    from acid.errors import DataError
-
-    try:
-        with warnings.catch_warnings(), np.errstate(all="ignore"):
-            warnings.simplefilter("ignore")
-            return resid(ds.window(lo, hi), params)
-    except DataError as exc:
-        return str(exc)
-
-
-def residual_section(r) -> dict | None:
-    """Print the residual tests ``r`` (``residual_tests``) with what they mean; returns
-    their JSON summary (None when they were skipped)."""
-    if isinstance(r, str):
-        note(f"residual tests skipped: {r}")
-        return None
-    rows = []
-    for i, c in enumerate(r.channels):
-        a = np.abs(r.autocorrelation[1:, i])
-        rows.append([c, "yes" if r.white[c] else "no",
-                     _fmt(float(a.max()) if np.all(np.isfinite(a)) else math.nan, 2),
-                     _fmt(r.ljung_box[c]["p_value"], 3),
-                     ", ".join(u for u in r.inputs if not r.independent[u][c]) or "none"])
-    print_table(f"One-step residuals on the validated samples (N = {r.n}, 99 % band "
-                f"+-{r.band99:.3f})", ["_channel", "white", "max |acf|", "Ljung-Box p",
-                                       "_correlated with"], rows)
-    for c, text in r.interpretation.items():
-        say(f"  {c}: {text}")
-    d = r.to_json_dict()
-    return {k: d[k] for k in ("n", "band99", "white", "independent", "ljung_box",
-                              "interpretation")}

@@ -73,7 +73,7 @@ def build_workspace(w: Path) -> Path:
     import scipy.io
 
     from acid.excite import ExcitationSpec, excite
-    from acid.params import paper
+    from acid.models.params import paper
     from acid.plant import make_plant
 
     w.mkdir(parents=True, exist_ok=True)
@@ -129,7 +129,7 @@ def _write_bytes(name: str, data: bytes) -> Callable[[Path], None]:
 def _params(name: str, **changes) -> Callable[[Path], None]:
     """A params.json from the paper preset with some keys replaced (raw JSON values)."""
     def make(w: Path) -> None:
-        from acid.params import paper
+        from acid.models.params import paper
 
         p = paper()   # the layout users' older params.json files have: groups as lists
         d = {"gamma": list(p.gamma), "tau": list(p.tau), "beta": list(p.beta), "c_p": p.c_p,

@@ -10,11 +10,7 @@ import dataclasses
 import json
 import math
 
-from acid.claims import STUDIES, TABLE_I
-from acid.params import paper
-from acid.pipeline import StageOutcome
-from acid.reproduce import ReproduceOptions, write_outputs
-from acid.stage_results import (
+from acid.claims.results import (
     CavComparisonSummary,
     CavStudyStage,
     ChannelErrors,
@@ -30,6 +26,10 @@ from acid.stage_results import (
     TimingSummary,
     ValidationStage,
 )
+from acid.models.params import paper
+from acid.paper import STUDIES, TABLE_I
+from acid.pipeline import StageOutcome
+from acid.studies.reproduce import ReproduceOptions, write_outputs
 
 
 def sweep(duration_s=TABLE_I.duration_s, scale=1.01) -> SweepStage:

@@ -508,7 +508,7 @@ def params_files(draw):
 
 
 def _read_params(path: Path):
-    from acid.params import load_params
+    from acid.models.params import load_params
 
     return load_params(path)
 
@@ -611,7 +611,7 @@ sweep_spec_files = documents(lambda: json.loads(json.dumps(VALID_SPEC)), spec_ke
 
 
 def _read_sweep_spec(path: Path):
-    from acid.sweep.spec import load_spec
+    from acid.studies.sweep.spec import load_spec
 
     return load_spec(path)
 
@@ -620,7 +620,7 @@ def _read_sweep_spec(path: Path):
 def _valid_fmu_map() -> dict:
     import tomllib
 
-    from acid.plant.fmu_export import fmu_map_text, plant_interface
+    from acid.plant.fmi.export import fmu_map_text, plant_interface
 
     return tomllib.loads(fmu_map_text(plant_interface(), "plant.fmu", 2))
 
@@ -636,7 +636,7 @@ fmu_map_files = st.deferred(lambda: documents(_valid_fmu_map, _fmu_map_keys(), t
 
 
 def _read_fmu_map(path: Path):
-    from acid.plant.fmu import FmuMap
+    from acid.plant.fmi.plant import FmuMap
 
     return FmuMap.from_file(path)
 
@@ -710,7 +710,7 @@ record_files = documents(_valid_record, record_keys, json_value, toml=False, edi
 def _read_record(path: Path):
     """A record written where ``acid sweep`` keeps it, read back as a resumed sweep does;
     a valid one goes into the table and the summary."""
-    from acid.sweep.results import ResultStore, controller_summary, results_table
+    from acid.studies.sweep.results import ResultStore, controller_summary, results_table
 
     folder = path.parent / "sweep" / "scenarios"
     folder.mkdir(parents=True, exist_ok=True)
@@ -725,7 +725,7 @@ def _read_record(path: Path):
 def _valid_econ() -> dict:
     from conftest import ECON_MAP, ECON_TRUTH
 
-    from acid.econ.params import EconParams, PowerMap
+    from acid.models.econ_params import EconParams, PowerMap
 
     domain = {"Q_e": (-500.0, 6000.0), "T_evap": (270.0, 290.0), "v_veh": (0.0, 35.0),
               "T_amb": (290.0, 320.0)}
@@ -743,7 +743,7 @@ econ_files = documents(_valid_econ, econ_keys, st.one_of(json_value, odd_float, 
 
 
 def _read_econ(path: Path):
-    from acid.econ.params import load_any_params
+    from acid.models.econ_params import load_any_params
 
     return load_any_params(path)
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from acid.sweep.controllers import PaperNMPC, PaperNMPCConfig, register_controller
+from acid.studies.sweep.controllers import PaperNMPC, PaperNMPCConfig, register_controller
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 ``model_dataset``: 2 h (1440 samples at Ts = 5 s) of the paper-preset model plant excited
 with the default APRBS (``ExcitationSpec()``, seed 0), T_int/T_shell varied, no noise;
-temperatures in degC, so the true parameters are ``acid.params.paper()``.
+temperatures in degC, so the true parameters are ``acid.models.params.paper()``.
 ``noisy_model_dataset``: the same run with 0.05 K measurement noise on T_cab, T_evap, T_ain.
 Both are session-scoped (built once, ~20 ms each): treat them as read-only (use
 ``ds.window(...)`` or copies before modifying).
@@ -18,6 +18,7 @@ from hypothesis import HealthCheck, settings
 
 from acid.excite import ExcitationSpec, excite
 from acid.plant import make_plant
+from acid.plant.declared import econ_plant
 
 # Property-based tests: modest in the suite, thorough on demand
 # (pytest --hypothesis-profile=acid-thorough tests/test_readers_property.py).
@@ -60,7 +61,7 @@ def noisy_model_dataset(model_spec):
 def exported_fmu(tmp_path_factory):
     """acid's high-fidelity plant exported once per session as an FMI 2.0 FMU, with its map:
     ``(fmu_path, map_path)``."""
-    from acid.plant.fmu_export import export_fmu
+    from acid.plant.fmi.export import export_fmu
 
     folder = tmp_path_factory.mktemp("fmu")
     result = export_fmu(folder / "plant.fmu", map_out=folder / "plant.toml")
@@ -81,7 +82,7 @@ ECON_MAP = (0.155, 0.051, -0.029, -0.006, 0.05, -0.004, -0.01, -0.0015, 0.0027, 
 @pytest.fixture(scope="session")
 def econ_truth():
     """A known econ parameter set (sizes as identified on the high-fidelity plant)."""
-    from acid.econ.params import EconParams, PowerMap
+    from acid.models.econ_params import EconParams, PowerMap
 
     domain = {"Q_e": (-500.0, 6000.0), "T_evap": (270.0, 290.0), "v_veh": (0.0, 35.0),
               "T_amb": (290.0, 320.0)}
@@ -93,9 +94,8 @@ def econ_truth():
 def econ_model_dataset(econ_truth):
     """2 h of the econ model as a plant, excited as ``acid excite --model econ`` (seed 1)."""
     from acid.excite import spec_for_model
-    from acid.models import econ as econ_decl
 
-    return excite(econ_decl.plant(econ_truth.theta_all),
+    return excite(econ_plant(econ_truth.theta_all),
                   spec_for_model("econ", duration=2 * 3600.0, seed=1))
 
 
@@ -112,7 +112,7 @@ def econ_hifi_fit(econ_hifi_dataset):
     """The econ model identified on the first 3/4 of ``econ_hifi_dataset``."""
     import warnings
 
-    from acid.econ.params import identify
+    from acid.ident.econ import identify
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

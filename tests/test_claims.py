@@ -30,9 +30,9 @@ from acid.claims import (
     headline_markdown,
     validate_registry,
 )
-from acid.params import paper
-from acid.report.numbers import format_number
-from acid.stage_results import FitStage, MpcStage, StudyResults, SweepStage
+from acid.claims.results import FitStage, MpcStage, StudyResults, SweepStage
+from acid.models.params import paper
+from acid.numbers import format_number
 
 
 def _by_id(verdicts):
@@ -54,7 +54,7 @@ def test_registry_is_consistent_and_paths_name_declared_fields():
 
 def test_no_number_of_the_paper_is_written_outside_the_registry():
     """The paper's results (Table I, identified parameters, CAV energies), as the paper
-    prints them, appear in no source file of acid or its CLI but acid/claims/paper.py."""
+    prints them, appear in no source file of acid or its CLI but acid/paper.py."""
     numbers = {f"{e:.2f}" for e in TABLE_I.energy_MJ}
     numbers |= {f"{e:.3f}" for e in TABLE_I.energy_MJ_per_km if e is not None}
     numbers |= {repr(abs(v)).removesuffix(".0") for v in MODEL.gamma + MODEL.tau + MODEL.beta}
@@ -62,13 +62,13 @@ def test_no_number_of_the_paper_is_written_outside_the_registry():
     pattern = re.compile(r"(?<![\w.])(" + "|".join(re.escape(n) for n in numbers)
                          + r")(?![\w.]*\d)")
     root = Path(acid.__file__).resolve().parent
-    home = root / "claims" / "paper.py"
+    home = root / "paper.py"
     files = [p for p in sorted(root.rglob("*.py")) + sorted((root.parent / "cli").rglob("*.py"))
              if p != home]
     hits = [f"{p.relative_to(root.parent)}:{i}: {line.strip()}" for p in files
             for i, line in enumerate(p.read_text().splitlines(), start=1)
             if pattern.search(line)]
-    assert not hits, "paper numbers outside acid/claims/paper.py:\n" + "\n".join(hits)
+    assert not hits, "paper numbers outside acid/paper.py:\n" + "\n".join(hits)
 
 
 def test_parameter_preset_reads_the_registry():
@@ -193,7 +193,7 @@ def test_claims_command_prints_the_headline_table(tmp_path, capsys):
 def test_a_quick_run_judges_only_the_stages_it_does_not_shorten(tmp_path):
     """Issue 21: a --quick run's shortened stages are "not judged (quick run)", values kept;
     its NMPC checks (the same scenarios as the study) are judged."""
-    from acid.reproduce import ReproduceOptions
+    from acid.studies.reproduce import ReproduceOptions
 
     v = _by_id(evaluate(results(), quick=True))
     for cid in ("table1.energy.0mps", "table1.ratio", "validation.T_cab",
@@ -227,7 +227,7 @@ def test_the_plant_violation_has_one_criterion_for_the_claim_and_mpc_check():
     mpc-check calls it FAIL: both read the registry's limit."""
     from acid.claims import judge_value
     from acid.claims.registry import PLANT_VIOLATION_TOL_K
-    from acid.mpc import scenarios
+    from acid.studies import scenarios
 
     assert scenarios.PLANT_TOL_K == claim("nmpc.plant.violation").rule.limit
     assert scenarios.PLANT_TOL_K == PLANT_VIOLATION_TOL_K

@@ -10,7 +10,7 @@ from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
 from acid.errors import DataError, OutputError
-from acid.params import paper
+from acid.models.params import paper
 from acid_cli._common import check_paths
 from acid_cli.main import app
 

@@ -87,8 +87,8 @@ def test_a_study_of_several_cycles_moves_in_plant_steps_not_per_cycle(monkeypatc
     only 1/2 and 2/2: a log was silent for a whole cycle. It counts plant steps over both."""
     from types import SimpleNamespace
 
-    import acid.mpc.cav_study as cs
-    from acid.params import paper
+    import acid.studies.cav_study as cs
+    from acid.models.params import paper
 
     def study_cycle(params, econ, name, config, plant_factory, progress=None):
         for _ in range(3):

@@ -10,11 +10,12 @@ from acid.control.heating import (
     HeatingControlConfig,
     HeatingNMPC,
     heat_pump_map,
+    heating_control_model,
     run_case,
     tune_rule,
     warm_start,
 )
-from acid.models.heating_control import COP_FIT, heating_control_model
+from acid.models.heating_control import COP_FIT
 from acid.plant.heating import HeatingPlant
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
 from acid.units import C2K

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from acid.control.layout import BlockVector
+from acid.control.nmpc import NMPC
 from acid.control.ocp import stage_shift
-from acid.mpc.nmpc import NMPC
-from acid.params import paper
+from acid.models.params import paper
 
 
 def _ocp_vector(N=3):
@@ -69,8 +69,8 @@ def test_stage_shift_holds_the_horizons_last_stages_in_place():
 def test_the_nmpc_holds_its_plans_end_arc_for_fewer_iterations_and_the_same_moves():
     """The paper's plans end in an arc tied to the horizon's end: a warm start that keeps it
     in place needs fewer SQP iterations (deterministic, CasADi's count) for the same moves."""
-    from acid.mpc.nmpc import NMPCConfig
-    from acid.mpc.scenarios import run_model_scenario
+    from acid.control.nmpc import NMPCConfig
+    from acid.studies.scenarios import run_model_scenario
 
     moves, iterations = {}, {}
     for hold in (0, 2):
@@ -85,8 +85,8 @@ def test_the_nmpc_holds_its_plans_end_arc_for_fewer_iterations_and_the_same_move
 
 @pytest.mark.parametrize("hold", [-1, 1.5, "2", True])
 def test_a_warm_start_hold_that_is_no_stage_count_is_one_line(hold):
+    from acid.control.nmpc import NMPCConfig
     from acid.errors import ConfigError
-    from acid.mpc.nmpc import NMPCConfig
 
     with pytest.raises(ConfigError, match="warm_start_hold"):
         NMPCConfig(warm_start_hold=hold)

@@ -14,11 +14,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from acid.control.nmpc import NMPC, NMPCConfig
 from acid.control.ocp import OCP, OCPSpec, SoftBound, disturbed_dynamics, tracking_cost
 from acid.errors import ConfigError
 from acid.models.paper import model as paper_model
-from acid.mpc.nmpc import NMPC, NMPCConfig
-from acid.params import paper
+from acid.models.params import paper
 
 REFS = json.loads((Path(__file__).parent / "references" / "ocp_first_moves.json").read_text())
 
@@ -96,7 +96,7 @@ def test_econ_nmpc_reproduces_the_first_moves_of_the_builder_it_replaced(econ_tr
                                                                          stage_functions):
     import warnings
 
-    from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig
+    from acid.control.econ.nmpc import EconNMPC, EconNMPCConfig
 
     rows = [r for r in REFS["econ"] if r["terminal"] == terminal]
     cfg = EconNMPCConfig(intervals=tuple(rows[0]["intervals"]), T_cab_min=rows[0]["T_cab_min"],
@@ -136,7 +136,7 @@ def test_the_steady_state_problem_is_the_models_fixed_point():
 
 
 def test_the_trajectory_as_generated_c_equals_casadis():
-    from acid.mpc.codegen import find_compiler
+    from acid.control.codegen.build import find_compiler
 
     if find_compiler() is None:
         pytest.skip("no C compiler")
@@ -156,8 +156,8 @@ def test_stage_functions_are_differentiated_only_by_the_decision_variables(econ_
     the NLP's constraint Jacobian and Lagrangian Hessian must still equal those of the
     inlined form (CasADi SX, which knows nothing of it) at a point on the model's
     trajectory; and no derivative is taken by a parameter."""
+    from acid.control.econ.nmpc import EconNMPC, EconNMPCConfig, ocp_spec
     from acid.models.econ import model as econ_model
-    from acid.mpc.econ_nmpc import EconNMPC, EconNMPCConfig, ocp_spec
 
     cfg = EconNMPCConfig(compiled=False, solver="ipopt", comfort_weight=30.0)
     mpc = EconNMPC(econ_truth, cfg)

@@ -155,7 +155,7 @@ def test_fit_starts_take_the_built_in_families_through_the_declared_fitter(recor
     assert res.exit_code == 0, res.output
     d = json.loads(one.read_text())
     assert d["format"] == "acid-declared-params" and len(d["gamma"]) == 7
-    from acid.params import ModelParams
+    from acid.models.params import ModelParams
     assert ModelParams.from_json(one).gamma == tuple(
         d["parameters"][f"gamma{i}"]["value"] for i in range(1, 8))
     res = runner.invoke(app, ["fit", str(record), "--model", "paper", "--fit-starts", "3",

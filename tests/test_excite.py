@@ -153,7 +153,7 @@ def test_cli_excite_same_seed_same_file(tmp_path):
 
 
 def test_cli_excite_params_file_and_no_exogenous(tmp_path):
-    from acid.params import paper
+    from acid.models.params import paper
 
     params = paper().replace(name="mine").to_json(tmp_path / "p.json")
     out = tmp_path / "d.h5"

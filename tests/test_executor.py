@@ -77,8 +77,8 @@ LOOP = textwrap.dedent("""
     import os, signal, threading
     import numpy as np
     from acid.executor import check_interrupt, interrupt_guard
-    from acid.mpc.nmpc import NMPC, NMPCConfig
-    from acid.params import paper
+    from acid.control.nmpc import NMPC, NMPCConfig
+    from acid.models.params import paper
     from acid.units import C2K
     mpc = NMPC(paper(), NMPCConfig())
     x, ub = np.array([C2K(30.0), C2K(10.0)]), np.full(7, C2K(24.0))

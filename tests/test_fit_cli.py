@@ -10,7 +10,7 @@ import pytest
 from _cli import assert_one_line_error
 from typer.testing import CliRunner
 
-from acid.params import ModelParams, paper
+from acid.models.params import ModelParams, paper
 from acid_cli.main import app
 
 runner = CliRunner()

@@ -1,19 +1,18 @@
 """acid.ident.analysis: predict, compare and resid for any declared model, through
-acid.analysis's result objects; checked against the model's own one-sample map."""
+acid.ident.analysis's result objects; checked against the model's own one-sample map."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from acid.analysis import compare, predict, resid
 from acid.errors import ConfigError
 from acid.excite import ExcitationSpec, excite
-from acid.ident.analysis import predict_model
+from acid.ident.analysis import compare, predict, predict_model, resid
 from acid.ident.fit import fit_model
 from acid.models import load
-from acid.models.plant import DeclaredPlant
 from acid.models.values import ParameterValues
+from acid.plant.declared import DeclaredPlant
 
 CABIN3 = load("cabin3")
 

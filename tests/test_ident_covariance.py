@@ -15,7 +15,7 @@ from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.excite import ExcitationSpec, excite
 from acid.ident.fit import DEFAULT_COVARIANCE, fit_model
-from acid.params import PARAMETER_TABLE, paper
+from acid.models.params import PARAMETER_TABLE, paper
 from acid.plant import make_plant
 from acid_cli.main import app
 

@@ -11,6 +11,7 @@ from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.ident.fit import fit_model
 from acid.models import Model, Parameter, Signal, State, load, sin
+from acid.plant.declared import econ_plant
 
 
 def _dataset(channels: dict, units: dict, Ts: float, experiment=None) -> Dataset:
@@ -191,14 +192,13 @@ def test_multi_start_finds_the_global_optimum_and_reports_distinct_optima():
 
 def test_the_econ_declaration_gains_output_error():
     from acid.excite import excite, spec_for_model
-    from acid.models import econ as econ_decl
 
     m = load("econ")
     truth = {"C_cab": 5000.0, "hA_int": 170.0, "Q_sh": 700.0, "tau_ew": 14.0}
     theta = m.values.copy()
     for n, v in truth.items():
         theta[m.parameter_names.index(n)] = v
-    plant = econ_decl.plant(theta)
+    plant = econ_plant(theta)
     ds = excite(plant, spec_for_model("econ", duration=1200.0, seed=1))
     free = tuple(truth)
     res = fit_model(m, ds, method="oe", oe_window=120,

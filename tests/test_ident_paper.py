@@ -15,7 +15,7 @@ from acid.errors import ConfigError, DataError
 from acid.excite import ExcitationSpec, excite, make_schedule
 from acid.ident.fit import fit_model
 from acid.models import load
-from acid.params import PARAMETER_TABLE, eta_cop_of, fitted, paper
+from acid.models.params import PARAMETER_TABLE, eta_cop_of, fitted, paper
 from acid.plant import make_plant
 
 TRUE = paper().theta

@@ -8,7 +8,7 @@ import pytest
 
 from acid.data import Dataset
 from acid.errors import DataError
-from acid.hac import hac_meat, segment_ids
+from acid.ident.hac import hac_meat, segment_ids
 from acid.ident.stages import Stage, fit_stages
 from acid.models import Model, Parameter, Signal, State
 

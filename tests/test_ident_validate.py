@@ -123,7 +123,7 @@ def test_too_short_a_record_is_one_line(rng):
 def test_the_paper_declaration_matches_eqs_1_to_3_written_out(noisy_model_dataset):
     """T_int/T_shell held (the paper's protocol): every predicted T_cab, T_evap, T_ain
     equals eqs. 1-3 simulated by hand from the measured start."""
-    from acid.params import paper
+    from acid.models.params import paper
 
     ds, p = noisy_model_dataset, paper()
     g, tau = p.gamma, p.tau
@@ -216,7 +216,7 @@ def test_the_warm_start_equals_the_joint_dense_solve(rng, case, atol):
     import scipy.optimize
 
     from acid.ident.data import ModelData
-    from acid.ident.validate import _fit_initial_states, _warm_start
+    from acid.ident.validate import _fit_initial_states, warm_start_states
 
     m, ds, p = case(rng)
     data = ModelData.of(m, ds, min_samples=2)
@@ -245,7 +245,7 @@ def test_the_warm_start_equals_the_joint_dense_solve(rng, case, atol):
     latent = [i for i, st in enumerate(m.states) if not st.measured]
     measured = [i for i, st in enumerate(m.states) if st.measured]
     rule = data.initial_states(m, k0)
-    got = _warm_start(m, data, P, k0, W, rule, latent)
+    got = warm_start_states(m, data, P, k0, W, rule, latent)
     np.testing.assert_allclose(got[:, latent], expected[:, latent], rtol=0, atol=atol)
     z = _fit_initial_states(m, data, P, (k0 - W)[:, None] + np.arange(W)[None, :], meas,
                             chan, scale, z0.reshape(k0.size, m.nx))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from acid.models import DeclarationError, Model, Parameter, Signal, State, load
-from acid.params import paper
+from acid.models.params import paper
 
 HEADER = "from acid.models import Model, Parameter, Signal, State, RK4\n"
 

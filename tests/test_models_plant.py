@@ -1,4 +1,4 @@
-"""acid.models.plant: any declaration as a plant for acid.excite; its data fit back."""
+"""acid.plant.declared: any declaration as a plant for acid.excite; its data fit back."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from acid.errors import ConfigError
 from acid.excite import ExcitationSpec, excite
 from acid.ident.fit import fit_model
 from acid.models import load
-from acid.models.plant import DeclaredPlant
+from acid.plant.declared import DeclaredPlant, econ_plant
 
 
 def test_excite_a_declared_model_and_fit_it_back():
@@ -44,7 +44,7 @@ def test_a_floor_holds_an_output_where_the_smooth_model_goes_below_it():
     # the wall warming fast towards a far set-point: the refrigerant heat Q_e is negative
     kw = {"initial": {**econ.HOT_SOAK, "T_cab": 295.0, "T_evap": 275.0}}
     raw = DeclaredPlant("econ", **kw).step(0.1, 300.0, 10.0, T_amb=300.0)
-    floored = econ.plant(**kw).step(0.1, 300.0, 10.0, T_amb=300.0)
+    floored = econ_plant(**kw).step(0.1, 300.0, 10.0, T_amb=300.0)
     assert raw["P_comp"] < 0.0 and floored["P_comp"] == 0.0
     assert floored["T_cab"] == raw["T_cab"] and floored["T_ain"] == raw["T_ain"]
     with pytest.raises(ConfigError, match="floor of 'P_com', not an output"):

@@ -1,4 +1,4 @@
-"""FMU plants (``acid.plant.fmu``) and the exported plant FMU (``acid.plant.fmu_export``).
+"""FMU plants (``acid.plant.fmi.plant``) and the exported plant FMU (``acid.plant.fmi.export``).
 
 Real FMUs only: acid's own high-fidelity plant exported with pythonfmu (FMI 2.0, session
 fixture ``exported_fmu``) and pythonfmu3 (FMI 3.0), and a small user FMU in other units
@@ -20,7 +20,7 @@ import pytest
 from acid.errors import ConfigError
 from acid.excite import ExcitationSpec, excite
 from acid.plant import make_plant
-from acid.plant.fmu import FmuError, FmuMap, FmuPlant
+from acid.plant.fmi.plant import FmuError, FmuMap, FmuPlant
 from acid.plant.hifi import HifiPlant
 from acid.units import C2K
 
@@ -56,7 +56,7 @@ def test_exported_fmu_equals_the_native_plant_channel_for_channel(exported_fmu):
 
 
 def test_fmi3_export_and_sub_steps_equal_the_native_plant(tmp_path, exported_fmu):
-    from acid.plant.fmu_export import export_fmu
+    from acid.plant.fmi.export import export_fmu
 
     res = export_fmu(tmp_path / "p3.fmu", fmi_version=3, map_out=tmp_path / "p3.toml")
     spec = ExcitationSpec(seed=1, duration=300.0)
@@ -99,8 +99,8 @@ def test_speed_sweep_through_the_fmu_runs_its_nominal_controller(exported_fmu):
 
 
 def test_closed_loop_scenario_on_the_fmu_equals_the_native_plant(exported_fmu):
-    from acid.mpc.scenarios import run_plant_scenario
-    from acid.params import paper
+    from acid.models.params import paper
+    from acid.studies.scenarios import run_plant_scenario
 
     fmu, fmu_map = exported_fmu
     native = run_plant_scenario(paper(), duration_s=40.0)
@@ -112,7 +112,7 @@ def test_closed_loop_scenario_on_the_fmu_equals_the_native_plant(exported_fmu):
 
 
 def test_the_shipped_example_map_drives_the_exported_fmu(exported_fmu):
-    from acid.plant.fmu_export import fmu_map_text, plant_interface
+    from acid.plant.fmi.export import fmu_map_text, plant_interface
 
     fmu, _ = exported_fmu
     example = Path(__file__).parents[1] / "datasets" / "examples" / "acid_hifi_fmu_map.toml"
@@ -270,7 +270,7 @@ def test_step_keywords_the_map_lacks_are_refused(cabin_lag):
 
 def test_the_configuration_is_baked_into_the_fmu(tmp_path):
     from acid.plant.config import PlantConfig
-    from acid.plant.fmu_export import export_fmu
+    from acid.plant.fmi.export import export_fmu
 
     cfg = PlantConfig().replace(T_amb=C2K(38.0), RH_amb=0.3)
     res = export_fmu(tmp_path / "hot.fmu", cfg, map_out=tmp_path / "hot.toml")
@@ -307,7 +307,7 @@ def private_tmp(tmp_path, monkeypatch):
 
 def test_a_zip_bomb_is_refused_before_anything_is_extracted(exported_fmu, tmp_path,
                                                             monkeypatch, private_tmp):
-    import acid.plant.fmu as fmu_module
+    import acid.plant.fmi.plant as fmu_module
 
     fmu, fmu_map = exported_fmu
     with zipfile.ZipFile(fmu) as z:

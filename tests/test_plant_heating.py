@@ -9,10 +9,10 @@ import pytest
 
 from acid.errors import ConfigError
 from acid.plant.base import InputSchedule
-from acid.plant.check_heating import _hp_run, steady_cop
 from acid.plant.heating import HeatingPlant, dew_point, shell_conductance
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
 from acid.plant.hifi import humidity_ratio
+from acid.studies.credentials.heating import _hp_run, steady_cop
 from acid.units import C2K
 
 

@@ -14,7 +14,7 @@ import pytest
 from acid.excite import ExcitationSpec, excite
 from acid.ident.fit import fit_model
 from acid.ident.validate import validate
-from acid.params import fitted
+from acid.models.params import fitted
 from acid.plant import make_plant
 
 pytestmark = pytest.mark.slow

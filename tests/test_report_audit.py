@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from acid.mpc.scenarios import ClosedLoopRun, ScenarioResult
 from acid.report.audit import audit_figure
 from acid.report.figures import read_figure_index, save_report_figure, write_figure_index
 from acid.report.mpc import closed_loop_figure
+from acid.studies.scenarios import ClosedLoopRun, ScenarioResult
 from acid.units import C2K
 
 

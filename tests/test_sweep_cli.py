@@ -119,7 +119,7 @@ def _files(folder):
 def test_a_folder_of_another_specs_results_is_refused_and_the_same_spec_resumes(
         tmp_path, no_workers):
     from acid.executor import InlineExecutor
-    from acid.sweep import load_spec, run_sweep
+    from acid.studies.sweep import load_spec, run_sweep
 
     first = tmp_path / "first.toml"
     first.write_text(TINY)
@@ -147,7 +147,7 @@ def test_a_folder_of_another_specs_results_is_refused_and_the_same_spec_resumes(
 
 def test_unstable_parameters_are_refused_before_any_worker_unless_allowed(tmp_path,
                                                                           no_workers):
-    from acid.params import paper
+    from acid.models.params import paper
 
     paper().replace(gamma=(0.9, 0.9, 0.2, 0.5, 0.6, 0.3, 10.0), name="bad").to_json(
         tmp_path / "b.json")
@@ -217,11 +217,11 @@ def test_each_progress_line_names_the_scenario_that_finished(tmp_path, monkeypat
     import contextlib
     import re
 
-    import acid.sweep.runner
+    import acid.studies.sweep.runner
     from acid.executor import InlineExecutor
-    from acid.params import paper
+    from acid.models.params import paper
 
-    monkeypatch.setattr(acid.sweep.runner, "open_executor",
+    monkeypatch.setattr(acid.studies.sweep.runner, "open_executor",
                         lambda *a, **k: contextlib.nullcontext(InlineExecutor()))
     paper().to_json(tmp_path / "p[red]x.json")
     spec = tmp_path / "s.toml"

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from acid.data import ChannelMap
-from acid.plant.fmu import FmuMap, fmi_unit_definition
+from acid.plant.fmi.plant import FmuMap, fmi_unit_definition
 from acid.units import (
     BASE_DIMENSIONS,
     KNOWN_UNITS,

@@ -17,7 +17,7 @@ import pytest
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.ident.validate import held_out_part, validate
-from acid.params import paper
+from acid.models.params import paper
 from acid.plant import InputSchedule, ModelPlant
 from acid.signals import aprbs
 from acid.units import C2K
@@ -321,8 +321,8 @@ def test_non_overlapping_starts_respect_experiment_boundaries(varying):
 
 
 def test_reproduce_stage_result_and_report_section_carry_design_and_yardsticks(varying):
+    from acid.claims.results import ValidationStage
     from acid.report.sections import SECTION_BUILDERS
-    from acid.stage_results import ValidationStage
 
     r = validate(varying, paper(), starts=12, horizon=300, held_out_fraction=0.5,
                  yardsticks=True)

@@ -1,12 +1,12 @@
 """The registry of the paper's claims: its numbers, where acid measures them, how they are judged.
 
-The paper's numbers are written in :mod:`acid.claims.paper` and nowhere else (Wang,
+The paper's numbers are written in :mod:`acid.paper` and nowhere else (Wang,
 Kolmanovsky, Amini & Sun, "Model Predictive Climate Control of Connected and Automated
 Vehicles for Improved Energy Efficiency", ACC 2018). Everything else reads them from there:
-the parameter preset (:func:`acid.params.paper`), the speed sweep's Table I, the CAV
+the parameter preset (:func:`acid.models.params.paper`), the speed sweep's Table I, the CAV
 scenario's window, the report, ``summary.json`` and the README's headline table.
 
-Modules: :mod:`~acid.claims.paper` (the numbers), :mod:`~acid.claims.core` (claims, rules,
+Modules: :mod:`~acid.paper` (the numbers), :mod:`~acid.claims.core` (claims, rules,
 verdicts), :mod:`~acid.claims.registry` (``CLAIMS``, ``HEADLINE``),
 :mod:`~acid.claims.headline` (the README table from a ``summary.json``).
 
@@ -15,7 +15,7 @@ A :class:`Claim` is one result of the paper:
 * ``paper``: its value, unit, where in the paper it is and, for qualitative or approximate
   statements, the paper's words (:class:`PaperValue`);
 * ``measured``: where acid measures it, as a stage result class of
-  :mod:`acid.stage_results` and a path to one of its fields (checked against the declared
+  :mod:`acid.claims.results` and a path to one of its fields (checked against the declared
   fields when the registry is built), plus the conditions under which the two are comparable
   (e.g. a 600 s sweep) (:class:`Measured`, :class:`Requires`);
 * ``rule``: how the verdict is reached: :class:`Within` a tolerance, :class:`AtMost` a
@@ -30,7 +30,7 @@ objects; :func:`contradictions` lists violated implications; :func:`headline_mar
 renders the README's headline table from a ``summary.json``.
 
 Adding a claim (for a new stage or study): give the stage a result class in
-:mod:`acid.stage_results`, then add a ``Claim`` in :mod:`acid.claims.registry` (and, if it
+:mod:`acid.claims.results`, then add a ``Claim`` in :mod:`acid.claims.registry` (and, if it
 belongs in the README, its id to a :class:`HeadlineRow` in ``HEADLINE``). ``python -m acid.claims``
 lists the registry; ``python -m acid.claims summary.json`` prints the headline table.
 """
@@ -65,7 +65,6 @@ from acid.claims.headline import (
     main,
     registry_rows,
 )
-from acid.claims.paper import MODEL, PAPER_CITATION, STUDIES, TABLE_I, TABLE_II
 from acid.claims.registry import (
     CLAIMS,
     HEADLINE,
@@ -76,6 +75,7 @@ from acid.claims.registry import (
     summary_claims,
     validate_registry,
 )
+from acid.paper import MODEL, PAPER_CITATION, STUDIES, TABLE_I, TABLE_II
 
 __all__ = ["CLAIMS", "HEADLINE", "MODEL", "NO_VERDICT", "PAPER_CITATION", "STUDIES", "TABLE_I",
            "TABLE_II",

@@ -2,7 +2,7 @@
 :mod:`acid.claims.registry`).
 
 A :class:`Claim` is one result of the paper: its value (:class:`PaperValue`), where acid
-measures it (:class:`Measured`: a typed stage result class of :mod:`acid.stage_results` and
+measures it (:class:`Measured`: a typed stage result class of :mod:`acid.claims.results` and
 a field path, with :class:`Requires` conditions for comparability) and the :class:`Rule` of
 its verdict (:class:`Within`, :class:`AtMost`, :class:`SameSign`, :class:`NotComparable`,
 :class:`BeyondThePaper`). :func:`judge` applies it to the results of one run.
@@ -21,8 +21,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import Enum
 
-from acid.report.numbers import format_estimate, format_number
-from acid.stage_results import Estimate, StageResult, StudyResults, field_type
+from acid.claims.results import Estimate, StageResult, StudyResults, field_type
+from acid.numbers import format_estimate, format_number
 
 
 class Verdict(str, Enum):
@@ -80,7 +80,7 @@ class Measured:
 
     Paths are dotted field names with ``[i]`` indices into tuples and names as keys of
     dicts: ``"energy_MJ[2]"``, ``"channels.T_cab.p90_abs"``, ``"parameters.gamma1"``. A path
-    ending at an :class:`acid.stage_results.Estimate` carries its standard error and 95 %
+    ending at an :class:`acid.claims.results.Estimate` carries its standard error and 95 %
     interval into the report. ``spec`` formats the value; ``unit`` is its unit when the
     claim has no paper value (otherwise the paper's unit applies).
     """

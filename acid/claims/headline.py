@@ -127,10 +127,10 @@ def rejudge(summary: Mapping, path: str | Path = "summary.json") -> tuple[dict, 
     the ids whose stored verdict differed (corrected). A malformed or tampered value is a
     ``DataError`` naming the file and the key.
     """
+    from acid.claims.options import run_mode
     from acid.claims.registry import evaluate, summary_claims
+    from acid.claims.results import StudyResults
     from acid.errors import DataError
-    from acid.reproduce import run_mode
-    from acid.stage_results import StudyResults
 
     stages = summary.get("stages")
     if not isinstance(stages, Mapping) or not stages:

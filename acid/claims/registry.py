@@ -1,6 +1,6 @@
 """The registry: one :class:`~acid.claims.core.Claim` per result of the paper.
 
-Each claim names the paper's value (from :mod:`acid.claims.paper`), the field of a typed
+Each claim names the paper's value (from :mod:`acid.paper`), the field of a typed
 stage result where acid measures it, and the rule of its verdict; ``HEADLINE`` groups them
 into the rows of the README's headline table. Paths are checked against the declared fields
 when this module is imported (:func:`validate_registry`).
@@ -33,8 +33,7 @@ from acid.claims.core import (
     judge,
     not_judged,
 )
-from acid.claims.paper import MODEL, PAPER_CITATION, STUDIES, TABLE_I, TABLE_II
-from acid.stage_results import (
+from acid.claims.results import (
     CavStudyStage,
     EconStage,
     FitStage,
@@ -45,6 +44,7 @@ from acid.stage_results import (
     SweepStage,
     ValidationStage,
 )
+from acid.paper import MODEL, PAPER_CITATION, STUDIES, TABLE_I, TABLE_II
 
 #: where Table I is judged (``acid.plant.vehicles``)
 _VEHICLE_NOTE = ("on the paper vehicle (the Table I calibration, example:"
@@ -180,7 +180,7 @@ def _nmpc_claims() -> list[Claim]:
               Measured(MpcStage, "plant.max_avoidable_violation_K", spec=".3f"),
               AtMost(limit=PLANT_VIOLATION_TOL_K, reading="'slight violations'"),
               note="the one criterion of this quantity: acid mpc-check's scenario (b) "
-                   "verdict uses the same limit (acid.mpc.scenarios.PLANT_TOL_K)"),
+                   "verdict uses the same limit"),
         Claim("nmpc.computation", "Computation",
               "NMPC time per step, mean over the timed steps (the paper's average)",
               PaperValue(Ts_ms * STUDIES.computation_fraction_of_Ts, "ms", "section IV-B",

@@ -30,10 +30,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acid.control.codegen.solver import NLPSolver
 from acid.control.ocp import OCP, OCPSpec, SoftBound
 from acid.errors import ConfigError, SolverWarning
 from acid.models.declaration import Model
-from acid.mpc.solver import NLPSolver
 from acid.units import C2K
 
 
@@ -195,21 +195,21 @@ class CabinFilter:
     from (interior, shell and load are latent)."""
 
     def __init__(self, model: Model, values, x0):
-        from acid.ident.pem import _spread, _step
+        from acid.ident.pem import ekf_step, initial_spread
 
         self.model, self.theta = model, np.asarray(values, dtype=float)
-        self._step = _step(model, (model.state_names.index("T_cab"),))
+        self.ekf_step = ekf_step(model, (model.state_names.index("T_cab"),))
         self.x = np.asarray(x0, dtype=float)
-        self.P = np.diag(_spread(model) ** 2).ravel(order="F")
+        self.P = np.diag(initial_spread(model) ** 2).ravel(order="F")
 
     def update(self, T_cab: float) -> np.ndarray:
         """The filtered state (nx,) after the cabin air ``T_cab`` (K) measured now."""
         self._m = [float(T_cab)]
         u0, d0 = np.zeros(self.model.nu), np.zeros(self.model.nd)   # xf reads neither
-        return np.asarray(self._step(self.x, self.P, u0, d0, self.theta, self._m,
+        return np.asarray(self.ekf_step(self.x, self.P, u0, d0, self.theta, self._m,
                                      [1.0])[5]).ravel()
 
     def predict(self, u, d) -> None:
         """One sample ahead under the input ``u`` and disturbances ``d`` held over it."""
-        out = self._step(self.x, self.P, u, d, self.theta, self._m, [1.0])
+        out = self.ekf_step(self.x, self.P, u, d, self.theta, self._m, [1.0])
         self.x, self.P = np.asarray(out[0]).ravel(), np.asarray(out[1]).ravel()

@@ -27,7 +27,7 @@ builder stacks, stage by stage (the order fatrop's structure detection wants)::
 * ``dist`` are the offset-free disturbances: each one acts on a named state (added to its
   next value) or on a named output (added to it, and substituted where the step reads it,
   e.g. the paper's inlet air in eq. 1). :meth:`OCP.dynamics` is the same map as a CasADi
-  Function ``(x, u, v, d) -> x_next`` for :class:`acid.mpc.estimator.OffsetFreeEstimator`.
+  Function ``(x, u, v, d) -> x_next`` for :class:`acid.control.estimator.OffsetFreeEstimator`.
 * The terminal price ``lam`` (J per unit state) comes from the model's optimal steady state
   (:func:`steady_state_problem` on the same declaration) or any other rule of the caller.
 * Inputs (and states) enter the NLP scaled, ``u = u_offset + w / u_scale``, for
@@ -208,7 +208,7 @@ class OCP:
 
     Attributes (after construction)
     ----------
-    nlp : ``{"x", "f", "g", "p"}`` for :class:`acid.mpc.solver.NLPSolver`.
+    nlp : ``{"x", "f", "g", "p"}`` for :class:`acid.control.codegen.solver.NLPSolver`.
     w, g, par : the declared layouts (:class:`acid.control.layout.BlockVector`).
     lbx, ubx, lbg, ubg : constant bound vectors (input bounds, slacks >= 0, constraint
         sides); the soft bounds' limits are parameters (:meth:`parameters`).
@@ -576,7 +576,7 @@ class OCP:
 
     def dynamics(self, theta: np.ndarray, name: str = "ocp_model") -> ca.Function:
         """``(x, u, v, d) -> x_next`` at fixed parameters: the prediction model with its
-        offset-free disturbances ``d`` (for :class:`acid.mpc.estimator.OffsetFreeEstimator`;
+        offset-free disturbances ``d`` (for :class:`acid.control.estimator.OffsetFreeEstimator`;
         ``v`` the declared disturbances)."""
         m = self.model
         x, u, v, d = (ca.SX.sym(n, k) for n, k in (("x", m.nx), ("u", m.nu), ("v", m.nd),
@@ -589,7 +589,7 @@ def numeric_evaluator(fn: ca.Function, compiled: bool | str = "auto") -> Callabl
     """``fn`` on numbers, returning numpy arrays of its outputs' shapes: generated C when
     ``compiled`` allows and a compiler works, else inside CasADi."""
     if compiled is not False:
-        from acid.mpc.codegen import CodegenError, compile_function
+        from acid.control.codegen.build import CodegenError, compile_function
 
         try:
             cf, _ = compile_function(fn)

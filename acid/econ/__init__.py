@@ -1,13 +1,12 @@
-"""The economic model's parameter files and the names its controllers read. The model itself
-is declared once, in :mod:`acid.models.econ` (equations, parameter table, fitting stages).
+"""Moved to :mod:`acid.models.econ_params`: this alias package warns, and goes in the next
+release. Its modules are aliases of the new ones."""
 
-* :mod:`acid.econ.params` -- ``EconParams`` (the declaration's table as a value container,
-  JSON) with its ``PowerMap`` (domain, quality); ``identify`` (``acid fit --model econ``):
-  acid.ident's staged fit of the declaration;
+import warnings
 
-It is validated by acid's one validator, :func:`acid.ident.validate.validate`.
-"""
-
-from acid.econ.params import EconParams, PowerMap, load_any_params
+from acid.errors import MovedWarning
+from acid.models.econ_params import EconParams, PowerMap, load_any_params  # noqa: F401
 
 __all__ = ["EconParams", "PowerMap", "load_any_params"]
+
+warnings.warn("acid.econ has moved to acid.models.econ_params; the old name will be removed "
+              "in the next release", MovedWarning, stacklevel=2)

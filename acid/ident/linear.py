@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from acid.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.ident.data import ModelData
+from acid.ident.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.models.declaration import Model
 
 _RANK_RTOL = 1e-9

@@ -17,8 +17,8 @@ import numpy as np
 import scipy.optimize
 
 from acid.errors import DataError
-from acid.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.ident.data import ModelData
+from acid.ident.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.ident.linear import HUBER_M, robust_std
 from acid.models.declaration import Model
 

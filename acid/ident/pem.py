@@ -77,14 +77,14 @@ def noise_parameters(model: Model) -> tuple[str, ...]:
                                if isinstance(v, str)))
 
 
-def _spread(model: Model) -> np.ndarray:
+def initial_spread(model: Model) -> np.ndarray:
     return np.array([s.spread if s.spread is not None else
                      (DEFAULT_SPREAD_MEASURED if s.measured else DEFAULT_SPREAD_LATENT)
                      for s in model.states], dtype=float)
 
 
 @functools.lru_cache(maxsize=16)
-def _step(model: Model, chan: tuple[int, ...]) -> ca.Function:
+def ekf_step(model: Model, chan: tuple[int, ...]) -> ca.Function:
     """One filter sample: update with the measured channels ``chan`` of [x | y] (``o``: 1
     where observed), then predict one sample ahead.
 
@@ -124,7 +124,7 @@ def _step(model: Model, chan: tuple[int, ...]) -> ca.Function:
 @functools.lru_cache(maxsize=16)
 def _run(model: Model, chan: tuple[int, ...], L: int, n: int) -> ca.Function:
     """The filter over ``n`` padded records of ``L`` samples each (``.map``)."""
-    acc = _step(model, chan).mapaccum("ekf", L, 2)
+    acc = ekf_step(model, chan).mapaccum("ekf", L, 2)
     return acc.map(n)
 
 
@@ -150,7 +150,7 @@ class _Records:
         meas = data.observed()[idx][..., list(chan)]
         o = (np.isfinite(meas) & real[..., None]).astype(float)
         x0 = data.initial_states(model, idx[:, 0])
-        P0 = np.tile(np.diag(_spread(model) ** 2).ravel(), (len(spans), 1))
+        P0 = np.tile(np.diag(initial_spread(model) ** 2).ravel(), (len(spans), 1))
         return cls(x0=x0, P0=P0, u=data.u[idx], d=data.d[idx], m=np.nan_to_num(meas), o=o,
                    idx=idx, real=real)
 
@@ -349,7 +349,7 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
     likelihood's curvature, 95 % normal intervals)."""
     import time
 
-    from acid.ident.fit import DeclaredFitResult, Estimate
+    from acid.ident.result import DeclaredFitResult, Estimate
 
     t0 = time.perf_counter() if t0 is None else t0
     data = ModelData.of(model, ds)

@@ -29,9 +29,9 @@ import scipy.stats
 
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
-from acid.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.ident.data import ModelData
 from acid.ident.fit import DeclaredFitResult, EquationReport, Estimate, fit_model
+from acid.ident.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.models.declaration import Model
 from acid.models.loader import load
 

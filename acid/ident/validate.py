@@ -249,7 +249,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
     ``non_overlapping``: starts at least ``horizon + 1`` samples apart.
     ``start_range`` (lo, hi): every window inside samples lo .. hi - 1 (e.g. the held-out
-    part). ``yardsticks``: persistence, ARX and subspace (``acid.yardsticks``) on the same
+    part). ``yardsticks``: persistence, ARX and subspace (``acid.ident.yardsticks``) on the same
     windows, given the same inputs and held disturbances, fitted on ``estimation`` (lo, hi)
     samples (default: the whole record, in-sample). ``to_end``: a start may lie less than
     ``horizon`` samples before its experiment's end (at least ``horizon // 25`` steps, 60 s
@@ -321,7 +321,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                 if gaps.size else "one start")
              + f", horizon {horizon * model.Ts:g} s, "
              + ("overlapping" if gaps.size and gaps.min() <= horizon else "no overlap")]
-    P = _parameters_at(model, data, params, k0, notes)
+    P = parameters_at(model, data, params, k0, notes)
     x0 = data.initial_states(model, k0)
     if latent and need_warm > 0:
         if warm_start in ("ekf", "ekf-trip"):
@@ -332,7 +332,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                 if warm_start == "ekf-trip" else need_warm
             x0[:, latent] = filter_states(model, data, P, k0, W)[:, latent]
         else:
-            x0 = _warm_start(model, data, P, k0, need_warm, x0, latent)
+            x0 = warm_start_states(model, data, P, k0, need_warm, x0, latent)
         notes.append(f"latent states ({', '.join(model.states[i].name for i in latent)}) "
                      + ("estimated by the extended Kalman filter run from the start of "
                         "each experiment" if warm_start == "ekf-trip" else
@@ -512,10 +512,10 @@ def by_time(errors: dict, Ts: float, times_s=REPORT_TIMES_S) -> dict:
 
 def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, steps,
                 estimation, inside) -> dict:
-    """Persistence, ARX and subspace (``acid.yardsticks``) on the model's windows: the same
+    """Persistence, ARX and subspace (``acid.ident.yardsticks``) on the model's windows: the same
     inputs and disturbances (held as the model has them), predicting the measured channels
     that are recorded throughout; RMSE and p90 |e| overall and at ``steps``."""
-    from acid.yardsticks import evaluate
+    from acid.ident.yardsticks import evaluate
 
     meas = np.concatenate([data.x, data.y], axis=1)
     use = [(c, n) for c, n in rows if np.all(np.isfinite(meas[:, c]))]
@@ -561,7 +561,7 @@ def _default_horizons(H: int) -> tuple[int, ...]:
     return tuple(sorted({1, max(H // 10, 1), max(H // 4, 1), max(H // 2, 1), H}))
 
 
-def _parameters_at(model: Model, data: ModelData, params: ParameterValues, k0, notes) -> np.ndarray:
+def parameters_at(model: Model, data: ModelData, params: ParameterValues, k0, notes) -> np.ndarray:
     if tuple(params.values) != tuple(model.parameter_names):
         raise ConfigError(f"{params.label}: parameters of another model than {model.name!r}")
     P = np.tile(params.theta, (k0.size, 1))
@@ -579,7 +579,7 @@ def _parameters_at(model: Model, data: ModelData, params: ParameterValues, k0, n
     return P
 
 
-def _warm_start(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np.ndarray:
+def warm_start_states(model: Model, data: ModelData, P, k0, W: int, x_k, latent) -> np.ndarray:
     """The state at each start: fit the state at k - W to the measured channels over the
     W samples before k (parameters held), simulate to k; measured states as measured.
 

@@ -22,7 +22,7 @@ acid's own plant computes 2.4-3.7 at 40 degC (``datasets/plant/SOURCES.md``). La
 the power the same ``T_in - T_evap`` costs, which ``k_ac`` absorbs.
 
 The power rows are fitted by least squares on the 13 estimation trips, the cabin rows
-by the prediction-error method (:func:`acid.car_study.fit_power` and
+by the prediction-error method (:func:`acid.studies.car_study.fit_power` and
 ``notes/i20-real-logs.md``, "Deliverable 5", for the held-out numbers); the declared values
 of the power rows are those of that fit, the cabin rows keep ``car_cabin``'s starting
 values (a parameter file from ``acid fit --model car_cabin --method pem`` gives them).

@@ -336,7 +336,7 @@ class Model:
         except DeclarationError:
             raise
         except Exception as exc:  # noqa: BLE001 - any failure of user code while tracing
-            line = _user_line(exc, self.source)
+            line = user_line(exc, self.source)
             msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             if "truth value" in msg or "symbolic" in msg.lower() and "bool" in msg.lower():
                 msg = ("a Python if/and/or/comparison on a symbolic value; use "
@@ -611,7 +611,7 @@ def _reads(expr, yr, outputs, names) -> bool:
     return any(ca.depends_on(expr, yr[i]) for i in idx)
 
 
-def _user_line(exc: BaseException, source: str) -> int | None:
+def user_line(exc: BaseException, source: str) -> int | None:
     """The line of the model file where ``exc`` was raised (innermost frame in the file)."""
     line = None
     for fr in traceback.extract_tb(exc.__traceback__):

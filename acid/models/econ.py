@@ -56,9 +56,11 @@ import numpy as np
 
 from acid.errors import DataError
 from acid.models.declaration import RK4, Constant, Group, Model, Parameter, Signal, State
-from acid.params import PAPER_BETA
-from acid.params import PARAMETER_TABLE as PAPER_TABLE
+from acid.models.paper import PARAMETER_TABLE as PAPER_TABLE
+from acid.paper import MODEL as _PAPER_MODEL
 from acid.psychro import H_FG, P_ATM, humidity_ratio
+
+PAPER_BETA = _PAPER_MODEL.beta  # eq. 5's values: the econ model's start
 
 TS = 5.0
 STATES = ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")
@@ -389,16 +391,6 @@ FIT_SKIP_S = 600.0
 #: A hot-soaked start (K, kg/kg): the default initial state of the model as a plant.
 HOT_SOAK = {"T_cab": 313.15, "T_int": 315.15, "T_shell": 315.15, "T_evap": 303.15,
             "w_cab": 0.0085}
-
-
-def plant(theta=None, **kw):
-    """The econ model as a plant (:class:`acid.models.plant.DeclaredPlant`) at the parameter
-    vector ``theta`` (default: declared), started hot-soaked, the compressor power map
-    floored at zero (``kw`` as ``DeclaredPlant``'s)."""
-    from acid.models.plant import DeclaredPlant
-
-    return DeclaredPlant(model, theta, **{"initial": HOT_SOAK, "floor": {"P_comp": 0.0},
-                                          **kw})
 
 
 class _ByName(dict):

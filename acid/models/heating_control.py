@@ -5,8 +5,8 @@ What the heating controller predicts with, declared once (the NMPC of
 (identified from what the logged car records), this model carries what a controller acts on:
 the heat pump's heat, the coolant heater's power and the recirculation share, and the
 windscreen's fogging margin. **Its values are derived from the heating plant's configuration**
-(``heating_control_model(heating, config)``: ``HeatingConfig`` and the winter
-``PlantConfig``, every value cited there), not identified; the heat pump's COP law is the one
+(``acid.control.heating.heating_control_model(heating, config)``: ``HeatingConfig`` and the
+winter ``PlantConfig``, every value cited there), not identified; the heat pump's COP law is the one
 fitted here (``COP_*`` below) to 71 direct-mode runs of the heating plant
 (``acid.control.heating.heat_pump_map``). The blower flow is held (``W_bl``), the
 defrost-outlet share at its normal value ``f_def0``; frost and defrost are not modelled (the
@@ -39,12 +39,7 @@ fogging margin ``fog_margin = T_glass - T_dew(w_cab)`` (Magnus, over water), ``T
 
 from __future__ import annotations
 
-import math
-
 from acid.models import RK4, Model, Parameter, Signal, State, exp, fmax, log
-from acid.plant.config import PlantConfig
-from acid.plant.heating import shell_conductance
-from acid.plant.heating_config import HeatingConfig, winter_plant_config
 
 T0C = 273.15
 
@@ -110,52 +105,12 @@ def output(s):
             "T_a1": T_a1}
 
 
-def heating_control_model(heating: HeatingConfig | None = None,
-                          config: PlantConfig | None = None,
-                          W_bl: float = W_BL_HOLD, Ts: float = 10.0) -> Model:
-    """The declaration with its values derived from the heating plant's configuration
-    (module docstring); ``W_bl`` the held blower flow (kg/s), ``Ts`` the sample (s)."""
-    h = heating or HeatingConfig()
-    c = config or winter_plant_config()
-    f_ws = h.A_ws / c.A_shell
-    def eps(UA0):  # epsilon-NTU of a core at the held flow (the plant's UA ~ W^n_hc)
-        return 1.0 - math.exp(-UA0 * (W_bl / h.W_hc0) ** h.n_hc / (W_bl * c.c_p_air))
-
-    eps_hc = eps(h.UA_hc0)
-    k = {  # name: (value, unit, description)
-        "C_cab": (c.C_cab, "J/K", "cabin air (PlantConfig.C_cab)"),
-        "C_int": (c.C_int, "J/K", "fast interior (PlantConfig.C_int)"),
-        "C_is": (c.C_int_slow, "J/K", "slow interior (PlantConfig.C_int_slow)"),
-        "C_sh": (c.C_sh * (1.0 - f_ws), "J/K", "shell without the windscreen"),
-        "C_ws": (h.C_ws, "J/K", "windscreen glass (HeatingConfig.C_ws)"),
-        "C_cool": (h.C_cool, "J/K", "coolant loop (HeatingConfig.C_cool)"),
-        "C_icw": (h.C_icw, "J/K", "inner-condenser wall (HeatingConfig.C_icw)"),
-        "eps_ic": (eps(h.UA_ic0), "1", "inner-condenser effectiveness at W_bl (UA_ic0)"),
-        "hA_int": (c.hA_int, "W/K", "interior <-> cabin air"),
-        "hA_is": (c.hA_int_slow, "W/K", "fast <-> slow interior"),
-        "hA_sh": (shell_conductance(c, h), "W/K", "cabin air -> shell, winter envelope"),
-        "hA_gi": (h.h_ws_in * h.A_ws, "W/K", "cabin air -> windscreen inner surface"),
-        "hA_ext0": (c.hA_ext0, "W/K", "shell -> ambient, parked"),
-        "hA_ext_v": (c.hA_ext_v, "W/K/(m/s)^0.8", "shell -> ambient, forced"),
-        "f_ws": (f_ws, "1", "windscreen share of the shell area"),
-        "f_def": (h.f_def0, "1", "supply-air share at the windscreen (normal heating)"),
-        "m_inf0": (c.m_inf0, "kg/s", "infiltration, parked"),
-        "k_inf": (c.k_inf if c.cabin_speed else 0.0, "kg/s/(m/s)", "infiltration per m/s"),
-        "Q_pass": (c.Q_pass * h.n_pass, "W", "occupants' sensible heat"),
-        "m_moist": (c.m_moist_pass * h.n_pass, "kg/s", "occupants' moisture"),
-        "W_bl": (W_bl, "kg/s", "blower flow, held"),
-        "beta1": (c.beta1, "W s^2/kg^2", "blower power map"),
-        "beta2": (c.beta2, "W s/kg", "blower power map"),
-        "beta3": (c.beta3, "W", "blower power map"),
-        "f_bl_heat": (c.f_bl_heat, "1", "blower power into the air"),
-        "c_p": (c.c_p_air, "J/(kg K)", "air"),
-        "p_atm": (c.p_atm, "Pa", "ambient pressure"),
-        "RH_amb": (c.RH_amb, "1", "ambient relative humidity"),
-        "eps_hc": (eps_hc, "1", "heater-core effectiveness at W_bl (UA_hc0, n_hc)"),
-        "eta_heater": (h.eta_heater, "1", "coolant heater efficiency"),
-        "G_cool": (h.m_cool * h.c_cool, "W/K", "coolant flow x c_cool"),
-        "UA_cool": (h.UA_cool_loss, "W/K", "coolant loop -> under-hood air"),
-    }
+def declare(values: dict[str, tuple[float, str, str]], Ts: float = 10.0) -> Model:
+    """The declaration with the fixed values ``values`` (name: (value, unit, description), every
+    name of the module docstring's equations but the COP law's), ``Ts`` the sample (s).
+    :func:`acid.control.heating.heating_control_model` derives them from the heating plant's
+    configuration."""
+    k = values
     params = [Parameter(n, u, float(v), fixed=True, description=d) for n, (v, u, d) in k.items()]
     params += [Parameter("COP_0", "1", COP_FIT["COP_0"], 1.0, 8.0,
                          description="COP at 0 degC ambient and zero lift (heat_pump_map)"),

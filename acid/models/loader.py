@@ -46,9 +46,9 @@ def load(spec: str | Path | Model) -> Model:
     except SyntaxError as exc:
         raise DeclarationError(f"{path.name}:{exc.lineno}: syntax error: {exc.msg}") from None
     except Exception as exc:  # noqa: BLE001 - the user's file failed while importing
-        from acid.models.declaration import _user_line
+        from acid.models.declaration import user_line
 
-        line = _user_line(exc, str(path))
+        line = user_line(exc, str(path))
         msg = str(exc).splitlines()[0] if str(exc) else ""
         raise DeclarationError(f"{path.name}{':' + str(line) if line else ''}: "
                                f"{type(exc).__name__}: {msg}") from None

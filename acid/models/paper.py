@@ -13,9 +13,9 @@ import math
 
 import numpy as np
 
-from acid.claims import MODEL as _PAPER
-from acid.claims import TABLE_II as _TABLE_II
 from acid.models.declaration import Constant, Constraint, Model, Parameter, Signal, State
+from acid.paper import MODEL as _PAPER
+from acid.paper import TABLE_II as _TABLE_II
 
 #: (name, unit, meaning) of every parameter, in the order of the table.
 PARAMETER_TABLE: tuple[tuple[str, str, str], ...] = (
@@ -152,27 +152,3 @@ def estimate_eta_cop(W_bl, T_ain, T_amb, P_comp, c_p: float) -> tuple[float, flo
 PLANT_INITIAL = {"T_cab": 308.15, "T_evap": 281.15, "T_int": 308.15, "T_shell": 311.15}
 
 
-def plant(params=None, T_amb: float = 303.15, meas_noise_std: float = 0.0,
-          process_noise_std: float = 0.0, rng=None):
-    """Eqs. 1-3 and 5 as a plant (``acid.models.plant.DeclaredPlant``, named ``"model"``):
-    T_int and T_shell held at their initial values until a schedule gives them; P_comp from
-    eq. 4 at the ambient ``T_amb`` (K, Table II: 30 degC); noise in K on T_cab, T_evap, T_ain.
-
-    ``params``: ``ModelParams`` or a fit of this declaration (the paper preset by default).
-    """
-    from acid.models.plant import DeclaredPlant
-    from acid.params import as_params, paper
-
-    p = paper() if params is None else as_params(params)
-
-    def eq4(row, given):
-        return {"T_amb": given["T_amb"], "v_veh": float(given["v_veh"]),
-                "P_comp": max(0.0, float(compressor_power(float(row["W_bl"]), row["T_ain"],
-                                                          given["T_amb"], p.c_p, p.eta_cop)))}
-
-    out = DeclaredPlant(model, p.theta, initial=PLANT_INITIAL, T_amb=float(T_amb),
-                        meas_noise_std=meas_noise_std, process_noise_std=process_noise_std,
-                        rng=rng, derived=eq4, name="model",
-                        info={"params": p.to_json_dict(), "T_amb_K": float(T_amb)})
-    out.params = p   # the ModelParams it runs (the controllers' tests compare them)
-    return out

@@ -11,7 +11,8 @@ is the declaration's ``checks`` (``problems()``).
 One file format, naming its model (``"format": "acid-declared-params"``); the reader also
 takes the layouts acid wrote before it (the paper's ``gamma``/``tau``/``beta`` lists, the
 econ model's ``"model": "econ"`` file), one-line ``DataError`` naming the file and the key.
-``acid.params.ModelParams`` and ``acid.econ.params.EconParams`` are this class bound to
+``acid.models.params.ModelParams`` and ``acid.models.econ_params.EconParams`` are this class bound
+to
 the paper's and the econ declaration.
 """
 

@@ -1,5 +1,5 @@
 """Plants: the high-fidelity A/C + cabin simulator, the control-oriented model as a plant, and
-any FMI 2.0 / 3.0 co-simulation FMU (``acid.plant.fmu``).
+any FMI 2.0 / 3.0 co-simulation FMU (``acid.plant.fmi.plant``).
 
 All implement the protocol of ``acid.plant.base.Plant`` (reset / step / measure / simulate).
 """
@@ -8,10 +8,10 @@ from acid.plant.base import InputSchedule, Measurement, Plant, measurements_to_d
 
 
 def ModelPlant(params=None, **kw):  # noqa: N802 - the plant's public name since the start
-    """The paper's model as a plant: ``acid.models.paper.plant`` (a ``DeclaredPlant``)."""
-    from acid.models.paper import plant
+    """The paper's model as a plant: ``acid.plant.declared.paper_plant`` (a ``DeclaredPlant``)."""
+    from acid.plant.declared import paper_plant
 
-    return plant(params, **kw)
+    return paper_plant(params, **kw)
 
 
 __all__ = ["FMU_PREFIX", "InputSchedule", "Measurement", "ModelPlant", "Plant", "make_plant",
@@ -42,7 +42,7 @@ def make_plant(name: str, *, config_path=None, params=None, meas_noise_std: floa
     if refrigerant is not None and name != "hifi":
         raise ConfigError(f"--refrigerant applies to --plant hifi only, not {name!r}")
     if name.startswith(FMU_PREFIX):
-        from acid.plant.fmu import FmuPlant
+        from acid.plant.fmi.plant import FmuPlant
 
         path = name[len(FMU_PREFIX):]
         if not path:

@@ -32,9 +32,9 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from acid.claims import MODEL as _PAPER_MODEL
-from acid.claims import TABLE_II as _TABLE_II
 from acid.errors import ConfigError
+from acid.paper import MODEL as _PAPER_MODEL
+from acid.paper import TABLE_II as _TABLE_II
 from acid.units import C2K, K2C, UNIT_SCALES
 
 REFRIGERANTS = ("R134a", "R1234yf")
@@ -179,9 +179,12 @@ _UNITS: dict[str, str] = {}
 MAX_SUBSTEPS = 10_000
 
 
-def _p(default, unit: str, section: str, source: str):
+def config_field(default, unit: str, section: str, source: str):
     """A configuration field with its unit, section and source in the field metadata."""
     return field(default=default, metadata={"unit": unit, "section": section, "source": source})
+
+
+_p = config_field
 
 
 _ASSUMED = "assumption"

@@ -17,7 +17,8 @@ import math
 from dataclasses import dataclass
 
 from acid.errors import ConfigError
-from acid.plant.config import PlantConfig, _p
+from acid.plant.config import PlantConfig
+from acid.plant.config import config_field as _p
 
 #: Temperature-like fields that are differences (K), not absolute temperatures.
 _DIFFERENCES = ("dT_approach", "dT_assist", "m_fog", "dm_fog", "dT_hp_off", "e_blower")

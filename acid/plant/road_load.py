@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.errors import ConfigError
-from acid.plant.config import _p
+from acid.plant.config import config_field as _p
 
 #: standard gravity, m/s^2; specific gas constant of dry air, J/(kg K)
 G_N, R_AIR = 9.80665, 287.05

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acid.claims import TABLE_I
+from acid.paper import TABLE_I
 from acid.plant.config import PlantConfig
 from acid.plant.hifi import HifiPlant
 

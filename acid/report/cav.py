@@ -1,4 +1,4 @@
-"""Figures of the drive-cycle energy study (:mod:`acid.mpc.cav_study`) from its result objects.
+"""Figures of the drive-cycle energy study (:mod:`acid.studies.cav_study`) from its result objects.
 
 Builds ``matplotlib.figure.Figure`` objects directly (no pyplot state); save with
 ``acid._io.save_figure``. Speeds in m/s, temperatures in °C, humidity in g/kg, powers in W,
@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from acid.mpc.cav_study import CONTROLLERS, CavStudyResult, CycleStudy
+from acid.studies.cav_study import CONTROLLERS, CavStudyResult, CycleStudy
 from acid.units import K2C
 
-_COLORS = {"A": "tab:blue", "B": "tab:orange", "D": "tab:purple", "E": "tab:green",
+CONTROLLER_COLORS = {"A": "tab:blue", "B": "tab:orange", "D": "tab:purple", "E": "tab:green",
            "P": "tab:brown", "F": "tab:red", "plan": "black"}
 _STYLE = {"A": "-", "B": "-", "D": ":", "E": "-", "P": "-.", "F": "-.", "plan": "--"}
 #: A drawn wide under E, F and the plan: where they coincide all stay visible (the report
@@ -36,7 +36,7 @@ def energy_figure(result: CavStudyResult) -> Figure:
         vals = [c.results[key].tail_corrected_J / 1e6 if key in c.results else np.nan
                 for c in result.cycles.values()]
         bars = ax.bar(x + (j - (len(keys) - 1) / 2) * width, vals, width,
-                      color=_COLORS[key], label=key, alpha=0.85)
+                      color=CONTROLLER_COLORS[key], label=key, alpha=0.85)
         if key == "plan":   # the plan's spread over its independent optima
             for b, c in zip(bars, result.cycles.values(), strict=True):
                 var = c.results["plan"].extra.get("variants", {}) if "plan" in c.results else {}
@@ -79,7 +79,7 @@ def trajectory_figure(study: CycleStudy, keys=("A", "E", "F", "plan")) -> Figure
                      "replayed on the plant", fontsize=9)
     for key in keys:
         r = study.results[key]
-        run, col, ls = r.run, _COLORS[key], _STYLE[key]
+        run, col, ls = r.run, CONTROLLER_COLORS[key], _STYLE[key]
         lab = f"{key}: {r.tail_corrected_J / 1e6:.4f} MJ (end state charged back)"
         kw = {"color": col, "ls": ls, "lw": _WIDTH[key], "zorder": _Z[key], "label": key}
         axs[1].plot(t, K2C(run.T_cab), **{**kw, "label": lab})

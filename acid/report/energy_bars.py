@@ -106,7 +106,7 @@ def _group_tick(bars: EnergyBars, group: str) -> str:
 
 
 def cav_energy_bars(result, baselines: Sequence[str] = ("F", "P", "A")) -> EnergyBars:
-    """The drive-cycle study (``acid.mpc.cav_study.CavStudyResult``) as an ``EnergyBars``:
+    """The drive-cycle study (``acid.studies.cav_study.CavStudyResult``) as an ``EnergyBars``:
     tail-corrected energies; the baseline of each cycle is the best (least energy) of the
     simple controllers ``baselines`` present in it (the fixed-coil PI F, the PI with a coil
     reset P, the paper's NMPC A)."""

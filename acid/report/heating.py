@@ -1,4 +1,4 @@
-"""The report's heating section (issue 25) from ``acid.stage_results.HeatingStage``: the
+"""The report's heating section (issue 25) from ``acid.claims.results.HeatingStage``: the
 heating plant's credentials that need no logs, each with the criterion ``acid heating-check``
 states for it, and the whole year at a few ambients (information: no criterion, no verdict).
 acid's own checks, not the paper's claims. No computation here."""
@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import math
 
+from acid.claims.results import HeatingStage
+from acid.numbers import format_number
 from acid.report.html import ReportSection
-from acid.report.numbers import format_number
-from acid.report.sections import report_section
-from acid.stage_results import HeatingStage
+from acid.report.registry import report_section
 
 _WORD = {True: "pass", False: "FAIL", None: "n/a"}
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from acid.claims import STUDIES
-from acid.mpc.scenarios import ScenarioResult
-from acid.report.numbers import format_number
+from acid.numbers import format_number
+from acid.paper import STUDIES
+from acid.studies.scenarios import ScenarioResult
 from acid.units import K2C
 
 _BOUND = {"color": "tab:red", "linestyle": ":", "linewidth": 1.4}

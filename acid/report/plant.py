@@ -11,7 +11,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
-from acid.claims import TABLE_I
+from acid.paper import TABLE_I
 from acid.plant.sweep import SweepResult
 from acid.units import K2C
 
@@ -181,7 +181,7 @@ def plant_check_figures(result) -> dict[str, Figure]:
         ax2.errorbar([10.0], [28.5], yerr=[[1.0], [1.0]], fmt="s", color="k", capsize=4,
                      label="JAF 2016: 27.5-29.5 °C at 10 min")
         ax2.axhline(25.0, color="0.5", ls=":", lw=1)
-        from acid.plant.check import HOT_PULLDOWN_MIN as lo_hi
+        from acid.studies.credentials.plant import HOT_PULLDOWN_MIN as lo_hi
 
         ax2.axvspan(*lo_hi, color="0.85", alpha=0.5,
                     label=f"PLANT.md: 25 °C after {lo_hi[0]:g}-{lo_hi[1]:g} min")

@@ -11,30 +11,18 @@ registers a builder here; the report shows its section after the claims::
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
-from acid.report.html import ReportSection
-from acid.report.numbers import format_number
-from acid.stage_results import (
+from acid.claims.results import (
     CavStudyStage,
     EconStage,
     PlantCheckStage,
-    StageResult,
     StudyResults,
     SweepStage,
     ValidationStage,
 )
-
-SECTION_BUILDERS: dict[type[StageResult], Callable[[StageResult], ReportSection]] = {}
-
-
-def report_section(kind: type[StageResult]):
-    """Decorator: register ``builder(result) -> ReportSection`` for results of ``kind``."""
-    def register(builder):
-        SECTION_BUILDERS[kind] = builder
-        return builder
-    return register
-
+from acid.numbers import format_number
+from acid.report.html import ReportSection
+from acid.report.registry import SECTION_BUILDERS, report_section
 
 #: the first words of a paragraph that draws a conclusion from a stage's numbers
 CONCLUSION = "Conclusion (from the numbers):"
@@ -68,8 +56,8 @@ def sections_for(results: StudyResults, quick: bool = False) -> list[ReportSecti
 
 @report_section(SweepStage)
 def _table_i_vehicles(r: SweepStage) -> ReportSection:
-    from acid.claims import TABLE_I
     from acid.claims.registry import DEFAULT_VEHICLE_MECHANISM, TABLE_I_MECHANISM
+    from acid.paper import TABLE_I
 
     full = abs(r.duration_s - TABLE_I.duration_s) < 1e-9
     other = r.beside_energy_MJ if len(r.beside_energy_MJ) == len(r.energy_MJ) else ()

@@ -64,22 +64,6 @@ def energy_figure(df) -> Figure:
     return difference_figure(sweep_energy_bars(df, baseline), controllers, cmap)
 
 
-def corrected_saving(df, label: str, reference: str):
-    """Per scenario, the saving of ``label`` against ``reference`` with both end states
-    charged back, ``100 (E_ref + tail_ref - E - tail) / E_ref`` (%; raw energies when the
-    sweep has no tail): a pandas Series indexed by scenario."""
-    ok = _ok(df)
-
-    def corrected(lab):
-        g = ok[ok["controller"] == lab].set_index("scenario")
-        tail = g["tail_energy_MJ"].fillna(0.0) if "tail_energy_MJ" in g else 0.0
-        return g["energy_MJ"] + tail, g["energy_MJ"]
-
-    x, _ = corrected(label)
-    r, e_r = corrected(reference)
-    return (100.0 * (r - x) / e_r).dropna()
-
-
 def prediction_figure(df, econ: str, references: list[str], plan: str | None = None
                       ) -> Figure:
     """Where prediction pays: per scenario, the saving of the economic NMPC ``econ`` against
@@ -98,7 +82,7 @@ def prediction_figure(df, econ: str, references: list[str], plan: str | None = N
     x = np.arange(len(scen))
     width = 0.8 / max(len(references), 1)
     cmap = _colors(len(references) + 1)
-    from acid.sweep.results import unequal_comfort
+    from acid.studies.sweep.results import corrected_saving, unequal_comfort
 
     bad = {s: set(unequal_comfort(g, econ, references)) for s, g in ok.groupby("scenario")}
     for i, ref in enumerate(references):
@@ -143,4 +127,4 @@ def _colors(n: int) -> list:
     return [cmap(i % 10) for i in range(max(n, 1))]
 
 
-__all__ = ["saving_figure", "energy_figure", "prediction_figure", "corrected_saving"]
+__all__ = ["saving_figure", "energy_figure", "prediction_figure"]

@@ -1,19 +1,27 @@
-"""Scenario sweeps: many drive cycles, climates, cabins and controllers, on Dask.
+"""Moved to :mod:`acid.studies.sweep`: this alias package warns, and goes in the next release.
+Its modules are aliases of the new ones."""
 
-``load_spec(path)`` reads and validates a TOML specification (:mod:`acid.sweep.spec`);
-``run_sweep(spec, out)`` runs it on a local Dask cluster (or an existing one, or in this
-process) and writes one tidy table (Parquet + CSV), summary figures and ``summary.json``
-(:mod:`acid.sweep.runner`). Controllers come from a small registry
-(:mod:`acid.sweep.controllers`); the climate is mapped onto the plant in one function
-(:func:`acid.sweep.conditions.plant_config_for`).
-"""
+import warnings
 
-from acid.sweep.conditions import Conditions, plant_config_for
-from acid.sweep.context import ControllerRun, ScenarioContext
-from acid.sweep.controllers import controller_types, register_controller
-from acid.sweep.runner import SweepResult, run_sweep
-from acid.sweep.spec import Scenario, SweepSpec, load_spec, spec_from_dict
+from acid.errors import MovedWarning
+from acid.studies.sweep import (  # noqa: F401
+    Conditions,
+    ControllerRun,
+    Scenario,
+    ScenarioContext,
+    SweepResult,
+    SweepSpec,
+    controller_types,
+    load_spec,
+    plant_config_for,
+    register_controller,
+    run_sweep,
+    spec_from_dict,
+)
 
 __all__ = ["load_spec", "spec_from_dict", "run_sweep", "SweepSpec", "SweepResult", "Scenario",
            "Conditions", "plant_config_for", "register_controller", "controller_types",
            "ScenarioContext", "ControllerRun"]
+
+warnings.warn("acid.sweep has moved to acid.studies.sweep; the old name will be removed in the "
+              "next release", MovedWarning, stacklevel=2)

@@ -1,0 +1,56 @@
+"""The sizes of the ``acid reproduce`` study and its run mode.
+
+The claims are judged only on a run of the study's full sizes; a run with other sizes (``--quick``)
+is a quick run whose shortened stages are not judged. ``acid reproduce`` (:mod:`acid.studies.
+reproduce`) runs with these options and hands its results to the claims; ``acid claims`` judges a
+``summary.json`` again from the options stored in it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+
+from acid.claims.registry import ENERGY_CYCLES
+
+
+@dataclass(frozen=True)
+class ReproduceOptions:
+    """Sizes of the study. ``quick()`` is a small version for tests and first looks."""
+
+    sweep_duration_s: float = 600.0
+    excite_duration_s: float = 4 * 3600.0
+    estimation_fraction: float = 0.5
+    excite_seed: int = 0
+    fit_method: str = "oe"
+    starts: int = 60
+    horizon: int = 300
+    timing_repeats: int = 5
+    cav_cycles: tuple[str, ...] = ENERGY_CYCLES
+    cav_warmup_s: float = 7200.0
+    cav_tail_s: float = 2400.0
+    econ_duration_s: float = 6 * 3600.0
+    econ_horizon_s: float = 120.0
+    econ_compiled: bool = True
+
+    @classmethod
+    def quick(cls) -> ReproduceOptions:
+        return cls(sweep_duration_s=300.0, excite_duration_s=2 * 3600.0, starts=12,
+                   horizon=120, timing_repeats=1, cav_warmup_s=300.0,
+                   cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0,
+                   econ_compiled=False)
+
+
+def run_mode(opts: ReproduceOptions | dict) -> str:
+    """"full" for the study's sizes (``ReproduceOptions()``), else "quick": a run whose
+    sizes differ from the study's (``--quick``) cannot judge the claims of the stages it
+    shortens (``acid.claims.registry.QUICK_RUN_JUDGES``)."""
+    d = opts if isinstance(opts, dict) else dataclasses.asdict(opts)
+    full = json.loads(json.dumps(dataclasses.asdict(ReproduceOptions())))
+    return "full" if json.loads(json.dumps(d)) == full else "quick"
+
+
+def is_quick(opts: ReproduceOptions | dict) -> bool:
+    """True unless ``opts`` are the full study's (see :func:`run_mode`)."""
+    return run_mode(opts) != "full"

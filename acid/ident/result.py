@@ -1,0 +1,148 @@
+"""What a fit of a declared model returns: :class:`DeclaredFitResult` (the fitted table with
+its standard errors and intervals, per-equation reports, optima of a multi-start fit, notes and
+warnings, provenance) and its rows. Written by :mod:`acid.ident.fit` and :mod:`acid.ident.pem`;
+printing lives in the CLI."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from acid._io import json_safe
+from acid.models.declaration import Model
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One row of the fitted table (a per-experiment parameter has a row per experiment,
+    ``name@experiment``)."""
+
+    name: str
+    unit: str
+    declared: float
+    value: float
+    stderr: float
+    ci95: tuple[float, float]
+    status: str      # estimated (ls | cvx | oe), fixed, not fitted, combination
+    experiment: int | None = None
+
+
+@dataclass(frozen=True)
+class EquationReport:
+    """How one equation was treated and what the data say about it."""
+
+    name: str
+    method: str                   # "ls", "cvx" or "oe"/"-" (not by equation error)
+    reason: str                   # why not least squares ("" when it was)
+    parameters: tuple[str, ...]
+    rank: int | None = None
+    n_columns: int | None = None
+    condition: float | None = None
+    residual_std: float | None = None
+    n_rows: int | None = None
+    fit_percent: float | None = None
+    combinations: tuple[str, ...] = ()
+    active_bounds: tuple[str, ...] = ()
+    residual_acf1: float | None = None      # lag-1 autocorrelation of the residuals
+    ljung_box_p: float | None = None        # whiteness test of the residuals (20 lags)
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """A distinct optimum of the multi-start output error."""
+
+    loss: float
+    n_starts: int
+    values: dict
+    spread: dict       # max - min of each parameter over the starts that reached it
+
+
+@dataclass(frozen=True)
+class DeclaredFitResult:
+    """What ``fit_model`` found (frozen; printing lives in the CLI)."""
+
+    model: str
+    model_source: str
+    method: str
+    estimates: tuple[Estimate, ...]
+    equations: tuple[EquationReport, ...]
+    values: np.ndarray                      # (np,) the fitted table (per-experiment: mean)
+    per_experiment: dict                    # {name: (E,) values}
+    experiment_ids: tuple[int, ...]
+    covariance: np.ndarray
+    covariance_names: tuple[str, ...]
+    covariance_kind: str
+    hac_bandwidth: dict
+    output_error: dict
+    optima: tuple[Optimum, ...]
+    combinations: tuple[str, ...]
+    notes: tuple[str, ...]
+    warnings: tuple[str, ...]
+    n_samples: int
+    data_source: str
+    elapsed_s: float = field(default=math.nan, compare=False)
+    #: {channel: fit %} of ``window``-sample simulations started from the measured states
+    #: (latent ones from their declared rule), the fitted parameters, every measured channel
+    simulation_fit: dict = field(default_factory=dict)
+    #: {equation: fit %} of its one-step predictions along the data with the fitted table
+    #: (measured states, inputs and read outputs substituted; equations reading a latent
+    #: state are left out)
+    one_step_fit: dict = field(default_factory=dict)
+    loss: str = "squared"
+    #: the ``Model`` fitted (``fitted_parameters`` binds the values to it)
+    declaration: Model | None = field(default=None, repr=False, compare=False)
+
+    def __getstate__(self):   # pickled without the Model (it holds the user's functions)
+        return {k: v for k, v in self.__dict__.items() if k != "declaration"}
+
+    def value(self, name: str, experiment: int | None = None) -> float:
+        """The fitted value of ``name``; a per-experiment one of the experiment index
+        ``experiment`` (default: its mean over the experiments)."""
+        if name in self.per_experiment:
+            vals = self.per_experiment[name]
+            return float(vals[experiment] if experiment is not None else np.mean(vals))
+        for e in self.estimates:
+            if e.name == name and e.experiment is None:
+                return e.value
+        raise KeyError(name)
+
+    def to_json_dict(self) -> dict:
+        return json_safe({
+            "model": self.model, "model_source": self.model_source, "method": self.method,
+            "n_samples": self.n_samples, "data": self.data_source,
+            "covariance_kind": self.covariance_kind, "hac_bandwidth": self.hac_bandwidth,
+            "parameters": [{"name": e.name, "unit": e.unit, "declared": e.declared,
+                            "estimate": e.value, "stderr": e.stderr, "ci95_low": e.ci95[0],
+                            "ci95_high": e.ci95[1], "status": e.status,
+                            "experiment": e.experiment} for e in self.estimates],
+            "equations": [vars(q) for q in self.equations],
+            "combinations": list(self.combinations),
+            "output_error": self.output_error, "loss": self.loss,
+            "fit_percent_simulation": self.simulation_fit,
+            "fit_percent_one_step": self.one_step_fit,
+            "optima": [vars(o) for o in self.optima],
+            "covariance": {"names": list(self.covariance_names), "matrix": self.covariance},
+            "notes": list(self.notes), "warnings": list(self.warnings),
+            "elapsed_s": self.elapsed_s,
+        })
+
+    def write(self, path: str | Path, model: Model, provenance: dict | None = None,
+              extra: dict | None = None) -> Path:
+        """The parameter file (``acid.models.values``' format) with this report as
+        ``fit``; ``extra`` adds keys (the paper's: its ``ModelParams``'s name and eq. 4's
+        COP), never the fitted values and their standard errors."""
+        from acid._io import write_json
+        from acid.models.values import ParameterValues
+
+        values = ParameterValues(
+            self.values, model=model, name=f"fit-{self.method}", provenance=provenance,
+            stderr={e.name: e.stderr for e in self.estimates if e.experiment is None},
+            per_experiment={n: dict(zip(self.experiment_ids, map(float, v), strict=True))
+                            for n, v in self.per_experiment.items()})
+        d = values.to_json_dict()
+        return write_json(path, json_safe({**d, **(extra or {}), "fit": self.to_json_dict(),
+                                           **{k: d[k] for k in ("parameters",
+                                                                "per_experiment")}}))
