@@ -81,7 +81,7 @@ def fit(
         help="Model family: 'paper' (eqs. 1-5, the default) or 'econ' (cabin, interior, "
              "shell, evaporator and humidity with an identified compressor power map; needs "
              "data from `acid excite --model econ`), or a model file FILE.py declaring "
-             "`model = acid.models.Model(...)` (ARCHITECTURE.md, 'How to add a model')."),
+             "`model = acid.models.Model(...)` (the README's section 'Your own model')."),
     fix: list[str] | None = typer.Option(
         None, "--fix", help="NAME=VALUE: hold a parameter of a declared model (a model "
                             "file, paper or econ) at VALUE (repeatable)."),

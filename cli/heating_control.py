@@ -19,7 +19,7 @@ from acid_cli._common import (
     write_summary,
 )
 
-CONTROLLERS = ("production", "rule", "nmpc_held", "nmpc")
+CONTROLLERS = ("production", "rule", "rule_eq", "nmpc_held", "nmpc")
 
 
 @handle_errors
@@ -44,9 +44,12 @@ def heating_control(
 ) -> None:
     """Compare heating controllers at equal comfort on the heating plant: energy (heat pump,
     coolant heater, blower, front fan) with the end state charged back, the saving of the
-    economic NMPC against the best tuned simple rule, and the share owed to preview."""
-    from acid.control.heating import CYCLES, HeatingControlConfig, heating_study
+    economic NMPC against the best tuned simple rule held to 2 K of fogging margin (rule) and
+    against the best rule held to the margin the NMPC kept (rule_eq: equal constraints), the
+    verdict over the cases from its 95 % interval, and the share owed to preview."""
+    from acid.control.heating import HeatingControlConfig
     from acid.signals import available_drive_cycles
+    from acid.studies.heating_control import CYCLES, heating_study
 
     cycles = CYCLES if cycle == "all" else (cycle,)
     for c in cycles:
@@ -67,9 +70,14 @@ def heating_control(
     rows = []
     for case in result["cases"]:
         for name in CONTROLLERS:
-            r = case["controllers"][name]
+            r = case["controllers"].get(name)
+            if r is None:
+                say(f"{case['cycle']} {case['T_amb_C']:+.0f} degC: no rule of the grid keeps "
+                    "the NMPC's constraints")
+                continue
             rows.append([case["cycle"], f"{case['T_amb_C']:+.0f}", name,
                          f"{r['energy_charged_kWh']:.3f}", f"{r['saving_vs_rule_pct']:+.1f}",
+                         f"{r['saving_vs_rule_eq_pct']:+.1f}",
                          f"{r['mean_T_cab_C']:.2f}", f"{100 * r['mean_RH']:.0f}",
                          f"{r['min_fog_margin_K']:.2f}", str(r["fog_samples"]),
                          f"{r['E_hp_kWh']:.3f}", f"{r['E_heater_kWh']:.3f}",
@@ -77,8 +85,16 @@ def heating_control(
         say(f"{case['cycle']} {case['T_amb_C']:+.0f} degC: preview's share of the NMPC's "
             f"saving {case['preview_share_pct']:.0f} %")
     print_table("acid heating-control (end state charged back)",
-                ["_cycle", "T_amb", "_controller", "kWh", "vs rule %", "T_cab", "RH %",
+                ["_cycle", "T_amb", "_controller", "kWh", "vs rule %", "vs rule_eq %", "T_cab",
+                 "RH %",
                  "fog margin K", "fogged", "HP kWh", "heater kWh", "defrost s"], rows)
+    v = result["verdict_nmpc_vs_rule_eq"]
+    if v["verdict"] == "not resolved":
+        say(f"NMPC against the rule at equal constraints: not resolved ({v['why']})")
+    else:
+        lo, hi = v["interval_pct"]
+        say(f"NMPC against the rule at equal constraints, over {v['n']} cases: {v['verdict']} "
+            f"(mean {v['mean_pct']:+.1f} %, 95 % interval {lo:+.1f} to {hi:+.1f} %)")
     result["acid_version"] = __version__
     write_summary(json_path, result)
     say(f"figure written to {png}")

@@ -119,7 +119,7 @@ def test_every_parameter_cites_a_source_or_says_assumption():
         for key in cited:
             assert key in keys, f"{name}: [{key}] is not in SOURCES.md"
         assert cited or re.search(r"assumption|calibrated|reference|standard|fixed|latent|"
-                                  r"paper|PLANT.md|False|internal step", source), name
+                                  r"paper|design|False|internal step", source), name
 
 
 def test_solar_is_one_irradiance_times_cited_areas():

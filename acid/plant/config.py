@@ -245,7 +245,7 @@ class PlantConfig:
 
     # ---------------------------------------------------------------- ambient / boundary
     T_amb: float = _p(303.15, "K", "ambient", "[Wang2018] Table II (30 degC)")
-    RH_amb: float = _p(0.5, "1", "ambient", "assumption: 50 % relative humidity (PLANT.md)")
+    RH_amb: float = _p(0.5, "1", "ambient", "assumption: 50 % relative humidity")
     p_atm: float = _p(101325.0, "Pa", "ambient", "standard atmosphere")
     G_solar: float = _p(850.0, "W/m^2", "ambient",
                         "[CFR86.161] SC03 solar load 850 W/m^2; sweep 0-1000 W/m^2 maps here")
@@ -272,7 +272,7 @@ class PlantConfig:
     C_int: float = _p(35.0e3, "J/K", "cabin",
                       "assumption: fast interior node (seat covers, dash skin, trim surfaces) "
                       "that the cabin air sees; with C_int_slow 125 kJ/K in all, inside the "
-                      "100-150 kJ/K of issue 9")
+                      "100-150 kJ/K of the design")
     C_int_slow: float = _p(90.0e3, "J/K", "cabin",
                            "assumption: slow interior node (seat foam cores, dash substrate, "
                            "floor); see C_int")
@@ -285,11 +285,11 @@ class PlantConfig:
                       "1500 J/(kg K), about 80 kJ/K")
     A_shell: float = _p(9.0, "m^2", "cabin",
                         "assumption: outer cabin surface swept by the air stream (roof 1.6, sides "
-                        "2 x 2.5, windshield 1.1, rear glass 0.8, pillars; PLANT.md about 10)")
+                        "2 x 2.5, windshield 1.1, rear glass 0.8, pillars; design range about 10)")
     L_shell: float = _p(4.0, "m", "cabin", "assumption: flow length along the car (its length)")
     h_ext_nat: float = _p(9.0, "W/(m^2 K)", "cabin",
                           "assumption: parked outer coefficient, natural convection + "
-                          "linearised radiation (PLANT.md 8-10)")
+                          "linearised radiation (design range 8-10)")
     m_inf0: float = _p(0.001, "kg/s", "cabin",
                        "[Knibbs2009], [Ott2008]: closed, parked cabins about 0-1.4 air changes "
                        "per hour; 1 ACH of 3.3 m^3")
@@ -321,7 +321,7 @@ class PlantConfig:
     n_ea: float = _p(0.51, "1", "evaporator",
                      "[ChangWang1997] louvred fins j ~ Re^-0.49, so UA ~ W^0.51")
     UA_er0: float = _p(5000.0, "W/K", "evaporator",
-                       "calibrated (idle low side, plant-check d) at the top of PLANT.md's "
+                       "calibrated (idle low side, plant-check d) at the top of the design's "
                        "3-5 kW/K (an assumption): two-phase refrigerant side at "
                        "m_r0 (flow boiling 2-5 kW/(m^2 K) on about 1-1.5 m^2)")
     m_r0: float = _p(0.05, "kg/s", "evaporator",
@@ -349,15 +349,15 @@ class PlantConfig:
                        "assumption: condenser face area of a compact car (about 0.62 x 0.40 m)")
     K_front: float = _p(100.0, "Pa s^2/m^6", "condenser",
                         "grille + condenser + radiator resistance dp = K Q^2: 56 Pa at 3 m/s "
-                        "face velocity (PLANT.md 50-100 Pa: K 89-178, an assumption)")
+                        "face velocity (design range 50-100 Pa: K 89-178, an assumption)")
     C_ram: float = _p(0.5, "1", "condenser",
-                      "assumption: ram pressure recovery 1/2 rho C_ram v^2 (PLANT.md 0.4-0.6)")
+                      "assumption: ram pressure recovery 1/2 rho C_ram v^2 (design range 0.4-0.6)")
     dp_fan0: float = _p(200.0, "Pa", "condenser",
-                        "assumption: fan shut-off pressure at full speed (PLANT.md 150-250)")
+                        "assumption: fan shut-off pressure at full speed (design range 150-250)")
     Q_fan_free: float = _p(0.69, "m^3/s", "condenser",
-                           "calibrated (idle head pressure) inside PLANT.md's idle face velocity "
+                           "calibrated (idle head pressure) inside the design's idle face velocity "
                            "1.5-2.5 m/s (an assumption): fan free delivery; gives 2.48 m/s face "
-                           "velocity (PLANT.md 1.5-2.5) and about 100 W of fan power")
+                           "velocity (design range 1.5-2.5) and about 100 W of fan power")
     K_fan_off: float = _p(20.0, "Pa s^2/m^6", "condenser",
                           "assumption: resistance of the stopped, windmilling fan and shroud")
     s_fan_low: float = _p(0.6, "1", "condenser", "assumption: low fan stage, speed fraction")
@@ -371,27 +371,27 @@ class PlantConfig:
     p_fan_low: float = _p(1.031e6, "Pa", "condenser",
                           "[HondaPS] fan back to low below 930 kPa gauge")
     dT_recirc: float = _p(4.0, "K", "condenser",
-                          "calibrated (Table I shape, idle head pressure) inside PLANT.md's 3-8 K "
-                          "(an assumption): idle hot-air recirculation raises the condenser "
+                          "calibrated (Table I shape, idle head pressure) inside the design's "
+                          "3-8 K (an assumption): idle hot-air recirculation raises the condenser "
                           "inlet air, fading linearly to 0 at v_recirc")
-    v_recirc: float = _p(5.0, "m/s", "condenser", "assumption: PLANT.md, fading by about 5 m/s")
+    v_recirc: float = _p(5.0, "m/s", "condenser", "assumption: fading by about 5 m/s")
 
     # ---------------------------------------------------------------- compressor / cycle
     refrigerant: str = _p("R134a", "-", "compressor", "paper era default; R1234yf option")
     V_disp: float = _p(33.0e-6, "m^3", "compressor",
-                       "assumption: electric scroll, inside the 20-35 cc of issue 9")
+                       "assumption: electric scroll, inside the 20-35 cc of the design")
     N_min: float = _p(800.0, "rpm", "compressor", "assumption: scroll minimum speed")
     N_max: float = _p(8000.0, "rpm", "compressor", "assumption: scroll maximum speed")
     tau_N: float = _p(2.0, "s", "compressor", "assumption: speed response of motor + inverter")
-    superheat: float = _p(5.0, "K", "compressor", "fixed evaporator superheat (PLANT.md)")
-    subcool: float = _p(5.0, "K", "compressor", "fixed condenser subcooling (PLANT.md)")
+    superheat: float = _p(5.0, "K", "compressor", "fixed evaporator superheat (design assumption)")
+    subcool: float = _p(5.0, "K", "compressor", "fixed condenser subcooling (design assumption)")
     eta_v0: float = _p(1.0, "1", "compressor",
                        "[Cuevas2010] eta_v from about 1.0 at PR 1.3 falling linearly: "
                        "eta_v = eta_v0 - k_v (PR - 1) - c_L / N")
     k_v: float = _p(0.02, "1", "compressor",
                     "[Cuevas2010] (1.0 - 0.83) / (9.7 - 1.3) = 0.020 per unit pressure ratio")
     c_L: float = _p(100.0, "rpm", "compressor",
-                    "assumption inside PLANT.md's 80-150 rpm: leakage through a fixed "
+                    "assumption inside the design's 80-150 rpm: leakage through a fixed "
                     "equivalent nozzle [Winandy2002], a loss c_L / N of displacement flow")
     eta_is_max: float = _p(0.72, "1", "compressor",
                            "[Cuevas2010] maximal isentropic efficiency 72 % at PR 2.5-2.6: "
@@ -401,9 +401,9 @@ class PlantConfig:
     PR_opt: float = _p(2.55, "1", "compressor", "[Cuevas2010] peak at PR 2.5-2.6")
     c_is_lo: float = _p(150.0, "rpm", "compressor",
                         "assumption: low-speed loss (leakage re-compression, heat) c_is_lo / N: "
-                        "10-20 points below 1500 rpm (PLANT.md, shape as [Li2013])")
+                        "10-20 points below 1500 rpm (design range, shape as [Li2013])")
     c_is_hi: float = _p(0.05, "1", "compressor",
-                        "assumption: port/valve pressure loss at N_max, about 5 points (PLANT.md)")
+                        "assumption: port/valve pressure loss at N_max, about 5 points")
     P_loss0: float = _p(60.0, "W", "compressor",
                         "assumption: inverter + motor no-load loss (switching, control)")
     P_loss_N: float = _p(120.0, "W", "compressor",
@@ -411,7 +411,7 @@ class PlantConfig:
     P_loss_cu: float = _p(150.0, "W", "compressor",
                           "assumption: copper + conduction loss at P_rated, ~ (shaft power)^2; "
                           "with P_loss0 and P_loss_N gives 0.80-0.83 at light load and 0.93 at "
-                          "rated (PLANT.md)")
+                          "rated (design assumption)")
     P_rated: float = _p(4500.0, "W", "compressor", "assumption: rated shaft power at N_max")
 
     # ---------------------------------------------------------------- nominal controller
@@ -433,17 +433,17 @@ class PlantConfig:
                            "conditional integration (False: integrators never stop, for tests)")
     p_derate: float = _p(2.6e6, "Pa", "controller",
                          "assumption: inverter derates speed above 26 bar head pressure "
-                         "(PLANT.md 26-28), linearly to N_min at p_cut")
+                         "(design range 26-28), linearly to N_min at p_cut")
     p_cut: float = _p(3.241e6, "Pa", "controller",
                       "[HondaPS] compressor off above 3140 kPa gauge (3241 kPa absolute)")
     T_e_min: float = _p(272.15, "K", "controller",
                         "assumption: frost protection keeps the evaporating temperature above "
-                        "-1 degC (PLANT.md)")
+                        "-1 degC (design assumption)")
     K_frost: float = _p(2000.0, "rpm/K", "controller",
                         "assumption: speed cap reduction per K below T_e_min")
 
     # ---------------------------------------------------------------- initial hot soak
-    T_cab0: float = _p(313.15, "K", "initial", "assumption: hot soak 40 degC (PLANT.md 38-42)")
+    T_cab0: float = _p(313.15, "K", "initial", "assumption: hot soak 40 degC (design range 38-42)")
     T_int0: float = _p(315.15, "K", "initial", "assumption: sun-heated seats and dash")
     T_shell0: float = _p(313.15, "K", "initial",
                          "assumption: shell at its parked equilibrium with the 40 degC soak: "

@@ -75,7 +75,7 @@ class HeatingConfig:
     C_icw: float = _p(1500.0, "J/K", "heatpump", "assumption: ~1.5 kg aluminium + refrigerant")
     UA_or0: float = _p(3000.0, "W/K", "heatpump",
                        "assumption: front heat exchanger as a two-phase evaporator at m_r0 "
-                       "(PLANT.md's 3-5 kW/K for evaporators, bottom)")
+                       "(the design's 3-5 kW/K for evaporators, bottom)")
     k_is_hp: float = _p(0.003, "1", "heatpump",
                         "assumption: off-design curvature of the compressor's isentropic "
                         "efficiency in pressure ratio for heat-pump duty (PR 5-10); "

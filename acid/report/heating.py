@@ -38,7 +38,7 @@ def heating_section(r: HeatingStage) -> ReportSection:
                      f"{format_number(p.E_heater_kWh, '.3f')}), mean cabin "
                      f"{format_number(p.T_cab_mean_C, '.1f')} degC"))
     return ReportSection(
-        "Winter: heating plant and the whole year (issue 25)",
+        "Winter: heating plant and the whole year",
         paragraphs=(
             "acid's own checks, not the paper's claims. The heating plant (coolant heater, heat "
             "pump with frost and defrost, windscreen fogging, production controller) against "

@@ -184,7 +184,7 @@ def plant_check_figures(result) -> dict[str, Figure]:
         from acid.studies.credentials.plant import HOT_PULLDOWN_MIN as lo_hi
 
         ax2.axvspan(*lo_hi, color="0.85", alpha=0.5,
-                    label=f"PLANT.md: 25 °C after {lo_hi[0]:g}-{lo_hi[1]:g} min")
+                    label=f"design target: 25 °C after {lo_hi[0]:g}-{lo_hi[1]:g} min")
         ax2.legend(fontsize=8)
     ax2.set_xlabel("time (min)")
     ax2.set_ylabel("cabin air temperature (°C)")

@@ -498,7 +498,7 @@ def check_pulldown(plant: Plant) -> tuple[list[CheckRow], dict]:
     name = (f"pull-down: {HOT_SOAK_C:g} degC soak at {HOT_AMBIENT_C:g} degC, "
             f"{HOT_SUN_W_M2:g} W/m2, to 25 degC")
     ref = (f"{HOT_PULLDOWN_MIN[0]:g}-{HOT_PULLDOWN_MIN[1]:g} min: acid's design target "
-           "(PLANT.md), not a published test")
+           "(a design target), not a published test")
     if data["hot43"] is None:
         rows.append(CheckRow(name, None, ref, "min", None, "e",
                              NA + " (ambient and sun cannot be set)", info=True))
@@ -512,8 +512,8 @@ def check_pulldown(plant: Plant) -> tuple[list[CheckRow], dict]:
                          f"information, no verdict: {'inside' if inside else 'outside'} the "
                          f"target; cabin air {T43[int(round(1800.0 / plant.Ts))]:.1f} degC "
                          f"after 30 min, {T43[-1]:.1f} degC after 45 min; real cars: "
-                         "breath-level air 25-30 degC after 20-30 min (PLANT.md; no published "
-                         "test with these conditions was found)", info=True))
+                         "breath-level air 25-30 degC after 20-30 min (a design target; no "
+                         "published test with these conditions was found)", info=True))
     return rows, data
 
 
@@ -556,29 +556,29 @@ def check_cop(plant: Plant) -> tuple[list[CheckRow], dict, float | None, float |
     falls_N = all(np.all(np.diff(c[1:]) < 0) for c in cop.values())
     low = min(c[0] / c[1] for c in cop.values())
     rows.append(CheckRow("steady COP falls with compressor speed, 3000-8000 rpm", None,
-                         "PLANT.md behaviour 4", "1", falls_N, "f",
+                         "design expectation", "1", falls_N, "f",
                          "T_ew 5 degC, 25/35/45 degC, 0/25 m/s; below 3000 rpm leakage and "
                          f"motor part-load losses take over (COP(1500)/COP(3000) down to "
                          f"{low:.2f})"))
     rises_v = all(np.all(np.array(cop[f"{Ta:g}C_25mps"]) > np.array(cop[f"{Ta:g}C_0mps"]))
                   for Ta in grid["T_amb_C"])
-    rows.append(CheckRow("steady COP rises with vehicle speed", None, "PLANT.md behaviour 2",
+    rows.append(CheckRow("steady COP rises with vehicle speed", None, "design expectation",
                          "1", rises_v, "f"))
     falls_T = all(cop[f"25C_{v:g}mps"][i] > cop[f"35C_{v:g}mps"][i] > cop[f"45C_{v:g}mps"][i]
                   for v in grid["v_mps"] for i in range(len(grid["N_rpm"])))
-    rows.append(CheckRow("steady COP falls with ambient", None, "PLANT.md behaviour 3", "1",
+    rows.append(CheckRow("steady COP falls with ambient", None, "design expectation", "1",
                          falls_T, "f"))
     r0, fan0 = _cop_at_load(cfg, 0.0)
     r25, fan25 = _cop_at_load(cfg, 25.0)
     rows.append(CheckRow("steady COP at 30 degC, 0 m/s, 1.8 kW cooling", r0.COP,
-                         "2.5-3.8 (issue 9, credible e-scroll map)", "1",
+                         "2.5-3.8 (a credible e-scroll map)", "1",
                          2.5 <= r0.COP <= 3.8, "f", f"compressor {r0.P_comp:.0f} W"))
     gain = 100.0 * (r25.COP / r0.COP - 1.0)
     rows.append(CheckRow("COP gain 25 vs 0 m/s at equal load (1.8 kW, 30 degC)", gain,
-                         ">= 10 % (issue 9 expectation)", "%", gain >= 10.0, "g"))
+                         ">= 10 % (design expectation)", "%", gain >= 10.0, "g"))
     dp = (r0.p_c - r25.p_c) / 1e5
     rows.append(CheckRow("head pressure idle minus 25 m/s at equal load", dp,
-                         "> 0, several bar (PLANT.md)", "bar", dp > 0.0, "g"))
+                         "> 0, several bar (design expectation)", "bar", dp > 0.0, "g"))
     with_fan = 100.0 * ((r25.Q_e / (r25.P_comp + fan25)) / (r0.Q_e / (r0.P_comp + fan0)) - 1.0)
     data = {"grid": grid, "cop": cop, "standstill": {"COP": r0.COP, "T_c_C": K2C(r0.T_c),
                                                       "p_dis_bar": r0.p_c / 1e5, "P_fan_W": fan0},
