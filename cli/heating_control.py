@@ -77,7 +77,8 @@ def heating_control(
                 continue
             rows.append([case["cycle"], f"{case['T_amb_C']:+.0f}", name,
                          f"{r['energy_charged_kWh']:.3f}", f"{r['saving_vs_rule_pct']:+.1f}",
-                         f"{r['saving_vs_rule_eq_pct']:+.1f}",
+                         "n/a" if r["saving_vs_rule_eq_pct"] is None
+                         else f"{r['saving_vs_rule_eq_pct']:+.1f}",
                          f"{r['mean_T_cab_C']:.2f}", f"{100 * r['mean_RH']:.0f}",
                          f"{r['min_fog_margin_K']:.2f}", str(r["fog_samples"]),
                          f"{r['E_hp_kWh']:.3f}", f"{r['E_heater_kWh']:.3f}",

@@ -1,5 +1,6 @@
 """The paper's eqs. 1-5 transcribed from the paper (Wang et al., ACC 2018), independently of
-acid's declaration ``acid/models/paper.py``: the oracle of ``tests/test_control_nmpc.py`` and the peer
+acid's declaration ``acid/models/paper.py``: the oracle of ``tests/test_control_nmpc.py``
+and the peer
 model of ``benchmarks/bench_mpc.py``. Numbers, arrays, complex steps and CasADi symbols
 alike; ``p`` a ``ModelParams`` (kelvin convention)."""
 

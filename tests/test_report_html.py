@@ -30,8 +30,9 @@ def test_summary_then_figures_then_sections_then_every_claim(tmp_path):
     page, _ = _page(tmp_path)
     where = {name: page.index(marker) for name, marker in (
         ("summary", "<h2 id=summary>"), ("figures", "<h2 id=figures>"),
-        ("section", "<h2>Where the energy is</h2>"), ("claims", "<h2 id=claims>"),
-        ("first claim row", "<tr data-claim="), ("stages", "<h2>Stages</h2>"))}
+        ("section", "<h2 id=where-the-energy-is>Where the energy is</h2>"),
+        ("claims", "<h2 id=claims>"),
+        ("first claim row", "<tr data-claim="), ("stages", "<h2 id=stages>Stages</h2>"))}
     assert list(where) == sorted(where, key=where.get), where
     assert page.index("<figure") < where["claims"]
 
@@ -58,3 +59,18 @@ def test_the_summary_is_short_and_counts_each_section(tmp_path):
     assert summary.count("<tr>") < paper_rows / 3
     assert f"({paper_rows} rows)" in summary and 'href="#claims"' in summary
     assert "data-claim=" not in summary   # the browser check counts the claim rows below
+
+
+def test_a_table_of_contents_links_every_heading_and_long_tables_fold(tmp_path):
+    """The page is navigable: a contents list links every heading's anchor (each anchor
+    exists once), and the long claims table sits behind a summary line."""
+    page, verdicts = _page(tmp_path)
+    toc = page[page.index("<nav class=toc"):page.index("</nav>")]
+    anchors = re.findall(r'href="#([a-z0-9-]+)"', toc)
+    assert anchors[:2] == ["summary", "figures"] and "where-the-energy-is" in anchors
+    for a in anchors:
+        assert page.count(f"id={a}>") == 1, a
+    claims = page[page.index("<h2 id=claims>"):]
+    n_paper = sum(v.claim.paper is not None for v in verdicts)
+    assert f"<details class=fold><summary>Show every claim with its rule ({n_paper} rows)" \
+        in claims

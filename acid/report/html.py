@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,7 +78,12 @@ td.section{background:#f6f8fa;font-weight:600}
 padding:.6em;color:#a40e26} .small{font-size:.85em;color:#57606a}
 figure{margin:1.2em 0;text-align:center} figure img{max-width:100%;border:1px solid #eee}
 figcaption{font-size:.9em;color:#57606a;margin-top:.3em} .meta{color:#57606a;font-size:.88em}
+nav.toc{background:#f6f8fa;border:1px solid #d0d7de;padding:.4em 1em;font-size:.9em}
+nav.toc ol{margin:.3em 0;padding-left:1.4em} details.fold>summary{cursor:pointer;color:#0969da}
 """
+
+#: a table with more rows than this is folded (``<details>``): the page stays navigable
+FOLD_ROWS = 12
 
 
 def _img_tag(path: Path) -> str:
@@ -169,16 +175,53 @@ def _figures(report: Report) -> list[str]:
     return out
 
 
+def _anchors(report: Report) -> list[str]:
+    """One unique anchor per study section, from its title."""
+    used, out = {"summary", "figures", "claims", "beyond", "stages", "contents"}, []
+    for s in report.sections:
+        base = re.sub(r"[^a-z0-9]+", "-", s.title.lower()).strip("-") or "section"
+        slug, i = base, 2
+        while slug in used:
+            slug, i = f"{base}-{i}", i + 1
+        used.add(slug)
+        out.append(slug)
+    return out
+
+
+def _contents(report: Report) -> list[str]:
+    """The table of contents: every heading of the page, linked."""
+    e = html.escape
+    items = [("summary", "Summary"), ("figures", "Figures")]
+    items += list(zip(_anchors(report), (s.title for s in report.sections), strict=True))
+    items += [("claims", "Paper vs acid: every claim")]
+    if any(v.claim.paper is None for v in report.verdicts):
+        items.append(("beyond", "Beyond the paper"))
+    items.append(("stages", "Stages"))
+    return ["<nav class=toc id=contents><b>Contents</b><ol>"
+            + "".join(f'<li><a href="#{a}">{e(t)}</a></li>' for a, t in items)
+            + "</ol></nav>"]
+
+
+def _fold(rows: list[str], n: int, what: str) -> list[str]:
+    """``rows`` (a table's HTML) folded behind a summary line when it has more than
+    ``FOLD_ROWS`` rows."""
+    if n <= FOLD_ROWS:
+        return rows
+    return [f"<details class=fold><summary>{html.escape(what)} ({n} rows)</summary>", *rows,
+            "</details>"]
+
+
 def _sections(report: Report) -> list[str]:
     e = html.escape
     out = []
-    for s in report.sections:
-        out.append(f"<h2>{e(s.title)}</h2>")
+    for s, anchor in zip(report.sections, _anchors(report), strict=True):
+        out.append(f"<h2 id={anchor}>{e(s.title)}</h2>")
         out += [f"<p>{e(p)}</p>" for p in s.paragraphs]
         if s.header:
-            out.append("<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in s.header) + "</tr>")
-            out += ["<tr>" + "".join(f"<td>{e(c)}</td>" for c in r) + "</tr>" for r in s.rows]
-            out.append("</table>")
+            table = ["<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in s.header) + "</tr>"]
+            table += ["<tr>" + "".join(f"<td>{e(c)}</td>" for c in r) + "</tr>" for r in s.rows]
+            table.append("</table>")
+            out += _fold(table, len(s.rows), "Show the table")
     return out
 
 
@@ -190,19 +233,22 @@ def _claims(report: Report) -> list[str]:
            "<p class=small>Every verdict below is computed from the claims registry "
            "(<code>acid.claims</code>): the paper's value, where acid measures it, and the "
            "rule named in each row.</p>"]
-    out += _claims_table(paper)
+    out += _fold(_claims_table(paper), len(paper), "Show every claim with its rule")
     if beyond:
-        out.append("<h2>Beyond the paper</h2><table class=claims><tr><th>quantity</th>"
-                   "<th>acid (measured)</th><th>note</th></tr>")
+        out.append("<h2 id=beyond>Beyond the paper</h2>")
+        table = ["<table class=claims><tr><th>quantity</th>"
+                 "<th>acid (measured)</th><th>note</th></tr>"]
         for v in beyond:
             c = v.claim
             where = f"<div class=small>{e(c.measured.where())}</div>" if c.measured else ""
             judged = "" if v.verdict is Verdict.BEYOND else \
                 f"<div class={_css_class(v.verdict)}>{e(v.verdict.value)}: {e(v.reason)}</div>"
-            out.append(f'<tr data-claim="{e(c.id)}" data-verdict="{e(v.verdict.value)}" '
-                       f'data-implies=""><td>{e(c.quantity)}{where}</td>'
-                       f"<td class=num>{e(v.acid_text)}</td><td>{judged}{e(c.note)}</td></tr>")
-        out.append("</table>")
+            table.append(f'<tr data-claim="{e(c.id)}" data-verdict="{e(v.verdict.value)}" '
+                         f'data-implies=""><td>{e(c.quantity)}{where}</td>'
+                         f"<td class=num>{e(v.acid_text)}</td><td>{judged}{e(c.note)}</td>"
+                         "</tr>")
+        table.append("</table>")
+        out += _fold(table, len(beyond), "Show acid's measurements beyond the paper")
     return out
 
 
@@ -215,8 +261,10 @@ def render_report(report: Report) -> str:
            f"</title><style>{_CSS}</style></head><body>", f"<h1>{e(report.title)}</h1>"]
     out.append("<p class=meta>" + " &middot; ".join(f"{e(k)}: {e(str(v))}"
                                                      for k, v in report.meta.items()) + "</p>")
-    out += _summary(report) + _figures(report) + _sections(report) + _claims(report)
-    out.append("<h2>Stages</h2><table><tr><th>stage</th><th>time (s)</th><th>cache</th></tr>")
+    out += (_contents(report) + _summary(report) + _figures(report) + _sections(report)
+            + _claims(report))
+    out.append("<h2 id=stages>Stages</h2><table><tr><th>stage</th><th>time (s)</th>"
+               "<th>cache</th></tr>")
     for s in report.stages:
         out.append(f"<tr><td>{e(s.title)}</td><td class=num>{s.seconds:.1f}</td>"
                    f"<td>{'reused' if s.cached else 'computed'}</td></tr>")

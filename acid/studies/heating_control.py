@@ -282,8 +282,8 @@ def paired_verdict(savings, *, min_count: int = MIN_CASES, level: float = 0.95) 
     x = np.asarray([s for s in savings if s is not None and math.isfinite(s)], dtype=float)
     n = int(x.size)
     if n < min_count:
-        return {"n": n, "mean_pct": float(x.mean()) if n else math.nan,
-                "interval_pct": [math.nan, math.nan], "verdict": "not resolved",
+        return {"n": n, "mean_pct": float(x.mean()) if n else None,
+                "interval_pct": [None, None], "verdict": "not resolved",
                 "why": f"{n} cases, fewer than {min_count}"}
     m, se = float(x.mean()), float(x.std(ddof=1) / math.sqrt(n))
     h = float(scipy.stats.t.ppf(0.5 + level / 2, n - 1) * se)
@@ -339,7 +339,7 @@ def compare(cycle: str, T_amb: float, cfg: HeatingControlConfig | None = None,
         r["saving_vs_rule_pct"] = 100.0 * (1.0 - r["energy_charged_kWh"] / E_rule)
         r["saving_vs_rule_eq_pct"] = (100.0 * (1.0 - r["energy_charged_kWh"]
                                                / eq["energy_charged_kWh"])
-                                      if eq is not None else math.nan)
+                                      if eq is not None else None)
         r.pop("_end", None)
     s_prev = rows["nmpc"]["saving_vs_rule_pct"]
     s_held = rows["nmpc_held"]["saving_vs_rule_pct"]
