@@ -89,3 +89,17 @@ def test_a_large_mean_saving_with_a_wide_spread_is_not_a_saving():
     """The point value says 'saves' (mean +2 %); the interval does not."""
     v = paired_verdict([12.0, -6.0, 9.0, -5.0, 0.0])
     assert v["mean_pct"] > 0 and v["verdict"] == "no resolvable difference"
+
+
+def test_an_anti_windup_rule_pulls_up_without_the_plain_rules_overshoot():
+    """From a -10 degC soak the plain PI rule winds up during the pull-up and overshoots the
+    set-point by several K; the same rule integrating only within 6 K of the set-point (a
+    practitioner's anti-windup, in the equal-constraint grid after a pull-up) does not, and
+    warms the cabin about as fast."""
+    cfg = HeatingControlConfig(pull_up_s=900.0)
+    sc = warm_start("udds", C2K(-10.0), cfg.T_set, 0.0, 300.0)
+    plain = run_case("rule", sc, cfg, target=cfg.T_set, recirc=0.75, gains=(1600.0, 16.0))
+    band = run_case("rule", sc, cfg, target=cfg.T_set, recirc=0.75, gains=(1600.0, 16.0, 6.0))
+    assert plain["max_T_cab_C"] > 24.0 and plain["excess_Kh"] > 0.1
+    assert band["max_T_cab_C"] < 23.5 and band["excess_Kh"] < 0.01
+    assert band["deficit_Kh"] < plain["deficit_Kh"] + 0.1

@@ -253,7 +253,8 @@ class HeatPumpServo:
 class SimpleRule:
     """The simple rule: PI on ``T_cab`` -> heat demand (W); heat pump first up to the heat
     that brings its outlet air to ``T_a1_max``, coolant heater for the rest; recirculation
-    share held. ``Kp`` W/K, ``Ki`` W/(K s)."""
+    share held. ``Kp`` W/K, ``Ki`` W/(K s); ``i_band`` (K) a practitioner's anti-windup for
+    pull-ups: no integration far from the set-point."""
 
     T_set: float
     recirc: float
@@ -261,6 +262,9 @@ class SimpleRule:
     Ki: float = 4.0
     T_a1_max: float = C2K(65.0)
     P_heater_max: float = 5700.0
+    #: conditional integration (anti-windup): the integral moves only while the cabin is within
+    #: this many K of the set-point (None: always, but for saturation), K
+    i_band: float | None = None
 
     def run(self, W_cp: float, Q0: float = 0.0):
         """A stateful law ``u = step(measurement, T_amb, Ts)``; the integral starts at the
@@ -273,7 +277,8 @@ class SimpleRule:
             T_mix = T_amb + self.recirc * (m["T_cab"] - T_amb)
             Q_hp_max = max(W_cp * (self.T_a1_max - T_mix), 0.0)
             q = min(max(raw, 0.0), Q_hp_max + self.P_heater_max)
-            if q == raw or (raw < 0.0) != (e > 0.0):
+            inside = self.i_band is None or abs(e) <= self.i_band
+            if inside and (q == raw or (raw < 0.0) != (e > 0.0)):
                 integral[0] += e * Ts
             Q_hp = min(q, Q_hp_max)
             return {"Q_hp": Q_hp, "P_heater": q - Q_hp, "recirc": self.recirc}

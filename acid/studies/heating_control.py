@@ -43,11 +43,14 @@ from acid.units import C2K, K2C
 
 CYCLES = ("udds", "hwfet")
 AMBIENTS_C = (-10.0, 0.0, 7.0)
-#: the finer rule grid of the equal-constraint rule: recirculation in steps of 0.05, the gains
-FINE_RECIRCS = tuple(round(0.05 * i, 2) for i in range(20))
-RULE_GAINS = ((400.0, 2.0), (800.0, 4.0), (1600.0, 8.0))
+#: the finer rule grid of the equal-constraint rule: recirculation in steps of 0.05 (below 0.3
+#: the rules only cost more), PI gains (W/K, W/(K s)) and, after a pull-up, a practitioner's
+#: anti-windup (integration only within that many K of the set-point; None: plain PI)
+FINE_RECIRCS = tuple(round(0.05 * i, 2) for i in range(6, 20))
+RULE_GAINS = ((400.0, 2.0), (800.0, 4.0), (1600.0, 8.0), (1600.0, 16.0))
+PULL_UP_BANDS_K = (None, 3.0, 6.0)
 #: candidates of the fine grid matched to the reference's mean cabin temperature (the cheapest)
-EQUAL_CANDIDATES = 3
+EQUAL_CANDIDATES = 4
 #: a cabin warmer than the set-point by more than this (K) counts as excess (overshoot)
 EXCESS_BAND_K = 1.0
 #: slack on the kept fogging margin and on the pull-up's deficit when a rule is held to the
@@ -116,7 +119,8 @@ def run_case(kind: str, sc: Scenario, cfg: HeatingControlConfig, *, target: floa
     W_cp = W_BL_HOLD * pc.c_p_air
     servo = HeatPumpServo(pc.N_min, pc.N_max)
     if kind == "rule":
-        law = SimpleRule(target, recirc, *gains, T_a1_max=cfg.T_a1_max,
+        law = SimpleRule(target, recirc, *gains[:2], T_a1_max=cfg.T_a1_max,
+                         i_band=gains[2] if len(gains) > 2 else None,
                          P_heater_max=hc.P_heater_max).run(W_cp, sc.Q0)
     elif kind == "nmpc":
         nmpc.set_band(target)
@@ -234,10 +238,14 @@ def equal_constraint_rule(sc: Scenario, cfg: HeatingControlConfig, *, fog_min: f
     at or above ``fog_min`` (K) over the whole run, its mean cabin temperature (record key
     ``key``) matched to ``T_ref`` (K), and (when given) its warm-up deficit and overshoot no
     larger than ``max_deficit_Kh`` / ``max_excess_Kh`` (K h). Searched over the fine grid
-    (``recircs`` x ``gains``, at the set-point); the ``EQUAL_CANDIDATES`` cheapest that keep
-    the margin are matched to ``T_ref`` and re-checked. ``None`` when no rule keeps them."""
+    (``recircs`` x ``gains``, x ``PULL_UP_BANDS_K`` after a pull-up, at the set-point); the
+    ``EQUAL_CANDIDATES`` cheapest that keep the constraints are matched to ``T_ref`` and
+    re-checked. ``None`` when no rule keeps them."""
     runs = list(tried or [])
     done = {(r["recirc_setting"], tuple(r["gains"])) for r in runs}
+    if cfg.pull_up_s > 0.0:
+        gains = [(*g[:2], b) if b is not None else tuple(g[:2])
+                 for g in gains for b in PULL_UP_BANDS_K]
     for r in recircs:
         for g in gains:
             if (r, tuple(g)) in done:
@@ -246,14 +254,15 @@ def equal_constraint_rule(sc: Scenario, cfg: HeatingControlConfig, *, fog_min: f
             rec["gains"] = list(g)
             runs.append(rec)
 
-    def keeps(rec) -> bool:
+    def keeps(rec, slack_Kh: float = 0.0) -> bool:
+        """The constraints; ``slack_Kh`` widens the comfort ones before the matching moves
+        the set-point (K h)."""
+        tol = DEFICIT_TOL_KH + slack_Kh
         return bool(rec["min_fog_margin_K"] >= fog_min - MARGIN_TOL_K
-                    and (max_deficit_Kh is None
-                         or rec["deficit_Kh"] <= max_deficit_Kh + DEFICIT_TOL_KH)
-                    and (max_excess_Kh is None
-                         or rec["excess_Kh"] <= max_excess_Kh + DEFICIT_TOL_KH))
+                    and (max_deficit_Kh is None or rec["deficit_Kh"] <= max_deficit_Kh + tol)
+                    and (max_excess_Kh is None or rec["excess_Kh"] <= max_excess_Kh + tol))
 
-    cheap = sorted((r for r in runs if r["min_fog_margin_K"] >= fog_min - MARGIN_TOL_K),
+    cheap = sorted((r for r in runs if keeps(r, slack_Kh=0.1)),
                    key=lambda r: r["energy_kWh"] + r["tail_kWh"])[:EQUAL_CANDIDATES]
     best = None
     for c in cheap:
