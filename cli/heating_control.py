@@ -83,8 +83,8 @@ def heating_control(
                          f"{r['min_fog_margin_K']:.2f}", str(r["fog_samples"]),
                          f"{r['E_hp_kWh']:.3f}", f"{r['E_heater_kWh']:.3f}",
                          f"{r['defrost_s']:.0f}"])
-        say(f"{case['cycle']} {case['T_amb_C']:+.0f} degC: preview's share of the NMPC's "
-            f"saving {case['preview_share_pct']:.0f} %")
+        say(f"{case['cycle']} {case['T_amb_C']:+.0f} degC: speed preview changed the NMPC's "
+            f"saving by {case['preview_points']:+.1f} points")
     print_table("acid heating-control (end state charged back)",
                 ["_cycle", "T_amb", "_controller", "kWh", "vs rule %", "vs rule_eq %", "T_cab",
                  "RH %",

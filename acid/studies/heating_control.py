@@ -355,6 +355,7 @@ def compare(cycle: str, T_amb: float, cfg: HeatingControlConfig | None = None,
     return {"cycle": cycle, "T_amb_C": K2C(T_amb), "warmup_s": warmup_s, "matched": key,
             "pull_up_s": cfg.pull_up_s, "start_T_cab_C": K2C(sc.initial["T_cab"]),
             "start_frost_kg": sc.initial["M_frost"], "controllers": rows,
+            "preview_points": s_prev - s_held,
             "preview_share_pct": (100.0 * (s_prev - s_held) / s_prev
                                   if abs(s_prev) > 1e-9 else float("nan")),
             "rule_tried": [{k: t[k] for k in ("recirc_setting", "gains", "energy_kWh",
