@@ -89,13 +89,10 @@ def heating_control(
                 ["_cycle", "T_amb", "_controller", "kWh", "vs rule %", "vs rule_eq %", "T_cab",
                  "RH %",
                  "fog margin K", "fogged", "HP kWh", "heater kWh", "defrost s"], rows)
-    v = result["verdict_nmpc_vs_rule_eq"]
-    if v["verdict"] == "not resolved":
-        say(f"NMPC against the rule at equal constraints: not resolved ({v['why']})")
-    else:
-        lo, hi = v["interval_pct"]
-        say(f"NMPC against the rule at equal constraints, over {v['n']} cases: {v['verdict']} "
-            f"(mean {v['mean_pct']:+.1f} %, 95 % interval {lo:+.1f} to {hi:+.1f} %)")
+    from acid.studies.verdict import Verdict
+
+    v = Verdict.from_dict(result["verdict_nmpc_vs_rule_eq"])
+    say(f"NMPC against the rule at equal constraints, over the cases: {v.summary()}")
     result["acid_version"] = __version__
     write_summary(json_path, result)
     say(f"figure written to {png}")

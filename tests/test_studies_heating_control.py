@@ -9,7 +9,6 @@ from acid.control.heating import HeatingControlConfig, HeatingNMPC, heating_cont
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
 from acid.studies.heating_control import (
     equal_constraint_rule,
-    paired_verdict,
     run_case,
     tune_rule,
     warm_start,
@@ -69,26 +68,6 @@ def test_a_rule_held_to_a_looser_fogging_margin_is_matched_and_never_dearer(shor
     # an impossible margin leaves no rule
     assert equal_constraint_rule(sc, cfg, fog_min=50.0, T_ref=T_ref, key="mean_T_cab_C",
                                  recircs=(0.6,), gains=((800.0, 4.0),), tried=tried) is None
-
-
-@pytest.mark.parametrize(("savings", "words"), [
-    ([3.1, 2.8, 3.4, 2.9, 3.2], "saves"),
-    ([-1.0, -1.2, -0.8, -1.1, -0.9, -1.3], "costs"),
-    ([3.0, -2.5, 1.0, -1.5, 0.4], "no resolvable difference"),
-    ([10.0, 9.0, 11.0, 10.5], "not resolved"),
-])
-def test_the_verdict_words_come_from_the_interval_not_the_point(savings, words):
-    v = paired_verdict(savings)
-    assert v["verdict"] == words
-    if words != "not resolved":
-        lo, hi = v["interval_pct"]
-        assert lo < v["mean_pct"] < hi
-
-
-def test_a_large_mean_saving_with_a_wide_spread_is_not_a_saving():
-    """The point value says 'saves' (mean +2 %); the interval does not."""
-    v = paired_verdict([12.0, -6.0, 9.0, -5.0, 0.0])
-    assert v["mean_pct"] > 0 and v["verdict"] == "no resolvable difference"
 
 
 def test_an_anti_windup_rule_pulls_up_without_the_plain_rules_overshoot():

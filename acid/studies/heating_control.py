@@ -18,7 +18,6 @@ the reference of the matching and is shown beside it.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +38,7 @@ from acid.plant.heating import HeatingPlant
 from acid.plant.heating_config import HeatingConfig, winter_plant_config
 from acid.psychro import relative_humidity
 from acid.signals import drive_cycle
+from acid.studies.verdict import paired_verdict
 from acid.units import C2K, K2C
 
 CYCLES = ("udds", "hwfet")
@@ -56,8 +56,6 @@ EXCESS_BAND_K = 1.0
 #: slack on the kept fogging margin and on the pull-up's deficit when a rule is held to the
 #: NMPC's (K; K h): the resolution of the runs, not a concession
 MARGIN_TOL_K, DEFICIT_TOL_KH = 0.01, 0.01
-#: the fewest cases behind a verdict over cases
-MIN_CASES = 5
 
 
 @dataclass(frozen=True)
@@ -281,27 +279,6 @@ def equal_constraint_rule(sc: Scenario, cfg: HeatingControlConfig, *, fog_min: f
     return best
 
 
-def paired_verdict(savings, *, min_count: int = MIN_CASES, level: float = 0.95) -> dict:
-    """A saving over cases, judged on its interval: the mean of the paired savings (%), its
-    ``level`` t-interval, and the words from the interval ("saves" when it lies above 0,
-    "costs" below, "no resolvable difference" across it; "not resolved" below ``min_count``
-    cases)."""
-    import scipy.stats
-
-    x = np.asarray([s for s in savings if s is not None and math.isfinite(s)], dtype=float)
-    n = int(x.size)
-    if n < min_count:
-        return {"n": n, "mean_pct": float(x.mean()) if n else None,
-                "interval_pct": [None, None], "verdict": "not resolved",
-                "why": f"{n} cases, fewer than {min_count}"}
-    m, se = float(x.mean()), float(x.std(ddof=1) / math.sqrt(n))
-    h = float(scipy.stats.t.ppf(0.5 + level / 2, n - 1) * se)
-    lo, hi = m - h, m + h
-    words = "saves" if lo > 0.0 else "costs" if hi < 0.0 else "no resolvable difference"
-    return {"n": n, "mean_pct": m, "interval_pct": [lo, hi], "verdict": words,
-            "level": level}
-
-
 def compare(cycle: str, T_amb: float, cfg: HeatingControlConfig | None = None,
             tail_s: float = 1200.0, warmup_s: float = 1800.0, nmpc: HeatingNMPC | None = None,
             rule_grid: dict | None = None, progress=None) -> dict:
@@ -378,7 +355,7 @@ def heating_study(cycles=CYCLES, ambients_C=AMBIENTS_C, cfg: HeatingControlConfi
                          for k, v in dataclasses.asdict(cfg).items()},
               "cop_fit": COP_FIT, "cases": cases,
               "verdict_nmpc_vs_rule_eq": paired_verdict(
-                  [c["controllers"]["nmpc"]["saving_vs_rule_eq_pct"] for c in cases])}
+                  [c["controllers"]["nmpc"]["saving_vs_rule_eq_pct"] for c in cases]).to_dict()}
     if json_path is not None:
         write_json(json_path, result)
     if png_path is not None:

@@ -1,0 +1,102 @@
+"""A saving as a verdict: paired differences over scenarios (or cases, days, trips), their 95 %
+interval and the words read from it, never from the point value.
+
+``paired_verdict(values)`` takes the paired savings of one controller against another, one per
+held-out scenario (%, or any unit: the verdict is about the sign), and returns a
+:class:`Verdict`:
+
+* the mean and the two-sided ``level`` interval of the mean: Student's t over the scenarios
+  and, beside it, a paired bootstrap (``n_boot`` resamples of the scenarios, percentile
+  interval, seeded: same seed, same bits);
+* the words: **"saves"** when the whole t-interval lies above zero, **"costs"** when below,
+  **"no resolvable difference"** when it holds zero, and **"not resolved"** below
+  ``min_count`` scenarios (no interval is computed from so few). The t-interval decides (it is
+  the wider of the two for the small counts of a study); the bootstrap is reported so a reader
+  can see when the two disagree (``agree``).
+
+Reference: B. Efron and R. J. Tibshirani, *An Introduction to the Bootstrap*, Chapman & Hall,
+1993, ch. 13 (percentile intervals) and ch. 15 (paired comparisons).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+#: the fewest paired values behind a verdict: below, "not resolved"
+MIN_COUNT = 5
+#: the words a verdict may read
+WORDS = ("saves", "no resolvable difference", "costs", "not resolved")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A paired comparison over ``n`` scenarios: ``mean`` of the savings, the t-interval
+    ``(lo, hi)`` and the bootstrap interval ``(boot_lo, boot_hi)`` at ``level``, the ``words``
+    (one of :data:`WORDS`) and, when not resolved, ``why``. Intervals are None below
+    ``min_count``."""
+
+    n: int
+    mean: float | None
+    lo: float | None
+    hi: float | None
+    boot_lo: float | None
+    boot_hi: float | None
+    level: float
+    words: str
+    why: str = ""
+
+    @property
+    def agree(self) -> bool | None:
+        """Whether the bootstrap interval reads the same words as the t-interval."""
+        if self.boot_lo is None:
+            return None
+        return _words(self.boot_lo, self.boot_hi) == self.words
+
+    def to_dict(self) -> dict:
+        return {**asdict(self), "agree": self.agree}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Verdict:
+        return cls(**{k: d[k] for k in ("n", "mean", "lo", "hi", "boot_lo", "boot_hi",
+                                        "level", "words", "why")})
+
+    def summary(self, unit: str = "%") -> str:
+        """One line: the words, the mean and its interval, the count."""
+        if self.lo is None:
+            return f"{self.words} ({self.why})"
+        return (f"{self.words}: mean {self.mean:+.2f} {unit}, {100 * self.level:.0f} % interval "
+                f"{self.lo:+.2f} to {self.hi:+.2f} {unit} over {self.n} (bootstrap "
+                f"{self.boot_lo:+.2f} to {self.boot_hi:+.2f})")
+
+    def __repr__(self) -> str:
+        return f"Verdict({self.summary()})"
+
+
+def _words(lo: float, hi: float) -> str:
+    return "saves" if lo > 0.0 else "costs" if hi < 0.0 else "no resolvable difference"
+
+
+def paired_verdict(values: Iterable[float | None], *, level: float = 0.95,
+                   min_count: int = MIN_COUNT, n_boot: int = 10_000, seed: int = 0) -> Verdict:
+    """The verdict of paired savings ``values`` (None or non-finite entries are dropped: a
+    scenario that failed is not a zero). See the module docstring."""
+    import scipy.stats
+
+    if not 0.5 < level < 1.0:
+        raise ValueError(f"level must lie in (0.5, 1), got {level!r}")
+    x = np.asarray([float(v) for v in values if v is not None and math.isfinite(float(v))])
+    n = int(x.size)
+    if n < max(min_count, 2):
+        return Verdict(n, float(x.mean()) if n else None, None, None, None, None, level,
+                       "not resolved", f"{n} paired values, fewer than {max(min_count, 2)}")
+    m = float(x.mean())
+    h = float(scipy.stats.t.ppf(0.5 + level / 2.0, n - 1) * x.std(ddof=1) / math.sqrt(n))
+    rng = np.random.default_rng(seed)
+    boot = x[rng.integers(0, n, size=(n_boot, n))].mean(axis=1)
+    a = 100.0 * (1.0 - level) / 2.0
+    b_lo, b_hi = (float(v) for v in np.percentile(boot, [a, 100.0 - a]))
+    return Verdict(n, m, m - h, m + h, b_lo, b_hi, level, _words(m - h, m + h))
