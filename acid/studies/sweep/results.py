@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from acid._io import atomic_path, write_json
+from acid.studies.verdict import paired_verdict
 
 #: columns first in the table, in this order (the rest follow alphabetically)
 LEADING = ("scenario", "label", "cycle", "duration_s", "ambient_C", "humidity_pct",
@@ -192,7 +193,10 @@ def _num(x):
 
 def controller_summary(df, baseline: str) -> dict:
     """Per controller over its successful scenarios: counts and mean / min / max of energy,
-    savings, cabin temperature, comfort violation; median solve time."""
+    savings, cabin temperature, comfort violation; median solve time; and the verdict of its
+    savings against the baseline over the scenarios (``acid.studies.verdict``: the paired
+    savings' 95 % interval and the words read from it; tail-corrected savings when the sweep
+    has tails)."""
     out = {}
     for label, g in df.groupby("controller", sort=False):
         ok = g[g["status"] == "ok"]
@@ -208,6 +212,12 @@ def controller_summary(df, baseline: str) -> dict:
                 d[col] = {"mean": _num(v.mean()), "min": _num(v.min()), "max": _num(v.max())}
         if "solve_ms_median" in ok and ok["solve_ms_median"].notna().any():
             d["solve_ms_median"] = _num(np.nanmedian(ok["solve_ms_median"].to_numpy(float)))
+        if label != baseline:
+            col = "saving_tail_corrected_pct" if "saving_tail_corrected_pct" in ok and \
+                ok["saving_tail_corrected_pct"].notna().any() else "saving_pct"
+            if col in ok:
+                d["verdict"] = {"against": baseline, "saving": col, **paired_verdict(
+                    ok[col].to_numpy(dtype=float)).to_dict()}
         out[label] = d
     return out
 
