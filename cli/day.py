@@ -38,7 +38,7 @@ def day(
     jobs: int = typer.Option(1, "--jobs", help="Worker processes (1: run in this process; "
                                               "more: a Dask LocalCluster)."),
     quick: bool = typer.Option(False, "--quick",
-                               help="3 training and 4 held-out days, leads every 10 min."),
+                               help="3 training and 4 held-out days, timer leads every 10 min."),
     out: Path = typer.Option(Path("reports/day"), "--out",
                              help="Folder for the JSON and the figure of a day."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
@@ -100,11 +100,13 @@ def day(
                              f"{m('E_battery_kWh'):.2f}", f"{m('E_climate_battery_kWh'):.2f}",
                              f"{m('E_pre_grid_kWh'):.2f}", f"{m('E_grid_kWh'):.2f}",
                              f"{m('cost_USD'):.2f}", f"{m('range_lost_km'):.1f}",
-                             f"{m('Kmin_window'):.2f}", f"{m('time_to_comfort_s') / 60:.1f}"])
+                             f"{m('Kmin_window'):.2f}", f"{m('Kmin_plugged'):.2f}",
+                             f"{m('time_to_comfort_s') / 60:.1f}"])
         print_table(f"{s}: means over {n_test} held-out days (two trips a day)",
                     ["_controller", "forecast error, min", "battery kWh", "climate kWh",
                      "pre-cond. grid kWh", "total grid kWh", "cost USD", "range lost km",
-                     "K.min first 10 min", "time to comfort min"], rows)
+                     "K.min first 10 min", "of it from a plug", "time to comfort min"],
+                    rows)
         comp = []
         for c in result.comparisons:
             if c["season"] != s:

@@ -149,7 +149,7 @@ def test_the_tuned_timer_is_as_good_as_the_best_lead_of_an_independent_scan():
 
 def test_the_planner_meets_the_comfort_target_at_no_more_cost_than_a_long_timer(summer):
     d, none, _ = summer
-    plan = D.run_day(d, D.Planner((0.0, 20.0, 40.0)))
+    plan = D.run_day(d, D.Planner(40.0))
     long = D.run_day(d, D.Timer(40.0))
     assert all(t.Kmin_window <= D.COMFORT_TARGET_KMIN for t in plan.trips)
     assert plan.cost_USD <= long.cost_USD + 1e-9

@@ -12,11 +12,11 @@ Haurwitz clear-sky model times a cloud factor; a hot day (Phoenix, July) on the 
 maximum, clouds, departure times and the work plug, drawn from a seeded generator.
 
 **The plant through the day.** Parked and switched off, the plant keeps running (speed 0,
-sun and ambient of the hour): compressor, heater and blower off, the HVAC box's leakage flow
-(``W_PARKED``, an assumption) and the cabin's infiltration the only air exchange, at a 60 s
-step. Pre-conditioning and driving run the plant's own production controller (5 s step).
-Pre-conditioning only while plugged: its climate power and the car's 12 V base load come from
-the grid through the charger (``acid.plant.battery.Charger``); driving draws traction
+sun and ambient of the hour, sun updated every 10 minutes, nobody on board): compressor,
+heater and blower off, the HVAC box's leakage flow (``W_PARKED``, an assumption) and the
+cabin's infiltration the only air exchange, at a 60 s step. Pre-conditioning (nobody on
+board) and driving run the plant's own production controller (5 s step). Pre-conditioning
+only while plugged: its climate power and the car's 12 V base load come from the grid through the charger (``acid.plant.battery.Charger``); driving draws traction
 (``acid.plant.road_load``), base load and climate from the battery
 (``acid.plant.battery.Battery``).
 
@@ -69,8 +69,7 @@ COMFORT_WINDOW_S = 600.0
 COMFORT_TARGET_KMIN = 1.0
 #: leads the timer is tuned over and the planner chooses from, minutes
 LEADS_MIN = tuple(float(x) for x in range(0, 65, 5))
-PLANNER_LEADS_MIN = tuple(float(x) for x in range(0, 70, 10))
-QUICK_LEADS_MIN = PLANNER_LEADS_MIN
+QUICK_LEADS_MIN = tuple(float(x) for x in range(0, 70, 10))
 #: departure forecast errors of the study (standard deviation, minutes)
 FORECAST_ERRORS_MIN = (0.0, 5.0, 15.0)
 #: paired intervals: fewer held-out days than this are "not resolved"
@@ -248,15 +247,19 @@ class _Car:
             self.off = HeatingPlant(hc, cfg.replace(W_bl_min=W_PARKED, Ts=PARKED_TS,
                                                     dt_int=5.0), mode="direct")
         self.keys = INITIAL_KEYS
+        # nobody in the parked car: no occupant heat or moisture off the road
+        empty = {"Q_pass": 0.0, "m_moist_pass": 0.0}
+        self.cfg = {"off": self.off.cfg.replace(**empty), "on": self.on.cfg.replace(**empty),
+                    "drive": self.on.cfg}
         self.on.reset()
         self.state = {k: v for k, v in self.on.measure().items() if k in self.keys}
         self.t = t0
         self._sun = -1.0
 
-    def _set_sun(self, plant, t: float) -> None:
+    def _set_sun(self, plant, mode: str, t: float) -> None:
         G = round(self.clim.G_solar(t, self.day.clouds), 1)
-        if plant.cfg.G_solar != G:
-            plant.cfg = plant.cfg.replace(G_solar=G)
+        if plant.cfg.G_solar != G or plant.cfg.Q_pass != self.cfg[mode].Q_pass:
+            plant.cfg = self.cfg[mode].replace(G_solar=G)
 
     def run(self, until: float, mode: str, v: np.ndarray | None = None) -> list[dict]:
         """Advance to ``until`` (s): ``mode`` "off" (parked, switched off), "on" (parked,
@@ -273,7 +276,7 @@ class _Car:
             n = int(round((until - self.t) / plant.Ts))
         for k in range(n):
             if k % max(1, int(600 / plant.Ts)) == 0:
-                self._set_sun(plant, self.t)
+                self._set_sun(plant, mode, self.t)
             T_amb = self.clim.T_amb_K(self.t, self.day.dT_max)
             speed = float(v[k]) if mode == "drive" else 0.0
             if mode == "off":
@@ -350,13 +353,15 @@ class Timer:
 
 @dataclass(frozen=True)
 class Planner:
-    """For each plugged departure, simulate each lead of ``leads_min`` on the plant (same
-    weather, the forecast departure, the first ``COMFORT_WINDOW_S`` of the drive) and keep
-    the cheapest lead whose discomfort is at most ``target_Kmin``; none meeting it: the
-    longest. Cost: grid energy at the hour's price, battery energy at the off-peak price
-    over the charger."""
+    """For each plugged departure, choose the start on the plant itself (same weather, the
+    forecast departure, the first ``COMFORT_WINDOW_S`` of the drive): the shortest lead, to
+    the minute, whose discomfort is at most ``target_Kmin`` (bisection: a longer lead never
+    leaves a warmer (colder) cabin), then the cheapest of it and the leads 5 and 10 minutes
+    longer that also meet the target (a cheaper hour can pay for a longer lead); none meeting
+    it within ``max_lead_min``: the longest. Cost: grid energy at the hour's price, the
+    drive's battery energy in the window at the off-peak price over the charger."""
 
-    leads_min: tuple[float, ...] = PLANNER_LEADS_MIN
+    max_lead_min: float = 60.0
     target_Kmin: float = COMFORT_TARGET_KMIN
     name: str = "planner"
 
@@ -366,27 +371,46 @@ class Planner:
         saved = car.copy_state()
         v = _speeds(trip.cycles)[:int(COMFORT_WINDOW_S / 5.0)]
         charger = Charger()
-        best, best_cost, fallback = None, math.inf, 0.0
-        first = trip.forecast_s - 60.0 * max(self.leads_min)
+        top = int(round(self.max_lead_min))
+        first = trip.forecast_s - 60.0 * top
         if first > car.t:  # the soak up to the earliest start, shared by every lead
             car.run(first, "off")
         soaked = car.copy_state()
-        for lead in sorted(self.leads_min):
-            L = 60.0 * lead
-            car.restore(soaked)
-            if trip.forecast_s - L > car.t:
-                car.run(trip.forecast_s - L, "off")
-            pre = car.run(trip.forecast_s, "on") if car.t < trip.forecast_s else []
-            drive = car.run(0.0, "drive", v)
-            grid = sum((_climate_W(r) + _base_W()) * r["Ts"] * tariff.price(r["t"]) for r in pre)
-            grid /= charger.efficiency * J_PER_KWH
-            batt = sum(_climate_W(r) * r["Ts"] for r in drive) / J_PER_KWH
-            cost = grid + batt * tariff.off_peak / charger.efficiency
-            fallback = L
-            if _outside_Kmin(drive, car.season) <= self.target_Kmin and cost < best_cost:
-                best, best_cost = L, cost
+        seen: dict[int, tuple[float, float]] = {}
+
+        def evaluate(lead: int) -> tuple[float, float]:
+            if lead not in seen:
+                car.restore(soaked)
+                if trip.forecast_s - 60.0 * lead > car.t:
+                    car.run(trip.forecast_s - 60.0 * lead, "off")
+                pre = car.run(trip.forecast_s, "on") if car.t < trip.forecast_s else []
+                drive = car.run(0.0, "drive", v)
+                grid = sum((_climate_W(r) + _base_W()) * r["Ts"] * tariff.price(r["t"])
+                           for r in pre) / (charger.efficiency * J_PER_KWH)
+                batt = sum(_climate_W(r) * r["Ts"] for r in drive) / J_PER_KWH
+                seen[lead] = (grid + batt * tariff.off_peak / charger.efficiency,
+                              _outside_Kmin(drive, car.season))
+            return seen[lead]
+
+        ok = lambda lead: evaluate(lead)[1] <= self.target_Kmin  # noqa: E731
+        if not ok(top):
+            car.restore(saved)
+            return 60.0 * top
+        lo, hi = -1, top  # lo infeasible (or none), hi feasible
+        if ok(0):
+            hi = 0
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if mid <= 0:
+                break
+            if ok(mid):
+                hi = mid
+            else:
+                lo = mid
+        best = min((L for L in (hi, hi + 5, hi + 10) if L <= top and ok(L)),
+                   key=lambda L: (evaluate(L)[0], L))
         car.restore(saved)
-        return best if best is not None else fallback
+        return 60.0 * best
 
 
 def _base_W() -> float:
@@ -396,14 +420,14 @@ def _base_W() -> float:
 
 
 def controller_of(name: str, lead_min: float = 0.0,
-                  leads_min: Sequence[float] = PLANNER_LEADS_MIN):
+                  leads_min: Sequence[float] = LEADS_MIN):
     """A controller by name (``CONTROLLERS``)."""
     if name == "none":
         return NoPreconditioning()
     if name == "timer":
         return Timer(float(lead_min))
     if name == "planner":
-        return Planner(tuple(float(x) for x in leads_min))
+        return Planner(float(max(leads_min)))
     raise ConfigError(f"unknown controller {name!r} (choose {', '.join(CONTROLLERS)})")
 
 
@@ -673,24 +697,23 @@ def _run_task(day: DaySpec, name: str, lead: float, leads: tuple[float, ...],
 
 QUANTITIES = (("E_battery_kWh", "battery energy, kWh"), ("cost_USD", "cost, USD"),
               ("Kmin_window", "K.min outside the band, first 10 min"),
+              ("Kmin_plugged", "K.min, first 10 min, trips from a plug"),
               ("E_grid_kWh", "total grid energy, kWh"))
 
 
 def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 10,
               seed: int = 0, forecast_errors_min: Sequence[float] = FORECAST_ERRORS_MIN,
-              leads_min: Sequence[float] = LEADS_MIN,
-              planner_leads_min: Sequence[float] = PLANNER_LEADS_MIN, planner: bool = True,
+              leads_min: Sequence[float] = LEADS_MIN, planner: bool = True,
               jobs: int | None = 1,
               progress: Callable[[int, int, str], None] | None = None) -> DayStudy:
     """Tune the timer over ``leads_min`` on ``n_train`` days per season (departures known),
-    judge none, timer and planner (choosing from ``planner_leads_min``) on ``n_test`` other
+    judge none, timer and planner (leads up to the longest of ``leads_min``) on ``n_test`` other
     days for each forecast error; paired intervals of timer and planner against none and of
     the planner against the timer. Training days are indices 0.., held-out days 1000..: no
     day is both."""
     from acid.executor import check_interrupt, open_executor
 
     seasons, leads = tuple(seasons), tuple(float(x) for x in leads_min)
-    pleads = tuple(float(x) for x in planner_leads_min)
     errs = tuple(float(x) for x in forecast_errors_min)
     for s in seasons:
         load_climate(s)
@@ -734,7 +757,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                 test[e] = make_days(s, n_test, seed, e, first_index=1000)
                 tasks += [(d, "timer", tuned[s], leads, e) for d in test[e]]
                 if planner:
-                    tasks += [(d, "planner", 0.0, pleads, e) for d in test[e]]
+                    tasks += [(d, "planner", 0.0, leads, e) for d in test[e]]
             res = run_all(ex, tasks)
             none = [res[(d, "none", 0.0, leads, 0.0)] for d in base_days]
             outcomes += none
@@ -743,7 +766,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                 outcomes += timer
                 pairs = [("timer", timer, "none", none)]
                 if planner:
-                    plan = [res[(d, "planner", 0.0, pleads, e)] for d in test[e]]
+                    plan = [res[(d, "planner", 0.0, leads, e)] for d in test[e]]
                     outcomes += plan
                     pairs += [("planner", plan, "none", none), ("planner", plan, "timer", timer)]
                 for name, a, bname, b in pairs:
