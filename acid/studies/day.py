@@ -16,7 +16,8 @@ sun and ambient of the hour, sun updated every 10 minutes, nobody on board): com
 heater and blower off, the HVAC box's leakage flow (``W_PARKED``, an assumption) and the
 cabin's infiltration the only air exchange, at a 60 s step. Pre-conditioning (nobody on
 board) and driving run the plant's own production controller (5 s step). Pre-conditioning
-only while plugged: its climate power and the car's 12 V base load come from the grid through the charger (``acid.plant.battery.Charger``); driving draws traction
+only while plugged: its climate power and the car's 12 V base load come from the grid
+through the charger (``acid.plant.battery.Charger``); driving draws traction
 (``acid.plant.road_load``), base load and climate from the battery
 (``acid.plant.battery.Battery``).
 
