@@ -72,7 +72,9 @@ def day(
                                  progress=update)
         traces, labels = {}, {}
         for s in seasons:
-            d = study.make_days(s, 1, seed, 0.0, first_index=1000)[0]
+            # the figure's day: the first held-out day plugged before both trips
+            pool = study.make_days(s, 20, seed, 0.0, first_index=1000)
+            d = next((x for x in pool if all(t.plugged for t in x.trips)), pool[0])
             ctrls = [study.NoPreconditioning(), study.Timer(result.tuned_lead_min[s])]
             if not no_planner:
                 ctrls.append(study.Planner())
