@@ -103,12 +103,13 @@ def day(
                              f"{m('E_pre_grid_kWh'):.2f}", f"{m('E_grid_kWh'):.2f}",
                              f"{m('cost_USD'):.2f}", f"{m('range_lost_km'):.1f}",
                              f"{m('Kmin_window'):.2f}", f"{m('Kmin_plugged'):.2f}",
-                             f"{m('time_to_comfort_s') / 60:.1f}"])
+                             f"{m('time_to_comfort_s') / 60:.1f}",
+                             f"{m('fog_margin_min_K'):.1f}" if s == "winter" else "-"])
         print_table(f"{s}: means over {n_test} held-out days (two trips a day)",
                     ["_controller", "forecast error, min", "battery kWh", "climate kWh",
                      "pre-cond. grid kWh", "total grid kWh", "cost USD", "range lost km",
-                     "K.min first 10 min", "of it from a plug", "time to comfort min"],
-                    rows)
+                     "K.min first 10 min", "of it from a plug", "time to comfort min",
+                     "lowest fog margin K"], rows)
         comp = []
         for c in result.comparisons:
             if c["season"] != s:
