@@ -96,11 +96,25 @@ def test_preconditioning_moves_climate_energy_off_the_battery(which, request):
     # the accounting adds up
     for o in (none, timer):
         assert o.E_battery_kWh == pytest.approx(sum(
-            t.E_climate_kWh + t.E_traction_kWh + t.E_base_kWh for t in o.trips))
+            t.E_pre_battery_kWh + t.E_climate_kWh + t.E_traction_kWh + t.E_base_kWh
+            for t in o.trips))
         assert o.E_recharge_grid_kWh == pytest.approx(o.E_battery_kWh / Charger().efficiency)
         assert 0.0 < o.soc_end < D.SOC_START
         assert o.to_dict()["controller"] == o.controller and json.dumps(o.to_dict())
         assert o.summary().startswith(d.label)
+
+
+def test_the_charger_caps_what_the_grid_supplies(winter):
+    # heater and heat pump together draw more than the charger's 6.4 kW DC: the rest comes
+    # from the battery, and a charger of twice the power takes all of it
+    d, _, timer = winter
+    t0 = timer.trips[0]
+    assert t0.E_pre_battery_kWh > 0.0
+    big = D.run_day(d, D.Timer(20.0), charger=Charger(P_ac_W=14800.0))
+    assert big.trips[0].E_pre_battery_kWh == 0.0
+    assert big.trips[0].E_pre_grid_kWh > t0.E_pre_grid_kWh
+    assert big.E_battery_kWh == pytest.approx(timer.E_battery_kWh - t0.E_pre_battery_kWh
+                                              - timer.trips[1].E_pre_battery_kWh, rel=1e-9)
 
 
 def test_winter_fog_margin_is_reported_and_summer_has_none(summer, winter):

@@ -389,10 +389,9 @@ class Planner:
                     car.run(trip.forecast_s - 60.0 * lead, "off")
                 pre = car.run(trip.forecast_s, "on") if car.t < trip.forecast_s else []
                 drive = car.run(0.0, "drive", v)
-                grid = sum((_climate_W(r) + _base_W()) * r["Ts"] * tariff.price(r["t"])
-                           for r in pre) / (charger.efficiency * J_PER_KWH)
-                batt = sum(_climate_W(r) * r["Ts"] for r in drive) / J_PER_KWH
-                seen[lead] = (grid + batt * tariff.off_peak / charger.efficiency,
+                _, grid_cost, pre_batt = _plugged_split(pre, charger, tariff, _base_W())
+                batt = pre_batt + sum(_climate_W(r) * r["Ts"] for r in drive) / J_PER_KWH
+                seen[lead] = (grid_cost + batt * tariff.off_peak / charger.efficiency,
                               _outside_Kmin(drive, car.season))
             return seen[lead]
 
@@ -415,6 +414,23 @@ class Planner:
                    key=lambda L: (evaluate(L)[0], L))
         car.restore(saved)
         return 60.0 * min(best + self.margin_min, top)
+
+
+def _plugged_split(pre: Sequence[dict], charger: Charger, tariff: Tariff, P_base: float
+                   ) -> tuple[float, float, float]:
+    """Pre-conditioning rows split between the charger and the battery: the DC load
+    (climate + 12 V base) up to the charger's DC output comes from the grid, the rest from
+    the battery. Returns (grid kWh, its cost USD at the hour's price, battery kWh)."""
+    cap = charger.P_ac_W * charger.efficiency
+    grid = cost = batt = 0.0
+    for r in pre:
+        P = _climate_W(r) + P_base
+        g = min(P, cap)
+        e = charger.grid_J(g * r["Ts"]) / J_PER_KWH
+        grid += e
+        cost += e * tariff.price(r["t"])
+        batt += (P - g) * r["Ts"] / J_PER_KWH
+    return grid, cost, batt
 
 
 def _base_W() -> float:
@@ -440,7 +456,9 @@ def controller_of(name: str, lead_min: float = 0.0,
 @dataclass(frozen=True)
 class TripOutcome:
     """One trip: the lead used (s), the pre-conditioning's grid energy (kWh, climate and 12 V
-    base load over the charger), the drive's battery energy (kWh: climate, traction, base),
+    base load over the charger, up to its DC output) and cost, its battery energy (the load
+    above the charger's output: the heater and heat pump together draw more than 6.4 kW),
+    the drive's battery energy (kWh: climate, traction, base),
     distance (km), comfort (K.min outside the band over the first 10 min and the whole drive,
     time to comfort s: 0 when ready at departure), the cabin at departure (K), the lowest fog
     margin of the drive (K, winter; NaN in summer)."""
@@ -450,6 +468,7 @@ class TripOutcome:
     plugged: bool
     E_pre_grid_kWh: float
     cost_pre_USD: float
+    E_pre_battery_kWh: float
     E_climate_kWh: float
     E_traction_kWh: float
     E_base_kWh: float
@@ -465,11 +484,11 @@ class TripOutcome:
 class DayOutcome:
     """What a fleet operator reads of one day under one controller (energies kWh, cost USD).
 
-    E_battery_kWh : battery energy of the trips (traction, base, climate);
-    E_climate_battery_kWh : the climate's part of it; E_pre_grid_kWh : grid energy of the
-    pre-conditioning; E_recharge_grid_kWh : grid energy to put the battery energy back
-    (over the charger); E_grid_kWh : their sum; E_total_kWh : the same, all energy the day
-    took from the grid; cost_USD : pre-conditioning at the hour's price + recharging at the
+    E_battery_kWh : battery energy of the day (the trips' traction, base and climate, and
+    pre-conditioning above the charger's output); E_climate_battery_kWh : the climate's part;
+    E_pre_grid_kWh : grid energy of the pre-conditioning; E_recharge_grid_kWh : grid energy
+    to put the battery energy back (over the charger); E_grid_kWh : their sum, all energy the
+    day took from the grid; cost_USD : pre-conditioning at the hour's price + recharging at the
     off-peak price; range_lost_km : the climate's battery energy in km of the day's trips
     (traction + base per km); soc_end : state of charge after the trips; Kmin_window :
     K.min outside the band over the first 10 minutes of the trips, summed; Kmin_plugged :
@@ -548,10 +567,7 @@ def run_day(day: DaySpec, controller, tariff: Tariff | None = None,
         pre = _park(car, trip, controller.lead_s(car, trip, tariff))
         v = _speeds(trip.cycles)
         drive = car.run(0.0, "drive", v)
-        dc = sum((_climate_W(r) + road.P_aux) * r["Ts"] for r in pre)
-        grid_pre = charger.grid_J(dc) / J_PER_KWH
-        cost_pre = sum((_climate_W(r) + road.P_aux) * r["Ts"] * tariff.price(r["t"])
-                       for r in pre) / charger.efficiency / J_PER_KWH
+        grid_pre, cost_pre, batt_pre = _plugged_split(pre, charger, tariff, road.P_aux)
         E_cl = sum(_climate_W(r) * r["Ts"] for r in drive) / J_PER_KWH
         T_mean = float(np.mean([r["T_amb"] for r in drive]))
         parts = [cycle_traction(road, c, T_mean) for c in trip.cycles]
@@ -564,14 +580,16 @@ def run_day(day: DaySpec, controller, tariff: Tariff | None = None,
         outs.append(TripOutcome(
             depart_s=trip.depart_s, lead_s=float(trip.depart_s - pre[0]["t"]) if pre else 0.0,
             plugged=trip.plugged, E_pre_grid_kWh=grid_pre, cost_pre_USD=cost_pre,
+            E_pre_battery_kWh=batt_pre,
             E_climate_kWh=E_cl, E_traction_kWh=sum(p.battery_J for p in parts) / J_PER_KWH,
             E_base_kWh=sum(p.aux_J for p in parts) / J_PER_KWH,
             distance_km=sum(p.distance_m for p in parts) / 1000.0,
             Kmin_window=_outside_Kmin(drive, day.season, COMFORT_WINDOW_S),
             Kmin_drive=_outside_Kmin(drive, day.season), time_to_comfort_s=ttc,
             T_cab_depart_K=float(drive[0]["T_cab"]), fog_margin_min_K=fog))
-    E_batt = sum(o.E_climate_kWh + o.E_traction_kWh + o.E_base_kWh for o in outs)
-    E_cl = sum(o.E_climate_kWh for o in outs)
+    E_batt = sum(o.E_pre_battery_kWh + o.E_climate_kWh + o.E_traction_kWh + o.E_base_kWh
+                 for o in outs)
+    E_cl = sum(o.E_pre_battery_kWh + o.E_climate_kWh for o in outs)
     E_pre = sum(o.E_pre_grid_kWh for o in outs)
     E_rech = charger.grid_J(E_batt * J_PER_KWH) / J_PER_KWH
     per_km = (sum(o.E_traction_kWh + o.E_base_kWh for o in outs)
