@@ -66,3 +66,7 @@ def register(app) -> None:
     from acid_cli import year_sweep
 
     app.command(name="year-sweep")(year_sweep.year_sweep)
+
+    from acid_cli import day
+
+    app.command(name="day")(day.day)

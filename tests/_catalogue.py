@@ -942,6 +942,10 @@ CASES: list[Case] = [
          _write("c.toml", "warp = 9\n")),
     Case("year-sweep-refrigerant-unknown", "options",
          ("year-sweep", "--refrigerant", "R22", "--out", "{w}/y"), ("--refrigerant 'R22'",)),
+    Case("day-season-unknown", "options", ("day", "--season", "spring", "--out", "{w}/dd"),
+         ("--season", "spring")),
+    Case("day-jobs-zero", "options", ("day", "--jobs", "0", "--out", "{w}/dd"), ("--jobs",)),
+    Case("day-out-is-a-file", "output", ("day", "--out", "{w}/afile"), ("--out", "afile")),
     Case("year-sweep-out-is-a-file", "output", ("year-sweep", "--out", "{w}/afile"),
          ("--out", "afile")),
 ]
