@@ -49,6 +49,7 @@ import tomllib
 
 from acid.errors import ConfigError
 from acid.plant.battery import J_PER_KWH, Battery, Charger
+from acid.studies.verdict import paired_verdict
 from acid.units import C2K, K2C
 
 SEASONS = ("summer", "winter")
@@ -644,28 +645,22 @@ class PairedInterval:
 
 def paired_interval(diff: Sequence[float], quantity: str, seed: int = 0,
                     n_boot: int = 2000, min_n: int = MIN_DAYS_RESOLVED) -> PairedInterval:
-    """Mean of the paired differences ``diff`` with a 95 % percentile bootstrap interval
-    over the days (seeded); "saves" when the interval lies below zero, "costs" above,
-    "no resolvable difference" across it, "not resolved" below ``min_n`` days. A
-    difference identically zero is "no resolvable difference" (the controller against
+    """Mean of the paired differences ``diff`` (controller minus baseline) with a 95 %
+    percentile bootstrap interval over the days (seeded), read by
+    :func:`acid.studies.verdict.paired_verdict`: "saves" when the interval lies below zero,
+    "costs" above, "no resolvable difference" across it, "not resolved" below ``min_n`` days.
+    A difference identically zero is "no resolvable difference" (the controller against
     itself)."""
     d = np.asarray(diff, dtype=float)
     n = int(d.size)
-    mean = float(d.mean()) if n else math.nan
     if n == 0:
         return PairedInterval(quantity, 0, math.nan, math.nan, math.nan, "not resolved")
-    rng = np.random.default_rng(seed)
-    boots = d[rng.integers(0, n, size=(n_boot, n))].mean(axis=1)
-    lo, hi = (float(x) for x in np.percentile(boots, [2.5, 97.5]))
-    if n < min_n:
-        verdict = "not resolved"
-    elif hi < 0.0:
-        verdict = "saves"
-    elif lo > 0.0:
-        verdict = "costs"
-    else:
-        verdict = "no resolvable difference"
-    return PairedInterval(quantity, n, mean, lo, hi, verdict)
+    # the engine's verdict on the saving (minus the difference), decided by its bootstrap
+    if n == 1:
+        return PairedInterval(quantity, 1, float(d[0]), float(d[0]), float(d[0]), "not resolved")
+    v = paired_verdict(-d, min_count=1, n_boot=n_boot, seed=seed, decide="bootstrap")
+    words = "not resolved" if n < min_n else v.words
+    return PairedInterval(quantity, n, float(d.mean()), -v.boot_hi, -v.boot_lo, words)
 
 
 # ----------------------------------------------------------------------------- the study

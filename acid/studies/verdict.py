@@ -10,9 +10,10 @@ held-out scenario (%, or any unit: the verdict is about the sign), and returns a
   interval, seeded: same seed, same bits);
 * the words: **"saves"** when the whole t-interval lies above zero, **"costs"** when below,
   **"no resolvable difference"** when it holds zero, and **"not resolved"** below
-  ``min_count`` scenarios (no interval is computed from so few). The t-interval decides (it is
-  the wider of the two for the small counts of a study); the bootstrap is reported so a reader
-  can see when the two disagree (``agree``).
+  ``min_count`` scenarios (no interval is computed from so few). The t-interval decides by
+  default (``decide="t"``: it is the wider of the two for the small counts of a study); the
+  bootstrap is reported so a reader can see when the two disagree (``agree``), and decides
+  with ``decide="bootstrap"`` (skewed savings over many scenarios).
 
 Reference: B. Efron and R. J. Tibshirani, *An Introduction to the Bootstrap*, Chapman & Hall,
 1993, ch. 13 (percentile intervals) and ch. 15 (paired comparisons).
@@ -48,13 +49,14 @@ class Verdict:
     level: float
     words: str
     why: str = ""
+    decided_by: str = "t"
 
     @property
     def agree(self) -> bool | None:
         """Whether the bootstrap interval reads the same words as the t-interval."""
         if self.boot_lo is None:
             return None
-        return _words(self.boot_lo, self.boot_hi) == self.words
+        return _words(self.boot_lo, self.boot_hi) == _words(self.lo, self.hi)
 
     def to_dict(self) -> dict:
         return {**asdict(self), "agree": self.agree}
@@ -62,7 +64,7 @@ class Verdict:
     @classmethod
     def from_dict(cls, d: dict) -> Verdict:
         return cls(**{k: d[k] for k in ("n", "mean", "lo", "hi", "boot_lo", "boot_hi",
-                                        "level", "words", "why")})
+                                        "level", "words", "why", "decided_by") if k in d})
 
     def summary(self, unit: str = "%") -> str:
         """One line: the words, the mean and its interval, the count."""
@@ -81,13 +83,16 @@ def _words(lo: float, hi: float) -> str:
 
 
 def paired_verdict(values: Iterable[float | None], *, level: float = 0.95,
-                   min_count: int = MIN_COUNT, n_boot: int = 10_000, seed: int = 0) -> Verdict:
+                   min_count: int = MIN_COUNT, n_boot: int = 10_000, seed: int = 0,
+                   decide: str = "t") -> Verdict:
     """The verdict of paired savings ``values`` (None or non-finite entries are dropped: a
     scenario that failed is not a zero). See the module docstring."""
     import scipy.stats
 
     if not 0.5 < level < 1.0:
         raise ValueError(f"level must lie in (0.5, 1), got {level!r}")
+    if decide not in ("t", "bootstrap"):
+        raise ValueError(f"decide must be 't' or 'bootstrap', got {decide!r}")
     x = np.asarray([float(v) for v in values if v is not None and math.isfinite(float(v))])
     n = int(x.size)
     if n < max(min_count, 2):
@@ -99,4 +104,5 @@ def paired_verdict(values: Iterable[float | None], *, level: float = 0.95,
     boot = x[rng.integers(0, n, size=(n_boot, n))].mean(axis=1)
     a = 100.0 * (1.0 - level) / 2.0
     b_lo, b_hi = (float(v) for v in np.percentile(boot, [a, 100.0 - a]))
-    return Verdict(n, m, m - h, m + h, b_lo, b_hi, level, _words(m - h, m + h))
+    words = _words(m - h, m + h) if decide == "t" else _words(b_lo, b_hi)
+    return Verdict(n, m, m - h, m + h, b_lo, b_hi, level, words, decided_by=decide)
