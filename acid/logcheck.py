@@ -369,6 +369,8 @@ def flag_samples(name: str, values: np.ndarray, unit: str, time: np.ndarray
     if rng is not None:
         lo, hi, what = rng
         bad = (values < lo) | (values > hi)
+        if bad.mean() > 0.5:  # most of the record: a wrong unit (``plausibility``), not faults
+            bad[:] = False
         if bad.any():
             starts, lengths = _runs(bad)
             flagged |= bad
