@@ -280,6 +280,10 @@ GLITCH_MAX_S = 60.0
 #: Smallest step (stored unit) a sensor's noise or quantisation may add to the rate bound.
 RATE_TOLERANCE = 0.5
 
+#: A channel with impossible steps at more than this share of its samples is not judged by
+#: its rate (a noisy sensor or another kind of signal than the limit is for).
+MAX_JUMP_SHARE = 0.01
+
 
 def _match(name: str, names: tuple[str, ...]) -> bool:
     return name in names or name.startswith(tuple(n + "_" for n in names))
@@ -354,7 +358,8 @@ def flag_samples(name: str, values: np.ndarray, unit: str, time: np.ndarray
 
     * ``"range"``: outside the channel kind's physical range (``RANGE_LIMITS``);
     * ``"glitch"``: a step faster than the channel's physical rate (``RATE_LIMITS``) and a
-      step back to the level before within ``GLITCH_MAX_S``: the samples between (a sensor
+      step back, the other way, to the level before within ``GLITCH_MAX_S``, the median of
+      the samples between off that level by more than the tolerance: those samples (a sensor
       reading 0.0 degC for 10 s in a 25 degC cabin, or a single spike);
     * ``"jump"``: such a step that does not come back: the first sample after it.
 
@@ -386,6 +391,8 @@ def flag_samples(name: str, values: np.ndarray, unit: str, time: np.ndarray
         tv, vv = time[ok], v[ok]
         tol = _tolerance(vv)
         jumps = np.flatnonzero(np.abs(np.diff(vv)) > limit * np.diff(tv) + tol)
+        if jumps.size > MAX_JUMP_SHARE * vv.size + 10:  # noise beyond the tolerance, or the
+            jumps = jumps[:0]                           # wrong channel kind: not judged
         glitch_starts, glitch_lengths, lone = [], [], []
         p = 0
         while p < jumps.size:
@@ -395,8 +402,10 @@ def flag_samples(name: str, values: np.ndarray, unit: str, time: np.ndarray
                 k = jumps[q]
                 if tv[k + 1] - tv[j + 1] > GLITCH_MAX_S:
                     break
-                if abs(vv[k + 1] - vv[j]) <= limit * (tv[k + 1] - tv[j]) + tol:
-                    back = q
+                if np.sign(vv[k + 1] - vv[k]) == -np.sign(vv[j + 1] - vv[j]) and \
+                        abs(vv[k + 1] - vv[j]) <= limit * (tv[k + 1] - tv[j]) + tol and \
+                        abs(np.median(vv[j + 1:k + 1]) - (vv[j] + vv[k + 1]) / 2) > tol:
+                    back = q      # back to the level before, from a level of its own
                     break
             if back is not None:
                 k = jumps[back]

@@ -111,6 +111,10 @@ def test_a_10_s_glitch_at_zero_is_flagged_masked_and_bridged(tmp_path):
     assert np.flatnonzero(ds["T_cab_censored"]).tolist() == [1234] and len(warned) == 1
     ds, warned = imported(write(log(tmp_path), tmp_path / "clean.csv"))
     assert warned == [] and "T_cab_censored" not in ds
+    noisy = log(tmp_path)                          # a noisy sensor is not a faulty one
+    noisy["cabin"] += np.random.default_rng(0).normal(0.0, 0.2, len(noisy))
+    ds, warned = imported(write(noisy, tmp_path / "noisy.csv"))
+    assert warned == [] and "T_cab_censored" not in ds
 
 
 def test_an_impossible_heater_power_and_a_jump_are_flagged(tmp_path):
