@@ -254,10 +254,17 @@ class Dataset:
 
     @staticmethod
     def concatenate(parts: list[Dataset]) -> Dataset:
-        """Join datasets as separate experiments (ids renumbered, time made contiguous)."""
+        """Join datasets as separate experiments (ids renumbered, time made contiguous).
+
+        The channels are the first part's; a mask channel (``<name>_censored``) that only
+        some parts have is 0 (nothing masked) in the others."""
         if not parts:
             raise DataError("nothing to concatenate")
-        names = list(parts[0].channels)
+        masks = [n for p in parts for n in p.channels
+                 if n.endswith(CENSORED_SUFFIX) and n not in parts[0].channels]
+        names = list(parts[0].channels) + list(dict.fromkeys(masks))
+        units = {**{n: "1" for n in masks}, **parts[0].units}
+        roles = {**{n: "auxiliary" for n in masks}, **parts[0].roles}
         Ts = parts[0].Ts
         times, chans, exps = [], {n: [] for n in names}, []
         t0, eid = 0.0, 0
@@ -265,15 +272,15 @@ class Dataset:
             if abs(p.Ts - Ts) > 1e-9:
                 raise DataError(f"{p.source}: sample time {p.Ts} s differs from {Ts} s")
             for n in names:
-                chans[n].append(p.get(n, parts[0].units[n]))
+                absent = n.endswith(CENSORED_SUFFIX) and n not in p.channels
+                chans[n].append(np.zeros(len(p)) if absent else p.get(n, units[n]))
             times.append(t0 + (p.time - p.time[0]))
             t0 = times[-1][-1] + Ts
             ids = np.unique(p.experiment, return_inverse=True)[1]
             exps.append(ids + eid)
             eid += ids.max() + 1
         return Dataset(np.concatenate(times), {n: np.concatenate(v) for n, v in chans.items()},
-                       dict(parts[0].units), Ts, np.concatenate(exps), dict(parts[0].roles),
-                       dict(parts[0].metadata))
+                       units, Ts, np.concatenate(exps), roles, dict(parts[0].metadata))
 
     def to_pandas(self):
         """A DataFrame indexed by time (s), one column per channel, units in ``df.attrs``."""
@@ -1367,14 +1374,7 @@ def import_logs(paths: Iterable[str | os.PathLike], cmap: ChannelMap,
                         "censored": ds.metadata.get("censored", {}),
                         "extremes": ds.metadata.get("extremes", {}),
                         "checks": checks, "quality": quality_table(checks)})
-    masks = [m for m in dict.fromkeys(n for p in parts for n in p.channels)
-             if m.endswith(CENSORED_SUFFIX)]
-    for p in parts:  # a mask one file needs: all-zero in the others (one channel set)
-        for m in masks:
-            if m not in p.channels:
-                p.channels[m] = np.zeros(len(p))
-                p.units[m], p.roles[m] = "1", "auxiliary"
-    out = Dataset.concatenate(parts) if len(parts) > 1 else parts[0]
+    out = Dataset.concatenate(parts) if len(parts) > 1 else parts[0]  # masks made common
     first = parts[0].metadata
     meta = {k: first[k] for k in ("imported_from", "channel_map", "assumed", "resample")
             if k in first}

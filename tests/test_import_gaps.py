@@ -141,6 +141,14 @@ def test_masks_of_one_file_are_zero_in_the_others(tmp_path):
     assert ds["T_cab_censored"][slice(*b)].sum() == 100
     assert ds.metadata["experiments"][0]["quality"] == []
     assert ds.metadata["experiments"][1]["quality"][0]["kind"] == "glitch"
+    # datasets imported apart (a fit's estimation data and a validation's) join too
+    clean = from_csv(tmp_path / "a.csv", ChannelMap.from_dict(MAP))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LogQualityWarning)
+        flagged = from_csv(tmp_path / "b.csv", ChannelMap.from_dict(MAP))
+    for parts in ((clean, flagged), (flagged, clean)):
+        both = Dataset.concatenate(list(parts))
+        assert both["T_cab_censored"].sum() == 100 and both.units["T_cab_censored"] == "1"
 
 
 def _cabin_log(path: Path, glitch: bool) -> tuple[Path, dict]:
