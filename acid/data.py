@@ -33,7 +33,17 @@ from acid import __version__
 from acid._io import atomic_path
 from acid.errors import DataError
 from acid.expr import Expression
-from acid.logcheck import censored_across, gaps, held_extremes, plausibility, quantisation
+from acid.logcheck import (
+    bridge,
+    bridged_finding,
+    censored_across,
+    flag_samples,
+    gaps,
+    held_extremes,
+    nonfinite_stretches,
+    plausibility,
+    quantisation,
+)
 from acid.units import (
     KNOWN_UNITS,
     UNIT_SCALES,
@@ -244,10 +254,17 @@ class Dataset:
 
     @staticmethod
     def concatenate(parts: list[Dataset]) -> Dataset:
-        """Join datasets as separate experiments (ids renumbered, time made contiguous)."""
+        """Join datasets as separate experiments (ids renumbered, time made contiguous).
+
+        The channels are the first part's; a mask channel (``<name>_censored``) that only
+        some parts have is 0 (nothing masked) in the others."""
         if not parts:
             raise DataError("nothing to concatenate")
-        names = list(parts[0].channels)
+        masks = [n for p in parts for n in p.channels
+                 if n.endswith(CENSORED_SUFFIX) and n not in parts[0].channels]
+        names = list(parts[0].channels) + list(dict.fromkeys(masks))
+        units = {**{n: "1" for n in masks}, **parts[0].units}
+        roles = {**{n: "auxiliary" for n in masks}, **parts[0].roles}
         Ts = parts[0].Ts
         times, chans, exps = [], {n: [] for n in names}, []
         t0, eid = 0.0, 0
@@ -255,15 +272,15 @@ class Dataset:
             if abs(p.Ts - Ts) > 1e-9:
                 raise DataError(f"{p.source}: sample time {p.Ts} s differs from {Ts} s")
             for n in names:
-                chans[n].append(p.get(n, parts[0].units[n]))
+                absent = n.endswith(CENSORED_SUFFIX) and n not in p.channels
+                chans[n].append(np.zeros(len(p)) if absent else p.get(n, units[n]))
             times.append(t0 + (p.time - p.time[0]))
             t0 = times[-1][-1] + Ts
             ids = np.unique(p.experiment, return_inverse=True)[1]
             exps.append(ids + eid)
             eid += ids.max() + 1
         return Dataset(np.concatenate(times), {n: np.concatenate(v) for n, v in chans.items()},
-                       dict(parts[0].units), Ts, np.concatenate(exps), dict(parts[0].roles),
-                       dict(parts[0].metadata))
+                       units, Ts, np.concatenate(exps), roles, dict(parts[0].metadata))
 
     def to_pandas(self):
         """A DataFrame indexed by time (s), one column per channel, units in ``df.attrs``."""
@@ -585,11 +602,11 @@ RESAMPLE_MODES = ("mean", "centered", "sample", "none")
 
 #: Keys a channel map may have.
 MAP_KEYS = ("time", "Ts", "resample", "channels", "description", "sep", "encoding", "decimal",
-            "drop_incomplete_end")
+            "drop_incomplete_end", "max_gap_s")
 
 #: Keys of one channel entry of a map.
 CHANNEL_KEYS = ("column", "unit", "constant", "expr", "note", "censored_above",
-                "censored_below")
+                "censored_below", "max_gap_s")
 
 #: Suffix of the mask channel that marks censored samples of a channel (1 = censored).
 CENSORED_SUFFIX = "_censored"
@@ -602,6 +619,12 @@ MAT_SUFFIXES = (".mat",)
 class PlausibilityWarning(UserWarning):
     """An imported channel's values contradict its declared unit (a speed in km/h declared
     as m/s, an A/C power in kW declared as W)."""
+
+
+class LogQualityWarning(PlausibilityWarning):
+    """An imported channel's sensor looks faulty at some samples (empty cells bridged,
+    glitches, impossible jumps, values out of physical range): they are masked, not fitted
+    or scored."""
 
 
 @dataclass(frozen=True)
@@ -617,6 +640,8 @@ class ChannelSource:
     note: str = ""
     censored_above: float | None = None
     censored_below: float | None = None
+    #: Longest stretch of NaN/inf (empty cells) bridged, s; ``None``: the map's.
+    max_gap_s: float | None = None
 
     @property
     def assumed(self) -> bool:
@@ -682,6 +707,17 @@ class ChannelMap:
     #: Drop the rows at a record's end where a read column is empty (a logger that stopped
     #: mid-row); empty values anywhere else are still refused.
     drop_incomplete_end: bool = False
+    #: Bridge stretches of NaN/inf (empty cells) of a measured channel up to this long, s
+    #: (0: refuse any); a channel's own ``max_gap_s`` overrides it. Continuous channels are
+    #: interpolated linearly, set-points and commands (inputs) hold their last value; the
+    #: bridged samples are masked in ``<channel>_censored`` (not fitted or scored). A longer
+    #: stretch refuses the file, naming channel and time.
+    max_gap_s: float = 0.0
+
+    def gap_limit(self, name: str) -> float:
+        """The longest NaN/inf stretch of channel ``name`` bridged, s."""
+        own = self.channels[name].max_gap_s
+        return self.max_gap_s if own is None else own
 
     @property
     def columns(self) -> list[str]:
@@ -751,9 +787,17 @@ class ChannelMap:
         drop_end = d.get("drop_incomplete_end", False)
         if not isinstance(drop_end, bool):
             raise DataError(f"{source}: drop_incomplete_end must be true or false")
+        max_gap = _gap_seconds(d.get("max_gap_s", 0.0), f"{source}: max_gap_s")
         return cls(time=time_col, channels=chans, Ts=Ts, resample=resample, source=source,
                    time_unit=time_unit, sep=sep, encoding=encoding, decimal=decimal,
-                   description=description, drop_incomplete_end=drop_end)
+                   description=description, drop_incomplete_end=drop_end, max_gap_s=max_gap)
+
+
+def _gap_seconds(value, where: str) -> float:
+    v = _number(value, where)
+    if v < 0:
+        raise DataError(f"{where} must be a number of seconds >= 0, got {value!r}")
+    return v
 
 
 def _time_entry(value, source: str) -> tuple[str, str]:
@@ -834,11 +878,15 @@ def _channel_entry(name, spec, source: str) -> ChannelSource:
                                                                   "censored_below") if k in spec}
     if levels and "column" not in spec:
         raise DataError(f"{where}: censored levels apply to measured columns only")
+    if "max_gap_s" in spec and "column" not in spec:
+        raise DataError(f"{where}: max_gap_s applies to measured columns only")
     if "column" in spec:
         col = spec["column"]
         if not isinstance(col, str) or not col:
             raise DataError(f"{where}: 'column' must be a column name, got {col!r}")
-        return ChannelSource(unit=unit, column=col, note=note, **levels)
+        gap = (_gap_seconds(spec["max_gap_s"], f"{where}: 'max_gap_s'")
+               if "max_gap_s" in spec else None)
+        return ChannelSource(unit=unit, column=col, note=note, max_gap_s=gap, **levels)
     if "constant" in spec:
         return ChannelSource(unit=unit, constant=_number(spec["constant"],
                                                          f"{where}: 'constant'"), note=note)
@@ -936,6 +984,7 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
             time = time[:keep]
             raw = {name: v[:keep] for name, v in raw.items()}
     checks: list[dict] = []
+    bridged = _bridge_gaps(raw, cmap, time, source, checks)
     chans, units, masks, censored = {}, {}, {}, {}
     for name, s in cmap.channels.items():
         stored = storage_unit(s.unit)
@@ -956,7 +1005,18 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
             for f in plausibility(name, v, s.unit, time):
                 checks.append(f)
                 warnings.warn(PlausibilityWarning(f"{source}: {f['message']}"), stacklevel=3)
-            chans[name] = convert(v, s.unit, stored) if stored != s.unit else v
+            v = convert(v, s.unit, stored) if stored != s.unit else v
+            flagged, found = flag_samples(name, v, stored, time)
+            for f in found:
+                checks.append(f)
+                warnings.warn(LogQualityWarning(f"{source}: {f['message']}"), stacklevel=3)
+            if flagged.any():
+                v = bridge(v, flagged, time, hold=_held_by_design(name))
+            bad = flagged | bridged.get(name, False)
+            if np.any(bad):
+                key = name + CENSORED_SUFFIX
+                masks[key] = np.maximum(masks.get(key, 0.0), bad.astype(float))
+            chans[name] = v
         elif s.constant is not None:
             chans[name] = np.full(time.shape, convert(s.constant, s.unit, stored))
         else:
@@ -1016,11 +1076,85 @@ def _sensor_checks(cmap: ChannelMap, chans: Mapping[str, np.ndarray],
         v = chans[name]
         if v.size and np.isfinite(v).all():
             extremes[name] = (float(v.min()), float(v.max()))
+        found = held_extremes(name, v, units[name], time)
         q = quantisation(name, v, units[name], time)
-        if q is not None:
-            checks.append(q)
-        checks.extend(held_extremes(name, v, units[name], time))
+        found = ([q] if q is not None else []) + found
+        why = _why_held(name, v, chans, cmap) if found else None
+        for f in found:
+            if why:
+                f["by_design"] = why
+            checks.append(f)
     return extremes
+
+
+def _why_held(name: str, v: np.ndarray, chans: Mapping[str, np.ndarray],
+              cmap: ChannelMap) -> str | None:
+    """Why a channel that holds levels does so by design, or None (then it may be a sensor
+    that clips or reports on a few levels): a set-point or command, or a channel whose
+    changes (at least 90 % of them, within one sample) are those of a measured one."""
+    if _held_by_design(name):
+        return "a set-point or command, held between its changes"
+    mine = np.flatnonzero(np.diff(v) != 0)
+    if mine.size == 0:
+        return None
+    for other, s in cmap.channels.items():
+        if other == name or s.column is None or not _held_by_design(other):
+            continue
+        theirs = np.flatnonzero(np.diff(chans[other]) != 0)
+        if theirs.size == 0:
+            continue
+        at = np.searchsorted(theirs, mine)
+        gap = np.minimum(np.abs(theirs[np.clip(at - 1, 0, theirs.size - 1)] - mine),
+                         np.abs(theirs[np.clip(at, 0, theirs.size - 1)] - mine))
+        near = gap <= 1
+        if near.mean() >= 0.9:
+            return f"follows {other}, a set-point or command"
+    return None
+
+
+#: Channels that are set-points or commands by role or nature: held between their changes.
+HELD_BY_DESIGN = ("recirc", "fan_speed")
+
+
+def _held_by_design(name: str) -> bool:
+    """A set-point or command (an input, a recirculation flap, a fan stage): it holds a level
+    between its changes by design, so a missing stretch holds the last value."""
+    spec = CHANNELS.get(name)
+    return (spec is not None and spec.role == "input") or name in HELD_BY_DESIGN
+
+
+def _bridge_gaps(raw: dict[str, np.ndarray], cmap: ChannelMap, time: np.ndarray,
+                 source: str, checks: list[dict]) -> dict[str, np.ndarray]:
+    """Bridge each measured channel's NaN/inf stretches up to its ``max_gap_s`` (in place in
+    ``raw``), with a finding and a warning; refuse a longer one (one line naming file,
+    channel and time). Returns {channel: bool mask of the bridged samples}."""
+    out = {}
+    if time.size < 2 or not np.isfinite(time).all():
+        return out
+    for name, v in raw.items():
+        bad = ~np.isfinite(v)
+        if not bad.any():
+            continue
+        starts, lengths, durations = nonfinite_stretches(v, time)
+        limit = cmap.gap_limit(name)
+        worst = int(np.argmax(durations))
+        if durations[worst] > limit * (1 + 1e-9) or bad.all():
+            first = float(time[starts[0]])
+            if limit <= 0:
+                raise DataError(f"{source}: channel {name!r} has {int(bad.sum())} NaN/inf "
+                                f"values (first at t = {first:g} s, longest stretch "
+                                f"{durations[worst]:.3g} s); max_gap_s in the map bridges "
+                                "stretches up to that long")
+            raise DataError(f"{source}: channel {name!r} has a {durations[worst]:.3g} s "
+                            f"stretch of NaN/inf values at t = {time[starts[worst]]:g} s, "
+                            f"longer than max_gap_s = {limit:g} s ({cmap.source})")
+        hold = _held_by_design(name)
+        raw[name] = bridge(v, bad, time, hold)
+        f = bridged_finding(name, starts, lengths, time, hold, limit)
+        checks.append(f)
+        warnings.warn(LogQualityWarning(f"{source}: {f['message']}"), stacklevel=4)
+        out[name] = bad
+    return out
 
 
 def _censor_mask(v: np.ndarray, s: ChannelSource) -> np.ndarray | None:
@@ -1232,14 +1366,15 @@ def import_logs(paths: Iterable[str | os.PathLike], cmap: ChannelMap,
     for name, path in zip(names, paths, strict=True):
         ds = from_csv(path, cmap) if log_kind(path) == "csv" else from_mat(path, cmap)
         parts.append(ds)
+        checks = ds.metadata.get("checks", [])
         records.append({"name": name, "source": str(path), "samples": len(ds),
                         "duration_s": ds.duration, "t_start_s": float(ds.time[0]),
                         "imported_from": ds.metadata.get("imported_from"),
                         "resample": ds.metadata.get("resample"),
                         "censored": ds.metadata.get("censored", {}),
                         "extremes": ds.metadata.get("extremes", {}),
-                        "checks": ds.metadata.get("checks", [])})
-    out = Dataset.concatenate(parts) if len(parts) > 1 else parts[0]
+                        "checks": checks, "quality": quality_table(checks)})
+    out = Dataset.concatenate(parts) if len(parts) > 1 else parts[0]  # masks made common
     first = parts[0].metadata
     meta = {k: first[k] for k in ("imported_from", "channel_map", "assumed", "resample")
             if k in first}
@@ -1256,6 +1391,17 @@ def import_logs(paths: Iterable[str | os.PathLike], cmap: ChannelMap,
     out.metadata = meta
     out.source = meta["source"]
     return out
+
+
+#: Kinds of finding that mark samples as not measurements (masked at import).
+QUALITY_KINDS = ("bridged", "glitch", "jump", "range")
+
+
+def quality_table(checks: list[dict]) -> list[dict]:
+    """One row per channel and kind of flag of a file's checks: {channel, kind, count,
+    samples, first_at_s} (count: stretches or events; times in the file's own clock)."""
+    return [{k: f[k] for k in ("channel", "kind", "count", "samples", "first_at_s")}
+            for f in checks if f.get("kind") in QUALITY_KINDS]
 
 
 def _read_mat5(path: Path, wanted: list[str]) -> dict[str, object]:

@@ -235,3 +235,226 @@ def gaps(time: np.ndarray, Ts: float | None) -> dict | None:
             "message": f"time jumps {where.size} time(s) by more than {limit:.3g} s (longest "
                        f"{longest:.3g} s, first at t = {first:.6g} s): the logger paused; "
                        "resampling interpolates across a jump"}
+
+
+# ------------------------------------------------------------- gaps, spikes, ranges
+#: The fastest a channel can physically change, in its stored unit per second:
+#: (channel names or a name prefix, limit, what it is, why). A step beyond
+#: ``limit * dt + tolerance`` between two samples is impossible.
+#:
+#: Cabin air: the BMW i3's cabin holds about 3 m^3 of air, 3.6 kg x 1005 J/(kg K) = 3.6 kJ/K.
+#: Even the largest heat flow the car can put into it, the 5.5 kW high-voltage heater or a
+#: cooling capacity of the same order from the 4-5 kW compressor, plus 1 kW of sun, would
+#: change that air alone by at most 6.5 kW / 3.6 kJ/K = 1.8 K/s; the seats, dashboard and
+#: trim it is bound to (tens of kJ/K) slow it by an order of magnitude. 2 K/s is a bound no
+#: real cabin reaches: the 48 BMW i3 trips change by at most 0.2 K/s over 0.1 s steps.
+#: Ambient air (a sensor behind the bumper): 1 K/s (the trips: at most 0.5 K/s, a sensor
+#: quantised at 0.5 K). Air leaving the evaporator or heater core follows the coil within
+#: seconds: 5 K/s (the trips: at most 1.5 K/s outside one corrupted stretch).
+RATE_LIMITS = (
+    (("T_cab",), 2.0, "cabin air"),
+    (("T_amb",), 1.0, "ambient air"),
+    (("T_evap", "T_ain"), 5.0, "air after the evaporator or heater core"),
+)
+
+#: Values a channel cannot take, in its stored unit: (names or a name prefix, low, high,
+#: what it is). Electric powers from the BMW i3's data: the high-voltage coolant heater is
+#: rated 5.5 kW, and its LIN reading sits at 7.0 kW in 20 of the 22 winter trips (the rating
+#: at nominal voltage; its draw rises with the battery's): above 8 kW is a fault (TripB02
+#: logs 36-39 kW for 158 s). The electric compressor draws 4-5 kW at most (the summer trips:
+#: 3.3 kW at most): above 6 kW is a fault. A small negative reading (an offset) is tolerated,
+#: -100 W. Air temperatures: outside -45 .. 95 degC (the automotive sensors' -40 .. 85 degC
+#: with margin) is no air in a car.
+RANGE_LIMITS = (
+    (("P_heater", "P_heat", "P_hvh", "P_ptc"), -100.0, 8000.0, "the heater's electric power"),
+    (("P_comp", "P_ac"), -100.0, 6000.0, "the A/C compressor's electric power"),
+    (("T_cab", "T_amb", "T_evap", "T_ain"), -45.0, 95.0, "an air temperature"),
+)
+
+#: The units ``RATE_LIMITS`` and ``RANGE_LIMITS`` are written in, by base unit.
+LIMIT_UNITS = {"K": "degC", "W": "W"}
+
+#: A glitch is an impossible jump away and one back within this time (longer: a jump).
+GLITCH_MAX_S = 60.0
+
+#: Smallest step (stored unit) a sensor's noise or quantisation may add to the rate bound.
+RATE_TOLERANCE = 0.5
+
+#: A channel with impossible steps at more than this share of its samples is not judged by
+#: its rate (a noisy sensor or another kind of signal than the limit is for).
+MAX_JUMP_SHARE = 0.01
+
+
+def _match(name: str, names: tuple[str, ...]) -> bool:
+    return name in names or name.startswith(tuple(n + "_" for n in names))
+
+
+def rate_limit(name: str) -> tuple[float, str] | None:
+    """(limit in the stored unit per s, what) of a channel, or None."""
+    for names, limit, what in RATE_LIMITS:
+        if _match(name, names):
+            return limit, what
+    return None
+
+
+def range_limit(name: str) -> tuple[float, float, str] | None:
+    """(low, high, what) of a channel in its stored unit, or None."""
+    for names, lo, hi, what in RANGE_LIMITS:
+        if _match(name, names):
+            return lo, hi, what
+    return None
+
+
+def _step(time: np.ndarray) -> float:
+    return float(np.median(np.diff(time))) if time.size > 1 else 1.0
+
+
+def _times(time: np.ndarray, starts: np.ndarray, most: int = 3) -> str:
+    shown = ", ".join(f"{time[s]:.6g}" for s in starts[:most])
+    return f"t = {shown}" + (", ..." if starts.size > most else "") + " s"
+
+
+def nonfinite_stretches(values: np.ndarray, time: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Runs of NaN/inf: (starts, lengths in samples, durations in s = samples x the median
+    step)."""
+    starts, lengths = _runs(~np.isfinite(values))
+    return starts, lengths, lengths * _step(time)
+
+
+def bridge(values: np.ndarray, bad: np.ndarray, time: np.ndarray, hold: bool) -> np.ndarray:
+    """``values`` with the ``bad`` samples replaced from the good ones around them: linear
+    interpolation in time (a continuous signal), or the last good value held (a set-point or
+    command, held between its changes by design; the next good one before the first). Ends
+    take the nearest good value."""
+    out = np.array(values, dtype=float)
+    good = ~bad
+    if not bad.any() or not good.any():
+        return out
+    if hold:
+        idx = np.where(good, np.arange(out.size), -1)
+        idx = np.maximum.accumulate(idx)
+        first = int(np.argmax(good))
+        idx[idx < 0] = first
+        return out[idx]
+    out[bad] = np.interp(time[bad], time[good], out[good])
+    return out
+
+
+def _tolerance(values: np.ndarray) -> float:
+    d = np.diff(values)
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return RATE_TOLERANCE
+    mad = float(np.median(np.abs(d - np.median(d))))
+    return RATE_TOLERANCE + 3 * 1.4826 * mad
+
+
+def flag_samples(name: str, values: np.ndarray, unit: str, time: np.ndarray
+                 ) -> tuple[np.ndarray, list[dict]]:
+    """Samples of a measured channel that no sensor working properly gives, and findings.
+
+    ``values`` are finite, in the stored ``unit`` (degC, W). Three kinds of flag:
+
+    * ``"range"``: outside the channel kind's physical range (``RANGE_LIMITS``);
+    * ``"glitch"``: a step faster than the channel's physical rate (``RATE_LIMITS``) and a
+      step back, the other way, to the level before within ``GLITCH_MAX_S``, the median of
+      the samples between off that level by more than the tolerance: those samples (a sensor
+      reading 0.0 degC for 10 s in a 25 degC cabin, or a single spike);
+    * ``"jump"``: such a step that does not come back: the first sample after it.
+
+    Returns the (N,) bool mask of flagged samples and one finding per kind found
+    (``{"channel", "kind", "count", "samples", "first_at_s", "message"}``).
+    """
+    flagged = np.zeros(values.shape, dtype=bool)
+    out: list[dict] = []
+    if values.size < 2 or unit != LIMIT_UNITS.get(base_unit(unit)):
+        return flagged, out
+    rng = range_limit(name)
+    if rng is not None:
+        lo, hi, what = rng
+        bad = (values < lo) | (values > hi)
+        if bad.mean() > 0.5:  # most of the record: a wrong unit (``plausibility``), not faults
+            bad[:] = False
+        if bad.any():
+            starts, lengths = _runs(bad)
+            flagged |= bad
+            peak = float(values[bad][np.argmax(np.abs(values[bad]))])
+            out.append(_finding(name, "range", starts, lengths, time,
+                                f"outside {what}'s range "
+                                f"{_fmt(lo)} .. {_fmt(hi)} {unit} (up to {_fmt(peak)} {unit})"))
+    rate = rate_limit(name)
+    if rate is not None:
+        limit, what = rate
+        v = np.where(flagged, np.nan, values)
+        ok = np.flatnonzero(np.isfinite(v))
+        tv, vv = time[ok], v[ok]
+        tol = _tolerance(vv)
+        jumps = np.flatnonzero(np.abs(np.diff(vv)) > limit * np.diff(tv) + tol)
+        if jumps.size > MAX_JUMP_SHARE * vv.size + 10:  # noise beyond the tolerance, or the
+            jumps = jumps[:0]                           # wrong channel kind: not judged
+        glitch_starts, glitch_lengths, lone = [], [], []
+        p = 0
+        while p < jumps.size:
+            j = jumps[p]
+            back = None
+            for q in range(p + 1, jumps.size):
+                k = jumps[q]
+                if tv[k + 1] - tv[j + 1] > GLITCH_MAX_S:
+                    break
+                if np.sign(vv[k + 1] - vv[k]) == -np.sign(vv[j + 1] - vv[j]) and \
+                        abs(vv[k + 1] - vv[j]) <= limit * (tv[k + 1] - tv[j]) + tol and \
+                        abs(np.median(vv[j + 1:k + 1]) - (vv[j] + vv[k + 1]) / 2) > tol:
+                    back = q      # back to the level before, from a level of its own
+                    break
+            if back is not None:
+                k = jumps[back]
+                flagged[ok[j + 1]:ok[k] + 1] = True
+                glitch_starts.append(ok[j + 1])
+                glitch_lengths.append(ok[k] + 1 - ok[j + 1])
+                p = back + 1
+            else:
+                flagged[ok[j + 1]] = True
+                lone.append(ok[j + 1])
+                p += 1
+        if glitch_starts:
+            starts, lengths = np.array(glitch_starts), np.array(glitch_lengths)
+            out.append(_finding(name, "glitch", starts, lengths, time,
+                                f"{starts.size} glitch{'es' if starts.size > 1 else ''} far "
+                                f"from both neighbours (a step faster than {what} can change, "
+                                f"{limit:g} {unit}/s, and back)"))
+        if lone:
+            starts = np.array(lone)
+            out.append(_finding(name, "jump", starts, np.ones(starts.size, int), time,
+                                f"{starts.size} step{'s' if starts.size > 1 else ''} faster "
+                                f"than {what} can change ({limit:g} {unit}/s) that "
+                                f"do{'es' if starts.size == 1 else ''} not "
+                                f"come back "
+                                f"within {GLITCH_MAX_S:g} s (the sample after it flagged)"))
+    return flagged, out
+
+
+def _finding(name: str, kind: str, starts: np.ndarray, lengths: np.ndarray,
+             time: np.ndarray, what: str,
+             tail: str = "values bridged from the good samples around") -> dict:
+    dt = _step(time)
+    samples = int(lengths.sum())
+    return {"channel": name, "kind": kind, "count": int(starts.size), "samples": samples,
+            "longest_s": float(lengths.max()) * dt, "first_at_s": float(time[starts[0]]),
+            "at_s": [float(time[s]) for s in starts[:20]],
+            "message": f"channel {name!r}: {what}: {samples} sample"
+                       f"{'s' if samples > 1 else ''} (longest "
+                       f"{float(lengths.max()) * dt:.3g} s) at {_times(time, starts)}: masked "
+                       f"in {name}_censored, {tail}"}
+
+
+def bridged_finding(name: str, starts: np.ndarray, lengths: np.ndarray, time: np.ndarray,
+                    hold: bool, limit: float) -> dict:
+    """The finding for a channel's NaN/inf stretches bridged at import."""
+    how = "the last value held (a set-point or command)" if hold else "linear interpolation"
+    n = starts.size
+    f = _finding(name, "bridged", starts, lengths, time,
+                 f"{n} NaN/inf stretch{'es' if n > 1 else ''} (empty cells) bridged by {how} "
+                 f"(max_gap_s = {limit:g} s)", tail="not scored or fitted")
+    f["method"] = "hold" if hold else "linear"
+    return f

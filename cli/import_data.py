@@ -48,8 +48,12 @@ def import_data(
     """Import SRC... through an explicit channel map, check and write one acid dataset.
 
     Units are converted (km/h, kW, kg/h, degF, ...); values that contradict their declared
-    unit get a warning; clipped and quantised sensors are reported; channels the map
-    declares as a constant or an expression are recorded as assumed.
+    unit get a warning; empty cells up to max_gap_s (a map key) are bridged, and glitches,
+    impossible jumps and out-of-range values are flagged: each a warning naming channel
+    and time, a quality table per file, and masked in <channel>_censored so fits and
+    validations skip them. Clipped and quantised sensors are reported apart from set-points
+    held by design; channels the map declares as a constant or an expression are recorded
+    as assumed.
     """
     labels = {"SRC" if len(srcs) == 1 else f"SRC {i + 1}": p for i, p in enumerate(srcs)}
     check_paths(inputs={**labels, "--map": map_path},
@@ -103,7 +107,7 @@ def import_data(
         "samples": len(ds), "duration_s": ds.duration, "Ts_s": ds.Ts,
         "channels": list(ds.channels), "assumed": ds.assumed,
         "experiments": [{k: r[k] for k in ("name", "source", "samples", "duration_s",
-                                           "checks", "censored")}
+                                           "checks", "censored", "quality")}
                         for r in ds.metadata["experiments"]],
         "censoring": ds.metadata.get("censoring", []),
         "warnings": [str(w.message) for w in caught
@@ -131,9 +135,16 @@ def _required(spec: str | None) -> tuple[str, ...]:
 
 
 def _report(ds, srcs: list[Path]) -> None:
-    """Notes on what the files hold: resampling, assumed channels, sensors that clip or hold
-    a few levels, masked samples."""
+    """Notes on what the files hold: resampling, assumed channels, samples flagged as a
+    faulty sensor's (a table), sensors that clip or hold a few levels apart from signals
+    held by design, masked samples."""
     experiments = ds.metadata["experiments"]
+    rows = [[r["name"], q["channel"], q["kind"], q["count"], q["samples"],
+             f"{q['first_at_s']:.6g}"] for r in experiments for q in r.get("quality") or []]
+    if rows:
+        print_table("samples flagged (a faulty sensor, empty cells): masked in "
+                    "<channel>_censored, not fitted or scored",
+                    ["_file", "_channel", "_flag", "count", "samples", "first at (s)"], rows)
     notes = {r["resample"]["note"] for r in experiments
              if (r.get("resample") or {}).get("note")}
     for text in sorted(notes):
@@ -145,16 +156,21 @@ def _report(ds, srcs: list[Path]) -> None:
                     for r in experiments)
         note(f"{name}: {total} raw samples at the declared clipping level are masked in "
              f"{name}_censored (1 = censored; the value kept is the sensor's limit)")
-    quant, held = defaultdict(list), []
+    quant, held, design = defaultdict(list), [], defaultdict(set)
     for r in experiments:
         for f in r["checks"]:
-            if f["kind"] == "quantised":
+            if f.get("by_design") and f["kind"] in ("quantised", "held"):
+                design[f["channel"]].add(f["by_design"])
+            elif f["kind"] == "quantised":
                 quant[f["channel"]].append(f["step"])
             elif f["kind"] == "gap":
                 note(f"{r['source']}: {f['message']}")
             elif f["kind"] == "held" and len(srcs) == 1:
                 held.append(f"{f['channel']} {f['side']} {f['level']:.4g} {f['unit']} "
                             f"({f['fraction']:.0%}, longest {f['longest_s']:.0f} s)")
+    if design:
+        note("held by design, not a sensor fault (levels held between changes): " + ", ".join(
+            f"{ch} ({'; '.join(sorted(why))})" for ch, why in design.items()))
     if quant:
         of = "" if len(srcs) == 1 else " in {} of " + f"{len(experiments)} files"
         note("quantised sensors (few levels, held): " + ", ".join(

@@ -473,9 +473,10 @@ def test_every_map_key_is_read_and_documented(tmp_path):
     d = {"description": "my car", "time": {"column": "t_ms", "unit": "ms"}, "Ts": 1.0,
          "resample": "centered", "sep": ";", "encoding": "cp1252", "decimal": ",",
          "drop_incomplete_end": True,   # this log ends complete: nothing is dropped
+         "max_gap_s": 5.0,              # nor empty: nothing is bridged
          "channels": {
              "T_cab": {"column": "Cabin °C", "unit": "degC", "censored_above": 39.0,
-                       "censored_below": 10.0, "note": "roof sensor"},
+                       "censored_below": 10.0, "note": "roof sensor", "max_gap_s": 2.0},
              "W_bl": {"constant": 0.1, "unit": "kg/s"},
              "T_ain": {"expr": "T_cab - 10", "unit": "degC"}}}
     assert set(d) == set(MAP_KEYS)
