@@ -355,7 +355,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                      f"{int((~inside[:, -1]).sum())} of {k0.size} starts lie less than "
                      f"{horizon} steps before it (at least {reach} steps each)")
     if data.censored is not None:
-        notes.append("censored samples (a clipping sensor) are not scored")
+        notes.append("censored samples (a clipping sensor, or a sample the import flagged or "
+                     "filled) are not scored")
     data0 = data
     if hold:
         held = [i for i, d in enumerate(model.disturbances) if d.name in hold]
