@@ -65,7 +65,8 @@ class BatchCycle:
     def _lin1(self, T):
         x = (T - rf.T1_LO) * self.inv1
         i = x.astype(np.int64)
-        np.clip(i, 0, self.i1max, out=i)
+        np.maximum(i, 0, out=i)
+        np.minimum(i, self.i1max, out=i)
         return i, x - i
 
     def p_sat(self, T):
@@ -92,11 +93,13 @@ class BatchCycle:
         h3 = H3[j] + f * (H3[j + 1] - H3[j])
         x = (Ts - rf.TE_LO) * self.inv2
         i = x.astype(np.int64)
-        np.clip(i, 0, self.iemax, out=i)
+        np.maximum(i, 0, out=i)
+        np.minimum(i, self.iemax, out=i)
         fe = x - i
         x = (Tc - rf.TC_LO) * self.inv2
         j = x.astype(np.int64)
-        np.clip(j, 0, self.icmax, out=j)
+        np.maximum(j, 0, out=j)
+        np.minimum(j, self.icmax, out=j)
         fc = x - j
         k = i * nc + j
         h2s = ((1.0 - fe) * (H2S[k] + fc * (H2S[k + 1] - H2S[k]))
@@ -139,9 +142,14 @@ class BatchCycle:
             n_, tew, tcw = N[act], Tew[act], Tcw[act]
             te, tc, ds = Te[act], Tc[act], dTs[act]
             its[act] = it
-            F1, F2 = self._residual(te, tc, n_, tew, tcw, ds)
-            a1, a2 = self._residual(te + FD, tc, n_, tew, tcw, ds)
-            b1, b2 = self._residual(te, tc + FD, n_, tew, tcw, ds)
+            # the residual and its two finite-difference neighbours in one vectorised call
+            na = act.size
+            r1, r2 = self._residual(np.concatenate((te, te + FD, te)),
+                                    np.concatenate((tc, tc, tc + FD)),
+                                    np.tile(n_, 3), np.tile(tew, 3), np.tile(tcw, 3),
+                                    np.tile(ds, 3))
+            F1, a1, b1 = r1[:na], r1[na:2 * na], r1[2 * na:]
+            F2, a2, b2 = r2[:na], r2[na:2 * na], r2[2 * na:]
             J11, J21 = (a1 - F1) / FD, (a2 - F2) / FD
             J12, J22 = (b1 - F1) / FD, (b2 - F2) / FD
             det = J11 * J22 - J12 * J21
@@ -219,10 +227,20 @@ class BatchPlant:
         self._cyc = BatchCycle(c0)
         self._fe_cache: dict = {}
         self._hA_cache: dict = {}
+        self._arrays: dict = {}
+        self._ft = None
+        self._cabin_speed = np.array([bool(c.cabin_speed) for c in self.cfgs], bool)
+        self._aw = np.array([bool(c.anti_windup) for c in self.cfgs], bool)
+        self._a_N = np.array([math.exp(-c.dt_int / c.tau_N) for c in self.cfgs])
         self.reset()
 
     def _a(self, name: str) -> np.ndarray:
-        return np.array([float(getattr(c, name)) for c in self.cfgs])
+        """The members' values of configuration field ``name`` (cached; read-only)."""
+        a = self._arrays.get(name)
+        if a is None:
+            a = self._arrays[name] = np.array([float(getattr(c, name)) for c in self.cfgs])
+            a.setflags(write=False)
+        return a
 
     def reset(self, initial: Sequence[dict[str, float] | None] | None = None) -> dict:
         """Reset every member (as ``HifiPlant.reset``); ``initial``: one dict (or None) each."""
@@ -267,24 +285,31 @@ class BatchPlant:
                 "p_dis_last": np.where(self.p_c == self.p_c, self.p_c, 0.0)}
 
     def _front_tables(self, v: np.ndarray):
-        """Per member: the front end's tables at its speed and ambient, stacked (B, L+1)."""
-        rows = []
+        """Per member: the front end's tables at its speed and ambient, stacked (B, L+1);
+        only the members whose speed or ambient changed are looked up again."""
         dt = self.cfgs[0].dt_int
+        ft = self._ft
+        if ft is None:
+            L = FAN_LEVELS + 1
+            ft = self._ft = ([None] * self.B, np.empty((5, self.B, L)), np.empty(self.B),
+                             np.empty(self.B, dtype=np.int64))
+        keys, tabs, rise, floor = ft
         for b, c in enumerate(self.cfgs):
             key = (id(c), float(v[b]), float(self.T_amb[b]))
+            if keys[b] == key:
+                continue
             hit = self._fe_cache.get(key)
             if hit is None:
                 if len(self._fe_cache) > 4096:
                     self._fe_cache.clear()
                 fe = front_end(c, key[1], key[2])
                 a = tuple(math.exp(-G * dt / c.C_cw) for G in fe.G_ca)
-                hit = self._fe_cache[key] = (fe.G_ca, fe.P_fan, fe.m_ca, fe.s, a,
+                hit = self._fe_cache[key] = (np.array((fe.G_ca, fe.P_fan, fe.m_ca, fe.s, a)),
                                              fe.T_in_rise, int(round(fe.s_floor * FAN_LEVELS)),
                                              c)
-            rows.append(hit)
-        G, P, m, s, a, rise, floor, _ = zip(*rows, strict=True)
-        return (np.array(G), np.array(P), np.array(m), np.array(s), np.array(a),
-                np.array(rise), np.array(floor, dtype=np.int64))
+            tabs[:, b], rise[b], floor[b] = hit[0], hit[1], hit[2]
+            keys[b] = key
+        return tabs[0], tabs[1], tabs[2], tabs[3], tabs[4], rise, floor
 
     def _hA_ext(self, v_cab: np.ndarray) -> np.ndarray:
         out = np.empty(self.B)
@@ -342,7 +367,7 @@ class BatchPlant:
         T_amb, w_amb, p_atm = self.T_amb, self.w_amb, A("p_atm")
         G_st, P_st, m_st, s_st_tab, a_st, rise, lev_floor = self._front_tables(v)
         T_ca_in = T_amb + rise
-        v_cab = np.where(np.array([c.cabin_speed for c in cfgs], bool), v, 0.0)
+        v_cab = np.where(self._cabin_speed, v, 0.0)
         fan_x = FAN_LEVELS / (A("p_fan_high") - A("p_fan_low"))
         hA_ext = self._hA_ext(v_cab)
         m_inf = A("m_inf0") + A("k_inf") * v_cab
@@ -356,7 +381,7 @@ class BatchPlant:
         b1, b2, b3, f_bh = A("beta1"), A("beta2"), A("beta3"), A("f_bl_heat")
         k_rec, r_max = A("k_rec"), A("r_max")
         W_min, W_max = A("W_bl_min"), A("W_bl_max")
-        a_N = np.array([math.exp(-dt / c.tau_N) for c in cfgs])
+        a_N = self._a_N
         N_min, N_max = A("N_min"), A("N_max")
         p_fl, p_der, p_cut = A("p_fan_low"), A("p_derate"), A("p_cut")
         k_der = (N_max - N_min) / (p_cut - p_der)
@@ -364,7 +389,7 @@ class BatchPlant:
         reset_max = A("T_ew_set_max") - A("T_ew_set")
         k_reset = A("k_reset")
         Kp_c, Ki_c, h_off, h_on = A("Kp_comp"), A("Ki_comp"), A("hyst_off"), A("hyst_on")
-        aw = np.array([bool(c.anti_windup) for c in cfgs], bool)
+        aw = self._aw
         Kp_b, Ki_b = A("Kp_bl"), A("Ki_bl")
         exp = np.exp
         rows_idx = np.arange(B)
