@@ -117,6 +117,23 @@ class BatchCycle:
         m = ev * rho * self.Vd60 * N
         return m, pe, pc, h1, h1 + dh / ei, h3, ev, ei, ps
 
+    def flow(self, Te, Tc, N, dTs):
+        """The refrigerant mass flow of ``state`` alone (the same operations), kg/s."""
+        c = self.c
+        SH = c.superheat
+        P, R = self.P, self.R
+        Ts = Te - dTs
+        i, f = self._lin1(Ts)
+        ps = P[i] + f * (P[i + 1] - P[i])
+        rho = (R[i] + f * (R[i + 1] - R[i])) * (Ts + SH) / (Te + SH)
+        j, f = self._lin1(Tc)
+        pc = P[j] + f * (P[j + 1] - P[j])
+        PR = pc / ps
+        PR = np.where(PR < 1.0, 1.0, PR)
+        ev = c.eta_v0 - c.k_v * (PR - 1.0) - c.c_L / N
+        ev = np.where(ev < 0.05, 0.05, ev)
+        return ev * rho * self.Vd60 * N
+
     def _residual(self, Te, Tc, N, Tew, Tcw, dTs):
         c = self.c
         m, _, _, h1, h2, h3, _, _, _ = self.state(Te, Tc, N, dTs)
@@ -146,8 +163,10 @@ class BatchCycle:
             na = act.size
             r1, r2 = self._residual(np.concatenate((te, te + FD, te)),
                                     np.concatenate((tc, tc, tc + FD)),
-                                    np.tile(n_, 3), np.tile(tew, 3), np.tile(tcw, 3),
-                                    np.tile(ds, 3))
+                                    np.concatenate((n_, n_, n_)),
+                                    np.concatenate((tew, tew, tew)),
+                                    np.concatenate((tcw, tcw, tcw)),
+                                    np.concatenate((ds, ds, ds)))
             F1, a1, b1 = r1[:na], r1[na:2 * na], r1[2 * na:]
             F2, a2, b2 = r2[:na], r2[na:2 * na], r2[2 * na:]
             J11, J21 = (a1 - F1) / FD, (a2 - F2) / FD
@@ -167,7 +186,7 @@ class BatchCycle:
             tc_n = tc - dTc
             te_n = np.where(te_n > tew, tew, te_n)
             tc_n = np.where(tc_n < tcw, tcw, tc_n)
-            q = self.state(te_n, tc_n, n_, ds)[0] * self.inv_m0
+            q = self.flow(te_n, tc_n, n_, ds) * self.inv_m0
             d_new = c.dT_suc0 * q * q
             change = np.abs(d_new - ds)
             Te[act] = np.where(ok, te_n, te)
