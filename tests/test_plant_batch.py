@@ -18,7 +18,7 @@ TOL = 1e-9  # K on temperatures; relative (to max(1, |x|)) on every other channe
 
 
 def _scenarios():
-    """Five members differing in ambient, sun, speed profile, length and protections."""
+    """Six members differing in ambient, sun, speed profile, length and protections."""
     base = PlantConfig()
     rng = np.random.default_rng(7)
     cfgs, scheds, inits = [], [], []
@@ -43,6 +43,10 @@ def _scenarios():
     cfgs.append(base)
     scheds.append(InputSchedule(np.full(n, 0.1), C2K(5.0), np.linspace(0, 30, n),
                                 T_amb=C2K(np.where(np.arange(n) < 10, 30.0, 22.0))))
+    inits.append(None)
+    # 5: the speed-blind counterfactual (front end and cabin at standstill at every speed)
+    cfgs.append(dataclasses.replace(base, front_end_speed=False, cabin_speed=False))
+    scheds.append(InputSchedule(np.full(24, 0.1), C2K(5.0), np.linspace(0, 30, 24)))
     inits.append(None)
     return cfgs, scheds, inits
 
@@ -73,9 +77,9 @@ def test_batch_equals_single_plants(mode):
     if mode == "direct":
         # the protections act in their own member only
         frost = [np.min(o["T_e"]) < cfgs[b].T_e_min for b, o in enumerate(out)]
-        assert frost == [False, False, True, False, False]
+        assert frost == [False, False, True, False, False, False]
         cut = [bool(np.any(o["cut_out"][1:] > 0.5)) for o in out]
-        assert cut == [False, False, False, True, False]
+        assert cut == [False, False, False, True, False, False]
 
 
 def test_batch_simulate_returns_datasets_like_the_single_plant():

@@ -32,10 +32,10 @@ from acid.plant.base import InputSchedule, checked_ambient
 from acid.plant.config import PlantConfig
 from acid.plant.hifi import (
     FAN_LEVELS,
+    G_CA_NATURAL,
     INITIAL_KEYS,
     MODES,
     STATE_UNITS,
-    front_end,
     humidity_ratio,
 )
 
@@ -244,10 +244,10 @@ class BatchPlant:
         self.Ts = float(c0.Ts)
         self.n_sub = int(round(self.Ts / c0.dt_int))
         self._cyc = BatchCycle(c0)
-        self._fe_cache: dict = {}
         self._hA_cache: dict = {}
         self._arrays: dict = {}
         self._ft = None
+        self._fe_speed = np.array([bool(c.front_end_speed) for c in self.cfgs], bool)
         self._cabin_speed = np.array([bool(c.cabin_speed) for c in self.cfgs], bool)
         self._aw = np.array([bool(c.anti_windup) for c in self.cfgs], bool)
         self._a_N = np.array([math.exp(-c.dt_int / c.tau_N) for c in self.cfgs])
@@ -303,31 +303,58 @@ class BatchPlant:
                 "T_c_last": self.T_c.copy(),
                 "p_dis_last": np.where(self.p_c == self.p_c, self.p_c, 0.0)}
 
+    def _front_rows(self, idx: np.ndarray, v: np.ndarray, T_amb: np.ndarray):
+        """``hifi.front_end`` for members ``idx`` at speeds ``v`` and ambients ``T_amb`` (K),
+        vectorised (the same operations): tables (5, k, L+1) of G_ca, P_fan, m_ca, s and the
+        condenser wall's decay factor exp(-G_ca dt / C_cw); the recirculation rise (k,) and
+        the fan floor level (k,)."""
+        A = lambda name: self._a(name)[idx]  # noqa: E731
+        v = np.where(self._fe_speed[idx], v, 0.0)
+        rho = A("p_atm") / (287.05 * T_amb)
+        cp = A("c_p_air")
+        dp0, Q_free, K_front = A("dp_fan0"), A("Q_fan_free"), A("K_front")
+        dp_ram = 0.5 * rho * A("C_ram") * v * v
+        K_fan = dp0 / Q_free ** 2
+        Q_off = np.sqrt(dp_ram / (K_front + A("K_fan_off")))
+        Q_full0 = np.sqrt(dp0 / (K_front + K_fan))
+        P_1 = dp0 * (1.0 - (Q_full0 / Q_free) ** 2) * Q_full0 / A("eta_fan")
+        col = lambda x: x[:, None]  # noqa: E731
+        s = np.broadcast_to(np.arange(FAN_LEVELS + 1) / FAN_LEVELS, (idx.size, FAN_LEVELS + 1))
+        P = np.array([[si ** 3 for si in s[0]]]) * col(P_1)
+        Q = np.sqrt((col(dp_ram) + col(dp0) * s * s) / col(K_front + K_fan))
+        off = (s == 0.0) | (Q <= col(Q_off)) | (Q > s * col(Q_free))
+        Q = np.where(off, col(Q_off), Q)
+        P = np.where(off & (s != 0.0), 0.0, P)
+        s = np.where(off, 0.0, s)
+        m = col(rho) * Q
+        mcp = m * col(cp)
+        pos = m > 0.0
+        msafe = np.where(pos, m, 1.0)
+        UA = col(A("UA_ca0")) * (msafe / col(A("m_ca0"))) ** col(A("n_ca"))
+        G = np.where(pos, mcp * (1.0 - np.exp(-UA / np.where(pos, mcp, 1.0))), 0.0)
+        G = np.where(G > G_CA_NATURAL, G, G_CA_NATURAL)
+        dt = self.cfgs[0].dt_int
+        a = np.exp(-G * dt / col(A("C_cw")))
+        zero = np.zeros(idx.size)
+        rise = A("dT_recirc") * np.maximum(zero, 1.0 - v / A("v_recirc"))
+        floor = A("s_fan_low") * np.maximum(zero, 1.0 - v / A("v_fan_off"))
+        return (np.stack((G, P, m, s, a)), rise,
+                np.round(floor * FAN_LEVELS).astype(np.int64))
+
     def _front_tables(self, v: np.ndarray):
         """Per member: the front end's tables at its speed and ambient, stacked (B, L+1);
-        only the members whose speed or ambient changed are looked up again."""
-        dt = self.cfgs[0].dt_int
-        ft = self._ft
-        if ft is None:
+        only the members whose speed or ambient changed are computed again."""
+        if self._ft is None:
             L = FAN_LEVELS + 1
-            ft = self._ft = ([None] * self.B, np.empty((5, self.B, L)), np.empty(self.B),
-                             np.empty(self.B, dtype=np.int64))
-        keys, tabs, rise, floor = ft
-        for b, c in enumerate(self.cfgs):
-            key = (id(c), float(v[b]), float(self.T_amb[b]))
-            if keys[b] == key:
-                continue
-            hit = self._fe_cache.get(key)
-            if hit is None:
-                if len(self._fe_cache) > 4096:
-                    self._fe_cache.clear()
-                fe = front_end(c, key[1], key[2])
-                a = tuple(math.exp(-G * dt / c.C_cw) for G in fe.G_ca)
-                hit = self._fe_cache[key] = (np.array((fe.G_ca, fe.P_fan, fe.m_ca, fe.s, a)),
-                                             fe.T_in_rise, int(round(fe.s_floor * FAN_LEVELS)),
-                                             c)
-            tabs[:, b], rise[b], floor[b] = hit[0], hit[1], hit[2]
-            keys[b] = key
+            self._ft = (np.full(self.B, np.nan), np.full(self.B, np.nan),
+                        np.empty((5, self.B, L)), np.empty(self.B),
+                        np.empty(self.B, dtype=np.int64))
+        v_last, T_last, tabs, rise, floor = self._ft
+        idx = np.nonzero((v != v_last) | (self.T_amb != T_last))[0]
+        if idx.size:
+            t, r, f = self._front_rows(idx, v[idx], self.T_amb[idx])
+            tabs[:, idx], rise[idx], floor[idx] = t, r, f
+            v_last[idx], T_last[idx] = v[idx], self.T_amb[idx]
         return tabs[0], tabs[1], tabs[2], tabs[3], tabs[4], rise, floor
 
     def _hA_ext(self, v_cab: np.ndarray) -> np.ndarray:
