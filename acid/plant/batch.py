@@ -173,15 +173,18 @@ class BatchCycle:
             J12, J22 = (b1 - F1) / FD, (b2 - F2) / FD
             det = J11 * J22 - J12 * J21
             ok = det != 0.0  # a singular Jacobian ends that member's iteration unchanged
-            det = np.where(ok, det, 1.0)
+            all_ok = bool(ok.all())
+            if not all_ok:
+                det = np.where(ok, det, 1.0)
             dTe = (J22 * F1 - J12 * F2) / det
             dTc = (J11 * F2 - J21 * F1) / det
             adTe, adTc = np.abs(dTe), np.abs(dTc)
             big = np.where(adTe > adTc, adTe, adTc)
             damp = big > 8.0
-            scale = np.where(damp, 8.0 / np.where(damp, big, 1.0), 1.0)
-            dTe = np.where(damp, dTe * scale, dTe)
-            dTc = np.where(damp, dTc * scale, dTc)
+            if damp.any():
+                scale = np.where(damp, 8.0 / np.where(damp, big, 1.0), 1.0)
+                dTe = np.where(damp, dTe * scale, dTe)
+                dTc = np.where(damp, dTc * scale, dTc)
             te_n = te - dTe
             tc_n = tc - dTc
             te_n = np.where(te_n > tew, tew, te_n)
@@ -189,10 +192,14 @@ class BatchCycle:
             q = self.flow(te_n, tc_n, n_, ds) * self.inv_m0
             d_new = c.dT_suc0 * q * q
             change = np.abs(d_new - ds)
-            Te[act] = np.where(ok, te_n, te)
-            Tc[act] = np.where(ok, tc_n, tc)
-            dTs[act] = np.where(ok, d_new, ds)
-            done = ~ok | ((big < _cycle._TOL) & (change < _cycle._TOL_SUC))
+            if all_ok:
+                Te[act], Tc[act], dTs[act] = te_n, tc_n, d_new
+                done = (big < _cycle._TOL) & (change < _cycle._TOL_SUC)
+            else:
+                Te[act] = np.where(ok, te_n, te)
+                Tc[act] = np.where(ok, tc_n, tc)
+                dTs[act] = np.where(ok, d_new, ds)
+                done = ~ok | ((big < _cycle._TOL) & (change < _cycle._TOL_SUC))
             act = act[~done]
         if act.size:
             for k in act:
