@@ -188,7 +188,7 @@ def measurements_to_dataset(rows: list[Measurement], Ts: float, metadata: dict,
         if name in CHANNELS:
             unit = CHANNELS[name].unit
         else:
-            unit = known.get(name) or _guess_unit(name)
+            unit = known.get(name) or guess_unit(name)
         if is_temperature(unit):
             v, unit = K2C(v), "degC"
         channels[name], units[name] = v, unit
@@ -196,7 +196,7 @@ def measurements_to_dataset(rows: list[Measurement], Ts: float, metadata: dict,
     return Dataset(time=time, channels=channels, units=units, Ts=Ts, metadata=metadata)
 
 
-def _guess_unit(name: str) -> str:
+def guess_unit(name: str) -> str:
     if name.startswith("T_"):
         return "degC"
     if name.startswith(("P_", "Q_")):
