@@ -35,6 +35,8 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                                             "best fixed-coil PI across climates and cycles"),
     "table_i_20cc.toml": ("plant config", "the paper vehicle: a 20 cc electric scroll "
                                           "calibrated to Table I (--plant-config paper)"),
+    "day.toml": ("day spec", "acid day's hot and cold day (Phoenix in July, Minneapolis in "
+                             "January) and the time-of-use tariff, every value cited"),
 }
 
 
