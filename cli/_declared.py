@@ -167,6 +167,14 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                     "parameters farthest from the best optimum (relative)",
                     ["loss", "starts", "spread", "differs most from the best in"],
                     _optima_rows(result.optima))
+    if result.failed_starts:
+        print_table(f"Failed starts of {fit_starts} (no optimum reached; not among the optima "
+                    "above): start number (0: the first start), final loss and why",
+                    ["start", "loss", "why"],
+                    [[str(f.start), _num(f.loss, 3), f.reason] for f in result.failed_starts])
+    if result.on_bounds:
+        say("on a declared bound (the data push past it; its interval is not reliable): "
+            + "; ".join(result.on_bounds))
     for c in result.combinations:
         say(f"identified combination: {c}")
     if result.simulation_fit:

@@ -95,6 +95,23 @@ class Optimum:
 
 
 @dataclass(frozen=True)
+class FailedStart:
+    """A multi-start output-error run that reached no optimum: its start number (0 is the
+    least-squares / declared start), its final loss and why it counts as failed."""
+
+    start: int
+    loss: float
+    reason: str
+    values: dict
+
+
+#: A start whose simulation error (RMS, a channel's own units) ends above this many times
+#: the channel's standard deviation in the data diverged, even when its solver stopped
+#: cleanly (a model that predicts the channel's mean is 1).
+DIVERGED_ERROR_RATIO = 100.0
+
+
+@dataclass(frozen=True)
 class DeclaredFitResult:
     """What ``fit_model`` found (frozen; printing lives in the CLI)."""
 
@@ -126,6 +143,11 @@ class DeclaredFitResult:
     #: state are left out)
     one_step_fit: dict = field(default_factory=dict)
     loss: str = "squared"
+    #: multi-start runs that reached no optimum (non-finite or diverged loss, solver
+    #: failure), kept out of ``optima``
+    failed_starts: tuple[FailedStart, ...] = ()
+    #: "NAME at its min|max VALUE" for every fitted parameter that ends on a declared bound
+    on_bounds: tuple[str, ...] = ()
     #: the ``Model`` fitted (``fitted_parameters`` binds the values to it)
     declaration: Model | None = field(default=None, repr=False, compare=False)
 
@@ -158,6 +180,8 @@ class DeclaredFitResult:
             "fit_percent_simulation": self.simulation_fit,
             "fit_percent_one_step": self.one_step_fit,
             "optima": [vars(o) for o in self.optima],
+            "failed_starts": [vars(f) for f in self.failed_starts],
+            "on_bounds": list(self.on_bounds),
             "covariance": {"names": list(self.covariance_names), "matrix": self.covariance},
             "notes": list(self.notes), "warnings": list(self.warnings),
             "elapsed_s": self.elapsed_s,
@@ -329,6 +353,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                      "free parameters, every signal measured)")
     oe_summary: dict = {}
     optima: list[Optimum] = []
+    failed: list[FailedStart] = []
     if method == "oe" and columns:
         base = data.parameter_matrix(model, declared)
         prob = oe.OEProblem(model, data, columns, _window_base(base, columns, oe.Windows.of(
@@ -336,18 +361,39 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         theta_start = np.where(np.isfinite(theta), theta, declared[[c.index for c in columns]])
         res = oe.solve(prob, theta_start, lo, hi, covariance=covariance,
                        hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
-        runs = [(res.loss, res.theta)]
         if fit_starts > 1:
             rng = np.random.default_rng(seed)
-            for s0 in _starts(rng, fit_starts - 1, theta, lo, hi):
-                r = oe.solve(prob, s0, lo, hi, reweight=False, covariance=covariance,
-                             hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
+            scale = {n: max(float(np.std(prob.meas[..., i][prob.obs[..., i]])), 1e-9)
+                     for i, n in enumerate(prob.chan_names)}
+            runs = []
+            chosen = None
+            for k, s0 in enumerate([None, *_starts(rng, fit_starts - 1, theta, lo, hi)]):
+                try:
+                    r = res if s0 is None else oe.solve(
+                        prob, s0, lo, hi, reweight=False, covariance=covariance,
+                        hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
+                except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                    failed.append(FailedStart(k, math.nan, f"the solver failed: {exc}", {
+                        c.label: float(v) for c, v in zip(columns, s0, strict=True)}))
+                    continue
+                why = _failure(r, scale)
+                if why:
+                    failed.append(FailedStart(k, float(r.loss), why, {
+                        c.label: float(v) for c, v in zip(columns, r.theta, strict=True)}))
+                    continue
                 runs.append((r.loss, r.theta))
-                if r.loss < res.loss * (1 - 1e-9):
-                    res = r
-            optima = _distinct(runs, columns, lo, hi)
-            notes.append(f"multi-start: {fit_starts} starts, {len(optima)} distinct optima; "
-                         f"the best (loss {optima[0].loss:.6g}) is reported")
+                if chosen is None or r.loss < chosen.loss * (1 - 1e-9):
+                    chosen = r
+            if chosen is not None:
+                res = chosen
+                optima = _distinct(runs, columns, lo, hi)
+                notes.append(f"multi-start: {fit_starts} starts, {len(runs)} converged into "
+                             f"{len(optima)} distinct optima, {len(failed)} failed; the best "
+                             f"(loss {optima[0].loss:.6g}, {optima[0].n_starts} start(s)) is "
+                             "reported")
+            else:
+                warn.append(f"multi-start: none of the {fit_starts} starts converged; the "
+                            "first start's result is reported")
         theta = res.theta
         stderr, cov = res.stderr, res.cov
         dof[:] = res.dof
@@ -381,10 +427,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                                                  tuple(names[i] for i in f.free))
             elif q.method in ("ls", "cvx"):
                 reports[f.name] = dataclasses.replace(q, method=f"{q.method} start, oe")
-        at = [f"{c.label} at its {w} {b:g}" for c, t, a, z in zip(columns, theta, lo, hi,
-                                                                  strict=True)
-              for b, w in ((a, "min"), (z, "max"))
-              if math.isfinite(b) and abs(t - b) <= 1e-8 * (1 + abs(b))]
+        at = _on_bounds(columns, theta, lo, hi)
         if at:
             notes.append("output error ends on declared bounds: " + "; ".join(at))
     elif method in ("ls", "cvx"):
@@ -440,6 +483,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         covariance=cov, covariance_names=tuple(c.label for c in columns),
         covariance_kind=covariance, hac_bandwidth=bandwidths, output_error=oe_summary,
         optima=tuple(optima), combinations=tuple(combos), notes=tuple(notes),
+        failed_starts=tuple(failed),
+        on_bounds=tuple(_on_bounds(columns, theta, lo, hi)),
         warnings=tuple(warn), n_samples=len(ds), data_source=ds.source,
         elapsed_s=time.perf_counter() - t0)
 
@@ -555,13 +600,37 @@ def _starts(rng: np.random.Generator, n: int, theta, lo, hi) -> list[np.ndarray]
     return [a + (b - a) * rng.random(theta.size) for _ in range(n)]
 
 
+def _failure(r, scale: dict) -> str:
+    """Why an output-error run reached no optimum ("" when it did); ``scale``: each
+    channel's standard deviation in the data."""
+    if not (np.isfinite(r.loss) and np.all(np.isfinite(r.theta))):
+        return "non-finite loss or parameters"
+    ratio = {n: r.channel_rms[n] / s for n, s in scale.items()}
+    worst = max(ratio, key=lambda n: ratio[n] if math.isfinite(ratio[n]) else math.inf)
+    if not ratio[worst] <= DIVERGED_ERROR_RATIO:
+        return (f"diverged ({worst}'s simulation error is {ratio[worst]:.3g} times its "
+                f"standard deviation in the data)")
+    if not r.success:
+        return f"solver failed or stopped: {r.status} ({r.nfev} evaluations)"
+    return ""
+
+
+def _on_bounds(columns, theta, lo, hi) -> list[str]:
+    """"NAME at its min|max VALUE" for every column within round-off of a declared bound."""
+    return [f"{c.label} at its {w} {b:g}" for c, t, a, z in zip(columns, theta, lo, hi,
+                                                                 strict=True)
+            for b, w in ((a, "min"), (z, "max"))
+            if math.isfinite(b) and math.isfinite(t) and abs(t - b) <= 1e-8 * (1 + abs(b))]
+
+
 def _distinct(runs, columns, lo, hi, rtol_loss: float = 1e-6,
               rtol_theta: float = 1e-3) -> list[Optimum]:
     """Runs grouped into optima: same loss (relative ``rtol_loss``, or round-off of the
     largest loss) and parameters within
     ``rtol_theta`` of their magnitude; best first."""
     runs = sorted(runs, key=lambda r: r[0])
-    atol = 1e-12 * max(abs(r[0]) for r in runs)        # zero losses differ by round-off
+    # zero losses differ by round-off
+    atol = 1e-12 * max(max(abs(r[0]) for r in runs), 1.0)
     groups: list[list] = []
     for loss, th in runs:
         for g in groups:
