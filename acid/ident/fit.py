@@ -47,6 +47,9 @@ COVARIANCES = ("hac", "white")
 #: The default of ``fit_model(covariance=...)`` and ``acid fit --covariance``.
 DEFAULT_COVARIANCE = "hac"
 LOSSES = ("squared", "huber")
+#: Output-error solvers: "dense" (scipy's least squares over the windows with CasADi's
+#: Jacobian) or "ms" (one sparse multiple-shooting NLP by IPOPT, linear in the data).
+OE_SOLVERS = ("dense", "ms")
 
 
 @dataclass(frozen=True)
@@ -212,7 +215,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
               seed: int = 0, oe_window: int = 300, covariance: str = "hac",
               hac_bandwidth="auto", solver: str | None = None,
               max_nfev: int = 100, loss: str = "squared", oe_estimate_x0: bool = True,
-              start: dict | None = None, strict: bool = False) -> DeclaredFitResult:
+              start: dict | None = None, strict: bool = False,
+              oe_solver: str = "dense") -> DeclaredFitResult:
     """Fit ``model`` (a ``Model`` or a name/path for :func:`acid.models.load`) to ``ds``.
 
     See the module docstring for the methods. ``fix`` {name: value} and ``free`` (names)
@@ -229,6 +233,12 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         raise ConfigError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
     if loss not in LOSSES:
         raise ConfigError(f"unknown loss {loss!r} (choose from {', '.join(LOSSES)})")
+    if oe_solver not in OE_SOLVERS:
+        raise ConfigError(f"unknown output-error solver {oe_solver!r} (choose from "
+                          f"{', '.join(OE_SOLVERS)})")
+    if oe_solver == "ms" and loss != "squared":
+        raise ConfigError("the multiple-shooting output error (oe_solver 'ms') minimises "
+                          "the squared loss only; use the dense solver with loss 'huber'")
     bw = hac_bandwidth
     if not (bw in ("auto", "nw") or (isinstance(bw, (int, np.integer))
                                      and not isinstance(bw, bool) and bw >= 0)):
@@ -359,8 +369,14 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         prob = oe.OEProblem(model, data, columns, _window_base(base, columns, oe.Windows.of(
             data.segments, oe_window)), oe_window, estimate_x0=oe_estimate_x0)
         theta_start = np.where(np.isfinite(theta), theta, declared[[c.index for c in columns]])
-        res = oe.solve(prob, theta_start, lo, hi, covariance=covariance,
-                       hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
+        solve = oe.solve
+        if oe_solver == "ms":
+            from acid.ident.oe_ms import solve_ms
+
+            def solve(*a, max_nfev, **kw):
+                return solve_ms(*a, max_iter=3 * max_nfev, **kw)
+        res = solve(prob, theta_start, lo, hi, covariance=covariance,
+                    hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
         if fit_starts > 1:
             rng = np.random.default_rng(seed)
             scale = {n: max(float(np.std(prob.meas[..., i][prob.obs[..., i]])), 1e-9)
@@ -369,7 +385,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
             chosen = None
             for k, s0 in enumerate([None, *_starts(rng, fit_starts - 1, theta, lo, hi)]):
                 try:
-                    r = res if s0 is None else oe.solve(
+                    r = res if s0 is None else solve(
                         prob, s0, lo, hi, reweight=False, covariance=covariance,
                         hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
                 except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -427,9 +443,6 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                                                  tuple(names[i] for i in f.free))
             elif q.method in ("ls", "cvx"):
                 reports[f.name] = dataclasses.replace(q, method=f"{q.method} start, oe")
-        at = _on_bounds(columns, theta, lo, hi)
-        if at:
-            notes.append("output error ends on declared bounds: " + "; ".join(at))
     elif method in ("ls", "cvx"):
         if outside and method == "ls":
             warn.append(f"least squares leaves the declared bounds ({', '.join(outside)}); "
