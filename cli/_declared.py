@@ -79,7 +79,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                  seed: int, oe_window: int, covariance: str, bandwidth,
                  estimation_fraction: float, more: list[Path] = (), loss: str = "squared",
                  strict: bool = False, oe_estimate_x0: bool = True,
-                 paper: PaperOptions | None = None, max_evals: int = 100) -> None:
+                 paper: PaperOptions | None = None, max_evals: int = 100,
+                 oe_solver: str = "dense") -> None:
     """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``
     (for the paper's model, ``paper``: also the params.json keys the controllers read)."""
     from acid.ident.fit import METHODS, fit_model, provenance
@@ -113,7 +114,7 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                        fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                        covariance=covariance, hac_bandwidth=bandwidth, loss=loss,
                        oe_estimate_x0=oe_estimate_x0, start=start, strict=strict,
-                       max_nfev=max_evals)
+                       max_nfev=max_evals, oe_solver=oe_solver)
     prov = provenance(ds, result.method, loss)
     prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
                 records=[str(data), *map(str, more)])
@@ -167,6 +168,14 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                     "parameters farthest from the best optimum (relative)",
                     ["loss", "starts", "spread", "differs most from the best in"],
                     _optima_rows(result.optima))
+    if result.failed_starts:
+        print_table(f"Failed starts of {fit_starts} (no optimum reached; not among the optima "
+                    "above): start number (0: the first start), final loss and why",
+                    ["start", "loss", "why"],
+                    [[str(f.start), _num(f.loss, 3), f.reason] for f in result.failed_starts])
+    if result.on_bounds:
+        say("on a declared bound (the data push past it; its interval is not reliable): "
+            + "; ".join(result.on_bounds))
     for c in result.combinations:
         say(f"identified combination: {c}")
     if result.simulation_fit:

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from acid.errors import ConfigError
-from acid.ident.fit import COVARIANCES, DEFAULT_COVARIANCE, LOSSES, METHODS
+from acid.ident.fit import COVARIANCES, DEFAULT_COVARIANCE, LOSSES, METHODS, OE_SOLVERS
 from acid_cli._common import (
     check_paths,
     handle_errors,
@@ -59,6 +59,11 @@ def fit(
     no_blower: bool = typer.Option(False, "--no-blower",
                                    help="--model paper: hold beta at the reference values "
                                         "instead of fitting P_bl."),
+    oe_solver: str = typer.Option(
+        "dense", "--oe-solver",
+        help="Output error's solver: 'dense' (least squares over the windows) or 'ms' (one "
+             "sparse multiple-shooting problem solved by IPOPT, the same optimum; squared "
+             "loss only)."),
     oe_measured_x0: bool = typer.Option(
         False, "--oe-measured-x0",
         help="Output error: start each window from the measured states instead of "
@@ -120,6 +125,10 @@ def fit(
     method = method or "auto"
     require_range(estimation_fraction, "--estimation-fraction", 0.0, 1.0, lo_open=True)
     require(loss in LOSSES, "--loss", f"must be one of {', '.join(LOSSES)}, got {loss!r}")
+    require(oe_solver in OE_SOLVERS, "--oe-solver",
+            f"must be one of {', '.join(OE_SOLVERS)}, got {oe_solver!r}")
+    require(oe_solver == "dense" or loss == "squared", "--oe-solver",
+            "'ms' minimises the squared loss only (--loss huber needs 'dense')")
     require_range(oe_window, "--oe-window", 5, MAX_WINDOW, "samples")
     require_range(max_evals, "--max-evals", 1, MAX_EVALS)
     bandwidth: str | int = hac_bandwidth
@@ -146,12 +155,13 @@ def fit(
                             estimation_fraction=estimation_fraction,
                             more=list(add_record or []), loss=loss, strict=strict,
                             max_evals=max_evals,
-                            oe_estimate_x0=not oe_measured_x0,
+                            oe_estimate_x0=not oe_measured_x0, oe_solver=oe_solver,
                             paper=PaperOptions(reference=reference, no_blower=no_blower,
                                                use_eta_cop=use_eta_cop)
                             if model == "paper" else None)
     given = [opt for opt, set_ in (("--method", method != "auto"), ("--loss", loss != "squared"),
                                    ("--strict", strict), ("--oe-measured-x0", oe_measured_x0),
+                                   ("--oe-solver", oe_solver != "dense"),
                                    ("--add-record", add_record),
                                    ("--max-evals", max_evals != 100)) if set_]
     if given:

@@ -269,3 +269,34 @@ def test_residual_whiteness_per_equation(rng):
     (c,) = [q for q in coloured.equations if q.name == "y"]
     assert abs(w.residual_acf1) < 0.1 and w.ljung_box_p > 0.01
     assert c.residual_acf1 == pytest.approx(0.8, abs=0.05) and c.ljung_box_p < 1e-6
+
+
+def test_multi_start_lists_diverged_starts_as_failed_not_as_optima():
+    # y = A exp(k u): starts with k above ~70 overflow, others between diverge in the solver
+    from acid.models import exp
+
+    m = _toy(lambda s: {"y": s.A * exp(s.k * s.u)},
+             [Parameter("A", "1", 1.2, 0.5, 2.0), Parameter("k", "1", 0.12, 0.0, 100.0)])
+    u = np.linspace(0, 10, 40)
+    res = fit_model(m, _toy_data(u, np.exp(0.1 * u)), method="oe", oe_window=40,
+                    fit_starts=8, seed=1)
+    assert res.failed_starts and len(res.failed_starts) + sum(
+        o.n_starts for o in res.optima) == 8
+    assert all(f.reason for f in res.failed_starts)
+    assert all(np.isfinite(o.loss) and o.loss < 1e-6 for o in res.optima)
+    assert res.value("k") == pytest.approx(0.1, rel=1e-6)
+    assert "failed" in " ".join(res.notes)
+    assert res.to_json_dict()["failed_starts"][0]["reason"] == res.failed_starts[0].reason
+
+
+def test_a_parameter_ending_on_its_bound_is_named(rng):
+    # y = a u with a true 3 but declared at most 2: least squares inside the bounds ends on it
+    m = _toy(lambda s: {"y": s.a * s.u + s.c},
+             [Parameter("a", "1", 1.0, 0.0, 2.0), Parameter("c", "1", 0.0, -1.0, 1.0)])
+    u = rng.standard_normal(200)
+    res = fit_model(m, _toy_data(u, 3.0 * u + 0.2 + 0.01 * rng.standard_normal(200)),
+                    method="cvx")
+    assert res.on_bounds == ("a at its max 2",)
+    oe = fit_model(m, _toy_data(u, 3.0 * u + 0.2), method="oe", oe_window=50)
+    assert oe.on_bounds == ("a at its max 2",)
+    assert oe.to_json_dict()["on_bounds"] == ["a at its max 2"]

@@ -42,6 +42,7 @@ from acid.ident.result import (  # noqa: F401 (the fit's result types, read from
     DeclaredFitResult,
     EquationReport,
     Estimate,
+    FailedStart,
     Optimum,
 )
 from acid.models.declaration import Model
@@ -52,6 +53,15 @@ COVARIANCES = ("hac", "white")
 #: The default of ``fit_model(covariance=...)`` and ``acid fit --covariance``.
 DEFAULT_COVARIANCE = "hac"
 LOSSES = ("squared", "huber")
+#: Output-error solvers: "dense" (scipy's least squares over the windows with CasADi's
+#: Jacobian) or "ms" (one sparse multiple-shooting NLP by IPOPT, linear in the data).
+OE_SOLVERS = ("dense", "ms")
+
+
+#: A start whose simulation error (RMS, a channel's own units) ends above this many times
+#: the channel's standard deviation in the data diverged, even when its solver stopped
+#: cleanly (a model that predicts the channel's mean is 1).
+DIVERGED_ERROR_RATIO = 100.0
 
 
 # -------------------------------------------------------------------------- fitter
@@ -60,7 +70,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
               seed: int = 0, oe_window: int = 300, covariance: str = "hac",
               hac_bandwidth="auto", solver: str | None = None,
               max_nfev: int = 100, loss: str = "squared", oe_estimate_x0: bool = True,
-              start: dict | None = None, strict: bool = False) -> DeclaredFitResult:
+              start: dict | None = None, strict: bool = False,
+              oe_solver: str = "dense") -> DeclaredFitResult:
     """Fit ``model`` (a ``Model`` or a name/path for :func:`acid.models.load`) to ``ds``.
 
     See the module docstring for the methods. ``fix`` {name: value} and ``free`` (names)
@@ -77,6 +88,12 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         raise ConfigError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
     if loss not in LOSSES:
         raise ConfigError(f"unknown loss {loss!r} (choose from {', '.join(LOSSES)})")
+    if oe_solver not in OE_SOLVERS:
+        raise ConfigError(f"unknown output-error solver {oe_solver!r} (choose from "
+                          f"{', '.join(OE_SOLVERS)})")
+    if oe_solver == "ms" and loss != "squared":
+        raise ConfigError("the multiple-shooting output error (oe_solver 'ms') minimises "
+                          "the squared loss only; use the dense solver with loss 'huber'")
     bw = hac_bandwidth
     if not (bw in ("auto", "nw") or (isinstance(bw, (int, np.integer))
                                      and not isinstance(bw, bool) and bw >= 0)):
@@ -201,25 +218,53 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                      "free parameters, every signal measured)")
     oe_summary: dict = {}
     optima: list[Optimum] = []
+    failed: list[FailedStart] = []
     if method == "oe" and columns:
         base = data.parameter_matrix(model, declared)
         prob = oe.OEProblem(model, data, columns, _window_base(base, columns, oe.Windows.of(
             data.segments, oe_window)), oe_window, estimate_x0=oe_estimate_x0)
         theta_start = np.where(np.isfinite(theta), theta, declared[[c.index for c in columns]])
-        res = oe.solve(prob, theta_start, lo, hi, covariance=covariance,
-                       hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
-        runs = [(res.loss, res.theta)]
+        solve = oe.solve
+        if oe_solver == "ms":
+            from acid.ident.oe_ms import solve_ms
+
+            def solve(*a, max_nfev, **kw):
+                return solve_ms(*a, max_iter=3 * max_nfev, **kw)
+        res = solve(prob, theta_start, lo, hi, covariance=covariance,
+                    hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
         if fit_starts > 1:
             rng = np.random.default_rng(seed)
-            for s0 in _starts(rng, fit_starts - 1, theta, lo, hi):
-                r = oe.solve(prob, s0, lo, hi, reweight=False, covariance=covariance,
-                             hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
+            scale = {n: max(float(np.std(prob.meas[..., i][prob.obs[..., i]])), 1e-9)
+                     for i, n in enumerate(prob.chan_names)}
+            runs = []
+            chosen = None
+            for k, s0 in enumerate([None, *_starts(rng, fit_starts - 1, theta, lo, hi)]):
+                try:
+                    r = res if s0 is None else solve(
+                        prob, s0, lo, hi, reweight=False, covariance=covariance,
+                        hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
+                except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                    failed.append(FailedStart(k, math.nan, f"the solver failed: {exc}", {
+                        c.label: float(v) for c, v in zip(columns, s0, strict=True)}))
+                    continue
+                why = _failure(r, scale)
+                if why:
+                    failed.append(FailedStart(k, float(r.loss), why, {
+                        c.label: float(v) for c, v in zip(columns, r.theta, strict=True)}))
+                    continue
                 runs.append((r.loss, r.theta))
-                if r.loss < res.loss * (1 - 1e-9):
-                    res = r
-            optima = _distinct(runs, columns, lo, hi)
-            notes.append(f"multi-start: {fit_starts} starts, {len(optima)} distinct optima; "
-                         f"the best (loss {optima[0].loss:.6g}) is reported")
+                if chosen is None or r.loss < chosen.loss * (1 - 1e-9):
+                    chosen = r
+            if chosen is not None:
+                res = chosen
+                optima = _distinct(runs, columns, lo, hi)
+                notes.append(f"multi-start: {fit_starts} starts, {len(runs)} converged into "
+                             f"{len(optima)} distinct optima, {len(failed)} failed; the best "
+                             f"(loss {optima[0].loss:.6g}, {optima[0].n_starts} start(s)) is "
+                             "reported")
+            else:
+                warn.append(f"multi-start: none of the {fit_starts} starts converged; the "
+                            "first start's result is reported")
         theta = res.theta
         stderr, cov = res.stderr, res.cov
         dof[:] = res.dof
@@ -253,12 +298,6 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                                                  tuple(names[i] for i in f.free))
             elif q.method in ("ls", "cvx"):
                 reports[f.name] = dataclasses.replace(q, method=f"{q.method} start, oe")
-        at = [f"{c.label} at its {w} {b:g}" for c, t, a, z in zip(columns, theta, lo, hi,
-                                                                  strict=True)
-              for b, w in ((a, "min"), (z, "max"))
-              if math.isfinite(b) and abs(t - b) <= 1e-8 * (1 + abs(b))]
-        if at:
-            notes.append("output error ends on declared bounds: " + "; ".join(at))
     elif method in ("ls", "cvx"):
         if outside and method == "ls":
             warn.append(f"least squares leaves the declared bounds ({', '.join(outside)}); "
@@ -312,6 +351,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         covariance=cov, covariance_names=tuple(c.label for c in columns),
         covariance_kind=covariance, hac_bandwidth=bandwidths, output_error=oe_summary,
         optima=tuple(optima), combinations=tuple(combos), notes=tuple(notes),
+        failed_starts=tuple(failed),
+        on_bounds=tuple(_on_bounds(columns, theta, lo, hi)),
         warnings=tuple(warn), n_samples=len(ds), data_source=ds.source,
         elapsed_s=time.perf_counter() - t0)
 
@@ -427,13 +468,37 @@ def _starts(rng: np.random.Generator, n: int, theta, lo, hi) -> list[np.ndarray]
     return [a + (b - a) * rng.random(theta.size) for _ in range(n)]
 
 
+def _failure(r, scale: dict) -> str:
+    """Why an output-error run reached no optimum ("" when it did); ``scale``: each
+    channel's standard deviation in the data."""
+    if not (np.isfinite(r.loss) and np.all(np.isfinite(r.theta))):
+        return "non-finite loss or parameters"
+    ratio = {n: r.channel_rms[n] / s for n, s in scale.items()}
+    worst = max(ratio, key=lambda n: ratio[n] if math.isfinite(ratio[n]) else math.inf)
+    if not ratio[worst] <= DIVERGED_ERROR_RATIO:
+        return (f"diverged ({worst}'s simulation error is {ratio[worst]:.3g} times its "
+                f"standard deviation in the data)")
+    if not r.success:
+        return f"solver failed or stopped: {r.status} ({r.nfev} evaluations)"
+    return ""
+
+
+def _on_bounds(columns, theta, lo, hi) -> list[str]:
+    """"NAME at its min|max VALUE" for every column within round-off of a declared bound."""
+    return [f"{c.label} at its {w} {b:g}" for c, t, a, z in zip(columns, theta, lo, hi,
+                                                                 strict=True)
+            for b, w in ((a, "min"), (z, "max"))
+            if math.isfinite(b) and math.isfinite(t) and abs(t - b) <= 1e-8 * (1 + abs(b))]
+
+
 def _distinct(runs, columns, lo, hi, rtol_loss: float = 1e-6,
               rtol_theta: float = 1e-3) -> list[Optimum]:
     """Runs grouped into optima: same loss (relative ``rtol_loss``, or round-off of the
     largest loss) and parameters within
     ``rtol_theta`` of their magnitude; best first."""
     runs = sorted(runs, key=lambda r: r[0])
-    atol = 1e-12 * max(abs(r[0]) for r in runs)        # zero losses differ by round-off
+    # zero losses differ by round-off
+    atol = 1e-12 * max(max(abs(r[0]) for r in runs), 1.0)
     groups: list[list] = []
     for loss, th in runs:
         for g in groups:

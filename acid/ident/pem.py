@@ -398,8 +398,7 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
                                                                 strict=True)
           for bd, w in ((a, "min"), (z, "max"))
           if math.isfinite(bd) and abs(t - bd) <= 1e-6 * (1 + abs(bd))]
-    if at:
-        notes.append("the prediction-error fit ends on declared bounds: " + "; ".join(at))
+    # the parameters on a bound are named by the result's on_bounds (the CLI prints them)
     warn = [] if res.success else [f"prediction-error fit did not converge ({res.status})"]
     loose = [c.label for c, ok in zip(columns, res.identified, strict=True) if not ok]
     if loose:
@@ -418,4 +417,4 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
         covariance_names=tuple(c.label for c in columns), covariance_kind="hessian",
         hac_bandwidth={}, output_error=summary, optima=(), combinations=(),
         notes=tuple(notes), warnings=tuple(warn), n_samples=len(ds),
-        data_source=ds.source, elapsed_s=time.perf_counter() - t0)
+        data_source=ds.source, elapsed_s=time.perf_counter() - t0, on_bounds=tuple(at))

@@ -61,6 +61,17 @@ class Optimum:
 
 
 @dataclass(frozen=True)
+class FailedStart:
+    """A multi-start output-error run that reached no optimum: its start number (0 is the
+    least-squares / declared start), its final loss and why it counts as failed."""
+
+    start: int
+    loss: float
+    reason: str
+    values: dict
+
+
+@dataclass(frozen=True)
 class DeclaredFitResult:
     """What ``fit_model`` found (frozen; printing lives in the CLI)."""
 
@@ -92,6 +103,11 @@ class DeclaredFitResult:
     #: state are left out)
     one_step_fit: dict = field(default_factory=dict)
     loss: str = "squared"
+    #: multi-start runs that reached no optimum (non-finite or diverged loss, solver
+    #: failure), kept out of ``optima``
+    failed_starts: tuple[FailedStart, ...] = ()
+    #: "NAME at its min|max VALUE" for every fitted parameter that ends on a declared bound
+    on_bounds: tuple[str, ...] = ()
     #: the ``Model`` fitted (``fitted_parameters`` binds the values to it)
     declaration: Model | None = field(default=None, repr=False, compare=False)
 
@@ -124,6 +140,8 @@ class DeclaredFitResult:
             "fit_percent_simulation": self.simulation_fit,
             "fit_percent_one_step": self.one_step_fit,
             "optima": [vars(o) for o in self.optima],
+            "failed_starts": [vars(f) for f in self.failed_starts],
+            "on_bounds": list(self.on_bounds),
             "covariance": {"names": list(self.covariance_names), "matrix": self.covariance},
             "notes": list(self.notes), "warnings": list(self.warnings),
             "elapsed_s": self.elapsed_s,
