@@ -183,7 +183,7 @@ class DeclaredValidation:
             "energy": self.energy, "window_design": self.window_design,
             "settings": self.settings,
             "by_horizon": list(self.by_horizon), "notes": list(self.notes),
-            "yardsticks": {k: {n: v for n, v in y.items() if n != "rmse_by_step"}
+            "yardsticks": {k: {n: v for n, v in y.items() if n not in ("rmse_by_step", "errors")}
                            for k, y in self.yardsticks.items()},
             "by_time": self.by_time,
             "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()}})
@@ -543,7 +543,9 @@ def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, ste
                                           for j, (_, n) in enumerate(use)}} for h in steps],
             "by_time": by_time({n: e[..., j] for j, (_, n) in enumerate(use)}, model.Ts),
             "rmse_by_step": {n: np.sqrt(np.nanmean(e[..., j] ** 2, axis=0))
-                             for j, (_, n) in enumerate(use)}}
+                             for j, (_, n) in enumerate(use)},
+            # (starts, horizon) errors on the model's windows (paired comparisons)
+            "errors": {n: e[..., j] for j, (_, n) in enumerate(use)}}
     return out
 
 
