@@ -172,3 +172,19 @@ def test_a_two_record_fit_validates_each_record_with_its_own_values(tmp_path):
     assert "their mean is used" not in res.output
     d = json.loads(out.read_text())
     assert d["channels"]["T_cab"]["max_abs"] < 0.05          # the mean (1000 W) is far off
+
+
+def test_the_json_carries_every_step_of_the_model_and_the_yardsticks():
+    from acid.ident.validate import validate_model
+
+    m, ds, _ = _three_trips()
+    res = validate_model(m, ds, starts=6, horizon=37, warmup=10, yardsticks=True,
+                         estimation=(0, 320))
+    d = json.loads(json.dumps(res.to_json_dict()))
+    assert set(d["by_step"]) == {"model", *res.yardsticks}
+    for k, chans in d["by_step"].items():
+        for c, s in chans.items():
+            assert len(s["rmse"]) == len(s["p90_abs"]) == len(s["n"]) == 37, (k, c)
+    e = res.errors["T_cab"][:, 36]
+    assert d["by_step"]["model"]["T_cab"]["rmse"][36] == pytest.approx(np.sqrt(np.mean(e ** 2)))
+    assert "errors" not in d["yardsticks"]["arx"]

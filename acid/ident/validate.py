@@ -186,7 +186,27 @@ class DeclaredValidation:
             "yardsticks": {k: {n: v for n, v in y.items() if n not in ("rmse_by_step", "errors")}
                            for k, y in self.yardsticks.items()},
             "by_time": self.by_time,
-            "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()}})
+            "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()},
+            "by_step": self.by_step()})
+
+    def by_step(self) -> dict:
+        """{"model" | yardstick: {channel: {"rmse", "p90_abs", "n"}}}: lists over every
+        prediction step 1 .. horizon (the starts scored at each step), none left out."""
+        out = {"model": self.errors, **{k: y.get("errors", {})
+                                        for k, y in self.yardsticks.items()}}
+        return {k: {c: _step_stats(e) for c, e in errs.items()} for k, errs in out.items()}
+
+
+def _step_stats(e: np.ndarray) -> dict:
+    """RMSE, p90 |e| and count of the finite errors at each step (column) of ``e``."""
+    ok = np.isfinite(e)
+    n = ok.sum(axis=0)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        r = np.sqrt(np.nanmean(np.where(ok, e, np.nan) ** 2, axis=0))
+        p = np.nanpercentile(np.abs(np.where(ok, e, np.nan)), 90, axis=0)
+    return {"rmse": r.tolist(), "p90_abs": p.tolist(),
+            "n": n.astype(int).tolist()}
 
 
 def window_design_text(d: dict) -> str:
