@@ -99,7 +99,6 @@ def _three_trips():
     return m, ds, parts
 
 
-@pytest.mark.slow
 def test_cross_validation_folds_never_see_their_held_out_experiment():
     m, ds, parts = _three_trips()
     seen = []
@@ -130,7 +129,6 @@ def test_cross_validation_folds_never_see_their_held_out_experiment():
     assert repr(cv).startswith("CrossValidation(model='cabin3'")
 
 
-@pytest.mark.slow
 def test_the_cli_cross_validates_experiments(tmp_path):
     _, ds, _ = _three_trips()
     data = ds.to_hdf5(tmp_path / "trips.h5")
@@ -148,7 +146,6 @@ def test_the_cli_cross_validates_experiments(tmp_path):
     assert bad.exit_code == 2 and "--cv" in bad.output
 
 
-@pytest.mark.slow
 def test_a_two_record_fit_validates_each_record_with_its_own_values(tmp_path):
     # two records with very different solar loads Q_sol (a per-experiment parameter)
     m = load("cabin3")
