@@ -231,11 +231,14 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                       held_out_fraction: float | None, hold_all: bool = False,
                       non_overlapping: bool = False, yardsticks: bool = True,
                       to_end: bool = False, warm_start: str = "fit", values=None,
-                      beside=None, figures: Path | None = None) -> None:
+                      beside=None, figures: Path | None = None,
+                      intervals: tuple | None = None) -> None:
     """Validate the model declared in ``model_file`` on ``data``; print the errors, write
     Figs. 5-6 (and the yardsticks' figure) into ``figures``. ``values``: the parameters
     (``ParameterValues``) when already read (the paper's and the econ model's files);
-    ``beside``: other ``ParameterValues``, validated on the same starts."""
+    ``beside``: other ``ParameterValues``, validated on the same starts. ``intervals``:
+    (designs, resamples): bootstrap intervals and verdicts (``acid.ident.crossval``) for
+    each start design."""
     from acid.ident.validate import (
         declared_parameters,
         held_out_part,
@@ -251,22 +254,36 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         if params == "paper" else read_parameters(model, params)
     ds = Dataset.from_hdf5(data, min_samples=2)
     sha = file_sha256(data)
-    part = held_out_part(ps.provenance, str(data), sha, held_out_fraction)
+    record, offset = _record_of(ps.provenance, data, sha)
+    prov = ps.provenance if record is None else {**ps.provenance, "data_sha256": sha}
+    part = held_out_part(prov, str(data), sha, held_out_fraction)
     if part.warning:
         warn(part.warning)
     frac = part.fraction
-    if ps.per_experiment and ps.provenance.get("data_sha256") != sha:
+    own = sorted(set(ds.experiment.tolist()))
+    if ps.per_experiment and record is None:
         ps = ps.replace(per_experiment={})
         note("per-experiment parameters were fitted on another record: their mean is used")
     lo = int(round(len(ds) * (1.0 - frac))) if frac is not None and frac < 1.0 else 0
     hi, estimation = len(ds), ((0, lo) if lo > 0 else None)
     est = _fit_records(ps, sha) if yardsticks else None
+    base = 0
     if est is not None:
-        # the yardsticks are fitted on the records the parameters were fitted on, placed
-        # before DATA; the starts stay in DATA
+        # the yardsticks are fitted on the records the parameters were fitted on (their
+        # estimation part; not DATA itself), placed before DATA; the starts stay in DATA
         n_est = len(est)
+        base = len(set(est.experiment.tolist()))
         ds = Dataset.concatenate([est, ds])
         lo, hi, estimation = n_est + lo, n_est + hi, (0, n_est)
+    if ps.per_experiment and record:
+        # this record's own per-experiment values: the fit numbered the experiments of its
+        # records in turn; DATA's k-th experiment is the fit's offset + k, here base + k
+        ids = own if est is None else range(base, base + len(own))
+        ps = ps.replace(per_experiment={
+            n: {int(e): t[offset + k] for k, e in enumerate(ids) if offset + k in t}
+            for n, t in ps.per_experiment.items()})
+        note(f"per-experiment parameters: this record's own values (record {record + 1} "
+             "of the fit)")
     kw = {"starts": starts, "horizon": horizon, "warmup": warmup, "placement": placement,
           "seed": seed, "non_overlapping": non_overlapping, "start_range": (lo, hi),
           "hold": tuple(d.name for d in model.disturbances) if hold_all else (),
@@ -361,6 +378,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                       f"{_num(other.metrics[c]['p90_abs'], 3)}"]
                      for c in res.channels if c in other.metrics])
     residuals = residual_section(residuals)
+    ivs = _intervals(res, ds, model, ps, kw, estimation, yardsticks, intervals)
     if saved:
         say(f"figures written to {', '.join(saved.values())}")
     write_summary(json_path, {"command": "validate", "acid_version": __version__,
@@ -369,8 +387,78 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                               "held_out_fraction_source": part.source,
                               "in_sample_warning": part.warning, "figures": saved,
                               **res.to_json_dict(), "residuals": residuals,
+                              **({"intervals": [iv.to_dict() for iv in ivs]} if ivs else {}),
                               **({"beside": {"channels": other.to_json_dict()["channels"]}}
                                  if other is not None else {})})
+
+
+def _intervals(res, ds, model, ps, kw, estimation, yardsticks, intervals) -> list:
+    """--intervals: the validation ``res`` and, for each further start design, the same
+    validation re-placed, with their bootstrap intervals and verdicts, printed."""
+    if intervals is None:
+        return []
+    from acid.ident.crossval import design_options, validation_intervals
+    from acid.ident.validate import validate_model
+
+    designs, resamples = intervals
+    out = []
+    for d in designs:
+        opts = design_options(d)
+        same = (opts["placement"] == kw["placement"]
+                and opts["non_overlapping"] == kw["non_overlapping"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = res if same else validate_model(model, ds, ps, yardsticks=yardsticks,
+                                                estimation=estimation, **{**kw, **opts})
+        iv = validation_intervals(r, ds, n_resamples=resamples, seed=kw["seed"], design=d)
+        say(iv.summary())
+        out.append(iv)
+    _say_robust(out)
+    return out
+
+
+def _say_robust(ivs) -> None:
+    """Whether each pooled verdict is the same under every start design."""
+    if len(ivs) < 2:
+        return
+    from acid.ident.crossval import CrossValidation
+
+    cv = CrossValidation(ivs[0].model, ivs[0].channel, {}, (), tuple(ivs))
+    say("Pooled verdicts across start designs:")
+    for y, d in cv.robust.items():
+        for t, v in d.items():
+            say(f"  vs {y} at {t} s: {v}")
+
+
+def cross_validate_declared(data: Path, model_file: str, json_path: Path | None, *,
+                            starts: int, horizon: int, warmup: int, seed: int, designs,
+                            folds: int | None, hold_all: bool, to_end: bool,
+                            warm_start: str, resamples: int, method: str,
+                            max_evals: int) -> None:
+    """``acid validate --cv experiments``: leave-experiments-out cross-validation of the
+    declared model (``acid.ident.crossval.cross_validate``), printed and in --json."""
+    from acid.ident.crossval import cross_validate
+    from acid.ident.fit import METHODS
+    from acid.models import load
+
+    if method not in METHODS:
+        raise ConfigError(f"--method must be one of {', '.join(METHODS)}, got {method!r}")
+    require_range(max_evals, "--max-evals", 1, 100_000)
+    if folds is not None:
+        require_range(folds, "--cv-folds", 2, 100_000)
+    model = load(model_file)
+    ds = Dataset.from_hdf5(data, min_samples=2)
+    with progress_bar(f"cross-validate {model.name}", None) as update:
+        cv = cross_validate(model, ds, fit_options={"method": method, "max_nfev": max_evals},
+                            folds=folds, designs=designs, starts=starts, horizon=horizon,
+                            warmup=warmup, exogenous="hold" if hold_all else "measured",
+                            to_end=to_end, warm_start=warm_start, n_resamples=resamples,
+                            seed=seed, progress=update)
+    say(cv.summary())
+    write_summary(json_path, {"command": "validate", "acid_version": __version__,
+                              "inputs": {"data": str(data), "data_sha256": file_sha256(data),
+                                         "model": str(model_file)},
+                              "cross_validation": cv.to_dict()})
 
 
 def _save_figures(res, figures: Path | None) -> dict[str, str]:
@@ -386,6 +474,24 @@ def _save_figures(res, figures: Path | None) -> dict[str, str]:
     return {k: str(save_figure(f(res), figures / f"{k}.png")) for k, f in draw.items()}
 
 
+def _record_of(provenance: dict, data: Path, data_sha: str) -> tuple[int | None, int]:
+    """Which of the fit's records ``data`` is (its index in ``provenance["records"]``, None
+    when none) and how many experiments the records before it hold (the fit numbered its
+    experiments record after record)."""
+    if provenance.get("data_sha256") == data_sha:
+        return 0, 0
+    records = [Path(r) for r in provenance.get("records") or []]
+    offset = 0
+    for i, r in enumerate(records):
+        if not r.is_file():
+            return None, 0
+        if i > 0 and file_sha256(r) == data_sha:
+            return i, offset
+        part = Dataset.from_hdf5(r, min_samples=2)
+        offset += len(set(part.experiment.tolist()))
+    return None, 0
+
+
 def _fit_records(ps, data_sha: str) -> Dataset | None:
     """The records the parameters were fitted on (their provenance), when they are not the
     validation data and are all here: the yardsticks' estimation data."""
@@ -393,7 +499,13 @@ def _fit_records(ps, data_sha: str) -> Dataset | None:
     if not records or not all(r.is_file() for r in records) \
             or ps.provenance.get("data_sha256") == data_sha:
         return None
+    records = [r for r in records if file_sha256(r) != data_sha]   # never DATA itself
+    if not records:
+        return None
+    frac = ps.provenance.get("estimation_fraction")
     parts = [Dataset.from_hdf5(r, min_samples=2) for r in records]
+    if isinstance(frac, (int, float)) and 0.0 < float(frac) < 1.0:
+        parts = [p.split(float(frac))[0] for p in parts]     # their estimation part only
     est = parts[0] if len(parts) == 1 else Dataset.concatenate(parts)
     est.source = ", ".join(map(str, records))
     return est

@@ -85,6 +85,32 @@ def validate(
              "extended Kalman filter with the declared noises, as `acid fit --method pem` "
              "uses, over that stretch) or 'ekf-trip' (the filter from the start of the "
              "trip, as it would run in the car)."),
+    cv: str | None = typer.Option(
+        None, "--cv",
+        help="'experiments': leave-experiments-out cross-validation: each experiment (trip) "
+             "predicted by the model fitted without it (`acid fit` with --method and "
+             "--max-evals), the yardsticks fitted on the same training experiments; "
+             "per-experiment and pooled intervals and verdicts. Needs --model."),
+    cv_folds: int | None = typer.Option(
+        None, "--cv-folds",
+        help="With --cv: group the experiments into N folds taken in turn (fewer fits; "
+             "default one fold per experiment)."),
+    starts_design: str | None = typer.Option(
+        None, "--starts-design",
+        help="Start design(s): even, random (seeded by --seed) or non-overlapping; several "
+             "comma-separated (e.g. even,random,non-overlapping) to see whether the verdicts "
+             "hold across them (with --cv or --intervals)."),
+    intervals: bool = typer.Option(
+        False, "--intervals",
+        help="Also report 95 % bootstrap intervals (experiments, then starts) of RMSE and "
+             "p90 at every prediction time, with their counts, and the verdicts against the "
+             "yardsticks from a paired bootstrap (always on with --cv)."),
+    resamples: int = typer.Option(1000, "--resamples",
+                                  help="Bootstrap resamples of --intervals and --cv."),
+    method: str = typer.Option("auto", "--method",
+                               help="With --cv: the fit method of each fold (as `acid fit`)."),
+    max_evals: int = typer.Option(100, "--max-evals",
+                                  help="With --cv: the fit's evaluation budget (as `acid fit`)."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -113,6 +139,23 @@ def validate(
     require_range(warmup, "--warmup", 0.0, MAX_WARMUP_S, "s")
     require(warm_start in WARM_STARTS, "--warm-start",
             f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
+    designs = _designs(starts_design, placement, non_overlapping)
+    require_range(resamples, "--resamples", 10, 1_000_000)
+    if cv is not None:
+        require(cv == "experiments", "--cv", f"must be 'experiments', got {cv!r}")
+        require(model is not None, "--cv", "needs --model (the declared model to fit)")
+        from acid_cli._declared import cross_validate_declared
+
+        return cross_validate_declared(
+            data, model, json_path, starts=starts, horizon=horizon,
+            warmup=warmup_samples(warmup, _sample_time(data)), seed=seed, designs=designs,
+            folds=cv_folds, hold_all=exogenous == "hold", to_end=to_end,
+            warm_start=warm_start, resamples=resamples, method=method, max_evals=max_evals)
+    if starts_design is not None and len(designs) == 1:
+        from acid.ident.crossval import design_options
+
+        opts = design_options(designs[0])
+        placement, non_overlapping = opts["placement"], opts["non_overlapping"]
     ps = other = None
     if model is None:   # a parameter file of the paper's or the econ model names its model
         ps = load_any_params(params, allow_unstable=allow_unstable)
@@ -125,7 +168,21 @@ def validate(
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
                       non_overlapping=non_overlapping, yardsticks=yardsticks,
                       to_end=to_end, warm_start=warm_start, values=ps, beside=other,
-                      figures=out)
+                      figures=out, intervals=(designs, resamples) if intervals else None)
+
+
+def _designs(spec: str | None, placement: str, non_overlapping: bool) -> tuple[str, ...]:
+    """--starts-design as a tuple of designs (default: the one --placement and
+    --non-overlapping give)."""
+    from acid.ident.crossval import STARTS_DESIGNS
+
+    if spec is None:
+        return ("non-overlapping" if non_overlapping else placement,)
+    out = tuple(dict.fromkeys(p.strip() for p in spec.split(",") if p.strip()))
+    for d in out or ("",):
+        require(d in STARTS_DESIGNS, "--starts-design",
+                f"must be one or more of {', '.join(STARTS_DESIGNS)}, got {d!r}")
+    return out
 
 
 def warmup_samples(warmup_s: float, Ts: float) -> int:

@@ -137,3 +137,20 @@ def test_non_overlapping_and_no_yardsticks(data_file, tmp_path):
     assert d["yardsticks"] == {} and d["window_design"]["non_overlapping"]
     assert d["n_starts"] == 4
     assert not (tmp_path / "o" / "fig6b_yardsticks.png").exists()
+
+
+@pytest.mark.slow
+def test_intervals_and_start_designs(data_file, tmp_path):
+    summary = tmp_path / "s.json"
+    res = _invoke(data_file, "--starts", 25, "--horizon", 40, "--intervals", "--resamples",
+                  50, "--starts-design", "even,non-overlapping", "--out", tmp_path / "o",
+                  "--json", summary)
+    assert res.exit_code == 0, res.output
+    assert "two-level bootstrap" in res.output and "across start designs" in res.output
+    d = json.loads(summary.read_text())
+    assert [iv["design"] for iv in d["intervals"]] == ["even", "non-overlapping"]
+    fig = d["intervals"][0]["figures"][0]
+    assert fig["n_starts"] == 25 and fig["rmse_lo"] <= fig["rmse"] <= fig["rmse_hi"]
+    assert len(d["by_step"]["model"]["T_cab"]["rmse"]) == 40
+    bad = _invoke(data_file, "--starts-design", "diagonal")
+    assert bad.exit_code == 2 and "--starts-design" in bad.output

@@ -183,10 +183,30 @@ class DeclaredValidation:
             "energy": self.energy, "window_design": self.window_design,
             "settings": self.settings,
             "by_horizon": list(self.by_horizon), "notes": list(self.notes),
-            "yardsticks": {k: {n: v for n, v in y.items() if n != "rmse_by_step"}
+            "yardsticks": {k: {n: v for n, v in y.items() if n not in ("rmse_by_step", "errors")}
                            for k, y in self.yardsticks.items()},
             "by_time": self.by_time,
-            "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()}})
+            "yardsticks_by_time": {k: y["by_time"] for k, y in self.yardsticks.items()},
+            "by_step": self.by_step()})
+
+    def by_step(self) -> dict:
+        """{"model" | yardstick: {channel: {"rmse", "p90_abs", "n"}}}: lists over every
+        prediction step 1 .. horizon (the starts scored at each step), none left out."""
+        out = {"model": self.errors, **{k: y.get("errors", {})
+                                        for k, y in self.yardsticks.items()}}
+        return {k: {c: _step_stats(e) for c, e in errs.items()} for k, errs in out.items()}
+
+
+def _step_stats(e: np.ndarray) -> dict:
+    """RMSE, p90 |e| and count of the finite errors at each step (column) of ``e``."""
+    ok = np.isfinite(e)
+    n = ok.sum(axis=0)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        r = np.sqrt(np.nanmean(np.where(ok, e, np.nan) ** 2, axis=0))
+        p = np.nanpercentile(np.abs(np.where(ok, e, np.nan)), 90, axis=0)
+    return {"rmse": r.tolist(), "p90_abs": p.tolist(),
+            "n": n.astype(int).tolist()}
 
 
 def window_design_text(d: dict) -> str:
@@ -544,7 +564,9 @@ def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, ste
                                           for j, (_, n) in enumerate(use)}} for h in steps],
             "by_time": by_time({n: e[..., j] for j, (_, n) in enumerate(use)}, model.Ts),
             "rmse_by_step": {n: np.sqrt(np.nanmean(e[..., j] ** 2, axis=0))
-                             for j, (_, n) in enumerate(use)}}
+                             for j, (_, n) in enumerate(use)},
+            # (starts, horizon) errors on the model's windows (paired comparisons)
+            "errors": {n: e[..., j] for j, (_, n) in enumerate(use)}}
     return out
 
 
