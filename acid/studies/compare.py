@@ -166,13 +166,18 @@ def families(quick: bool = False, econ: bool = True) -> tuple[Family, ...]:
 
 @dataclass(frozen=True)
 class RunSettings:
-    """What every run shares: cabin set-point and comfort band (K), periodic tolerance."""
+    """What every run shares: cabin set-point and comfort band (K); the periodic state's
+    tolerances on the distance still to go (extrapolated from the last two passes): cabin,
+    interior and shell temperatures ``tol_K`` (K), cabin humidity ``tol_w`` (kg/kg), the
+    pass energy ``tol_E`` (relative)."""
 
     T_set: float = C2K(24.0)
     T_low: float = C2K(23.0)
     T_high: float = C2K(25.0)
     tol_K: float = 0.01
-    max_passes: int = 25
+    tol_w: float = 1e-5
+    tol_E: float = 5e-4
+    max_passes: int = 400
     econ_horizon_s: float = 60.0
 
 
@@ -255,16 +260,26 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     plant = HifiPlant(pcfg, mode="nominal" if nominal else "direct")
     plant.reset(start if start is not None else sc.start())
     prev = plant_state(plant)
-    first = math.nan
-    res = math.inf
+    first = E_prev = math.nan
+    res, last = math.inf, {}
     for p in range(1, settings.max_passes + 1):
         E, T, rh = _pass(plant, ctrl, drive, settings.T_set)
         if p == 1:
             first = E
         now = plant_state(plant)
-        res = max(abs(now[k] - prev[k]) for k in PERIODIC_KEYS if k in now)
-        prev = now
-        if res < settings.tol_K:
+        steps = {"T": max(abs(now[k] - prev[k]) for k in PERIODIC_KEYS if k in now),
+                 "w": abs(now["w_cab"] - prev["w_cab"]) * settings.tol_K / settings.tol_w,
+                 "E": abs(E - E_prev) / abs(E) * settings.tol_K / settings.tol_E
+                 if p > 1 and E else math.inf}
+        # distance to the periodic state: a slow mode contracting by rho per pass leaves
+        # step * rho / (1 - rho) still to go (rho from the last two passes), each quantity
+        # scaled to the temperature tolerance
+        res = 0.0
+        for q, st in steps.items():
+            rho = min(0.99, st / last[q]) if last.get(q, 0) > 0 else 0.99
+            res = max(res, st * max(1.0, rho / (1.0 - rho)))
+        prev, last, E_prev = now, steps, E
+        if p >= 3 and res < settings.tol_K:
             break
     out = np.maximum(0.0, np.maximum(T - settings.T_high, settings.T_low - T))
     return PeriodicRun(sc.name, family, float(knob), E, float(np.sum(out) * drive.Ts / 60.0),
