@@ -66,3 +66,7 @@ app.command(name="examples")(examples.examples)
 from acid_cli import year_sweep  # noqa: E402
 
 app.command(name="year-sweep")(year_sweep.year_sweep)
+
+from acid_cli import compare  # noqa: E402
+
+app.command(name="compare")(compare.compare)
