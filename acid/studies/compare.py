@@ -278,12 +278,13 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
                  "E": abs(E - E_prev) / abs(E) * settings.tol_K / settings.tol_E
                  if p > 1 and E else math.inf}
         # distance to the periodic state: a slow mode contracting by rho per pass leaves
-        # step * rho / (1 - rho) still to go (rho from the last two passes), each quantity
-        # scaled to the temperature tolerance
+        # step * rho / (1 - rho) still to go (rho from the last two passes, the factor at
+        # most 20); a step no smaller than the last is the loops' cycling, not a slow mode
+        # (factor 1); each quantity scaled to the temperature tolerance
         res = 0.0
         for q, st in steps.items():
-            rho = min(0.99, st / last[q]) if last.get(q, 0) > 0 else 0.99
-            res = max(res, st * max(1.0, rho / (1.0 - rho)))
+            rho = st / last[q] if last.get(q, 0) > 0 else 0.95
+            res = max(res, st * (min(20.0, max(1.0, rho / (1.0 - rho))) if rho < 1 else 1.0))
         prev, last, E_prev = now, steps, E
         if p >= 3 and res < settings.tol_K:
             break
