@@ -188,7 +188,9 @@ def _controller(family: str, knob: float, settings: RunSettings, cfg, drive, eco
 
     p_atm = float(getattr(cfg, "p_atm", P_ATM))
     if family in ("F", "own"):
-        c = cfg if family == "own" else cfg.replace(T_ew_set=float(knob))
+        # the plant's low-load reset range widened only as far as the knob needs
+        c = cfg if family == "own" else cfg.replace(
+            T_ew_set=float(knob), T_ew_set_max=max(cfg.T_ew_set_max, float(knob) + 0.5))
         return True, None, c
     if family == "Fs":
         return False, PlantPI(cfg, drive.Ts, settings.T_set, float(knob), p_atm), cfg
