@@ -41,7 +41,8 @@ def compare(
                               help="Include the economic NMPC family E."),
     seed: int = typer.Option(0, "--seed", help="Seed of the split and of the bootstrap."),
     quick: bool = typer.Option(False, "--quick",
-                               help="Fewer knob values and a 400 s stop-and-go (tests)."),
+                               help="Fewer knob values, a 160 s stop-and-go, looser periodic "
+                                    "tolerances (0.05 K, 0.2 % of the pass energy)."),
     jobs: int = typer.Option(1, "--jobs", min=1, max=256,
                              help="Worker processes (Dask; 1: in this process)."),
     plant_config: Path | None = typer.Option(None, "--plant-config",
@@ -71,7 +72,7 @@ def compare(
         require(c in available_cycles(), "--cycle",
                 f"unknown cycle {c!r} (available: {', '.join(available_cycles())})")
     line = timed_lines("compare")
-    sset = cmp.default_set(cycles, ambients, seed=seed, stopgo_s=400.0 if quick else 800.0,
+    sset = cmp.default_set(cycles, ambients, seed=seed, stopgo_s=160.0 if quick else 800.0,
                            vehicle=None if plant_config is None else str(plant_config))
     say(f"training: {', '.join(s.name for s in sset.training)}")
     say(f"held out: {', '.join(s.name for s in sset.held_out)} ({sset.rule})")
@@ -88,7 +89,8 @@ def compare(
             params, _ = identify_econ(default_plant_factory(), identify_duration, seed=seed)
     fams = cmp.families(quick=quick, econ=econ)
     with open_executor(jobs, notice=line) as ex:
-        result = cmp.compare(sset, fams, econ=params, seed=seed,
+        result = cmp.compare(sset, fams, cmp.QUICK if quick else cmp.RunSettings(),
+                             econ=params, seed=seed,
                              executor=None if jobs == 1 else ex, progress=line)
     say(f"comfort level: {result.comfort_level_Kmin:.2f} K min per pass outside "
         f"{result.settings['T_low'] - 273.15:g}-{result.settings['T_high'] - 273.15:g} degC "

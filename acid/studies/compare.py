@@ -181,6 +181,10 @@ class RunSettings:
     econ_horizon_s: float = 60.0
 
 
+#: ``--quick``: looser periodic tolerances (tests and smoke runs)
+QUICK = RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30)
+
+
 def _controller(family: str, knob: float, settings: RunSettings, cfg, drive, econ):
     """(nominal, controller or None, plant config) for one family and knob."""
     from acid.mpc.pi_baselines import CoilReset, PlantPI
