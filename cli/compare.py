@@ -107,10 +107,11 @@ def compare(
                 ["_family", "_what", "knob", "MJ/pass", "K min", "RH %"], rows)
     print_table(f"verdicts on held out ({len(sset.held_out)} scenarios, seed {seed})",
                 ["_candidate vs baseline", "saving %", "bootstrap 95 %", "paired t 95 %",
-                 "_verdict"],
+                 "dK min", "dT_cab K", "_verdict"],
                 [[f"{v.candidate} vs {v.baseline}", f"{v.mean_pct:+.2f}",
                   f"[{v.boot_lo:+.2f}, {v.boot_hi:+.2f}]", f"[{v.t_lo:+.2f}, {v.t_hi:+.2f}]",
-                  v.word] for v in result.verdicts])
+                  f"{v.discomfort_gap_Kmin:+.2f}", f"{v.T_cab_gap_K:+.2f}", v.word]
+                 for v in result.verdicts])
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         cmp.plot_fronts(result, out / "fronts.png")

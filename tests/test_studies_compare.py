@@ -111,3 +111,12 @@ def test_compare_result_round_trips_json():
     assert back.to_dict() == r.to_dict()
     assert "held out: stopgo@36C" in r.summary() and "CompareResult(" in repr(r)
     assert "not resolved" in repr(r.verdicts[0])
+
+
+def test_a_saving_bought_with_comfort_is_not_read_as_one():
+    names, base = list("12345"), [2.0, 2.1, 2.2, 2.3, 2.4]
+    assert cmp.verdict("a", "b", names, [1.0] * 5, base).word == cmp.SAVES
+    assert cmp.verdict("a", "b", names, [1.0] * 5, base, T_cab_gap_K=0.3).word == cmp.UNEQUAL
+    assert cmp.verdict("a", "b", names, [1.0] * 5, base,
+                       discomfort_gap_Kmin=2.0).word == cmp.UNEQUAL
+    assert cmp.verdict("b", "a", names, base, [1.0] * 5, T_cab_gap_K=0.3).word == cmp.COSTS

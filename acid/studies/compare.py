@@ -50,6 +50,11 @@ DEFAULT_AMBIENTS_C = (30.0, 38.0)
 PERIODIC_KEYS = ("T_cab", "T_int", "T_int_slow", "T_shell")
 SAVES, NONE, COSTS, UNRESOLVED = ("saves", "no resolvable difference", "costs",
                                   "not resolved")
+UNEQUAL = "not at equal comfort"
+#: comfort gaps beyond which a saving is not read (candidate minus baseline, held-out mean):
+#: discomfort, K min per pass, and mean cabin temperature, K (0.02 K is about 0.1 % energy)
+MAX_DISCOMFORT_GAP_KMIN = 0.1
+MAX_WARMER_K = 0.05
 
 
 # ------------------------------------------------------------------------------ scenarios
@@ -318,12 +323,15 @@ class Verdict:
     word: str
     n_boot: int
     seed: int
+    discomfort_gap_Kmin: float = 0.0
+    T_cab_gap_K: float = 0.0
 
     def summary(self) -> str:
         return (f"{self.candidate} vs {self.baseline}: {self.mean_pct:+.2f} % "
                 f"[{self.boot_lo:+.2f}, {self.boot_hi:+.2f}] bootstrap 95 %, "
-                f"[{self.t_lo:+.2f}, {self.t_hi:+.2f}] paired t, n = {len(self.scenarios)}: "
-                f"{self.word}")
+                f"[{self.t_lo:+.2f}, {self.t_hi:+.2f}] paired t, n = {len(self.scenarios)}, "
+                f"comfort gap {self.discomfort_gap_Kmin:+.2f} K min, mean T_cab "
+                f"{self.T_cab_gap_K:+.2f} K: {self.word}")
 
     def __repr__(self) -> str:
         return f"Verdict({self.summary()})"
@@ -336,7 +344,8 @@ class Verdict:
         d = dict(d)
         d["scenarios"] = tuple(d["scenarios"])
         d["savings_pct"] = tuple(_num(x) for x in d["savings_pct"])
-        for k in ("mean_pct", "boot_lo", "boot_hi", "t_lo", "t_hi"):
+        for k in ("mean_pct", "boot_lo", "boot_hi", "t_lo", "t_hi", "discomfort_gap_Kmin",
+                  "T_cab_gap_K"):
             d[k] = _num(d[k])
         return cls(**d)
 
@@ -379,9 +388,13 @@ def paired_t(diff: Sequence[float], level: float = 0.95) -> tuple[float, float]:
 
 def verdict(candidate: str, baseline: str, names: Sequence[str], e_cand: Sequence[float],
             e_base: Sequence[float], seed: int = 0, n_boot: int = 10000,
-            min_scenarios: int = MIN_SCENARIOS) -> Verdict:
+            min_scenarios: int = MIN_SCENARIOS, discomfort_gap_Kmin: float = 0.0,
+            T_cab_gap_K: float = 0.0) -> Verdict:
     """The verdict word from the bootstrap interval (and the t interval: both must agree
-    for "saves" or "costs"); fewer than ``min_scenarios`` pairs: "not resolved"."""
+    for "saves" or "costs"); fewer than ``min_scenarios`` pairs: "not resolved"; a candidate
+    less comfortable than the baseline (held-out discomfort more than
+    ``MAX_DISCOMFORT_GAP_KMIN`` above, or a mean cabin more than ``MAX_WARMER_K`` warmer)
+    that would "save" or show no difference: "not at equal comfort"."""
     eb, ec = np.asarray(e_base, float), np.asarray(e_cand, float)
     s = 100.0 * (eb - ec) / eb
     lo, hi = paired_bootstrap(s, seed, n_boot)
@@ -394,8 +407,12 @@ def verdict(candidate: str, baseline: str, names: Sequence[str], e_cand: Sequenc
         word = COSTS
     else:
         word = NONE
+    if word in (SAVES, NONE) and (discomfort_gap_Kmin > MAX_DISCOMFORT_GAP_KMIN
+                                  or T_cab_gap_K > MAX_WARMER_K):
+        word = UNEQUAL
     return Verdict(candidate, baseline, tuple(names), tuple(float(x) for x in s),
-                   float(s.mean()), lo, hi, tlo, thi, word, int(n_boot), int(seed))
+                   float(s.mean()), lo, hi, tlo, thi, word, int(n_boot), int(seed),
+                   float(discomfort_gap_Kmin), float(T_cab_gap_K))
 
 
 # ------------------------------------------------------------------------------ the study
@@ -554,11 +571,22 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
     pairs += [(k, "F") for k in keys if k not in ("F", candidate)]
     if "own" in keys and "F" in keys:
         pairs.append(("F", "own"))
-    verdicts = tuple(verdict(c, b, names, [by[c, n].energy_J for n in names],
-                             [by[b, n].energy_J for n in names], seed, n_boot, min_scenarios)
-                     for c, b in pairs)
+    verdicts = tuple(judge(by, names, c, b, seed, n_boot, min_scenarios) for c, b in pairs)
     return CompareResult(scenarios, float(level), tuple(fronts), tuned, tuple(hruns),
                          verdicts, _json_safe(dataclasses.asdict(settings)))
+
+
+def judge(by: dict, names: Sequence[str], c: str, b: str, seed: int = 0, n_boot: int = 10000,
+          min_scenarios: int = MIN_SCENARIOS) -> Verdict:
+    """:func:`verdict` of family ``c`` against ``b`` from held-out runs keyed
+    ``(family, scenario)``, with their comfort gaps."""
+    def gap(attr):
+        return float(np.mean([getattr(by[c, n], attr) - getattr(by[b, n], attr)
+                              for n in names]))
+
+    return verdict(c, b, names, [by[c, n].energy_J for n in names],
+                   [by[b, n].energy_J for n in names], seed, n_boot, min_scenarios,
+                   gap("discomfort_Kmin"), gap("mean_T_cab"))
 
 
 def plot_fronts(result: CompareResult, path) -> None:
