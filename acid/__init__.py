@@ -69,8 +69,8 @@ _API = {
     "validate_model": ("acid.ident.validate", "validate_model"),
     # control
     "NMPC": ("acid.control.nmpc", "NMPC"), "NMPCConfig": ("acid.control.nmpc", "NMPCConfig"),
-    "closed_loop": ("acid.studies.scenarios", "closed_loop"),
-    "mpc_check": ("acid.studies.scenarios", "mpc_check"),
+    "closed_loop": ("acid.studies.mpc_check.scenarios", "closed_loop"),
+    "mpc_check": ("acid.studies.mpc_check.scenarios", "mpc_check"),
 }
 
 __all__ = ["__version__", *_API]

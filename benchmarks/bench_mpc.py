@@ -44,7 +44,7 @@ import numpy as np
 
 from acid.control.nmpc import NMPC, NMPCConfig
 from acid.models.params import ModelParams, paper
-from acid.studies.scenarios import (
+from acid.studies.mpc_check.scenarios import (
     BOUND_STEPS,
     MODEL_T_INT,
     MODEL_T_SHELL,

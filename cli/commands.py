@@ -70,3 +70,7 @@ def register(app) -> None:
     from acid_cli import day
 
     app.command(name="day")(day.day)
+
+    from acid_cli import compare
+
+    app.command(name="compare")(compare.compare)

@@ -15,8 +15,8 @@ from acid.control.nmpc import SOLVERS, NMPCConfig
 from acid.errors import ConfigError
 from acid.models.params import load_params
 from acid.paper import STUDIES
-from acid.studies.scenarios import PLANT_BACKOFF
-from acid.studies.scenarios import mpc_check as run_check
+from acid.studies.mpc_check.scenarios import PLANT_BACKOFF
+from acid.studies.mpc_check.scenarios import mpc_check as run_check
 from acid.units import K2C
 from acid_cli._common import (
     check_paths,

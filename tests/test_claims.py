@@ -227,7 +227,7 @@ def test_the_plant_violation_has_one_criterion_for_the_claim_and_mpc_check():
     mpc-check calls it FAIL: both read the registry's limit."""
     from acid.claims import judge_value
     from acid.claims.registry import PLANT_VIOLATION_TOL_K
-    from acid.studies import scenarios
+    from acid.studies.mpc_check import scenarios
 
     assert scenarios.PLANT_TOL_K == claim("nmpc.plant.violation").rule.limit
     assert scenarios.PLANT_TOL_K == PLANT_VIOLATION_TOL_K

@@ -11,7 +11,7 @@ from acid.control.econ.best_plan import PlanConfig, best_known_plan
 from acid.errors import ConfigError, ExtrapolationWarning
 from acid.models import econ as econ_decl
 from acid.plant.declared import econ_plant
-from acid.studies.scenarios import stop_and_go_cycle
+from acid.studies.mpc_check.scenarios import stop_and_go_cycle
 from acid.units import C2K
 
 V = stop_and_go_cycle(np.arange(48) * 5.0 + 2.5)          # 240 s of stop-and-go

@@ -66,7 +66,7 @@ def test_nmpc_with_offset_free_prediction_rides_the_bound_on_a_biased_plant():
         plant.step = step
         return plant
 
-    from acid.studies.scenarios import closed_loop
+    from acid.studies.mpc_check.scenarios import closed_loop
 
     dist = {"T_int": C2K(30.0), "T_shell": C2K(33.0)}
     n, bound = 30, C2K(25.0)

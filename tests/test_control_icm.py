@@ -7,7 +7,7 @@ import pytest
 
 from acid.control.icm import ICMConfig, icm_upper_bound, speed_target
 from acid.errors import ConfigError
-from acid.studies.scenarios import stop_and_go_profile
+from acid.studies.mpc_check.scenarios import stop_and_go_profile
 from acid.units import C2K
 
 

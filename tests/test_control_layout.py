@@ -70,7 +70,7 @@ def test_the_nmpc_holds_its_plans_end_arc_for_fewer_iterations_and_the_same_move
     """The paper's plans end in an arc tied to the horizon's end: a warm start that keeps it
     in place needs fewer SQP iterations (deterministic, CasADi's count) for the same moves."""
     from acid.control.nmpc import NMPCConfig
-    from acid.studies.scenarios import run_model_scenario
+    from acid.studies.mpc_check.scenarios import run_model_scenario
 
     moves, iterations = {}, {}
     for hold in (0, 2):

@@ -13,7 +13,7 @@ from acid.control.nmpc import NMPC, NMPCConfig
 from acid.errors import ConfigError, DataError, SolverWarning
 from acid.models.params import paper
 from acid.plant import ModelPlant
-from acid.studies.scenarios import (
+from acid.studies.mpc_check.scenarios import (
     BOUND_STEPS,
     MODEL_T_INT,
     MODEL_T_SHELL,
@@ -312,7 +312,7 @@ def test_cav_scenario_case1_saves_energy():
 
 
 def test_plant_scenarios_are_skipped_plainly_without_the_hifi_plant(monkeypatch):
-    import acid.studies.scenarios as sc
+    import acid.studies.mpc_check.scenarios as sc
 
     monkeypatch.setattr(sc, "hifi_available", lambda: "high-fidelity plant not available")
     for fn in (run_plant_scenario, run_cav_scenario):

@@ -100,7 +100,7 @@ def test_speed_sweep_through_the_fmu_runs_its_nominal_controller(exported_fmu):
 
 def test_closed_loop_scenario_on_the_fmu_equals_the_native_plant(exported_fmu):
     from acid.models.params import paper
-    from acid.studies.scenarios import run_plant_scenario
+    from acid.studies.mpc_check.scenarios import run_plant_scenario
 
     fmu, fmu_map = exported_fmu
     native = run_plant_scenario(paper(), duration_s=40.0)

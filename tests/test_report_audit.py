@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 from acid.report.audit import audit_figure
 from acid.report.figures import read_figure_index, save_report_figure, write_figure_index
 from acid.report.mpc import closed_loop_figure
-from acid.studies.scenarios import ClosedLoopRun, ScenarioResult
+from acid.studies.mpc_check.scenarios import ClosedLoopRun, ScenarioResult
 from acid.units import C2K
 
 

@@ -1,7 +1,8 @@
 """Closed loops against stored references (``tests/references/closed_loop.json``).
 
 If a change to the plant, the model or the controller moves these numbers on purpose, run
-``python -m acid.studies.regression --update`` and commit the new reference with the change.
+``python -m acid.studies.mpc_check.regression --update`` and commit the new reference with the
+change.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ import copy
 
 import pytest
 
-from acid.studies.regression import REFERENCE_FILE, compare, load, measure
+from acid.studies.mpc_check.regression import REFERENCE_FILE, compare, load, measure
 
 pytestmark = pytest.mark.slow
 
@@ -29,7 +30,8 @@ def measured() -> dict:
 def test_closed_loops_match_the_stored_references(stored, measured):
     bad = [d.describe() for d in compare(stored, measured) if not d.ok]
     assert not bad, ("closed loops drifted from tests/references/closed_loop.json (if "
-                     "intended: python -m acid.studies.regression --update):\n" + "\n".join(bad))
+                     "intended: python -m acid.studies.mpc_check.regression --update):\n"
+                     + "\n".join(bad))
 
 
 def test_references_cover_every_scenario_with_a_2_percent_energy_tolerance(stored):

@@ -377,7 +377,7 @@ class MpcStage(StageResult):
 
     @classmethod
     def of(cls, check) -> MpcStage:
-        """From an :class:`acid.studies.scenarios.CheckResult`."""
+        """From an :class:`acid.studies.mpc_check.scenarios.CheckResult`."""
         sc = {k: s.to_json_dict() for k, s in check.scenarios.items()}
 
         def loop(d: dict) -> ClosedLoopSummary:

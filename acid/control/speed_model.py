@@ -251,8 +251,8 @@ class SpeedAwareNMPC(NMPC):
     that the compressor/blower trade-off of the paper's model is unchanged and ``eta1 = 0``
     gives exactly the paper's NMPC. Everything else (constraints, slacks, solver, fallback)
     is :class:`acid.control.nmpc.NMPC`; ``make_step`` has the same signature, so
-    :func:`acid.studies.scenarios.closed_loop` drives it unchanged (its ``reset`` rewinds the
-    preview to step 0).
+    :func:`acid.studies.mpc_check.scenarios.closed_loop` drives it unchanged (its ``reset``
+    rewinds the preview to step 0).
 
     Parameters
     ----------

@@ -12,7 +12,7 @@ from acid.control.estimator import (  # noqa: F401
 from acid.control.icm import ICMConfig, icm_upper_bound, speed_target  # noqa: F401
 from acid.control.nmpc import NMPC, MPCSolution, NMPCConfig, StepLog  # noqa: F401
 from acid.errors import MovedWarning
-from acid.studies.scenarios import (  # noqa: F401
+from acid.studies.mpc_check.scenarios import (  # noqa: F401
     CheckResult,
     ClosedLoopRun,
     ScenarioResult,

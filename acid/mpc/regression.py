@@ -1,4 +1,4 @@
-"""Moved to :mod:`acid.studies.regression`: this alias warns, and goes in the next
+"""Moved to :mod:`acid.studies.mpc_check.regression`: this alias warns, and goes in the next
 release."""
 
 from acid._compat import alias

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 
 from acid.numbers import format_number
 from acid.paper import STUDIES
-from acid.studies.scenarios import ScenarioResult
+from acid.studies.mpc_check.scenarios import ScenarioResult
 from acid.units import K2C
 
 _BOUND = {"color": "tab:red", "linestyle": ":", "linewidth": 1.4}

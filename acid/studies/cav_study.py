@@ -271,7 +271,7 @@ class Scenario:
 def make_scenario(cycle: str, Ts: float, T_amb: float, stopgo_s: float = 800.0) -> Scenario:
     """The speed profile of a cycle name and a constant ambient (K)."""
     if cycle == STOPGO:
-        from acid.studies.scenarios import stop_and_go_cycle
+        from acid.studies.mpc_check.scenarios import stop_and_go_cycle
 
         n = int(round(stopgo_s / Ts))
         v = stop_and_go_cycle(np.arange(n) * Ts + 0.5 * Ts)
@@ -397,7 +397,7 @@ class _PaperBound:
                                   meas["T_int"], meas["T_shell"], T_amb=meas["T_amb"])
 
 
-class _Econ:
+class EconPreview:
     """The economic NMPC with the cycle's speed and ambient per interval (D, E).
 
     ``setting`` is what the study tunes to the target mean: the band's upper edge (K), or,
@@ -1109,7 +1109,7 @@ def _study_cycle(params, econ, cycle, config, plant_factory, controllers, progre
             if config.comfort_weight > 0:
                 lo, first = config.T_low - 2.0, _comfort_reference(econ_ctl, config, sc,
                                                                    runner.target)
-            results[key] = runner.tuned(key, partial(_Econ, mpc, sc), lo, config.T_high,
+            results[key] = runner.tuned(key, partial(EconPreview, mpc, sc), lo, config.T_high,
                                         start=first)
     if config.baselines:
         if "P" in controllers:

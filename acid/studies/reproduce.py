@@ -175,7 +175,7 @@ def stage_mpc(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """acid mpc-check with the identified parameters (paper Figs. 7-10)."""
     from acid.models.params import ModelParams
     from acid.report.mpc import mpc_figures
-    from acid.studies.scenarios import mpc_check
+    from acid.studies.mpc_check.scenarios import mpc_check
 
     params = ModelParams.from_json(inputs["fit"] / "params.json")
     res = mpc_check(params, timing_repeats=config["timing_repeats"], progress=progress)

@@ -13,7 +13,8 @@ held-out scenario (%, or any unit: the verdict is about the sign), and returns a
   ``min_count`` scenarios (no interval is computed from so few). The t-interval decides by
   default (``decide="t"``: it is the wider of the two for the small counts of a study); the
   bootstrap is reported so a reader can see when the two disagree (``agree``), and decides
-  with ``decide="bootstrap"`` (skewed savings over many scenarios).
+  with ``decide="bootstrap"`` (skewed savings over many scenarios); ``decide="both"`` reads
+  "saves" or "costs" only when both intervals exclude zero on the same side.
 
 Reference: B. Efron and R. J. Tibshirani, *An Introduction to the Bootstrap*, Chapman & Hall,
 1993, ch. 13 (percentile intervals) and ch. 15 (paired comparisons).
@@ -91,8 +92,8 @@ def paired_verdict(values: Iterable[float | None], *, level: float = 0.95,
 
     if not 0.5 < level < 1.0:
         raise ValueError(f"level must lie in (0.5, 1), got {level!r}")
-    if decide not in ("t", "bootstrap"):
-        raise ValueError(f"decide must be 't' or 'bootstrap', got {decide!r}")
+    if decide not in ("t", "bootstrap", "both"):
+        raise ValueError(f"decide must be 't', 'bootstrap' or 'both', got {decide!r}")
     x = np.asarray([float(v) for v in values if v is not None and math.isfinite(float(v))])
     n = int(x.size)
     if n < max(min_count, 2):
@@ -104,5 +105,7 @@ def paired_verdict(values: Iterable[float | None], *, level: float = 0.95,
     boot = x[rng.integers(0, n, size=(n_boot, n))].mean(axis=1)
     a = 100.0 * (1.0 - level) / 2.0
     b_lo, b_hi = (float(v) for v in np.percentile(boot, [a, 100.0 - a]))
-    words = _words(m - h, m + h) if decide == "t" else _words(b_lo, b_hi)
+    w_t, w_b = _words(m - h, m + h), _words(b_lo, b_hi)
+    words = {"t": w_t, "bootstrap": w_b}.get(decide) or (
+        w_t if w_t == w_b else "no resolvable difference")
     return Verdict(n, m, m - h, m + h, b_lo, b_hi, level, words, decided_by=decide)

@@ -16,7 +16,7 @@ import numpy as np
 from acid.control.nmpc import NMPC, NMPCConfig
 from acid.models.params import ModelParams
 from acid.plant.config import PlantConfig
-from acid.studies.scenarios import ClosedLoopRun, closed_loop
+from acid.studies.mpc_check.scenarios import ClosedLoopRun, closed_loop
 from acid.studies.sweep.conditions import Conditions
 
 #: horizon of the NMPC that runs the common warm-up and the tails (paper Table II)

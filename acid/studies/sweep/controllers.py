@@ -327,7 +327,7 @@ class NominalController:
         self.config = config
 
     def run(self, ctx: ScenarioContext) -> ControllerRun:
-        from acid.studies.scenarios import ClosedLoopRun
+        from acid.studies.mpc_check.scenarios import ClosedLoopRun
         from acid.studies.sweep.context import plant_state
 
         T_ew_set = C2K(self.config.T_evap_set_C)
@@ -479,7 +479,7 @@ def direct_loop(ctx: ScenarioContext, plant, make_step, label: str, T_cab_max: f
     """``u = make_step(measure(), k); plant.step(u)`` from the scenario's start over its
     speed, recorded as a :class:`ControllerRun` (``info["w_cab"]``: the cabin humidity
     ratio at the sample instants, kg/kg)."""
-    from acid.studies.scenarios import ClosedLoopRun
+    from acid.studies.mpc_check.scenarios import ClosedLoopRun
     from acid.studies.sweep.context import plant_state
 
     plant.reset(ctx.start)

@@ -135,7 +135,7 @@ def warm_start(ctx: ScenarioContext, seconds: float) -> dict | None:
     """The common start: the plant after ``seconds`` of the paper NMPC on a constant bound
     at the set-point, at the cycle's mean speed, from the hot soak (None when 0)."""
     from acid.control.nmpc import NMPC
-    from acid.studies.scenarios import closed_loop
+    from acid.studies.mpc_check.scenarios import closed_loop
 
     n_w = int(round(seconds / ctx.Ts))
     if n_w <= 0:

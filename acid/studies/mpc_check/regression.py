@@ -10,7 +10,7 @@ first step and at the first step (K) and the first move (W_bl kg/s, T_evap_set K
 ``tests/test_regression_references.py`` fails when a closed loop drifts beyond them (an
 energy by more than 2 %). When a change is intended (a new plant, a new controller), run::
 
-    python -m acid.studies.regression --update
+    python -m acid.studies.mpc_check.regression --update
 
 which re-measures, prints what changed against the stored file, and rewrites it (keeping the
 stored tolerances); commit the diff with the change that caused it.
@@ -30,7 +30,7 @@ from acid._io import write_json
 from acid.numbers import format_number
 
 #: the stored references of a source checkout
-REFERENCE_FILE = Path(__file__).resolve().parents[2] / "tests" / "references" / "closed_loop.json"
+REFERENCE_FILE = Path(__file__).resolve().parents[3] / "tests" / "references" / "closed_loop.json"
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,7 @@ def _run_numbers(run, window=None) -> dict[str, float]:
 def measure(plant_duration_s: float = 60.0) -> dict[str, dict[str, float]]:
     """{case: {quantity: value}} of the short reference runs (paper parameters, defaults)."""
     from acid.models.params import paper
-    from acid.studies.scenarios import (
+    from acid.studies.mpc_check.scenarios import (
         cav_scenario,
         make_hifi,
         run_cav_comparison,
@@ -146,17 +146,17 @@ def load(path: Path = REFERENCE_FILE) -> dict:
 def reference_dict(measured: dict[str, dict[str, float]], tolerances: dict[str, Tolerance]
                    ) -> dict:
     """The JSON written to the reference file."""
-    return {"generated_by": "python -m acid.studies.regression --update",
+    return {"generated_by": "python -m acid.studies.mpc_check.regression --update",
             "acid_version": __version__,
             "about": "short closed loops of acid mpc-check with the paper's parameters "
-                     "(acid.studies.regression.measure); energies MJ, violations K, first moves "
-                     "kg/s and K",
+                     "(acid.studies.mpc_check.regression.measure); energies MJ, violations K, "
+                     "first moves kg/s and K",
             "tolerances": {k: {"rel": t.rel, "abs": t.abs} for k, t in tolerances.items()},
             "cases": measured}
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m acid.studies.regression",
+    ap = argparse.ArgumentParser(prog="python -m acid.studies.mpc_check.regression",
                                  description="Check (default) or --update the stored "
                                              "closed-loop regression references.")
     ap.add_argument("--update", action="store_true", help="rewrite the reference file")

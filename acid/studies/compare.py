@@ -1,0 +1,609 @@
+"""The comparison engine: verdicts on controller energy that survive resampling.
+
+Protocol (kelvin inside, degC at the edges):
+
+1. **Scenario sets.** A :class:`Scenario` is a drive cycle
+   (``acid.studies.cav_study.make_scenario``, ``stopgo`` included), an ambient, solar
+   irradiance, ambient RH, an initial soak, a seed and a vehicle (plant configuration).
+   :func:`default_set` crosses cycles with ambients and splits them deterministically: for
+   each cycle a coin of ``numpy.random.default_rng(seed)`` sends one ambient to the training set (knobs tuned there) and the other to the held-out set (judged
+   there), so every cycle, stop-and-go included, is in both sets.
+2. **Periodic steady state.** Each run repeats the scenario's cycle from its soak until the
+   plant's cabin, interior (fast and slow) and shell temperatures at the end of a pass differ
+   from the previous pass's by less than ``tol_K`` (default 0.01 K); the energy (compressor +
+   blower) of the last pass is the figure, so no end state needs charging. Passes are reported.
+3. **Families with one knob each.** ``F``: fixed coil, run by the plant's own loops (the
+   plant's nominal mode: blower PI and compressor PI at the plant's internal step) with the
+   coil set-point as knob; ``Fs``: acid's sampled fixed-coil PI of ``acid cav-study``
+   (:class:`acid.control.pi_baselines.PlantPI`, blower PI at the 5 s sample), same knob; ``P``:
+   production coil reset (:class:`acid.control.pi_baselines.CoilReset`), knob its warm coil
+   ``T_warm``; ``own``: the plant's own loops at its configured coil (no knob); ``E``:
+   economic NMPC with speed preview, knob its comfort weight. Every family is swept on the
+   training set to a front (mean energy vs mean discomfort); the knob that meets the common
+   comfort level at least energy (linear interpolation between swept knobs) is then judged.
+4. **Verdicts.** Paired differences per held-out scenario (baseline minus candidate, percent
+   of the baseline: positive = the candidate saves), a seeded paired bootstrap 95 % interval
+   with the paired t interval beside it. Words from the interval: "saves" (above 0),
+   "costs" (below 0), "no resolvable difference" (straddles 0); fewer than
+   ``MIN_SCENARIOS`` held-out scenarios: "not resolved".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acid.errors import ConfigError
+from acid.studies.verdict import paired_verdict
+from acid.units import C2K
+
+#: fewest held-out scenarios a verdict word other than "not resolved" needs
+MIN_SCENARIOS = 5
+#: default cycles and ambients (degC) of the default scenario set
+DEFAULT_CYCLES = ("udds", "sc03", "hwfet", "us06", "stopgo")
+DEFAULT_AMBIENTS_C = (30.0, 38.0)
+#: the temperatures whose repetition between passes defines the periodic steady state
+PERIODIC_KEYS = ("T_cab", "T_int", "T_int_slow", "T_shell")
+SAVES, NONE, COSTS, UNRESOLVED = ("saves", "no resolvable difference", "costs",
+                                  "not resolved")
+UNEQUAL = "not at equal comfort"
+#: comfort gaps beyond which a saving is not read (candidate minus baseline, held-out mean):
+#: discomfort, K min per pass, and mean cabin temperature, K (0.02 K is about 0.1 % energy)
+MAX_DISCOMFORT_GAP_KMIN = 0.1
+MAX_WARMER_K = 0.05
+
+
+# ------------------------------------------------------------------------------ scenarios
+@dataclass(frozen=True)
+class Scenario:
+    """One driving situation (degC and percent at the edges, stored in K and fractions).
+
+    ``soak_K`` None: the plant's own initial state; otherwise cabin, interior and shell all
+    start at this temperature. ``vehicle`` is a plant configuration path or vehicle name
+    (None: the default plant). ``stopgo_s`` is the stop-and-go cycle's length.
+    """
+
+    cycle: str
+    T_amb: float
+    G_solar: float = 850.0
+    RH_amb: float = 0.5
+    soak_K: float | None = None
+    seed: int = 0
+    vehicle: str | None = None
+    stopgo_s: float = 800.0
+
+    @property
+    def name(self) -> str:
+        return f"{self.cycle}@{self.T_amb - 273.15:g}C"
+
+    def plant_config(self):
+        from acid.plant import make_plant
+
+        base = make_plant("hifi", config_path=self.vehicle).cfg
+        return base.replace(T_amb=float(self.T_amb), G_solar=float(self.G_solar),
+                            RH_amb=float(self.RH_amb))
+
+    def drive(self):
+        """The cycle as ``acid.studies.cav_study.Scenario`` (speed per 5 s sample)."""
+        from acid.studies.cav_study import make_scenario
+
+        return make_scenario(self.cycle, self.plant_config().Ts, float(self.T_amb),
+                             self.stopgo_s)
+
+    def start(self) -> dict | None:
+        if self.soak_K is None:
+            return None
+        return {k: float(self.soak_K) for k in ("T_cab", "T_int", "T_int_slow", "T_shell",
+                                                 "T_evap", "T_cw")}
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class ScenarioSet:
+    """Training (tune knobs) and held-out (judge) scenarios, and the split's rule."""
+
+    training: tuple[Scenario, ...]
+    held_out: tuple[Scenario, ...]
+    rule: str
+
+    def to_dict(self) -> dict:
+        return {"training": [s.to_dict() for s in self.training],
+                "held_out": [s.to_dict() for s in self.held_out], "rule": self.rule}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> ScenarioSet:
+        return cls(tuple(Scenario(**s) for s in d["training"]),
+                   tuple(Scenario(**s) for s in d["held_out"]), d["rule"])
+
+
+def default_set(cycles: Sequence[str] = DEFAULT_CYCLES,
+                ambients_C: Sequence[float] = DEFAULT_AMBIENTS_C, seed: int = 0,
+                stopgo_s: float = 800.0, vehicle: str | None = None) -> ScenarioSet:
+    """Each cycle at each ambient; per cycle a seeded permutation of the ambients sends the
+    first half to training and the rest to held-out (module docstring)."""
+    if len(ambients_C) < 2:
+        raise ConfigError("--t-amb: give at least two ambients (one trains, one judges)")
+    rng = np.random.default_rng(seed)
+    train, held = [], []
+    for i, c in enumerate(cycles):
+        order = rng.permutation(len(ambients_C))
+        h = len(order) // 2
+        for j, a in enumerate(order):
+            s = Scenario(cycle=c, T_amb=C2K(float(ambients_C[a])), seed=seed * 1000 + i,
+                         vehicle=vehicle, stopgo_s=stopgo_s)
+            (train if j < h else held).append(s)
+    return ScenarioSet(tuple(train), tuple(held),
+                       f"per cycle, numpy default_rng({seed}).permutation of the ambients: "
+                       "first half trains, the rest is held out")
+
+
+# ------------------------------------------------------------------------------ controllers
+@dataclass(frozen=True)
+class Family:
+    """A controller family with one knob; ``knobs`` are swept on training (SI units)."""
+
+    key: str
+    label: str
+    knob: str
+    knobs: tuple[float, ...]
+
+
+def families(quick: bool = False, econ: bool = True) -> tuple[Family, ...]:
+    coils = (C2K(6.0), C2K(8.0), C2K(10.0)) if quick else tuple(
+        C2K(c) for c in (5.0, 7.0, 8.5, 10.0))
+    out = [Family("F", "fixed coil, plant's own loops", "coil set-point, K", coils),
+           Family("Fs", "fixed coil, acid's sampled PI (cav-study F)", "coil set-point, K",
+                  coils),
+           Family("P", "production coil reset", "warm coil T_warm, K",
+                  (C2K(8.0), C2K(11.0)) if quick else (C2K(8.0), C2K(10.0), C2K(12.0))),
+           Family("own", "plant's own loops, configured coil", "none", (math.nan,))]
+    if econ:
+        out.append(Family("E", "economic NMPC, speed preview", "comfort weight, W/K^2 s",
+                          (3.0, 30.0) if quick else (3.0, 30.0, 300.0)))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """What every run shares: cabin set-point and comfort band (K); the periodic state's
+    tolerances on the distance still to go (extrapolated from the last two passes): cabin,
+    interior and shell temperatures ``tol_K`` (K), cabin humidity ``tol_w`` (kg/kg), the
+    pass energy ``tol_E`` (relative)."""
+
+    T_set: float = C2K(24.0)
+    T_low: float = C2K(23.0)
+    T_high: float = C2K(25.0)
+    tol_K: float = 0.01
+    tol_w: float = 1e-5
+    tol_E: float = 5e-4
+    max_passes: int = 400
+    econ_horizon_s: float = 60.0
+
+
+#: ``--quick``: looser periodic tolerances (tests and smoke runs)
+QUICK = RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30)
+
+
+def _controller(family: str, knob: float, settings: RunSettings, cfg, drive, econ):
+    """(nominal, controller or None, plant config) for one family and knob."""
+    from acid.control.pi_baselines import CoilReset, PlantPI
+    from acid.psychro import P_ATM
+
+    p_atm = float(getattr(cfg, "p_atm", P_ATM))
+    if family in ("F", "own"):
+        # the plant's low-load reset range widened only as far as the knob needs
+        c = cfg if family == "own" else cfg.replace(
+            T_ew_set=float(knob), T_ew_set_max=max(cfg.T_ew_set_max, float(knob) + 0.5))
+        return True, None, c
+    if family == "Fs":
+        return False, PlantPI(cfg, drive.Ts, settings.T_set, float(knob), p_atm), cfg
+    if family == "P":
+        return False, PlantPI(cfg, drive.Ts, settings.T_set, CoilReset(T_warm=float(knob)),
+                              p_atm), cfg
+    if family == "E":
+        from acid.control.econ.nmpc import EconNMPC, EconNMPCConfig
+        from acid.studies.cav_study import EconPreview
+
+        n = int(round(settings.econ_horizon_s / drive.Ts))
+        mpc = EconNMPC(econ, EconNMPCConfig(intervals=(drive.Ts,) * n, preview=True,
+                                            T_cab_min=settings.T_low - 1.0,
+                                            T_cab_max=settings.T_high + 1.0,
+                                            comfort_weight=float(knob)))
+        return False, EconPreview(mpc, drive, settings.T_set), cfg
+    raise ConfigError(f"unknown controller family {family!r}")
+
+
+@dataclass(frozen=True)
+class PeriodicRun:
+    """One family/knob on one scenario at periodic steady state (J, K min, fractions)."""
+
+    scenario: str
+    family: str
+    knob: float
+    energy_J: float
+    discomfort_Kmin: float
+    rh_mean: float
+    mean_T_cab: float
+    passes: int
+    converged: bool
+    residual_K: float
+    first_pass_J: float
+    end: dict = field(default_factory=dict)
+
+
+def _pass(plant, ctrl, drive, T_set: float):
+    from acid.psychro import relative_humidity
+
+    if ctrl is not None:
+        ctrl.reset()
+    E = 0.0
+    T, rh = [], []
+    for k in range(drive.n):
+        meas = plant.measure()
+        if ctrl is None:
+            row = plant.step(0.0, 0.0, float(drive.v[k]), T_amb=float(drive.T_amb[k]),
+                             T_cab_set=T_set)
+        else:
+            u = ctrl.make_step(meas, k)
+            row = plant.step(float(u[0]), float(u[1]), float(drive.v[k]),
+                             T_amb=float(drive.T_amb[k]))
+        E += (float(row["P_comp"]) + float(row["P_bl"])) * drive.Ts
+        m = plant.measure()
+        T.append(float(m["T_cab"]))
+        rh.append(float(relative_humidity(float(m["T_cab"]), float(m["w_cab"]))))
+    return E, np.asarray(T), np.asarray(rh)
+
+
+def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings = RunSettings(),
+                 econ=None, start: dict | None = None) -> PeriodicRun:
+    """Repeat the scenario's cycle until the pass-end states repeat (module docstring)."""
+    import warnings
+
+    from acid.errors import ExtrapolationWarning
+    from acid.plant.hifi import HifiPlant
+    from acid.studies.cav_study import plant_state
+
+    warnings.simplefilter("ignore", ExtrapolationWarning)  # E's econ model off its data
+
+    drive = sc.drive()
+    cfg = sc.plant_config()
+    nominal, ctrl, pcfg = _controller(family, knob, settings, cfg, drive, econ)
+    plant = HifiPlant(pcfg, mode="nominal" if nominal else "direct")
+    plant.reset(start if start is not None else sc.start())
+    prev = plant_state(plant)
+    first = E_prev = math.nan
+    res, last = math.inf, {}
+    for p in range(1, settings.max_passes + 1):
+        E, T, rh = _pass(plant, ctrl, drive, settings.T_set)
+        if p == 1:
+            first = E
+        now = plant_state(plant)
+        steps = {"T": max(abs(now[k] - prev[k]) for k in PERIODIC_KEYS if k in now),
+                 "w": abs(now["w_cab"] - prev["w_cab"]) * settings.tol_K / settings.tol_w,
+                 "E": abs(E - E_prev) / abs(E) * settings.tol_K / settings.tol_E
+                 if p > 1 and E else math.inf}
+        # distance to the periodic state: a slow mode contracting by rho per pass leaves
+        # step * rho / (1 - rho) still to go (rho from the last two passes, the factor at
+        # most 20); a step no smaller than the last is the loops' cycling, not a slow mode
+        # (factor 1); each quantity scaled to the temperature tolerance
+        res = 0.0
+        for q, st in steps.items():
+            rho = st / last[q] if last.get(q, 0) > 0 else 0.95
+            res = max(res, st * (min(20.0, max(1.0, rho / (1.0 - rho))) if rho < 1 else 1.0))
+        prev, last, E_prev = now, steps, E
+        if p >= 3 and res < settings.tol_K:
+            break
+    out = np.maximum(0.0, np.maximum(T - settings.T_high, settings.T_low - T))
+    return PeriodicRun(sc.name, family, float(knob), E, float(np.sum(out) * drive.Ts / 60.0),
+                       float(np.mean(rh)), float(np.mean(T)), p, bool(res < settings.tol_K),
+                       float(res), first, plant_state(plant))
+
+
+# ------------------------------------------------------------------------------ statistics
+@dataclass(frozen=True)
+class Verdict:
+    """Candidate vs baseline over paired held-out scenarios (saving in percent of the
+    baseline; positive: the candidate uses less)."""
+
+    candidate: str
+    baseline: str
+    scenarios: tuple[str, ...]
+    savings_pct: tuple[float, ...]
+    mean_pct: float
+    boot_lo: float
+    boot_hi: float
+    t_lo: float
+    t_hi: float
+    word: str
+    n_boot: int
+    seed: int
+    discomfort_gap_Kmin: float = 0.0
+    T_cab_gap_K: float = 0.0
+
+    def summary(self) -> str:
+        return (f"{self.candidate} vs {self.baseline}: {self.mean_pct:+.2f} % "
+                f"[{self.boot_lo:+.2f}, {self.boot_hi:+.2f}] bootstrap 95 %, "
+                f"[{self.t_lo:+.2f}, {self.t_hi:+.2f}] paired t, n = {len(self.scenarios)}, "
+                f"comfort gap {self.discomfort_gap_Kmin:+.2f} K min, mean T_cab "
+                f"{self.T_cab_gap_K:+.2f} K: {self.word}")
+
+    def __repr__(self) -> str:
+        return f"Verdict({self.summary()})"
+
+    def to_dict(self) -> dict:
+        return _json_safe(dataclasses.asdict(self))
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Verdict:
+        d = dict(d)
+        d["scenarios"] = tuple(d["scenarios"])
+        d["savings_pct"] = tuple(_num(x) for x in d["savings_pct"])
+        for k in ("mean_pct", "boot_lo", "boot_hi", "t_lo", "t_hi", "discomfort_gap_Kmin",
+                  "T_cab_gap_K"):
+            d[k] = _num(d[k])
+        return cls(**d)
+
+
+def _num(x):
+    return math.nan if x is None else float(x)
+
+
+def _json_safe(d):
+    if isinstance(d, dict):
+        return {k: _json_safe(v) for k, v in d.items()}
+    if isinstance(d, list | tuple):
+        return [_json_safe(v) for v in d]
+    if isinstance(d, float) and not math.isfinite(d):
+        return None
+    return d
+
+
+def paired_bootstrap(diff: Sequence[float], seed: int, n_boot: int = 10000,
+                     level: float = 0.95) -> tuple[float, float]:
+    """Percentile interval of the mean of paired differences (seeded resampling)."""
+    d = np.asarray(diff, dtype=float)
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, d.size, size=(n_boot, d.size))
+    means = d[idx].mean(axis=1)
+    a = (1.0 - level) / 2.0
+    return float(np.quantile(means, a)), float(np.quantile(means, 1.0 - a))
+
+
+def paired_t(diff: Sequence[float], level: float = 0.95) -> tuple[float, float]:
+    from scipy import stats
+
+    d = np.asarray(diff, dtype=float)
+    if d.size < 2:
+        return math.nan, math.nan
+    s = float(np.std(d, ddof=1)) / math.sqrt(d.size)
+    q = float(stats.t.ppf(0.5 + level / 2.0, d.size - 1))
+    return float(d.mean() - q * s), float(d.mean() + q * s)
+
+
+def verdict(candidate: str, baseline: str, names: Sequence[str], e_cand: Sequence[float],
+            e_base: Sequence[float], seed: int = 0, n_boot: int = 10000,
+            min_scenarios: int = MIN_SCENARIOS, discomfort_gap_Kmin: float = 0.0,
+            T_cab_gap_K: float = 0.0) -> Verdict:
+    """The verdict word from the bootstrap interval (and the t interval: both must agree
+    for "saves" or "costs"); fewer than ``min_scenarios`` pairs: "not resolved"; a candidate
+    less comfortable than the baseline (held-out discomfort more than
+    ``MAX_DISCOMFORT_GAP_KMIN`` above, or a mean cabin more than ``MAX_WARMER_K`` warmer)
+    that would "save" or show no difference: "not at equal comfort"."""
+    eb, ec = np.asarray(e_base, float), np.asarray(e_cand, float)
+    s = 100.0 * (eb - ec) / eb
+    # the one reading of an interval (acid.studies.verdict): both intervals must exclude zero
+    v = paired_verdict(s, min_count=1, n_boot=n_boot, seed=seed, decide="both")
+    lo, hi = (v.boot_lo, v.boot_hi) if v.boot_lo is not None else paired_bootstrap(s, seed,
+                                                                                   n_boot)
+    tlo, thi = (v.lo, v.hi) if v.lo is not None else (math.nan, math.nan)
+    word = UNRESOLVED if s.size < min_scenarios else {
+        "saves": SAVES, "costs": COSTS}.get(v.words, NONE)
+    if word in (SAVES, NONE) and (discomfort_gap_Kmin > MAX_DISCOMFORT_GAP_KMIN
+                                  or T_cab_gap_K > MAX_WARMER_K):
+        word = UNEQUAL
+    return Verdict(candidate, baseline, tuple(names), tuple(float(x) for x in s),
+                   float(s.mean()), lo, hi, tlo, thi, word, int(n_boot), int(seed),
+                   float(discomfort_gap_Kmin), float(T_cab_gap_K))
+
+
+# ------------------------------------------------------------------------------ the study
+@dataclass(frozen=True)
+class FrontPoint:
+    family: str
+    knob: float
+    energy_J: float
+    discomfort_Kmin: float
+    rh_mean: float
+
+
+@dataclass(frozen=True)
+class CompareResult:
+    """Fronts on training, tuned knobs, held-out runs and verdicts."""
+
+    scenarios: ScenarioSet
+    comfort_level_Kmin: float
+    fronts: tuple[FrontPoint, ...]
+    tuned: dict = field(default_factory=dict)
+    held_out: tuple[PeriodicRun, ...] = ()
+    verdicts: tuple[Verdict, ...] = ()
+    settings: dict = field(default_factory=dict)
+
+    def summary(self) -> str:
+        lines = ["training: " + ", ".join(s.name for s in self.scenarios.training),
+                 "held out: " + ", ".join(s.name for s in self.scenarios.held_out),
+                 f"comfort level: {self.comfort_level_Kmin:.2f} K min per pass outside the "
+                 "band (mean over training)"]
+        for f, k in self.tuned.items():
+            lines.append(f"  {f}: knob {k:.4g} tuned on training")
+        lines += [v.summary() for v in self.verdicts]
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return (f"CompareResult({len(self.scenarios.training)} training, "
+                f"{len(self.scenarios.held_out)} held out, {len(self.verdicts)} verdicts)")
+
+    def to_dict(self) -> dict:
+        return _json_safe({
+            "scenarios": self.scenarios.to_dict(), "comfort_level_Kmin": self.comfort_level_Kmin,
+            "fronts": [dataclasses.asdict(p) for p in self.fronts], "tuned": dict(self.tuned),
+            "held_out": [dataclasses.asdict(r) for r in self.held_out],
+            "verdicts": [v.to_dict() for v in self.verdicts], "settings": dict(self.settings)})
+
+    @classmethod
+    def from_dict(cls, d: dict) -> CompareResult:
+        def fix(x: dict, keys):
+            return {k: (_num(v) if k in keys else v) for k, v in x.items()}
+
+        return cls(ScenarioSet.from_dict(d["scenarios"]), _num(d["comfort_level_Kmin"]),
+                   tuple(FrontPoint(**fix(p, ("knob", "energy_J", "discomfort_Kmin",
+                                                "rh_mean"))) for p in d["fronts"]),
+                   {k: _num(v) for k, v in d["tuned"].items()},
+                   tuple(PeriodicRun(**fix(r, ("knob", "energy_J", "discomfort_Kmin",
+                                               "rh_mean", "mean_T_cab", "residual_K",
+                                               "first_pass_J"))) for r in d["held_out"]),
+                   tuple(Verdict.from_dict(v) for v in d["verdicts"]), dict(d["settings"]))
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=1)
+
+
+def _task(sc: Scenario, family: str, knob: float, settings: RunSettings, econ,
+          start: dict | None = None):
+    return periodic_run(sc, family, knob, settings, econ, start)
+
+
+def _map(tasks, executor, progress):
+    """Run ``tasks`` (argument tuples of :func:`_task`), through ``executor`` if given."""
+    out = [None] * len(tasks)
+    if executor is None:
+        for i, t in enumerate(tasks):
+            out[i] = _task(*t)
+            if progress:
+                progress(f"{i + 1}/{len(tasks)} {t[0].name} {t[1]} knob {t[2]:.4g}: "
+                         f"{out[i].energy_J / 1e6:.3f} MJ, {out[i].passes} passes")
+        return out
+    handles = {executor.submit(_task, *t): i for i, t in enumerate(tasks)}
+    pending, done = set(handles), 0
+    while pending:
+        for h in executor.wait_any(pending):
+            pending.discard(h)
+            i = handles[h]
+            out[i] = executor.result(h)
+            done += 1
+            if progress:
+                progress(f"{done}/{len(tasks)} {tasks[i][0].name} {tasks[i][1]}: "
+                         f"{out[i].energy_J / 1e6:.3f} MJ, {out[i].passes} passes")
+    return out
+
+
+def tune_knob(points: Sequence[FrontPoint], level: float) -> float:
+    """The knob meeting the comfort ``level`` at least energy: among the swept knobs
+    whose discomfort is at most ``level`` the cheapest, moved toward its cheaper
+    neighbour by linear interpolation in discomfort up to the level."""
+    pts = sorted(points, key=lambda p: p.knob)
+    ok = [p for p in pts if p.discomfort_Kmin <= level + 1e-9]
+    if not ok:
+        return min(pts, key=lambda p: p.discomfort_Kmin).knob
+    best = min(ok, key=lambda p: p.energy_J)
+    i = pts.index(best)
+    for j in (i - 1, i + 1):
+        if 0 <= j < len(pts) and pts[j].energy_J < best.energy_J \
+                and pts[j].discomfort_Kmin > level:
+            q = pts[j]
+            f = (level - best.discomfort_Kmin) / (q.discomfort_Kmin - best.discomfort_Kmin)
+            return float(best.knob + f * (q.knob - best.knob))
+    return best.knob
+
+
+def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSettings = RunSettings(),
+            econ=None, seed: int = 0, n_boot: int = 10000, candidate: str = "E",
+            executor=None, progress: Callable[[str], None] | None = None,
+            min_scenarios: int = MIN_SCENARIOS) -> CompareResult:
+    """Sweep every family on training, tune at the common comfort level, judge on held-out.
+
+    The comfort level is the plant's own loops' mean training discomfort (``own``), or the
+    least family mean when ``own`` is absent. Verdicts: ``candidate`` (if run) and every
+    family against ``F``, and ``F`` against ``own``.
+    """
+    if progress:
+        progress(f"training: {len(scenarios.training)} scenarios x "
+                 f"{sum(len(f.knobs) for f in fams)} family settings")
+    # every run starts from the periodic state of F's middle knob (a warm start: the
+    # periodic state does not depend on the start, it only saves passes)
+    allsc = scenarios.training + scenarios.held_out
+    mid = [f for f in fams if f.key == "F"]
+    mid_knob = mid[0].knobs[len(mid[0].knobs) // 2] if mid else C2K(8.0)
+    warm = _map([(sc, "F", mid_knob, settings, None) for sc in allsc], executor, progress)
+    starts = {sc.name: r.end for sc, r in zip(allsc, warm, strict=True)}
+    tasks = [(sc, f.key, k, settings, econ, starts[sc.name]) for f in fams for k in f.knobs
+             for sc in scenarios.training]
+    runs = _map(tasks, executor, progress)
+    fronts = []
+    for f in fams:
+        for k in f.knobs:
+            rs = [r for r, t in zip(runs, tasks, strict=True) if t[1] == f.key
+                  and (t[2] == k or (math.isnan(k) and math.isnan(t[2])))]
+            fronts.append(FrontPoint(f.key, float(k), float(np.mean([r.energy_J for r in rs])),
+                                     float(np.mean([r.discomfort_Kmin for r in rs])),
+                                     float(np.mean([r.rh_mean for r in rs]))))
+    own = [p for p in fronts if p.family == "own"]
+    level = own[0].discomfort_Kmin if own else min(
+        max(p.discomfort_Kmin for p in fronts if p.family == f.key) for f in fams)
+    tuned = {f.key: tune_knob([p for p in fronts if p.family == f.key], level) for f in fams}
+    if progress:
+        progress("held out: " + ", ".join(s.name for s in scenarios.held_out))
+    htasks = [(sc, f.key, tuned[f.key], settings, econ, starts[sc.name]) for f in fams
+              for sc in scenarios.held_out]
+    hruns = _map(htasks, executor, progress)
+    by = {(r.family, r.scenario): r for r in hruns}
+    names = [s.name for s in scenarios.held_out]
+    keys = [f.key for f in fams]
+    pairs = [(candidate, "F")] if candidate in keys and "F" in keys else []
+    pairs += [(k, "F") for k in keys if k not in ("F", candidate)]
+    if "own" in keys and "F" in keys:
+        pairs.append(("F", "own"))
+    verdicts = tuple(judge(by, names, c, b, seed, n_boot, min_scenarios) for c, b in pairs)
+    return CompareResult(scenarios, float(level), tuple(fronts), tuned, tuple(hruns),
+                         verdicts, _json_safe(dataclasses.asdict(settings)))
+
+
+def judge(by: dict, names: Sequence[str], c: str, b: str, seed: int = 0, n_boot: int = 10000,
+          min_scenarios: int = MIN_SCENARIOS) -> Verdict:
+    """:func:`verdict` of family ``c`` against ``b`` from held-out runs keyed
+    ``(family, scenario)``, with their comfort gaps."""
+    def gap(attr):
+        return float(np.mean([getattr(by[c, n], attr) - getattr(by[b, n], attr)
+                              for n in names]))
+
+    return verdict(c, b, names, [by[c, n].energy_J for n in names],
+                   [by[b, n].energy_J for n in names], seed, n_boot, min_scenarios,
+                   gap("discomfort_Kmin"), gap("mean_T_cab"))
+
+
+def plot_fronts(result: CompareResult, path) -> None:
+    """Energy vs discomfort per family on training (one PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from acid._io import save_figure
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for fam in dict.fromkeys(p.family for p in result.fronts):
+        pts = sorted((p for p in result.fronts if p.family == fam), key=lambda p: p.knob)
+        ax.plot([p.discomfort_Kmin for p in pts], [p.energy_J / 1e6 for p in pts], "o-",
+                label=fam)
+    ax.axvline(result.comfort_level_Kmin, color="k", lw=0.8, ls="--", label="comfort level")
+    ax.set_xlabel("discomfort, K min per pass outside the band (training mean)")
+    ax.set_ylabel("energy per pass, MJ (periodic steady state)")
+    ax.legend()
+    save_figure(fig, path)
+    plt.close(fig)

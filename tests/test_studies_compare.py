@@ -1,0 +1,122 @@
+"""Independent cross-checks of the comparison engine (short stop-and-go cycles)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from acid.studies import compare as cmp
+from acid.units import C2K
+
+SG = 160.0  # a two-period stop-and-go (80 s alternation): cheap passes
+
+
+#: looser periodic tolerances than the default, to keep the tests fast
+S = cmp.RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30)
+
+
+def _sc(t_amb_c: float, **kw) -> cmp.Scenario:
+    kw.setdefault("soak_K", C2K(25.0))
+    return cmp.Scenario("stopgo", C2K(t_amb_c), stopgo_s=SG, **kw)
+
+
+AMBIENTS = (28.0, 29.0, 30.0, 31.0, 32.0)
+
+
+@pytest.fixture(scope="module")
+def coils():
+    """Fixed coils at 3 and 10 degC on five ambients (periodic steady state)."""
+    return {c: [cmp.periodic_run(_sc(a), "F", C2K(c), settings=S).energy_J for a in AMBIENTS]
+            for c in (3.0, 10.0)}
+
+
+def test_a_controller_against_itself_is_no_resolvable_difference(coils):
+    again = cmp.periodic_run(_sc(AMBIENTS[0]), "F", C2K(10.0), settings=S).energy_J
+    assert again == coils[10.0][0]                                  # runs are deterministic
+    v = cmp.verdict("F", "F", [str(a) for a in AMBIENTS], coils[10.0], coils[10.0], seed=1)
+    assert v.word == cmp.NONE
+    assert v.boot_lo <= 0.0 <= v.boot_hi
+
+
+def test_a_clearly_worse_controller_costs(coils):
+    names = [str(a) for a in AMBIENTS]
+    v = cmp.verdict("F3", "F10", names, coils[3.0], coils[10.0], seed=1)
+    assert v.word == cmp.COSTS, v.summary()
+    assert v.boot_hi < 0.0 and v.t_hi < 0.0
+    assert cmp.verdict("F10", "F3", names, coils[10.0], coils[3.0]).word == cmp.SAVES
+
+
+def test_fewer_than_the_minimum_is_not_resolved():
+    v = cmp.verdict("a", "b", ["1", "2", "3"], [1.0, 1.0, 1.0], [2.0, 2.1, 2.2])
+    assert v.word == cmp.UNRESOLVED
+    assert cmp.verdict("a", "b", list("12345"), [1.0] * 5,
+                       [2.0, 2.1, 2.2, 2.3, 2.4]).word == cmp.SAVES
+
+
+def test_bootstrap_is_seeded():
+    d = np.random.default_rng(3).normal(0.1, 1.0, 12)
+    assert cmp.paired_bootstrap(d, 7, 2000) == cmp.paired_bootstrap(d, 7, 2000)
+    assert cmp.paired_bootstrap(d, 7, 2000) != cmp.paired_bootstrap(d, 8, 2000)
+
+
+def test_periodic_state_converges_and_forgets_the_soak():
+    hot = cmp.periodic_run(_sc(32.0, soak_K=None), "F", C2K(8.0))  # 40 degC start
+    cool = cmp.periodic_run(_sc(32.0, soak_K=C2K(24.0)), "F", C2K(8.0))
+    assert hot.converged and cool.converged and hot.passes >= 3
+    assert hot.first_pass_J > 1.5 * hot.energy_J       # the pull-down is not in the figure
+    assert abs(hot.energy_J - cool.energy_J) / hot.energy_J < 2e-3
+    assert abs(hot.mean_T_cab - cool.mean_T_cab) < 0.01
+
+
+def test_F_is_the_plant_own_loops_and_not_dearer_than_them():
+    """F at the plant's configured coil is the plant's own loops; F's tuned coil at equal or
+    better comfort costs no more than they do."""
+    sc = _sc(34.0)
+    own = cmp.periodic_run(sc, "own", math.nan, settings=S)
+    coil = sc.plant_config().T_ew_set
+    same = cmp.periodic_run(sc, "F", coil, settings=S)
+    assert same.energy_J == pytest.approx(own.energy_J, rel=1e-9)
+    warm = cmp.periodic_run(sc, "F", C2K(9.0), settings=S)
+    assert warm.discomfort_Kmin <= own.discomfort_Kmin + 1e-9
+    assert warm.energy_J < own.energy_J
+
+
+def test_tune_knob_reads_the_front_at_the_level():
+    P = cmp.FrontPoint
+    pts = [P("F", 1.0, 10.0, 0.0, 0.4), P("F", 2.0, 9.0, 0.0, 0.4), P("F", 3.0, 8.0, 2.0, 0.4)]
+    assert cmp.tune_knob(pts, 1.0) == pytest.approx(2.5)
+    assert cmp.tune_knob(pts, 0.0) == pytest.approx(2.0)
+    assert cmp.tune_knob(pts, 5.0) == pytest.approx(3.0)
+
+
+def test_split_is_deterministic_and_covers_every_cycle():
+    a = cmp.default_set(("udds", "stopgo"), (30.0, 38.0), seed=4)
+    assert a == cmp.default_set(("udds", "stopgo"), (30.0, 38.0), seed=4)
+    for c in ("udds", "stopgo"):
+        assert [s.cycle for s in a.training].count(c) == 1
+        assert [s.cycle for s in a.held_out].count(c) == 1
+    assert not {s.name for s in a.training} & {s.name for s in a.held_out}
+
+
+def test_compare_result_round_trips_json():
+    sset = cmp.ScenarioSet((_sc(30.0),), (_sc(36.0),), "by hand")
+    fams = (cmp.Family("F", "fixed", "coil", (C2K(6.0), C2K(10.0))),
+            cmp.Family("own", "own", "none", (math.nan,)))
+    r = cmp.compare(sset, fams, S, n_boot=200)
+    assert r.verdicts and all(v.word == cmp.UNRESOLVED for v in r.verdicts)
+    back = cmp.CompareResult.from_dict(json.loads(r.to_json()))
+    assert back.to_dict() == r.to_dict()
+    assert "held out: stopgo@36C" in r.summary() and "CompareResult(" in repr(r)
+    assert "not resolved" in repr(r.verdicts[0])
+
+
+def test_a_saving_bought_with_comfort_is_not_read_as_one():
+    names, base = list("12345"), [2.0, 2.1, 2.2, 2.3, 2.4]
+    assert cmp.verdict("a", "b", names, [1.0] * 5, base).word == cmp.SAVES
+    assert cmp.verdict("a", "b", names, [1.0] * 5, base, T_cab_gap_K=0.3).word == cmp.UNEQUAL
+    assert cmp.verdict("a", "b", names, [1.0] * 5, base,
+                       discomfort_gap_Kmin=2.0).word == cmp.UNEQUAL
+    assert cmp.verdict("b", "a", names, base, [1.0] * 5, T_cab_gap_K=0.3).word == cmp.COSTS
