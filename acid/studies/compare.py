@@ -6,8 +6,9 @@ Protocol (kelvin inside, degC at the edges):
    (``acid.studies.cav_study.make_scenario``, ``stopgo`` included), an ambient, solar
    irradiance, ambient RH, an initial soak, a seed and a vehicle (plant configuration).
    :func:`default_set` crosses cycles with ambients and splits them deterministically: for
-   each cycle a coin of ``numpy.random.default_rng(seed)`` sends one ambient to the training set (knobs tuned there) and the other to the held-out set (judged
-   there), so every cycle, stop-and-go included, is in both sets.
+   each cycle a coin of ``numpy.random.default_rng(seed)`` sends one ambient to the training
+   set (knobs tuned there) and the other to the held-out set (judged there), so every cycle,
+   stop-and-go included, is in both sets.
 2. **Periodic steady state.** Each run repeats the scenario's cycle from its soak until the
    plant's cabin, interior (fast and slow) and shell temperatures at the end of a pass differ
    from the previous pass's by less than ``tol_K`` (default 0.01 K); the energy (compressor +
