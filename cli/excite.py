@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from acid_cli._common import (
     plant_inputs,
     print_table,
     progress_bar,
+    require,
     require_range,
     write_summary,
 )
@@ -187,6 +189,11 @@ def excite(
     if model not in MODEL_PRESETS:
         raise ConfigError(f"--model: unknown model family {model!r} (choose "
                           f"{', '.join(MODEL_PRESETS)})")
+    for opt, rng_ in (("--speed-range", speed_range), ("--t-amb-range", t_amb_range)):
+        if rng_ is not None:
+            lo_, hi_ = rng_
+            require(all(isinstance(x, (int, float)) and math.isfinite(x) for x in rng_)
+                    and lo_ < hi_, opt, f"needs LOW < HIGH, both finite, got {lo_:g} {hi_:g}")
     given = {"speed_bounds": speed_range, "T_amb_bounds": t_amb_range,
              "steady_fraction": steady_fraction}
     options = {k: v for k, v in given.items() if v is not None}

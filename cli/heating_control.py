@@ -58,8 +58,8 @@ def heating_control(
     for a in t_amb:
         require_range(a, "--t-amb", -20.0, 15.0, "degC")
     require_range(horizon, "--horizon", 2, 600, integer=True)
-    require_range(warmup, "--warmup", 0.0)
-    require_range(tail, "--tail", 0.0)
+    require_range(warmup, "--warmup", 0.0, 86400.0, "s")     # at most a day of driving
+    require_range(tail, "--tail", 0.0, 86400.0, "s")
     require_range(pull_up, "--pull-up", 0.0, 3600.0, "s")
     png = out / "heating_control.png"
     check_paths(outputs={"--json": json_path, "--out": png})

@@ -173,3 +173,17 @@ def test_next_state_is_for_interval_outputs_only():
         Model("nx", step=lambda s: {"T": s.next.T, "P": s.T}, **kw)
     with pytest.raises(DeclarationError, match="only a step's interval outputs"):
         Model("nx", step=lambda s: {"T": s.T}, output=lambda s: {"P": s.next.T}, **kw)
+
+
+@pytest.mark.parametrize(("what", "value"), [("sensor", -0.1), ("noise", float("nan")),
+                                             ("spread", float("inf")), ("noise", 1e300),
+                                             ("spread", "C_cab"), ("sensor", True)])
+def test_a_noise_spread_or_sensor_that_is_no_standard_deviation_is_named(what, value):
+    """Negative, NaN, infinite or absurd filter noises are refused at the declaration, naming
+    the state and the field (they reached PEM as a LinAlgError before)."""
+    from acid.models import DeclarationError, Model, Parameter, Signal, State
+
+    with pytest.raises(DeclarationError, match=rf"state 'x': {what} must be"):
+        Model("m", states=[State("x", "K", **{what: value})], inputs=[Signal("u", "W")],
+              parameters=[Parameter("a", "1", 1.0)], Ts=1.0,
+              step=lambda s: {"x": s.x + s.a * s.u})

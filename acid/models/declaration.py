@@ -288,6 +288,16 @@ class Model:
                                       "(kelvin inside; datasets in degC are converted)")
         if not self.states:
             raise self._error("a model needs at least one state")
+        for s in self.states:
+            for what in ("noise", "sensor", "spread"):
+                v = getattr(s, what)
+                if v is None or (isinstance(v, str) and what != "spread"):
+                    continue   # a parameter's name: checked where the filter reads it
+                if isinstance(v, bool) or not isinstance(v, (int, float)) \
+                        or not math.isfinite(v) or v < 0.0 or v > 1e6:
+                    raise self._error(f"state {s.name!r}: {what} must be a standard deviation "
+                                      f"in [0, 1e6] {s.unit} (or, but for spread, a "
+                                      f"parameter's name), got {v!r}")
         for p in self.parameters:
             try:
                 v, lo, hi = (_numeric(p.value, f"parameter {p.name!r} value"),
