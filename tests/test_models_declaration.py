@@ -175,7 +175,8 @@ def test_next_state_is_for_interval_outputs_only():
         Model("nx", step=lambda s: {"T": s.T}, output=lambda s: {"P": s.next.T}, **kw)
 
 
-@pytest.mark.parametrize(("what", "value"), [("sensor", -0.1), ("noise", float("nan")),
+@pytest.mark.parametrize(("what", "value"), [("sensor", -0.1), ("sensor", 0.0),
+                                             ("noise", float("nan")),
                                              ("spread", float("inf")), ("noise", 1e300),
                                              ("spread", "C_cab"), ("sensor", True)])
 def test_a_noise_spread_or_sensor_that_is_no_standard_deviation_is_named(what, value):

@@ -293,10 +293,13 @@ class Model:
                 v = getattr(s, what)
                 if v is None or (isinstance(v, str) and what != "spread"):
                     continue   # a parameter's name: checked where the filter reads it
+                lo_open = what == "sensor"   # a filter divides by the sensor's variance
                 if isinstance(v, bool) or not isinstance(v, (int, float)) \
-                        or not math.isfinite(v) or v < 0.0 or v > 1e6:
+                        or not math.isfinite(v) or v < 0.0 or (lo_open and v == 0.0) \
+                        or v > 1e6:
+                    span = "(0, 1e6]" if lo_open else "[0, 1e6]"
                     raise self._error(f"state {s.name!r}: {what} must be a standard deviation "
-                                      f"in [0, 1e6] {s.unit} (or, but for spread, a "
+                                      f"in {span} {s.unit} (or, but for spread, a "
                                       f"parameter's name), got {v!r}")
         for p in self.parameters:
             try:
