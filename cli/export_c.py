@@ -133,6 +133,11 @@ def _input_bounds(m, specs: list[str]) -> dict:
             raise ConfigError(f"--input {spec!r}: MIN and MAX must be numbers") from None
         if not (math.isfinite(a) and math.isfinite(b) and a < b):
             raise ConfigError(f"--input {spec!r}: needs finite MIN < MAX")
+        if name in bounds:
+            raise ConfigError(f"--input {spec!r}: {name} is bounded twice (give each input "
+                              "once)")
+        if units[name] == "K" and a < -273.15:
+            raise ConfigError(f"--input {spec!r}: {a:g} degC is below absolute zero")
         bounds[name] = (C2K(a), C2K(b)) if units[name] == "K" else (a, b)
     missing = [n for n in units if n not in bounds]
     if missing:

@@ -116,6 +116,7 @@ def fit(
             f"must be one of {', '.join(dict.fromkeys([*MODEL_FAMILIES, *BUILT_IN]))} or a "
             f"model file FILE.py, got {model!r}")
     # econ keeps its family's fitter unless an option only the declared fitter has is given
+    require_range(seed, "--seed", 0, 2**32 - 1, integer=True)
     if model == "econ" and (fix or free or fit_starts != 1):
         declared = True
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
