@@ -188,3 +188,23 @@ def test_a_noise_spread_or_sensor_that_is_no_standard_deviation_is_named(what, v
         Model("m", states=[State("x", "K", **{what: value})], inputs=[Signal("u", "W")],
               parameters=[Parameter("a", "1", 1.0)], Ts=1.0,
               step=lambda s: {"x": s.x + s.a * s.u})
+
+
+@pytest.mark.parametrize(("body", "said"), [
+    ("import sys\nsys.exit(0)\n", "calls sys.exit(0) while acid imports it"),
+    ("import sys\ndef model():\n    sys.exit(3)\n", "calls sys.exit(3) in model()"),
+    ("def model():\n    raise RuntimeError('boom')\n", ":2: RuntimeError: boom (in model())"),
+    ("raise KeyboardInterrupt\n", "raises KeyboardInterrupt while acid imports it"),
+    ("def model():\n    raise KeyboardInterrupt\n", "raises KeyboardInterrupt in model()"),
+])
+def test_a_model_file_that_exits_raises_or_interrupts_is_one_line_naming_it(tmp_path, body,
+                                                                            said):
+    """sys.exit in a model file ended acid with exit 0 having done nothing; an exception in
+    model() was an internal error; a KeyboardInterrupt the file raises looked like Ctrl-C."""
+    from acid.models import DeclarationError, load
+
+    f = tmp_path / "bad_model.py"
+    f.write_text(body)
+    with pytest.raises(DeclarationError) as err:
+        load(f)
+    assert str(err.value).startswith("bad_model.py") and said in str(err.value)

@@ -40,28 +40,60 @@ def load(spec: str | Path | Model) -> Model:
     sys.modules[name] = module
     no_bytecode, sys.dont_write_bytecode = sys.dont_write_bytecode, True  # no __pycache__
     try:                                                                   # beside the file
-        spec_.loader.exec_module(module)
-    except DeclarationError:
-        raise
-    except SyntaxError as exc:
-        raise DeclarationError(f"{path.name}:{exc.lineno}: syntax error: {exc.msg}") from None
-    except Exception as exc:  # noqa: BLE001 - the user's file failed while importing
-        from acid.models.declaration import user_line
-
-        line = user_line(exc, str(path))
-        msg = str(exc).splitlines()[0] if str(exc) else ""
-        raise DeclarationError(f"{path.name}{':' + str(line) if line else ''}: "
-                               f"{type(exc).__name__}: {msg}") from None
+        _guarded(path, lambda: spec_.loader.exec_module(module), "while acid imports it")
     finally:
         sys.modules.pop(name, None)
         sys.dont_write_bytecode = no_bytecode
     return _model_of(module, str(path))
 
 
+def _user_raised(exc: BaseException, path: Path) -> bool:
+    """Whether ``exc`` was raised by a ``raise`` statement of the user's file (not by a signal
+    arriving while the file ran)."""
+    tb = exc.__traceback__
+    last = None
+    while tb is not None:
+        last = tb
+        tb = tb.tb_next
+    if last is None or Path(last.tb_frame.f_code.co_filename).resolve() != path.resolve():
+        return False
+    import linecache
+
+    return linecache.getline(str(path), last.tb_lineno).lstrip().startswith("raise")
+
+
+def _guarded(path: Path, run, when: str):
+    """``run()``, the user's file running: every way it can fail is one ``DeclarationError``
+    naming the file (and line): an exception, ``sys.exit`` (which would otherwise end acid
+    with a "success"), a ``KeyboardInterrupt`` the file raises itself (a real Ctrl-C still
+    interrupts)."""
+    try:
+        return run()
+    except DeclarationError:
+        raise
+    except SyntaxError as exc:
+        raise DeclarationError(f"{path.name}:{exc.lineno}: syntax error: {exc.msg}") from None
+    except SystemExit as exc:
+        raise DeclarationError(f"{path.name}: the model file calls sys.exit({exc.code!r}) "
+                               f"{when}; a model file only declares") from None
+    except KeyboardInterrupt as exc:
+        if not _user_raised(exc, path):
+            raise
+        raise DeclarationError(f"{path.name}: the model file raises KeyboardInterrupt "
+                               f"{when}") from None
+    except Exception as exc:  # noqa: BLE001 - the user's file failed
+        from acid.models.declaration import user_line
+
+        line = user_line(exc, str(path))
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise DeclarationError(f"{path.name}{':' + str(line) if line else ''}: "
+                               f"{type(exc).__name__}: {msg} ({when})") from None
+
+
 def _model_of(module, where: str) -> Model:
     obj = getattr(module, "model", None)
     if callable(obj) and not isinstance(obj, Model):
-        obj = obj()
+        obj = _guarded(Path(where), obj, "in model()")
     if not isinstance(obj, Model):
         raise DeclarationError(f"{Path(where).name}: defines no model (write "
                                "`model = acid.models.Model(...)` at module level)")
