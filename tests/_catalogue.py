@@ -838,6 +838,17 @@ CASES: list[Case] = [
     Case("fit-model-file-raises-keyboard-interrupt", "params",
          ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"),
          ("m.py", "KeyboardInterrupt"), _write("m.py", "raise KeyboardInterrupt\n")),
+    Case("fit-model-file-equations-not-finite", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py", "--method", "oe"),
+         ("'nanny'", "NaN or inf", "T_cab"),
+         _write("m.py", "from acid.models import RK4, Model, Parameter, Signal, State, log\n"
+                        "def ode(s):\n"
+                        "    return {'T_cab': log(s.T_cab - 400.0)\n"
+                        "            + s.a * (s.T_evap_set - s.T_cab)}\n"
+                        "model = Model('nanny', states=[State('T_cab', 'K')],\n"
+                        "              inputs=[Signal('T_evap_set', 'K')],\n"
+                        "              parameters=[Parameter('a', '1/s', 0.001, 0.0, 1.0)],\n"
+                        "              Ts=5.0, ode=ode, integrator=RK4(substeps=1))\n")),
     Case("fit-model-file-fix-malformed", "options",
          ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py", "--fix", "a"),
          ("--fix", "'a'"), _write("m.py", MODEL_FILE)),

@@ -224,6 +224,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         prob = oe.OEProblem(model, data, columns, _window_base(base, columns, oe.Windows.of(
             data.segments, oe_window)), oe_window, estimate_x0=oe_estimate_x0)
         theta_start = np.where(np.isfinite(theta), theta, declared[[c.index for c in columns]])
+        _check_finite_start(model, prob, theta_start, lo, hi, ds.source)
         solve = oe.solve
         if oe_solver == "ms":
             from acid.ident.oe_ms import solve_ms
@@ -466,6 +467,23 @@ def _starts(rng: np.random.Generator, n: int, theta, lo, hi) -> list[np.ndarray]
     b = np.where(np.isfinite(hi), hi, theta + span)
     a, b = np.maximum(a, lo), np.minimum(b, hi)
     return [a + (b - a) * rng.random(theta.size) for _ in range(n)]
+
+
+def _check_finite_start(model: Model, prob, theta0, lo, hi, source: str) -> None:
+    """A ``ConfigError`` naming the channel and sample where the simulation from the start
+    values is not finite (an equation outside its domain: log or sqrt of a negative number, a
+    division by zero), instead of the solver's internal error."""
+    z0 = np.concatenate([np.clip(theta0, lo, hi), prob.x0_start[:, prob.x0_free].ravel()])
+    with np.errstate(all="ignore"):
+        e0 = prob.errors(z0)
+    bad = ~np.isfinite(e0) & prob.obs
+    if bad.any():
+        w, step, c = (int(i) for i in np.argwhere(bad)[0])
+        raise ConfigError(f"model {model.name!r}: its simulation from the start values gives "
+                          f"NaN or inf on {source} (channel {prob.chan_names[c]}, sample "
+                          f"{int(prob.w.idx[w, step])}): an equation outside its domain (log "
+                          "or sqrt of a negative number, a division by zero) at these states "
+                          "and inputs, or start values that make it so")
 
 
 def _failure(r, scale: dict) -> str:
