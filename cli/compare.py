@@ -21,6 +21,7 @@ from acid_cli._common import (
     timed_lines,
     write_summary,
 )
+from acid_cli._plant import plant_overrides, refrigerant_option
 
 
 @handle_errors
@@ -45,6 +46,7 @@ def compare(
                                     "tolerances (0.05 K, 0.2 % of the pass energy)."),
     jobs: int = typer.Option(1, "--jobs", min=1, max=256,
                              help="Worker processes (Dask; 1: in this process)."),
+    refrigerant: str | None = refrigerant_option(),
     plant_config: Path | None = typer.Option(None, "--plant-config",
                                              help="TOML configuration of the plant."),
     out: Path | None = typer.Option(None, "--out", help="Folder for fronts.png."),
@@ -72,8 +74,10 @@ def compare(
         require(c in available_cycles(), "--cycle",
                 f"unknown cycle {c!r} (available: {', '.join(available_cycles())})")
     line = timed_lines("compare")
+    plant_overrides(refrigerant=refrigerant)   # an unknown refrigerant: one line naming it
     sset = cmp.default_set(cycles, ambients, seed=seed, stopgo_s=160.0 if quick else 800.0,
-                           vehicle=None if plant_config is None else str(plant_config))
+                           vehicle=None if plant_config is None else str(plant_config),
+                           refrigerant=refrigerant)
     say(f"training: {', '.join(s.name for s in sset.training)}")
     say(f"held out: {', '.join(s.name for s in sset.held_out)} ({sset.rule})")
     params = None

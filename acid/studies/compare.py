@@ -66,7 +66,8 @@ class Scenario:
 
     ``soak_K`` None: the plant's own initial state; otherwise cabin, interior and shell all
     start at this temperature. ``vehicle`` is a plant configuration path or vehicle name
-    (None: the default plant). ``stopgo_s`` is the stop-and-go cycle's length.
+    (None: the default plant), ``refrigerant`` replaces its refrigerant (None: its own).
+    ``stopgo_s`` is the stop-and-go cycle's length.
     """
 
     cycle: str
@@ -77,6 +78,7 @@ class Scenario:
     seed: int = 0
     vehicle: str | None = None
     stopgo_s: float = 800.0
+    refrigerant: str | None = None
 
     @property
     def name(self) -> str:
@@ -86,8 +88,9 @@ class Scenario:
         from acid.plant import make_plant
 
         base = make_plant("hifi", config_path=self.vehicle).cfg
+        extra = {} if self.refrigerant is None else {"refrigerant": self.refrigerant}
         return base.replace(T_amb=float(self.T_amb), G_solar=float(self.G_solar),
-                            RH_amb=float(self.RH_amb))
+                            RH_amb=float(self.RH_amb), **extra)
 
     def drive(self):
         """The cycle as ``acid.studies.cav_study.Scenario`` (speed per 5 s sample)."""
@@ -126,7 +129,8 @@ class ScenarioSet:
 
 def default_set(cycles: Sequence[str] = DEFAULT_CYCLES,
                 ambients_C: Sequence[float] = DEFAULT_AMBIENTS_C, seed: int = 0,
-                stopgo_s: float = 800.0, vehicle: str | None = None) -> ScenarioSet:
+                stopgo_s: float = 800.0, vehicle: str | None = None,
+                refrigerant: str | None = None) -> ScenarioSet:
     """Each cycle at each ambient; per cycle a seeded permutation of the ambients sends the
     first half to training and the rest to held-out (module docstring)."""
     if len(ambients_C) < 2:
@@ -138,7 +142,7 @@ def default_set(cycles: Sequence[str] = DEFAULT_CYCLES,
         h = len(order) // 2
         for j, a in enumerate(order):
             s = Scenario(cycle=c, T_amb=C2K(float(ambients_C[a])), seed=seed * 1000 + i,
-                         vehicle=vehicle, stopgo_s=stopgo_s)
+                         vehicle=vehicle, stopgo_s=stopgo_s, refrigerant=refrigerant)
             (train if j < h else held).append(s)
     return ScenarioSet(tuple(train), tuple(held),
                        f"per cycle, numpy default_rng({seed}).permutation of the ambients: "
