@@ -104,7 +104,8 @@ def compare(
         k = result.tuned[f.key]
         pt = min((p for p in result.fronts if p.family == f.key),
                  key=lambda p: abs(p.knob - k) if k == k else 0.0)
-        knob = "-" if k != k else (f"{k - 273.15:.2f} degC" if k > 200 else f"{k:.3g}")
+        knob = "-" if k != k else (f"{k - 273.15:.2f} degC" if f.knob.endswith(", K")
+                                   else f"{k:.3g} {f.knob.rsplit(', ', 1)[-1]}")
         rows.append([f.key, f.label, knob, f"{pt.energy_J / 1e6:.3f}",
                      f"{pt.discomfort_Kmin:.2f}", f"{100 * pt.rh_mean:.1f}"])
     print_table("families on training (tuned knob, nearest swept point)",
@@ -115,6 +116,7 @@ def compare(
                 [[f"{v.candidate} vs {v.baseline}", f"{v.mean_pct:+.2f}",
                   f"[{v.boot_lo:+.2f}, {v.boot_hi:+.2f}]", f"[{v.t_lo:+.2f}, {v.t_hi:+.2f}]",
                   f"{v.discomfort_gap_Kmin:+.2f}", f"{v.T_cab_gap_K:+.2f}", v.word]
+                 if v.scenarios else [f"{v.candidate} vs {v.baseline}", *"-----", v.word]
                  for v in result.verdicts])
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
