@@ -112,6 +112,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         model = model.with_parameters(fix, tuple(free))
     if start:
         model = _with_values(model, start)
+    priors = [p.name for p in model.parameters if p.prior is not None and not p.fixed]
+    if priors and method in ("ls", "cvx"):
+        raise ConfigError(f"--method {method}: the priors on {', '.join(priors)} are "
+                          "honoured by --method oe, pem or auto (output error)")
     if method == "pem":
         from acid.ident.pem import fit_pem
 
@@ -206,8 +210,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     ls_reached = [s != "not fitted" for s in status]
     latent = [s.name for s in model.states if not s.measured]
     if method == "auto":
-        method = "ls" if all(ls_reached) and not latent and fit_starts == 1 else "oe"
+        method = "ls" if all(ls_reached) and not latent and fit_starts == 1 \
+            and not priors else "oe"
         notes.append(f"method auto: {method} (" + (
+            "declared priors" if priors and method == "oe" else
             "least squares reaches every free parameter" if method == "ls" else
             f"{fit_starts} output-error starts asked for" if fit_starts > 1 else
             "latent states " + ", ".join(latent) if latent and all(ls_reached) else
@@ -288,6 +294,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                       "n_parameters": len(columns)}
         if not res.success:
             warn.append(f"output error did not converge ({res.status})")
+        if linear.prior_note(model, columns, theta):
+            notes.append(linear.prior_note(model, columns, theta))
         notes.append(f"output error over {res.n_windows} windows of <= {oe_window} samples, "
                      + ("each window's initial state estimated" if oe_estimate_x0 else
                         "each window started from the measured states") + (

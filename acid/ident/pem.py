@@ -251,6 +251,11 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
     out = _run(model, chan, L, n)(ca.DM(rec.x0.T), ca.DM(rec.P0.T), flat(rec.u),
                                    flat(rec.d), Pm, flat(rec.m), flat(rec.o))
     J = ca.sum2(out[2])
+    pri = [(c, *model.parameters[col.index].prior) for c, col in enumerate(columns)
+           if model.parameters[col.index].prior is not None]
+    if pri:   # declared priors: -2 log of each Gaussian prior (J is -2 log L + const)
+        J = J + ca.sumsqr((ca.vertcat(*[th[c] for c, _, _ in pri])
+                           - ca.DM([m for _, m, _ in pri])) / ca.DM([sd for _, _, sd in pri]))
     fg = ca.Function("pem_cost", [Z], [J, ca.gradient(J, Z)])
     ev = ca.Function("pem_out", [Z], [out[3], out[4]])
     count = {"n": 0}
@@ -394,6 +399,8 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
              "(L-BFGS-B, CasADi gradient)" + (f"; latent: {', '.join(latent)}" if latent
                                               else "")
              + (f"; states with process noise: {', '.join(walks)}" if walks else "")]
+    if linear.prior_note(model, columns, res.theta):
+        notes.append(linear.prior_note(model, columns, res.theta))
     at = [f"{c.label} at its {w} {bd:g}" for c, t, a, z in zip(columns, res.theta, lo, hi,
                                                                 strict=True)
           for bd, w in ((a, "min"), (z, "max"))
