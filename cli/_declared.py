@@ -130,11 +130,12 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                  for p in parts]
         est = Dataset.concatenate([est, *parts])
         est.source = str(data)
-    result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
-                       fit_starts=fit_starts, seed=seed, oe_window=oe_window,
-                       covariance=covariance, hac_bandwidth=bandwidth, loss=loss,
-                       oe_estimate_x0=oe_estimate_x0, start=start, strict=strict,
-                       max_nfev=max_evals, oe_solver=oe_solver)
+    with progress_bar(f"fit {model.name}", None) as update:
+        result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
+                           fit_starts=fit_starts, seed=seed, oe_window=oe_window,
+                           covariance=covariance, hac_bandwidth=bandwidth, loss=loss,
+                           oe_estimate_x0=oe_estimate_x0, start=start, strict=strict,
+                           max_nfev=max_evals, oe_solver=oe_solver, progress=update)
     prov = provenance(ds, result.method, loss)
     prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
                 records=[str(data), *map(str, more)])

@@ -213,11 +213,12 @@ class OEProblem:
 
 def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
           reweight: bool = True, covariance: str = "hac", hac_bandwidth="auto",
-          max_nfev: int = 100, loss: str = "squared") -> OEResult:
+          max_nfev: int = 100, loss: str = "squared", progress=None) -> OEResult:
     """Minimise from ``theta0`` (clipped into the bounds); ``reweight``: a second pass with
     each channel weighted by its error RMS of the first (channels in their own units).
     ``loss="huber"``: the second pass weights each channel by its robust standard deviation
-    and minimises the Huber loss (threshold ``HUBER_M``), robust to outliers."""
+    and minimises the Huber loss (threshold ``HUBER_M``), robust to outliers. ``progress``:
+    ``progress(evaluations, None, label)`` at every residual evaluation."""
     nx = int(prob.x0_free.sum())
     z = np.concatenate([np.clip(theta0, lo, hi), prob.x0_start[:, prob.x0_free].ravel()])
     zlo = np.concatenate([lo, np.full(prob.nw * nx, -np.inf)])
@@ -230,6 +231,16 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                                hi - 1e-9 * (1 + abs(hi)), z[:len(hi)])
     res = None
     floor = 1e-3 * prob.weights
+    count = {"n": 0, "pass": 1}
+
+    def residuals(v):
+        r = prob.objective_residuals(v)
+        count["n"] += 1
+        if progress is not None:
+            progress(count["n"], None, f"pass {count['pass']}, evaluation {count['n']}, "
+                                       f"loss {0.5 * float(r @ r):.6g}")
+        return r
+
     robust = loss == "huber"
     for it in range(2 if (reweight or robust) else 1):
         if it == 1:
@@ -238,6 +249,7 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                             np.sqrt(np.mean(e[..., i][prob.obs[..., i]] ** 2))
                             for i in range(len(prob.chan))])
             prob.weights = np.maximum(rms, floor)
+        count["pass"] = it + 1
         kwargs = {"loss": "huber", "f_scale": HUBER_M} if robust and it == 1 else {}
         res = None
         with np.errstate(all="ignore"):
@@ -245,7 +257,7 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                 # MINPACK's Levenberg-Marquardt first (its own QR: no BLAS threads, which
                 # slow SVDs 100-fold on a busy machine); kept when it ends inside the bounds
                 res = scipy.optimize.least_squares(
-                    prob.objective_residuals, z, jac=prob.objective_jacobian, method="lm",
+                    residuals, z, jac=prob.objective_jacobian, method="lm",
                     x_scale="jac",
                     ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=2 * max_nfev)
                 inside = np.all((res.x >= zlo) & (res.x <= zhi))
@@ -253,7 +265,7 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                     res = None
             if res is None:  # trust-region reflective inside the declared bounds
                 res = scipy.optimize.least_squares(
-                    prob.objective_residuals, z, jac=prob.objective_jacobian,
+                    residuals, z, jac=prob.objective_jacobian,
                     bounds=(zlo, zhi), method="trf",
                     x_scale="jac", ftol=1e-12, xtol=1e-12, gtol=1e-10, max_nfev=max_nfev,
                     **kwargs)
