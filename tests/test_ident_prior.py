@@ -6,36 +6,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from _cli import assert_one_line_error
+from _gain import gain_data, gain_model
 from typer.testing import CliRunner
 
-import acid
 from acid.errors import ConfigError
 from acid.ident.fit import fit_model
-from acid.models import Model, Parameter, Signal, State
 from acid.models.declaration import DeclarationError
 from acid_cli.main import app
 
-TS, N = 1.0, 400
+
+def _model(prior=None, split: bool = False):
+    return gain_model(prior, split)
 
 
-def _model(prior=None, split: bool = False) -> Model:
-    """y = k u (or (a + b) u): a static gain, a latent state the output does not read."""
-    params = ([Parameter("a", "1", 1.0, -10.0, 10.0),
-               Parameter("b", "1", 0.5, -10.0, 10.0, prior=prior)] if split else
-              [Parameter("k", "1", 1.0, -10.0, 10.0, prior=prior)])
-    gain = (lambda s: s.a + s.b) if split else (lambda s: s.k)
-    return Model("gain", states=[State("x", "1", measured=False, initial=0.0)],
-                 inputs=[Signal("u", "1")], outputs=[Signal("y", "1")],
-                 parameters=params, Ts=TS, ode=lambda s: {"x": -s.x},
-                 output=lambda s: {"y": gain(s) * s.u})
-
-
-def _data(k_true: float = 2.0, noise: float = 0.1) -> acid.Dataset:
-    rng = np.random.default_rng(0)
-    u = rng.normal(0.0, 1.0, N)
-    y = k_true * u + rng.normal(0.0, noise, N)
-    return acid.Dataset(time=np.arange(N) * TS, channels={"u": u, "y": y},
-                        units={"u": "1", "y": "1"}, Ts=TS)
+def _data():
+    return gain_data()
 
 
 def _closed_form(ds, w, mean, sd) -> float:
