@@ -118,6 +118,12 @@ def compare(
                   f"{v.discomfort_gap_Kmin:+.2f}", f"{v.T_cab_gap_K:+.2f}", v.word]
                  if v.scenarios else [f"{v.candidate} vs {v.baseline}", *"-----", v.word]
                  for v in result.verdicts])
+    off = sorted({(r.family, r.scenario, n) for r in result.held_out for n in r.extrapolated})
+    for fam in sorted({f for f, _, _ in off}):
+        runs = sorted({sc for f, sc, _ in off if f == fam})
+        names = sorted({n for f, _, n in off if f == fam})
+        say(f"{fam} planned outside its econ model's identification data ({', '.join(names)}) "
+            f"on {len(runs)} held-out run(s): {', '.join(runs)}")
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         cmp.plot_fronts(result, out / "fronts.png")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -111,6 +112,11 @@ def test_compare_result_round_trips_json():
     assert back.to_dict() == r.to_dict()
     assert "held out: stopgo@36C" in r.summary() and "CompareResult(" in repr(r)
     assert "not resolved" in repr(r.verdicts[0])
+    # the envelope's record survives JSON
+    off = dataclasses.replace(r, held_out=(dataclasses.replace(r.held_out[0],
+                                                               extrapolated=("Q_e", "T_evap")),))
+    assert cmp.CompareResult.from_dict(json.loads(off.to_json())).held_out[0].extrapolated == (
+        "Q_e", "T_evap")
 
 
 def test_a_saving_bought_with_comfort_is_not_read_as_one():

@@ -13,7 +13,7 @@ import os
 import select
 import signal
 import sys
-import threading
+import warnings
 from pathlib import Path
 
 from acid.models.declaration import DeclarationError, Model
@@ -78,13 +78,16 @@ def _trial_load(path: Path) -> None:
     """Load ``path`` once in a forked child, its output discarded, bounded by
     ``LOAD_TIMEOUT_S``: a file that ends the process (``os._exit``, a crash) or never
     finishes is refused with one line naming the file, before acid runs it itself. Any other
-    failure is left to the real load, which names it. Skipped where ``fork`` is not the
-    way (no ``os.fork``, other threads running) and with a timeout of 0."""
+    failure is left to the real load, which names it. Skipped without ``os.fork`` and with a
+    timeout of 0. The child only runs the user's file: should another thread of the parent
+    hold a lock it needs, the child waits and the timeout names it."""
     timeout = _timeout_s()
-    if timeout == 0.0 or not hasattr(os, "fork") or threading.active_count() > 1:
+    if timeout == 0.0 or not hasattr(os, "fork"):
         return
     r, w = os.pipe()
-    pid = os.fork()
+    with warnings.catch_warnings():   # Python >= 3.12 warns of fork with threads running
+        warnings.simplefilter("ignore", DeprecationWarning)
+        pid = os.fork()
     if pid == 0:                                           # the child: load, report, leave
         try:
             os.close(r)

@@ -255,6 +255,9 @@ class PeriodicRun:
     residual_K: float
     first_pass_J: float
     end: dict = field(default_factory=dict)
+    #: the econ model's inputs a controller's plans took outside the data its power map was
+    #: identified on (E only: the model's envelope; empty when it stayed inside)
+    extrapolated: tuple[str, ...] = ()
 
 
 def _pass(plant, ctrl, drive, T_set: float):
@@ -299,8 +302,11 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     prev = plant_state(plant)
     first = E_prev = math.nan
     res, last = math.inf, {}
+    outside: list[str] = []
     for p in range(1, settings.max_passes + 1):
         E, T, rh = _pass(plant, ctrl, drive, settings.T_set)
+        outside += [n for n in getattr(getattr(ctrl, "mpc", None), "extrapolation", ())
+                    if n not in outside]
         if p == 1:
             first = E
         now = plant_state(plant)
@@ -322,7 +328,7 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     out = np.maximum(0.0, np.maximum(T - settings.T_high, settings.T_low - T))
     return PeriodicRun(sc.name, family, float(knob), E, float(np.sum(out) * drive.Ts / 60.0),
                        float(np.mean(rh)), float(np.mean(T)), p, bool(res < settings.tol_K),
-                       float(res), first, plant_state(plant))
+                       float(res), first, plant_state(plant), tuple(outside))
 
 
 # ------------------------------------------------------------------------------ statistics
@@ -484,9 +490,11 @@ class CompareResult:
                    tuple(FrontPoint(**fix(p, ("knob", "energy_J", "discomfort_Kmin",
                                                 "rh_mean"))) for p in d["fronts"]),
                    {k: _num(v) for k, v in d["tuned"].items()},
-                   tuple(PeriodicRun(**fix(r, ("knob", "energy_J", "discomfort_Kmin",
-                                               "rh_mean", "mean_T_cab", "residual_K",
-                                               "first_pass_J"))) for r in d["held_out"]),
+                   tuple(PeriodicRun(**{**fix(r, ("knob", "energy_J", "discomfort_Kmin",
+                                                  "rh_mean", "mean_T_cab", "residual_K",
+                                                  "first_pass_J")),
+                                        "extrapolated": tuple(r.get("extrapolated", ()))})
+                         for r in d["held_out"]),
                    tuple(Verdict.from_dict(v) for v in d["verdicts"]), dict(d["settings"]))
 
     def to_json(self) -> str:
