@@ -32,6 +32,10 @@ from acid.models.car_ac import model as CAR_AC
 from acid.models.declaration import Model
 from acid.studies.car_study import car_ac_values, fit_power, power_function
 
+#: W: a trip whose logged power varies less than this (standard deviation), or averages
+#: less, is scored in the pooled numbers only (the A/C was off)
+FLAT_W = 1.0
+
 
 @dataclass(frozen=True)
 class TripScore:
@@ -65,7 +69,8 @@ class HeldOut:
         return {"predictor": self.predictor, "folds": self.folds, "r2_5s": self.r2,
                 "r2_5s_ci90": list(self.r2_ci), "energy_ratio": self.energy_ratio,
                 "energy_ratio_ci90": list(self.energy_ratio_ci), "rmse_W": self.rmse_W,
-                "trips": [t.__dict__ for t in self.trips],
+                "trips": [{k: (None if isinstance(v, float) and v != v else v)
+                           for k, v in t.__dict__.items()} for t in self.trips],
                 "fold_values": list(self.fold_values)}
 
 
@@ -100,9 +105,12 @@ def _score(name: str, predictor: str, folds: int, names, P, Ph, fold_values=(),
            n_boot: int = 2000, seed: int = 0) -> HeldOut:
     trips = []
     for nm, p, ph in zip(names, P, Ph, strict=True):
-        r2 = 1 - np.sum((p - ph) ** 2) / max(np.sum((p - p.mean()) ** 2), 1e-9)
+        ss = np.sum((p - p.mean()) ** 2)
+        # a trip with the A/C off (logged power flat) has no R^2 and no energy ratio
+        r2 = 1 - np.sum((p - ph) ** 2) / ss if ss > len(p) * FLAT_W ** 2 else float("nan")
         trips.append(TripScore(nm, len(p), float(p.mean()), float(ph.mean()), float(r2),
-                               float(ph.sum() / p.sum()) if p.sum() > 0 else float("nan")))
+                               float(ph.sum() / p.sum()) if p.mean() > FLAT_W
+                               else float("nan")))
     r2, er, rmse = _pooled(P, Ph)
     rng = np.random.default_rng(seed)
     boot = []
@@ -126,7 +134,8 @@ def leave_trips_out(trips: Sequence[Dataset], cabin_values, folds: int | None = 
     P, Ph, names, fold_values = [], [], [], []
     for f, held in enumerate(parts):
         est = Dataset.concatenate([t for i, t in enumerate(trips) if i not in set(held)])
-        fit = fit_power(est, trips[held[0]], cabin_values, model)
+        with np.errstate(divide="ignore", invalid="ignore"):   # a held-out trip A/C off
+            fit = fit_power(est, trips[held[0]], cabin_values, model)
         fold_values.append(fit.values)
         values = car_ac_values(cabin_values, model)
         for k, v in fit.values.items():
