@@ -55,7 +55,7 @@ def _names(spec: str | None) -> list[str]:
     return [s.strip() for s in spec.split(",") if s.strip()] if spec else []
 
 
-def _read(params: Path | None, what: str):
+def _read(params: Path | None):
     from acid.models.values import ParameterValues
 
     return None if params is None else ParameterValues.from_json(params).replace(
@@ -87,16 +87,16 @@ def car_fit(
     _folder(logs)
     check_paths(inputs={"--map": map_path, "--params": params},
                 outputs={"--out": out, "--json": json_path})
-    with progress_bar("car fit", 2) as update:
-        trips = _trips(logs, map_path)
-        update(1, 2, "trips read")
-        names = [t.experiment_names()[0] for t in trips]
-        want = _names(held_out)
-        missing = [n for n in want if n not in names]
-        require(not missing, "--held-out", f"trip(s) {', '.join(missing)} not in {logs}")
-        held = [names.index(n) for n in want] if want else list(range(1, len(trips), 2))
-        result = fit_car(trips, cabin_values(_read(params, "cabin")), held)
-        update(2, 2, "power fitted")
+    cab = cabin_values(_read(params))
+    trips = _trips(logs, map_path)
+    names = [t.experiment_names()[0] for t in trips]
+    want = _names(held_out)
+    missing = [n for n in want if n not in names]
+    require(not missing, "--held-out", f"trip(s) {', '.join(missing)} not in {logs}")
+    held = [names.index(n) for n in want] if want else list(range(1, len(trips), 2))
+    with progress_bar("car fit", 1) as update:
+        result = fit_car(trips, cab, held)
+        update(1, 1, "power fitted")
     result.values.to_json(out)
     print_table("car_ac power rows", ["_row", "value"],
                 [[k, f"{v:.4g}"] for k, v in result.fit.values.items()])
@@ -134,7 +134,7 @@ def car_validate(
                 outputs={"--json": json_path})
     require(seed >= 0, "--seed", "must be >= 0")
     trips = _trips(logs, map_path)
-    cab = cabin_values(_read(params, "cabin"))
+    cab = cabin_values(_read(params))
     k = folds or len(trips)
     with progress_bar("car validate", k) as update:
         model = leave_trips_out(trips, cab, k, seed=seed, progress=update)
@@ -176,7 +176,7 @@ def car_control(
     check_paths(inputs={"--map": map_path, "--params": params},
                 outputs={"--json": json_path})
     require(horizon >= 2, "--horizon", "must be >= 2 samples")
-    values = _read(params, "car_ac")
+    values = _read(params)
     if values is not None and values.declaration.name != "car_ac":
         from acid.errors import DataError
         raise DataError(f"--params {params}: a parameter file of model "

@@ -76,8 +76,14 @@ class CarFit:
     def summary(self) -> dict:
         return {"estimation_trips": list(self.estimation), "held_out_trips": list(self.held_out),
                 "power_rows": self.fit.values, "status": self.fit.status,
-                "estimation": self.fit.estimation.__dict__,
-                "held_out": self.fit.held_out.__dict__}
+                "estimation": _finite(self.fit.estimation.__dict__),
+                "held_out": _finite(self.fit.held_out.__dict__)}
+
+
+def _finite(d: dict) -> dict:
+    """``d`` with a non-finite number (R^2 of trip means over one trip) as None."""
+    return {k: (None if isinstance(v, float) and not np.isfinite(v) else v)
+            for k, v in d.items()}
 
 
 def fit_car(trips: Sequence[Dataset], cabin: np.ndarray, held_out: Sequence[int]) -> CarFit:
@@ -86,8 +92,9 @@ def fit_car(trips: Sequence[Dataset], cabin: np.ndarray, held_out: Sequence[int]
     est = [t for i, t in enumerate(trips) if i not in held]
     if not est or not held:
         raise DataError("the car fit needs at least one estimation and one held-out trip")
-    fit = fit_power(Dataset.concatenate(est), Dataset.concatenate([trips[i] for i in held]),
-                    cabin, CAR_AC)
+    with np.errstate(divide="ignore", invalid="ignore"):   # trip-mean R^2 over one trip
+        fit = fit_power(Dataset.concatenate(est),
+                        Dataset.concatenate([trips[i] for i in held]), cabin, CAR_AC)
     values = car_ac_values(cabin, CAR_AC)
     for n in POWER_NAMES:
         values[CAR_AC.parameter_names.index(n)] = fit.values[n]
