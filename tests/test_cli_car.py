@@ -103,3 +103,23 @@ def test_car_commands_refuse_a_wrong_parameter_file_and_an_unknown_trip(logs, tm
                                               "TripZ9"]), "--held-out", "TripZ9")
     assert_one_line_error(runner.invoke(app, ["car", "control", str(logs), "--trip",
                                               "TripZ9"]), "TripZ9")
+
+
+@needs_logs
+def test_validate_car_ac_reads_the_car_fit_file_and_names_it_for_a_cabin_file(logs, tmp_path):
+    from acid.models import load
+    from acid.models.values import ParameterValues
+
+    h5, out = tmp_path / "t.h5", tmp_path / "car_ac.json"
+    cabin = ParameterValues(model=load("car_cabin")).to_json(tmp_path / "cabin.json")
+    r = runner.invoke(app, ["import", str(logs / "TripA04.csv.gz"), "--map",
+                            "example:bmw_i3_map.toml", "--out", str(h5)])
+    assert r.exit_code == 0, r.output
+    assert_one_line_error(runner.invoke(app, ["validate", str(h5), "--model", "car_ac",
+                                              "--params", str(cabin)]),
+                          "'car_cabin'", "acid car fit")
+    r = runner.invoke(app, ["car", "fit", str(logs), "--params", str(cabin), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["validate", str(h5), "--model", "car_ac", "--params", str(out),
+                            "--starts", "3", "--horizon", "12", "--out", str(tmp_path / "f")])
+    assert r.exit_code == 0, r.output
