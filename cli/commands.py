@@ -74,3 +74,13 @@ def register(app) -> None:
     from acid_cli import compare
 
     app.command(name="compare")(compare.compare)
+
+    from acid_cli import car
+
+    car_app = type(app)(name="car", no_args_is_help=True,
+                        help="The car study on a folder of a car's logs: fit, validate, "
+                             "control.")
+    car_app.command(name="fit")(car.car_fit)
+    car_app.command(name="validate")(car.car_validate)
+    car_app.command(name="control")(car.car_control)
+    app.add_typer(car_app, name="car")

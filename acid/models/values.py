@@ -35,6 +35,10 @@ from acid.models.loader import BUILT_IN, load
 
 #: The ``format`` key of a parameter file.
 FORMAT = "acid-declared-params"
+#: (model of the file given, model wanted) -> how to make the file wanted from it
+MADE_FROM = {("car_cabin", "car_ac"): "`acid car fit LOGS --params FILE` writes the car_ac "
+             "file from it (the A/C power rows fitted on the logs)",
+             ("car_ac", "car_cabin"): "validate it with --model car_ac"}
 _LOADED: dict[str, Model] = {}
 #: {model name: the class bound to it} (``ModelParams``, ``EconParams``): what a file of
 #: that model is read as
@@ -274,7 +278,9 @@ class ParameterValues:
         except AcidError as exc:   # a model file that is gone or wrong
             raise DataError(f"{source}: {exc}") from None
         if named != m.name:
-            raise DataError(f"{source}: parameters of model {named!r}, not {m.name!r}")
+            hint = MADE_FROM.get((named, m.name))
+            raise DataError(f"{source}: parameters of model {named!r}, not {m.name!r}"
+                            + (f"; {hint}" if hint else ""))
         fmt = d.get("format")
         if fmt is not None and fmt != FORMAT:
             raise DataError(f"{source}: unknown format {fmt!r} (expected {FORMAT!r})")

@@ -1,0 +1,200 @@
+"""``acid car fit|validate|control``: the car study on a folder of a car's logs.
+
+``fit`` fits the A/C power rows of ``car_ac`` on estimation trips (the cabin rows from a
+``car_cabin`` parameter file) and scores them on held-out trips; ``validate`` holds out each
+trip in turn (leave-trips-out) beside an unconstrained regressor's bound; ``control`` runs
+the car's economic NMPC on one trip's replay against the car's own set-point replayed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from acid import __version__
+from acid_cli._common import (
+    check_paths,
+    handle_errors,
+    print_table,
+    progress_bar,
+    require,
+    say,
+    write_summary,
+)
+
+#: the import map used when --map is not given (the BMW i3 summer trips' channels)
+DEFAULT_MAP = "example:bmw_i3_map.toml"
+
+LOGS = typer.Argument(..., metavar="LOGS", help="Folder of the car's trip logs (*.csv.gz or "
+                      "*.csv, one trip per file), read through --map.")
+MAP = typer.Option(None, "--map", "-m", help="Import map of the logs' channels (T_cab, T_evap, "
+                   f"T_amb, v_veh, P_comp; default {DEFAULT_MAP}).")
+JSON = typer.Option(None, "--json", help="Write a JSON summary here.")
+
+
+def _folder(logs: Path) -> None:
+    from acid.errors import DataError
+
+    if not logs.exists():
+        raise DataError(f"LOGS {logs}: folder not found")
+    if not logs.is_dir():
+        raise DataError(f"LOGS {logs}: not a folder of trip logs")
+
+
+def _trips(logs: Path, map_path, names=None):
+    from acid.data import ChannelMap
+    from acid.examples import resolve
+    from acid.studies.car.run import load_trips
+
+    cmap = ChannelMap.from_file(map_path if map_path is not None else resolve(DEFAULT_MAP))
+    return load_trips(logs, cmap, names)
+
+
+def _names(spec: str | None) -> list[str]:
+    return [s.strip() for s in spec.split(",") if s.strip()] if spec else []
+
+
+def _read(params: Path | None):
+    from acid.models.values import ParameterValues
+
+    return None if params is None else ParameterValues.from_json(params).replace(
+        source=str(params))
+
+
+def _f(x, d=2) -> str:
+    return "n/a" if x is None or x != x else f"{x:.{d}f}"
+
+
+@handle_errors
+def car_fit(
+    logs: Path = LOGS,
+    map_path: Path | None = MAP,
+    params: Path | None = typer.Option(
+        None, "--params", help="car_cabin parameter file (acid fit --model car_cabin --method "
+        "pem) for the cabin rows; default: car_cabin's declared values."),
+    held_out: str | None = typer.Option(
+        None, "--held-out", help="Comma-separated trip names held out (default: every "
+        "second trip, the 2nd, 4th...)."),
+    out: Path = typer.Option(Path("car_ac.json"), "--out", help="car_ac parameter file to "
+                             "write."),
+    json_path: Path | None = JSON,
+) -> None:
+    """Fit car_ac's A/C power on estimation trips, score it on the held-out trips, write
+    the car_ac parameter file (`acid validate --model car_ac --params` reads it)."""
+    from acid.studies.car.run import cabin_values, fit_car
+
+    _folder(logs)
+    check_paths(inputs={"--map": map_path, "--params": params},
+                outputs={"--out": out, "--json": json_path})
+    cab = cabin_values(_read(params))
+    trips = _trips(logs, map_path)
+    names = [t.experiment_names()[0] for t in trips]
+    want = _names(held_out)
+    missing = [n for n in want if n not in names]
+    require(not missing, "--held-out", f"trip(s) {', '.join(missing)} not in {logs}")
+    held = [names.index(n) for n in want] if want else list(range(1, len(trips), 2))
+    with progress_bar("car fit", 1) as update:
+        result = fit_car(trips, cab, held)
+        update(1, 1, "power fitted")
+    result.values.to_json(out)
+    print_table("car_ac power rows", ["_row", "value"],
+                [[k, f"{v:.4g}"] for k, v in result.fit.values.items()])
+    rows = [[what, s.n, _f(s.r2), f"{s.rmse_W:.0f}", _f(s.energy_ratio)]
+            for what, s in (("estimation trips", result.fit.estimation),
+                            ("held-out trips", result.fit.held_out))]
+    print_table(f"P_comp on {len(result.estimation)} estimation and {len(result.held_out)} "
+                "held-out trips", ["_trips", "samples", "R^2 (5 s)", "RMSE W",
+                                   "energy model/logged"], rows)
+    say(f"car_ac parameters written to {out}")
+    write_summary(json_path, {**result.summary(), "params": str(out),
+                              "acid_version": __version__})
+
+
+@handle_errors
+def car_validate(
+    logs: Path = LOGS,
+    map_path: Path | None = MAP,
+    params: Path | None = typer.Option(
+        None, "--params", help="car_cabin or car_ac parameter file for the cabin rows "
+        "(the power rows are refitted in each fold); default: declared values."),
+    folds: int | None = typer.Option(None, "--folds", help="Folds of trips (default: one "
+                                     "per trip, each trip held out alone)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the trip resampling (intervals)."),
+    json_path: Path | None = JSON,
+) -> None:
+    """Leave-trips-out: car_ac's power rows refitted without each fold's trips and scored on
+    them (R^2 per 5 s, energy model/logged, per trip and pooled with 90 % intervals), beside
+    an unconstrained quadratic regressor on the same logged channels (the logs' bound)."""
+    from acid.studies.car.power import leave_trips_out, regressor_bound
+    from acid.studies.car.run import cabin_values
+
+    _folder(logs)
+    check_paths(inputs={"--map": map_path, "--params": params},
+                outputs={"--json": json_path})
+    require(seed >= 0, "--seed", "must be >= 0")
+    trips = _trips(logs, map_path)
+    cab = cabin_values(_read(params))
+    k = folds or len(trips)
+    with progress_bar("car validate", k) as update:
+        model = leave_trips_out(trips, cab, k, seed=seed, progress=update)
+    bound = regressor_bound(trips, k, seed=seed)
+    rows = [[a.trip, a.n, f"{a.mean_logged_W:.0f}", f"{a.mean_model_W:.0f}", _f(a.r2),
+             _f(a.energy_ratio), _f(b.r2)] for a, b in zip(model.trips, bound.trips,
+                                                           strict=True)]
+    print_table(f"P_comp on held-out trips ({k} folds)",
+                ["_trip", "samples", "logged W", "model W", "R^2 (5 s)", "energy ratio",
+                 "bound R^2"], rows)
+    print_table("pooled over the held-out trips (90 % intervals over trips resampled)",
+                ["_predictor", "R^2 (5 s)", "energy model/logged", "RMSE W"],
+                [[h.predictor, f"{h.r2:.2f} [{h.r2_ci[0]:.2f}, {h.r2_ci[1]:.2f}]",
+                  f"{h.energy_ratio:.2f} [{h.energy_ratio_ci[0]:.2f}, "
+                  f"{h.energy_ratio_ci[1]:.2f}]", f"{h.rmse_W:.0f}"] for h in (model, bound)])
+    write_summary(json_path, {"model": model.summary(), "bound": bound.summary(),
+                              "acid_version": __version__})
+
+
+@handle_errors
+def car_control(
+    logs: Path = LOGS,
+    trip: str = typer.Option(..., "--trip", help="The trip replayed (its file name without "
+                             "suffixes, e.g. TripA12)."),
+    map_path: Path | None = MAP,
+    params: Path | None = typer.Option(
+        None, "--params", help="car_ac parameter file (acid car fit); default: declared "
+        "values."),
+    horizon: int = typer.Option(120, "--horizon", help="NMPC horizon, samples (5 s each)."),
+    json_path: Path | None = JSON,
+) -> None:
+    """The car's economic NMPC on one trip's replay (its ambient and speed), the identified
+    car_ac model as the plant, beside the car's logged set-point replayed on it."""
+    from acid.control.car_ac import CarACConfig
+    from acid.models.values import ParameterValues
+    from acid.studies.car.run import control_trip
+
+    _folder(logs)
+    check_paths(inputs={"--map": map_path, "--params": params},
+                outputs={"--json": json_path})
+    require(horizon >= 2, "--horizon", "must be >= 2 samples")
+    values = _read(params)
+    if values is not None and values.declaration.name != "car_ac":
+        from acid.errors import DataError
+        raise DataError(f"--params {params}: a parameter file of model "
+                        f"{values.declaration.name!r}; control needs one of 'car_ac' "
+                        "(acid car fit writes it)")
+    if values is None:
+        from acid.models import load
+        values = ParameterValues(model=load("car_ac"), source="declared values")
+    (ds,) = _trips(logs, map_path, [trip])
+    with progress_bar(f"car control {trip}", len(ds)) as update:
+        s = control_trip(ds, values, CarACConfig(N=horizon), progress=update)
+    rows = [[r["controller"], f"{r['energy_kJ']:.0f}", f"{r['mean_T_cab_C']:.2f}",
+             f"{r['violation_Ks']:.0f}", r["fallbacks"]]
+            for r in (s["nmpc"], s["logged_replayed"])]
+    rows.append(["logged car (as driven)", f"{s['logged']['energy_kJ']:.0f}",
+                 f"{s['logged']['mean_T_cab_C']:.2f}", "", ""])
+    print_table(f"{trip}: {s['samples']} samples, band {s['band_C'][0]:.0f}-"
+                f"{s['band_C'][1]:.0f} degC", ["_controller", "A/C energy kJ",
+                                               "mean cabin degC", "outside band K s",
+                                               "fallbacks"], rows)
+    write_summary(json_path, {**s, "params": values.label, "acid_version": __version__})
