@@ -77,7 +77,8 @@ def register(app) -> None:
 
     from acid_cli import car
 
-    car_app = type(app)(name="car", no_args_is_help=True,
+    car_app = type(app)(name="car", no_args_is_help=True, cls=app.info.cls,   # acid's group:
+                        # flags shown without a type, usage errors as one line
                         help="The car study on a folder of a car's logs: fit, validate, "
                              "control.")
     car_app.command(name="fit")(car.car_fit)
