@@ -95,6 +95,9 @@ def _trial_load(path: Path) -> None:
             os.dup2(null, 1)
             os.dup2(null, 2)
             sys.stdout = sys.stderr = open(os.devnull, "w")   # noqa: SIM115 - os._exit ends it
+            import faulthandler
+
+            faulthandler.disable()     # a crash of the user's file: its exit status says it
             try:
                 _load_file(path)
             except BaseException:  # noqa: BLE001 - the real load names it
