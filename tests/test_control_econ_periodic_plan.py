@@ -30,7 +30,8 @@ def test_the_cyclic_constraint_holds_on_every_plan(plans):
         assert c.plan.success, (c.formulation, c.start, c.plan.status)
         np.testing.assert_allclose(c.plan.x[-1], c.plan.x[0], atol=1e-5)
         assert c.plan.mean_T_cab == pytest.approx(C2K(24.0), abs=1e-5)
-        assert C2K(23.0) - 1e-5 <= c.plan.x[1:, 0].min() <= c.plan.x[1:, 0].max() <= C2K(25.0) + 1e-5
+        T = c.plan.x[1:, 0]
+        assert C2K(23.0) - 1e-5 <= T.min() <= T.max() <= C2K(25.0) + 1e-5
 
 
 def test_the_winner_is_the_least_replayed_periodic_energy(plans):
@@ -58,3 +59,19 @@ def test_a_plan_replayed_from_off_its_periodic_state_converges_to_it(econ_truth)
     rep = replay_periodic(econ_plant(econ_truth.theta_all), plan, V, T_AMB, 5.0, start=start)
     assert rep.passes >= 3                                    # had to settle
     assert rep.energy_J == pytest.approx(plan.energy_J, rel=2e-3)
+
+
+def test_a_plant_that_differs_from_the_model_gets_its_mean_matched(econ_truth):
+    """The plant's cabin load is larger (Q_cab + 40 W): the model's mean is re-set until
+    the plant's periodic mean is the required one (equal comfort)."""
+    from acid.models.econ_params import EconParams
+
+    hot = EconParams(values={**econ_truth.values, "Q_cab": 120.0}, C_ew=econ_truth.C_ew,
+                     power_map=econ_truth.power_map, name="hot")
+    r = periodic_plans(econ_truth, V, T_AMB, CFG, n_random=0, formulations=("shooting",),
+                       plant_factory=lambda: econ_plant(hot.theta_all))
+    unmatched = replay_periodic(econ_plant(hot.theta_all), shooting_plan(econ_truth, V, T_AMB,
+                                                                          CFG), V, T_AMB, 5.0)
+    assert abs(unmatched.mean_T_cab - C2K(24.0)) > 0.05       # the mismatch is real
+    for c in r.candidates:
+        assert c.replay.mean_T_cab == pytest.approx(C2K(24.0), abs=0.02), c.to_dict()

@@ -112,7 +112,8 @@ def replay_periodic(plant, plan: WholeCyclePlan, v_veh, T_amb, Ts: float, *, max
                     tol_K: float = 0.005, start: dict | None = None) -> PeriodicReplay:
     """Apply the plan's inputs open loop, pass after pass, until the plant's pass-end states
     move by less than ``tol_K`` (K, humidity scaled 1 g/kg = 1 K); the first pass starts
-    from ``start`` or else the plan's own periodic state (the econ states of the plant)."""
+    from ``start`` or else the plan's own periodic state (the econ states of the plant; its
+    other states its own). Only the econ model's states are compared between passes."""
     v = np.asarray(v_veh, dtype=float).ravel()
     Ta = np.broadcast_to(np.asarray(T_amb, dtype=float), v.shape)
     keys = [k for k in getattr(plant, "INITIAL_KEYS", econ.STATES)]
@@ -122,7 +123,7 @@ def replay_periodic(plant, plan: WholeCyclePlan, v_veh, T_amb, Ts: float, *, max
 
     def state():
         m = plant.measure()
-        return {k: float(m[k]) for k in keys if k in m and np.isfinite(float(m[k]))}
+        return {k: float(m[k]) for k in econ.STATES if k in m}
 
     prev, step, p = state(), np.inf, 0
     T = np.empty(v.size)
@@ -239,10 +240,13 @@ def _simulate(params, v, Ta, cfg, u):
 def periodic_plans(params: EconParams, v_veh, T_amb, config: PlanConfig, *,
                    plant_factory=None, guess: tuple[np.ndarray, np.ndarray] | None = None,
                    n_random: int = 1, seed: int = 0, formulations=FORMULATIONS,
-                   shooting_m: int = 4, band_tol_K: float = 0.05) -> PeriodicPlanSet:
+                   shooting_m: int = 4, band_tol_K: float = 0.05, match_rounds: int = 4,
+                   match_tol_K: float = 0.02) -> PeriodicPlanSet:
     """Solve every formulation from every start, replay each on ``plant_factory()`` (a new
     plant per replay; ``None``: no replay, the model energy decides) and pick the plan
-    (module docstring)."""
+    (module docstring). With a plant, each plan's model mean is re-set (at most
+    ``match_rounds`` solves) until its replayed periodic mean T_cab is ``config.T_mean``
+    within ``match_tol_K`` (the mean clipped to the band): equal comfort on the plant."""
     cfg = config if config.cyclic else _replace(config, cyclic=True)
     v = np.asarray(v_veh, dtype=float).ravel()
     Ta = np.broadcast_to(np.asarray(T_amb, dtype=float), v.shape).copy()
@@ -261,22 +265,29 @@ def periodic_plans(params: EconParams, v_veh, T_amb, config: PlanConfig, *,
     cands = []
     for form in formulations:
         for name, g in starts.items():
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", ExtrapolationWarning)
-                try:
-                    if form == "direct":
-                        plan = best_known_plan(params, v, Ta, cfg, guess=g)
-                    elif form == "shooting":
-                        plan = shooting_plan(params, v, Ta, cfg, m=shooting_m, guess=g)
-                    else:
-                        raise ConfigError(f"unknown plan formulation {form!r}: "
-                                          f"choose from {', '.join(FORMULATIONS)}")
-                except ConfigError:
-                    if form not in FORMULATIONS:
-                        raise
-                    continue
-                rep = (replay_periodic(plant_factory(), plan, v, Ta, params.Ts)
-                       if plant_factory is not None else None)
+            if form not in FORMULATIONS:
+                raise ConfigError(f"unknown plan formulation {form!r}: "
+                                  f"choose from {', '.join(FORMULATIONS)}")
+            T_req, pc, plan, rep = cfg.T_mean, cfg, None, None
+            for _ in range(max(1, match_rounds) if plant_factory is not None else 1):
+                pc = _replace(cfg, T_mean=float(np.clip(T_req, cfg.T_low, cfg.T_high)))
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", ExtrapolationWarning)
+                    try:
+                        plan = (best_known_plan(params, v, Ta, pc, guess=g) if form == "direct"
+                                else shooting_plan(params, v, Ta, pc, m=shooting_m, guess=g))
+                    except ConfigError:
+                        break
+                    rep = (replay_periodic(plant_factory(), plan, v, Ta, params.Ts)
+                           if plant_factory is not None else None)
+                if rep is None or abs(rep.mean_T_cab - cfg.T_mean) <= match_tol_K:
+                    break
+                # the model and the plant disagree on the cabin: re-set the model's mean
+                # until the plant's periodic mean is the required one (equal comfort)
+                T_req = pc.T_mean - (rep.mean_T_cab - cfg.T_mean)
+                g = (plan.x, plan.inputs)
+            if plan is None:
+                continue
             resid = float(np.max(np.abs(plan.x[-1, :4] - plan.x[0, :4])))
             cands.append(Candidate(form, name, plan, rep, resid))
     if not cands:
@@ -289,6 +300,8 @@ def periodic_plans(params: EconParams, v_veh, T_amb, config: PlanConfig, *,
                 and c.replay.max_T_cab <= cfg.T_high + band_tol_K)
 
     ok = [c for c in cands if in_band(c)] or cands
+    if plant_factory is not None:      # equal comfort: the plant's mean at the required one
+        ok = [c for c in ok if abs(c.replay.mean_T_cab - cfg.T_mean) <= match_tol_K] or ok
     best = {}
     for c in ok:
         if c.formulation not in best or c.energy_J < best[c.formulation].energy_J:
