@@ -246,7 +246,8 @@ def periodic_plans(params: EconParams, v_veh, T_amb, config: PlanConfig, *,
     plant per replay; ``None``: no replay, the model energy decides) and pick the plan
     (module docstring). With a plant, each plan's model mean is re-set (at most
     ``match_rounds`` solves) until its replayed periodic mean T_cab is ``config.T_mean``
-    within ``match_tol_K`` (the mean clipped to the band): equal comfort on the plant."""
+    within ``match_tol_K``, the model's band moved with it (the model's cabin offset from the
+    plant's): equal comfort on the plant."""
     cfg = config if config.cyclic else _replace(config, cyclic=True)
     v = np.asarray(v_veh, dtype=float).ravel()
     Ta = np.broadcast_to(np.asarray(T_amb, dtype=float), v.shape).copy()
@@ -270,7 +271,9 @@ def periodic_plans(params: EconParams, v_veh, T_amb, config: PlanConfig, *,
                                   f"choose from {', '.join(FORMULATIONS)}")
             T_req, pc, plan, rep = cfg.T_mean, cfg, None, None
             for _ in range(max(1, match_rounds) if plant_factory is not None else 1):
-                pc = _replace(cfg, T_mean=float(np.clip(T_req, cfg.T_low, cfg.T_high)))
+                sh = float(T_req - cfg.T_mean)    # the model's cabin offset: band moved too
+                pc = _replace(cfg, T_mean=cfg.T_mean + sh, T_low=cfg.T_low + sh,
+                              T_high=cfg.T_high + sh)
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", ExtrapolationWarning)
                     try:
