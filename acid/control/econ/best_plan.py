@@ -166,7 +166,7 @@ def best_known_plan(params: EconParams, v_veh, T_amb, config: PlanConfig,
     for msg in params.power_map.outside(v_veh=v, T_amb=Ta):
         warnings.warn(f"plan: power map extrapolated: {msg}", ExtrapolationWarning,
                       stacklevel=2)
-    F = _interval_map(params, Ts, n)
+    F = interval_map(params, Ts, n)
     Z = ca.MX.sym("Z", _NX, n + 1)
     U = ca.MX.sym("U", _NU, n)
     xoff, xscl = ca.DM(_X_OFF), ca.DM(_X_SCL)
@@ -261,7 +261,7 @@ def _initial_guess(params, v, Ta, cfg: PlanConfig, guess, x_start):
     return x, u
 
 
-def _interval_map(params: EconParams, Ts: float, n: int) -> ca.Function:
+def interval_map(params: EconParams, Ts: float, n: int) -> ca.Function:
     """``(x (5, n), u (2, n), d (2, n)) -> (x_next, Q_e, P_comp, P_bl)``: the declaration's
     interval of ``Ts`` s (:func:`acid.models.econ.casadi_interval`, no disturbance) at the
     numbers of ``params``, mapped over ``n`` samples (P_comp unclipped)."""
