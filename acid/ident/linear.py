@@ -299,11 +299,8 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
     deviations of the residuals, re-estimated once), robust to outliers; its covariance is
     the M-estimator's sandwich (scores psi(e) z, the bread divided by the share of
     unclipped residuals; "white": the robust sigma^2 (Z^T Z)^-1).
-    ``prior`` (mean, sd) per column (sd inf: none; squared loss only): the maximum a
-    posteriori estimate, the prior as rows sigma (theta - mean) / sd beside the data rows,
-    sigma the data's residual standard deviation of the fit without priors (the equation
-    errors' noise scale); the covariance is the posterior curvature sigma^2 (Za^T Za)^-1
-    ("white") or the sandwich with the data's scores plus the prior rows' (``hac``).
+    ``prior`` (mean, sd per column): maximum a posteriori (``prior_rows``); covariance
+    sigma^2 (Za^T Za)^-1 ("white") or the data's HAC sandwich plus the prior rows'.
     """
     X, y = reg.X, reg.y
     n, k = X.shape
