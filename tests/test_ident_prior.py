@@ -58,9 +58,32 @@ def test_a_bad_prior_is_refused_naming_the_parameter(prior):
         _model(prior=prior)
 
 
-def test_least_squares_refuses_priors_it_cannot_honour():
+@pytest.mark.parametrize("method", ["ls", "cvx"])
+def test_least_squares_map_equals_the_closed_form(method):
+    """Equation error: the prior's rows weighted by the residual sd of the fit without
+    priors; estimate and posterior standard error against numpy's closed form."""
+    ds = _data()
+    u, y = ds["u"], ds["y"]
+    r = fit_model(_model(prior=(1.5, 0.01)), ds, method, covariance="white")
+    e = r.estimates[0]
+    res = y - (u @ y) / (u @ u) * u
+    lam = (res @ res / (u.size - 1)) / 0.01**2
+    assert e.value == pytest.approx((u @ y + 1.5 * lam) / (u @ u + lam), abs=1e-8)
+    assert e.stderr == pytest.approx(0.01 * np.sqrt(lam / (u @ u + lam)), abs=1e-8)
+    assert any("prior 1.5 +- 0.01" in n for n in r.notes)
+
+
+def test_least_squares_prior_fixes_what_the_data_leave_open():
+    r = fit_model(_model(prior=(0.7, 0.05), split=True), _data(), "ls")
+    v = {e.name: e.value for e in r.estimates}
+    assert v["b"] == pytest.approx(0.7, abs=1e-3)
+    assert v["a"] + v["b"] == pytest.approx(2.0, abs=0.02)
+    assert all(np.isfinite(e.stderr) for e in r.estimates)
+
+
+def test_huber_least_squares_refuses_priors():
     with pytest.raises(ConfigError, match="priors on k"):
-        fit_model(_model(prior=(1.5, 0.1)), _data(), "ls")
+        fit_model(_model(prior=(1.5, 0.1)), _data(), "ls", loss="huber")
 
 
 def test_the_cli_prior_option(tmp_path):

@@ -115,9 +115,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     if start:
         model = _with_values(model, start)
     priors = [p.name for p in model.parameters if p.prior is not None and not p.fixed]
-    if priors and method in ("ls", "cvx"):
-        raise ConfigError(f"--method {method}: the priors on {', '.join(priors)} are "
-                          "honoured by --method oe, pem or auto (output error)")
+    if priors and method in ("ls", "cvx") and loss == "huber":
+        raise ConfigError(f"--method {method} --loss huber: the priors on "
+                          f"{', '.join(priors)} are honoured by the squared loss")
     if method == "pem":
         from acid.ident.pem import fit_pem
 
@@ -174,7 +174,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                            bounds=(lo[pos], hi[pos]) if ls_method == "cvx" else None,
                            solver=solver, loss=loss, constraints=tuple(
                                linear.affine_rows(model, data, reg.columns, P[0])
-                               if ls_method == "cvx" else ()))
+                               if ls_method == "cvx" else ()),
+                           prior=linear.prior_arrays(model, reg.columns))
         theta[pos] = sol.theta
         stderr[pos] = sol.stderr
         cov[np.ix_(pos, pos)] = sol.cov
@@ -225,6 +226,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     if lin:
         notes.append(f"equation-error least squares on {', '.join(lin)} (linear in their "
                      "free parameters, every signal measured)")
+        if method in ("ls", "cvx") and linear.prior_note(model, columns, theta):
+            notes.append(linear.prior_note(model, columns, theta))
     oe_summary: dict = {}
     optima: list[Optimum] = []
     failed: list[FailedStart] = []

@@ -24,6 +24,7 @@ import numpy as np
 
 from acid.ident.data import ModelData
 from acid.ident.hac import hac_meat, resolve_bandwidth, segment_ids
+from acid.ident.prior import prior_arrays, prior_note, prior_rows  # noqa: F401
 from acid.models.declaration import Model
 
 _RANK_RTOL = 1e-9
@@ -42,19 +43,6 @@ class Column:
     @property
     def label(self) -> str:
         return self.name if self.experiment is None else f"{self.name}@{self.experiment}"
-
-
-def prior_note(model: Model, columns, theta) -> str:
-    """One note line for the fitted ``columns`` that carry a declared prior: each estimate
-    beside its prior and how far it moved, in the prior's standard deviations ("" without
-    priors)."""
-    parts = []
-    for c, t in zip(columns, theta, strict=True):
-        pr = model.parameters[c.index].prior
-        if pr is not None:
-            parts.append(f"{c.label} {t:.4g} (prior {pr[0]:g} +- {pr[1]:g} "
-                         f"{model.parameters[c.index].unit}, {(t - pr[0]) / pr[1]:+.1f} sd)")
-    return ("maximum a posteriori with declared priors: " + "; ".join(parts)) if parts else ""
 
 
 @dataclass(frozen=True)
@@ -301,7 +289,8 @@ def affine_rows(model: Model, data: ModelData, columns: tuple[Column, ...],
 def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: str,
           hac_bandwidth, bounds: tuple[np.ndarray, np.ndarray] | None = None,
           solver: str | None = None, loss: str = "squared",
-          constraints: tuple[AffineRows, ...] = ()) -> Solution:
+          constraints: tuple[AffineRows, ...] = (),
+          prior: tuple[np.ndarray, np.ndarray] | None = None) -> Solution:
     """Least squares (CVXPY with ``bounds`` and ``constraints``), covariance (white or
     HAC), identifiability.
 
@@ -310,6 +299,8 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
     deviations of the residuals, re-estimated once), robust to outliers; its covariance is
     the M-estimator's sandwich (scores psi(e) z, the bread divided by the share of
     unclipped residuals; "white": the robust sigma^2 (Z^T Z)^-1).
+    ``prior`` (mean, sd per column): maximum a posteriori (``prior_rows``); covariance
+    sigma^2 (Za^T Za)^-1 ("white") or the data's HAC sandwich plus the prior rows'.
     """
     X, y = reg.X, reg.y
     n, k = X.shape
@@ -318,6 +309,10 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
     Z = X / scale
     s, Vt, keep = _svd(Z)
     rank = int(keep.sum())
+    Zd, yd = Z, y
+    Z, y, Rp, sig_p = prior_rows(Z, y, scale, rank, prior)
+    if Rp.shape[0]:
+        s, Vt, keep = _svd(Z)
     cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else math.inf
     # minimum-norm correction from the reference (scaled units): unique where identified
     phi_ref = reference * scale
@@ -337,6 +332,9 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
             phi, status, active = _solve_bounded(Z, y, scale, lo, hi, reg.columns, solver, phi,
                                                  constraints)
     theta = phi / scale
+    if Rp.shape[0]:
+        status = status.replace("lstsq", "lstsq, maximum a posteriori")
+    y = yd
     resid = y - X @ theta
     dof = max(n - rank, 1)
     bread = (Vt[keep].T / s[keep] ** 2) @ Vt[keep]
@@ -348,7 +346,7 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
         psi = np.clip(resid, -c, c)
     if covariance == "hac":
         order = np.argsort(reg.sample, kind="stable")
-        scores = Z * psi[:, None]
+        scores = Zd * psi[:, None]
         # rows of one instant (several equations) make one score
         uniq, inv = np.unique(reg.sample[order], return_inverse=True)
         h = np.zeros((uniq.size, k))
@@ -356,7 +354,10 @@ def solve(reg: Regression, data: ModelData, reference: np.ndarray, covariance: s
         g = segment_ids(uniq, data.segments)
         bandwidth = resolve_bandwidth(hac_bandwidth, _centred_scores(X, psi, reg.sample,
                                                                      order, inv, uniq.size), g)
-        cov_phi = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread) / frac**2
+        meat = hac_meat(h, g, bandwidth) + sig_p**2 * (Rp.T @ Rp) * dof / n
+        cov_phi = n / dof * (bread @ meat @ bread) / frac**2
+    elif Rp.shape[0]:       # the posterior curvature, in the data's noise scale
+        cov_phi = sig_p**2 * bread
     elif loss == "huber":
         cov_phi = robust_std(resid) ** 2 * bread
     else:
