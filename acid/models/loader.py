@@ -2,13 +2,26 @@
 
 A model file is a Python file that defines, at module level, ``model = Model(...)`` (or a
 function ``model()`` returning one). It is executed as a module named after the file.
+
+Loading a file is guarded: it is first loaded (imported and traced) in a forked child
+process, so a file that ends the process (``os._exit``, a crash), never finishes (an endless
+loop, a huge trace: bound ``ACID_MODEL_TIMEOUT``, default 60 s) or declares more than
+``ACID_MODEL_MAX_STATES`` states (default 400) or ``ACID_MODEL_MAX_PARAMETERS`` parameters
+(default 5000) is one ``DeclarationError`` naming the file and the cause; then acid loads it
+itself. Where ``fork`` is missing or other threads run, only the in-process checks apply.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.util
+import os
+import select
+import signal
 import sys
+import threading
+import time
 from pathlib import Path
 
 from acid.models.declaration import DeclarationError, Model
@@ -17,6 +30,25 @@ from acid.models.declaration import DeclarationError, Model
 BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
             "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin",
             "heating": "acid.models.heating", "car_ac": "acid.models.car_ac"}
+
+#: Wall-clock bound on loading (importing and tracing) a model file, s; env ACID_MODEL_TIMEOUT.
+LOAD_TIMEOUT_S = 60.0
+#: Size bounds of a declaration loaded from a file; env ACID_MODEL_MAX_STATES / _PARAMETERS.
+MAX_STATES = 400
+MAX_PARAMETERS = 5000
+
+
+def _bound(env: str, default: float) -> float:
+    text = os.environ.get(env)
+    if text is None:
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise DeclarationError(f"{env}={text!r}: expected a positive finite number")
+    return value
 
 
 def load(spec: str | Path | Model) -> Model:
@@ -34,6 +66,11 @@ def load(spec: str | Path | Model) -> Model:
                                "or a .py file declaring a model")
     if not path.is_file():
         raise DeclarationError(f"{path}: model file not found")
+    _check_in_child(path)
+    return _checked_size(_load_file(path), path)
+
+
+def _load_file(path: Path) -> Model:
     name = f"acid_user_model_{abs(hash(str(path.resolve())))}"
     spec_ = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec_)
@@ -98,3 +135,118 @@ def _model_of(module, where: str) -> Model:
         raise DeclarationError(f"{Path(where).name}: defines no model (write "
                                "`model = acid.models.Model(...)` at module level)")
     return obj
+
+
+def _checked_size(model: Model, path: Path) -> Model:
+    for what, n, env, default in (("states", len(model.states), "ACID_MODEL_MAX_STATES",
+                                   MAX_STATES),
+                                  ("parameters", len(model.parameters),
+                                   "ACID_MODEL_MAX_PARAMETERS", MAX_PARAMETERS)):
+        limit = int(_bound(env, default))
+        if n > limit:
+            raise DeclarationError(f"{path.name}: declares {n} {what}, above the bound of "
+                                   f"{limit} ({env} raises it)")
+    return model
+
+
+@contextlib.contextmanager
+def _sizes_bounded(path: Path):
+    """Refuse an oversized declaration before CasADi traces it (in the child only)."""
+    init = Model.__init__
+
+    def bounded(self, *args, **kw):
+        if kw.get("source") is None:   # the declaring file, as Model itself would find it
+            kw["source"] = sys._getframe(1).f_code.co_filename
+        for what, env, default in (("states", "ACID_MODEL_MAX_STATES", MAX_STATES),
+                                   ("parameters", "ACID_MODEL_MAX_PARAMETERS",
+                                    MAX_PARAMETERS)):
+            items = kw.get(what)
+            if items is not None and not isinstance(items, (list, tuple)):
+                items = kw[what] = tuple(items)
+            limit = int(_bound(env, default))
+            if items is not None and len(items) > limit:
+                raise DeclarationError(f"{path.name}: declares {len(items)} {what}, above the "
+                                       f"bound of {limit} ({env} raises it)")
+        init(self, *args, **kw)
+
+    Model.__init__ = bounded
+    try:
+        yield
+    finally:
+        Model.__init__ = init
+
+
+def _check_in_child(path: Path) -> None:
+    """Load ``path`` once in a forked child: what ends or hangs the child is one error here."""
+    if os.environ.get("ACID_MODEL_GUARD") == "0" or not hasattr(os, "fork") \
+            or threading.active_count() > 1:
+        return
+    timeout = _bound("ACID_MODEL_TIMEOUT", LOAD_TIMEOUT_S)
+    _bound("ACID_MODEL_MAX_STATES", MAX_STATES)
+    _bound("ACID_MODEL_MAX_PARAMETERS", MAX_PARAMETERS)
+    read, write = os.pipe()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # the child: load, report one line, end without running any cleanup
+        status = 3
+        try:
+            os.close(read)
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+            if "faulthandler" in sys.modules:   # no crash report from the child
+                sys.modules["faulthandler"].disable()
+            null = os.open(os.devnull, os.O_RDWR)
+            for fd in (0, 1, 2):
+                os.dup2(null, fd)
+            try:
+                with _sizes_bounded(path):
+                    _load_file(path)
+                report = "ok"
+            except DeclarationError as exc:
+                report = "error " + str(exc)
+            except BaseException as exc:  # noqa: BLE001 - reported to the parent
+                report = f"error {path.name}: {type(exc).__name__}: {exc} (while acid loads it)"
+            os.write(write, report.encode("utf-8", "replace")[:60000])
+            status = 0
+        finally:
+            os._exit(status)
+    os.close(write)
+    report = b""
+    try:
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise DeclarationError(
+                    f"{path.name}: loading the model file did not finish within {timeout:g} s "
+                    "(an endless loop or a huge model?); ACID_MODEL_TIMEOUT=SECONDS raises "
+                    "the bound")
+            ready, _, _ = select.select([read], [], [], min(left, 1.0))
+            if ready:
+                chunk = os.read(read, 65536)
+                if not chunk:
+                    break
+                report += chunk
+    finally:
+        os.close(read)
+        _, status = _reap(pid)
+    text = report.decode("utf-8", "replace")
+    if text.startswith("error "):
+        raise DeclarationError(text[6:].splitlines()[0])
+    if text != "ok":
+        if os.WIFSIGNALED(status):
+            cause = f"is killed by signal {signal.Signals(os.WTERMSIG(status)).name}"
+        else:
+            cause = f"ends the process (os._exit({os.WEXITSTATUS(status)}))"
+        raise DeclarationError(f"{path.name}: the model file {cause} while acid loads it; "
+                               "a model file only declares")
+
+
+def _reap(pid: int) -> tuple[int, int]:
+    """Wait for the child, killing it if it still runs (a timeout, an interrupt)."""
+    done, status = os.waitpid(pid, os.WNOHANG)
+    if done == 0:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+        done, status = os.waitpid(pid, 0)
+    return done, status
