@@ -987,7 +987,8 @@ CASES: list[Case] = [
     Case("day-jobs-zero", "options", ("day", "--jobs", "0", "--out", "{w}/dd"), ("--jobs",)),
     Case("day-out-is-a-file", "output", ("day", "--out", "{w}/afile"), ("--out", "afile")),
     Case("year-sweep-out-is-a-file", "output", ("year-sweep", "--out", "{w}/afile"),
-         ("--out", "afile")),    # a model file that ends the process or declares a model too big to trace (guarded load)
+         ("--out", "afile")),
+    # a model file that ends the process or declares a model too big to trace (guarded load)
     Case("fit-model-file-os-exit", "params",
          ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"), ("m.py", "os._exit(0)"),
          _write("m.py", "import os\nos._exit(0)\n")),

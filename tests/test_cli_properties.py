@@ -16,18 +16,14 @@ from __future__ import annotations
 import math
 import typing
 
-import pytest
+import typer
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from typer._click.exceptions import ClickException
 
-hypothesis = pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
-import typer  # noqa: E402
-from typer._click.exceptions import ClickException  # noqa: E402
-
-from acid.models.declaration import DeclarationError  # noqa: E402
-from acid.models.loader import load  # noqa: E402
-from acid_cli.main import app  # noqa: E402
+from acid.models.declaration import DeclarationError
+from acid.models.loader import load
+from acid_cli.main import app
 
 ROOT = typer.main.get_command(app)
 
