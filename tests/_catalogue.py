@@ -1011,6 +1011,8 @@ CASES: list[Case] = [
          ("--identify-duration", "nan")),
     Case("compare-seed-negative", "options",
          ("compare", "--seed", "-1", "--json", "{w}/c.json"), ("--seed", "-1")),
+    Case("day-seed-negative", "options", ("day", "--seed", "-1", "--out", "{w}/dd"),
+         ("--seed", "-1")),
 ]
 
 
