@@ -125,14 +125,16 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     except OSError as exc:
         raise OutputError(f"{path}: cannot create folder {path.parent} ({_reason(exc)})") from None
     clean_stale_parts(path.parent)
+    prefix = f".{path.name}.{os.getpid()}."
+    tmp_path = None
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=PART_SUFFIX,
-                                   dir=path.parent)
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot write in {path.parent} ({_reason(exc)})") from None
-    os.close(fd)
-    tmp_path = Path(tmp)
-    try:
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=PART_SUFFIX, dir=path.parent)
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write in {path.parent} ({_reason(exc)})") from None
+        tmp_path = Path(tmp)
+        _ACTIVE.add(tmp_path)
+        os.close(fd)
         try:
             yield tmp_path
             _fsync(tmp_path)
@@ -145,9 +147,29 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
                 raise OutputError(f"{path}: is a folder, expected a file name") from None
             raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
     except BaseException:
-        with contextlib.suppress(OSError):
-            tmp_path.unlink()
+        _remove_own_parts(path.parent, prefix, tmp_path)
         raise
+    finally:
+        _ACTIVE.discard(tmp_path)
+
+
+#: Temporary files this process is writing right now (so that cleaning up after one
+#: interrupted write never removes another writer's).
+_ACTIVE: set = set()
+
+
+def _remove_own_parts(folder: Path, prefix: str, tmp_path: Path | None) -> None:
+    """Remove this write's temporary file, also when the interrupt came between its creation
+    and its name reaching us (inside ``mkstemp``): then it is the one ``prefix`` (our process
+    id) file no other write of this process holds."""
+    candidates = [tmp_path] if tmp_path is not None else []
+    with contextlib.suppress(OSError):
+        candidates += [p for p in folder.iterdir()
+                       if p.name.startswith(prefix) and p.name.endswith(PART_SUFFIX)
+                       and p not in _ACTIVE]
+    for p in candidates:
+        with contextlib.suppress(OSError):
+            p.unlink()
 
 
 def _fsync(path: Path) -> None:

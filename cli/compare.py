@@ -17,6 +17,7 @@ from acid_cli._common import (
     handle_errors,
     print_table,
     require,
+    require_range,
     say,
     timed_lines,
     write_summary,
@@ -66,6 +67,9 @@ def compare(
     require(bool(cycles), "--cycle", "give at least one cycle")
     require(len(ambients) >= 2, "--t-amb", "give at least two ambients, degC, comma-separated")
     require(all(-30.0 <= a <= 55.0 for a in ambients), "--t-amb", "ambients lie in -30..55 degC")
+    require_range(seed, "--seed", 0, 2**63 - 1, integer=True)
+    # the econ model's identification record: a day or a week of simulation is the bound
+    require_range(identify_duration, "--identify-duration", 3600.0, 7 * 86400.0, "s")
     check_paths(inputs={"--econ-params": econ_params, "--plant-config": plant_config},
                 outputs={"--json": json_path}, folders={"--out": (out, ("fronts.png",))})
     from acid.studies.cav_study import available_cycles

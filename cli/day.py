@@ -60,6 +60,7 @@ def day(
         require(s in study.SEASONS, "--season", f"{s!r}: choose summer or winter")
     require_range(days, "--days", 1, 1000, integer=True)
     require_range(jobs, "--jobs", 1, 256, integer=True)
+    require_range(seed, "--seed", 0, 2**63 - 1, integer=True)
     check_paths(outputs={"--json": json_path}, folders={"--out": (out, OUTPUTS)})
     n_test = 4 if quick else days
     n_train = 3 if quick else max(2, days // 2)

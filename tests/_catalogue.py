@@ -988,6 +988,31 @@ CASES: list[Case] = [
     Case("day-out-is-a-file", "output", ("day", "--out", "{w}/afile"), ("--out", "afile")),
     Case("year-sweep-out-is-a-file", "output", ("year-sweep", "--out", "{w}/afile"),
          ("--out", "afile")),
+    # a model file that ends the process or declares a model too big to trace (guarded load)
+    Case("fit-model-file-os-exit", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"), ("m.py", "os._exit(0)"),
+         _write("m.py", "import os\nos._exit(0)\n")),
+    Case("fit-model-file-crash-signal", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"), ("m.py", "SIGABRT"),
+         _write("m.py", "import os, signal\nos.kill(os.getpid(), signal.SIGABRT)\n")),
+    Case("fit-model-file-3000-states", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"),
+         ("m.py", "3000 states", "ACID_MODEL_MAX_STATES"),
+         _write("m.py", "from acid.models import Model, Parameter, Signal, State\n"
+                        "n = 3000\n"
+                        "model = Model('big', states=[State(f'x{i}', 'K', measured=(i == 0))"
+                        " for i in range(n)],\n"
+                        "    parameters=[Parameter('a', '1/s', 0.1, 0.0, 1.0)], Ts=1.0,\n"
+                        "    inputs=[Signal('u', 'K')],\n"
+                        "    ode=lambda s: {f'x{i}': s.a * (s.u - getattr(s, f'x{i}'))"
+                        " for i in range(n)})\n")),
+    Case("compare-identify-duration-nan", "options",
+         ("compare", "--identify-duration", "nan", "--json", "{w}/c.json"),
+         ("--identify-duration", "nan")),
+    Case("compare-seed-negative", "options",
+         ("compare", "--seed", "-1", "--json", "{w}/c.json"), ("--seed", "-1")),
+    Case("day-seed-negative", "options", ("day", "--seed", "-1", "--out", "{w}/dd"),
+         ("--seed", "-1")),
 ]
 
 

@@ -2,31 +2,55 @@
 
 A model file is a Python file that defines, at module level, ``model = Model(...)`` (or a
 function ``model()`` returning one). It is executed as a module named after the file.
+
+Loading a file is guarded: it is first loaded (imported and traced) in a forked child
+process, so a file that ends the process (``os._exit``, a crash), never finishes (an endless
+loop, a huge trace: bound ``ACID_MODEL_TIMEOUT``, default 60 s) or declares more than
+``ACID_MODEL_MAX_STATES`` states (default 400) or ``ACID_MODEL_MAX_PARAMETERS`` parameters
+(default 5000) is one ``DeclarationError`` naming the file and the cause; then acid loads it
+itself (with other threads running too: the child only loads the file, and the timeout
+bounds a child that waits on a lock another thread held). Where ``fork`` is missing, only
+the in-process checks apply.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.util
-import math
 import os
 import select
 import signal
 import sys
+import time
 import warnings
 from pathlib import Path
 
 from acid.models.declaration import DeclarationError, Model
 
-#: Seconds a model file may take to load and declare its model (a trial load in a forked
-#: child first, where the platform forks): beyond, an endless loop or a runaway
-#: declaration is refused. ``ACID_MODEL_LOAD_TIMEOUT_S`` changes it (0: no trial load).
-LOAD_TIMEOUT_S = 120.0
-
 #: Built-in declarations: name -> module defining ``model``.
 BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
             "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin",
             "heating": "acid.models.heating", "car_ac": "acid.models.car_ac"}
+
+#: Wall-clock bound on loading (importing and tracing) a model file, s; env ACID_MODEL_TIMEOUT.
+LOAD_TIMEOUT_S = 60.0
+#: Size bounds of a declaration loaded from a file; env ACID_MODEL_MAX_STATES / _PARAMETERS.
+MAX_STATES = 400
+MAX_PARAMETERS = 5000
+
+
+def _bound(env: str, default: float) -> float:
+    text = os.environ.get(env)
+    if text is None:
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise DeclarationError(f"{env}={text!r}: expected a positive finite number")
+    return value
 
 
 def load(spec: str | Path | Model) -> Model:
@@ -44,8 +68,8 @@ def load(spec: str | Path | Model) -> Model:
                                "or a .py file declaring a model")
     if not path.is_file():
         raise DeclarationError(f"{path}: model file not found")
-    _trial_load(path)
-    return _load_file(path)
+    _check_in_child(path)
+    return _checked_size(_load_file(path), path)
 
 
 def _load_file(path: Path) -> Model:
@@ -60,70 +84,6 @@ def _load_file(path: Path) -> Model:
         sys.modules.pop(name, None)
         sys.dont_write_bytecode = no_bytecode
     return _model_of(module, str(path))
-
-
-def _timeout_s() -> float:
-    text = os.environ.get("ACID_MODEL_LOAD_TIMEOUT_S", "")
-    try:
-        value = float(text) if text else LOAD_TIMEOUT_S
-    except ValueError:
-        value = math.nan
-    if not (value >= 0.0 and math.isfinite(value)):
-        raise DeclarationError(f"ACID_MODEL_LOAD_TIMEOUT_S must be a number of seconds >= 0, "
-                               f"got {text!r}")
-    return value
-
-
-def _trial_load(path: Path) -> None:
-    """Load ``path`` once in a forked child, its output discarded, bounded by
-    ``LOAD_TIMEOUT_S``: a file that ends the process (``os._exit``, a crash) or never
-    finishes is refused with one line naming the file, before acid runs it itself. Any other
-    failure is left to the real load, which names it. Skipped without ``os.fork`` and with a
-    timeout of 0. The child only runs the user's file: should another thread of the parent
-    hold a lock it needs, the child waits and the timeout names it."""
-    timeout = _timeout_s()
-    if timeout == 0.0 or not hasattr(os, "fork"):
-        return
-    r, w = os.pipe()
-    with warnings.catch_warnings():   # Python >= 3.12 warns of fork with threads running
-        warnings.simplefilter("ignore", DeprecationWarning)
-        pid = os.fork()
-    if pid == 0:                                           # the child: load, report, leave
-        try:
-            os.close(r)
-            null = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(null, 1)
-            os.dup2(null, 2)
-            sys.stdout = sys.stderr = open(os.devnull, "w")   # noqa: SIM115 - os._exit ends it
-            import faulthandler
-
-            faulthandler.disable()     # a crash of the user's file: its exit status says it
-            try:
-                _load_file(path)
-            except BaseException:  # noqa: BLE001 - the real load names it
-                pass
-            os.write(w, b"done")
-        finally:
-            os._exit(0)
-    os.close(w)
-    try:
-        ready, _, _ = select.select([r], [], [], timeout)
-        said = os.read(r, 4) if ready else None
-    finally:
-        os.close(r)
-        if not ready:
-            os.kill(pid, signal.SIGKILL)
-        _, status = os.waitpid(pid, 0)
-    if said is None:
-        raise DeclarationError(f"{path.name}: loading the model file did not finish within "
-                               f"{timeout:g} s (an endless loop, or a declaration too large "
-                               "to trace); ACID_MODEL_LOAD_TIMEOUT_S raises the limit")
-    if said != b"done":
-        how = (f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status)
-               else f"exit status {os.WEXITSTATUS(status)}")
-        raise DeclarationError(f"{path.name}: the model file ended the process while acid "
-                               f"loaded it ({how}: os._exit or a crash); a model file only "
-                               "declares")
 
 
 def _user_raised(exc: BaseException, path: Path) -> bool:
@@ -177,3 +137,120 @@ def _model_of(module, where: str) -> Model:
         raise DeclarationError(f"{Path(where).name}: defines no model (write "
                                "`model = acid.models.Model(...)` at module level)")
     return obj
+
+
+def _checked_size(model: Model, path: Path) -> Model:
+    for what, n, env, default in (("states", len(model.states), "ACID_MODEL_MAX_STATES",
+                                   MAX_STATES),
+                                  ("parameters", len(model.parameters),
+                                   "ACID_MODEL_MAX_PARAMETERS", MAX_PARAMETERS)):
+        limit = int(_bound(env, default))
+        if n > limit:
+            raise DeclarationError(f"{path.name}: declares {n} {what}, above the bound of "
+                                   f"{limit} ({env} raises it)")
+    return model
+
+
+@contextlib.contextmanager
+def _sizes_bounded(path: Path):
+    """Refuse an oversized declaration before CasADi traces it (in the child only)."""
+    init = Model.__init__
+
+    def bounded(self, *args, **kw):
+        if kw.get("source") is None:   # the declaring file, as Model itself would find it
+            kw["source"] = sys._getframe(1).f_code.co_filename
+        for what, env, default in (("states", "ACID_MODEL_MAX_STATES", MAX_STATES),
+                                   ("parameters", "ACID_MODEL_MAX_PARAMETERS",
+                                    MAX_PARAMETERS)):
+            items = kw.get(what)
+            if items is not None and not isinstance(items, (list, tuple)):
+                items = kw[what] = tuple(items)
+            limit = int(_bound(env, default))
+            if items is not None and len(items) > limit:
+                raise DeclarationError(f"{path.name}: declares {len(items)} {what}, above the "
+                                       f"bound of {limit} ({env} raises it)")
+        init(self, *args, **kw)
+
+    Model.__init__ = bounded
+    try:
+        yield
+    finally:
+        Model.__init__ = init
+
+
+def _check_in_child(path: Path) -> None:
+    """Load ``path`` once in a forked child: what ends or hangs the child is one error here."""
+    if os.environ.get("ACID_MODEL_GUARD") == "0" or not hasattr(os, "fork"):
+        return
+    timeout = _bound("ACID_MODEL_TIMEOUT", LOAD_TIMEOUT_S)
+    _bound("ACID_MODEL_MAX_STATES", MAX_STATES)
+    _bound("ACID_MODEL_MAX_PARAMETERS", MAX_PARAMETERS)
+    read, write = os.pipe()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    with warnings.catch_warnings():   # Python >= 3.12 warns of fork with threads running:
+        warnings.simplefilter("ignore", DeprecationWarning)   # the child only loads the file
+        pid = os.fork()                                       # and the timeout bounds it
+    if pid == 0:  # the child: load, report one line, end without running any cleanup
+        status = 3
+        try:
+            os.close(read)
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+            if "faulthandler" in sys.modules:   # no crash report from the child
+                sys.modules["faulthandler"].disable()
+            null = os.open(os.devnull, os.O_RDWR)
+            for fd in (0, 1, 2):
+                os.dup2(null, fd)
+            sys.stdout = sys.stderr = open(os.devnull, "w")  # noqa: SIM115 - a capture too
+            try:
+                with _sizes_bounded(path):
+                    _load_file(path)
+                report = "ok"
+            except DeclarationError as exc:
+                report = "error " + str(exc)
+            except BaseException as exc:  # noqa: BLE001 - reported to the parent
+                report = f"error {path.name}: {type(exc).__name__}: {exc} (while acid loads it)"
+            os.write(write, report.encode("utf-8", "replace")[:60000])
+            status = 0
+        finally:
+            os._exit(status)
+    os.close(write)
+    report = b""
+    try:
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise DeclarationError(
+                    f"{path.name}: loading the model file did not finish within {timeout:g} s "
+                    "(an endless loop or a huge model?); ACID_MODEL_TIMEOUT=SECONDS raises "
+                    "the bound")
+            ready, _, _ = select.select([read], [], [], min(left, 1.0))
+            if ready:
+                chunk = os.read(read, 65536)
+                if not chunk:
+                    break
+                report += chunk
+    finally:
+        os.close(read)
+        _, status = _reap(pid)
+    text = report.decode("utf-8", "replace")
+    if text.startswith("error "):
+        raise DeclarationError(text[6:].splitlines()[0])
+    if text != "ok":
+        if os.WIFSIGNALED(status):
+            cause = f"is killed by signal {signal.Signals(os.WTERMSIG(status)).name}"
+        else:
+            cause = f"ends the process (os._exit({os.WEXITSTATUS(status)}))"
+        raise DeclarationError(f"{path.name}: the model file {cause} while acid loads it; "
+                               "a model file only declares")
+
+
+def _reap(pid: int) -> tuple[int, int]:
+    """Wait for the child, killing it if it still runs (a timeout, an interrupt)."""
+    done, status = os.waitpid(pid, os.WNOHANG)
+    if done == 0:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+        done, status = os.waitpid(pid, 0)
+    return done, status
