@@ -16,3 +16,16 @@ def test_the_result_reads_as_a_table_and_a_frame():
     text = repr(r)
     assert "gain: oe fit of 300 samples" in text and "k" in text and "error RMS: y" in text
     assert r.summary() in text
+
+
+def test_the_nmse_is_the_simulation_mse_over_the_channel_variance():
+    import numpy as np
+
+    model, ds = gain_model(), gain_data(n=300, noise=0.5)
+    r = fit_model(model, ds, "oe")
+    u, y = np.asarray(ds["u"]), np.asarray(ds["y"])
+    expected = np.mean((y - r.value("k") * u) ** 2) / np.var(y)   # a static gain: exact
+    assert r.nmse["y"] == pytest.approx(expected, rel=1e-6)
+    assert 0.03 < r.nmse["y"] < 0.1                     # noise 0.5 on a signal of sd 2
+    assert "NMSE (simulation, MSE / variance): y" in r.summary()
+    assert r.to_json_dict()["nmse_simulation"]["y"] == pytest.approx(expected, rel=1e-6)

@@ -122,6 +122,16 @@ class DeclaredFitResult:
                               "ci95_low": e.ci95[0], "ci95_high": e.ci95[1],
                               "status": e.status} for e in self.estimates])
 
+    @property
+    def nmse(self) -> dict:
+        """{channel: normalised mean squared error} of the fitted table's simulations
+        (``simulation_fit``): the channel's mean squared error divided by its variance over
+        the same samples, (1 - fit % / 100) ** 2. 0 is perfect, 1 is no better than the
+        channel's mean; unlike the optimiser's cost it compares fits of different models
+        on the same data."""
+        return {k: (1.0 - v / 100.0) ** 2 if math.isfinite(v) else math.nan
+                for k, v in self.simulation_fit.items()}
+
     def summary(self) -> str:
         """The fit as text: what was fitted how, the parameter table, the per-channel error
         RMS (output error: simulation over windows; prediction error: one-step innovations),
@@ -139,6 +149,9 @@ class DeclaredFitResult:
                          f"{e.status}")
         if rms:
             lines.append("  error RMS: " + ", ".join(f"{k} {v:.4g}" for k, v in rms.items()))
+        if self.simulation_fit:
+            lines.append("  NMSE (simulation, MSE / variance): " + ", ".join(
+                f"{k} {v:.4g}" for k, v in self.nmse.items()))
         lines += [f"  on a bound: {b}" for b in self.on_bounds]
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
@@ -174,6 +187,7 @@ class DeclaredFitResult:
             "output_error": self.output_error, "loss": self.loss,
             "fit_percent_simulation": self.simulation_fit,
             "fit_percent_one_step": self.one_step_fit,
+            "nmse_simulation": self.nmse,
             "optima": [vars(o) for o in self.optima],
             "failed_starts": [vars(f) for f in self.failed_starts],
             "on_bounds": list(self.on_bounds),
