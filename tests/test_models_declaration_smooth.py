@@ -53,3 +53,15 @@ def test_a_threshold_written_with_smooth_step_is_fitted():
                       units={"u": "1", "y": "1"}, Ts=1.0)
     soft = fit_model(_threshold_model(lambda x, c: smooth_step(x, c, 0.05)), ds, "oe")
     assert soft.value("c") == pytest.approx(0.7, abs=0.05)
+
+
+def test_a_threshold_only_inside_if_else_is_named_at_declaration():
+    with pytest.warns(UserWarning, match=r"parameter\(s\) c reach the equations only "
+                                         r"through a comparison"):
+        _threshold_model(lambda x, c: if_else(x > c, 1.0, 0.0))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _threshold_model(lambda x, c: smooth_step(x, c, 0.05))       # no warning
+        _threshold_model(lambda x, c: if_else(x > 0.5, c * x, 0.0))  # c has a gradient
