@@ -29,3 +29,24 @@ def test_the_nmse_is_the_simulation_mse_over_the_channel_variance():
     assert 0.03 < r.nmse["y"] < 0.1                     # noise 0.5 on a signal of sd 2
     assert "NMSE (simulation, MSE / variance): y" in r.summary()
     assert r.to_json_dict()["nmse_simulation"]["y"] == pytest.approx(expected, rel=1e-6)
+
+
+def test_an_overflow_in_the_hac_covariance_is_a_note_not_a_terminal_line():
+    import warnings
+
+    import numpy as np
+
+    from acid.ident import hac
+
+    model, ds = gain_model(), gain_data(n=300)
+
+    def overflowing(*a, **kw):   # a fit whose scores overflow float64 in the HAC meat
+        hac.hac_meat(np.full((4, 2), 1e200), np.zeros(4, int), 2)
+        warnings.warn("kept", UserWarning, stacklevel=1)
+        return fit_model(*a, **kw)
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = hac.warnings_as_note(overflowing)(model, ds, "oe")
+    assert [str(w.message) for w in caught] == ["kept"]      # others pass through
+    assert any("overflow" in n and "standard errors" in n for n in r.notes)
