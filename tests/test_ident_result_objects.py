@@ -50,3 +50,20 @@ def test_an_overflow_in_the_hac_covariance_is_a_note_not_a_terminal_line():
         r = hac.warnings_as_note(overflowing)(model, ds, "oe")
     assert [str(w.message) for w in caught] == ["kept"]      # others pass through
     assert any("overflow" in n and "standard errors" in n for n in r.notes)
+
+
+def test_the_result_round_trips_through_json():
+    import json
+
+    import numpy as np
+
+    from acid.ident.result import DeclaredFitResult
+
+    model = gain_model()
+    r = fit_model(model, gain_data(n=200), "oe")
+    back = DeclaredFitResult.from_json_dict(json.loads(json.dumps(r.to_json_dict())))
+    assert back == r and back.value("k") == r.value("k")
+    np.testing.assert_array_equal(back.covariance, r.covariance)
+    assert back.estimates == r.estimates and back.summary() == r.summary()
+    other = fit_model(model, gain_data(n=200, noise=0.3), "oe")
+    assert other != r

@@ -193,8 +193,50 @@ class DeclaredFitResult:
             "on_bounds": list(self.on_bounds),
             "covariance": {"names": list(self.covariance_names), "matrix": self.covariance},
             "notes": list(self.notes), "warnings": list(self.warnings),
-            "elapsed_s": self.elapsed_s,
+            "elapsed_s": self.elapsed_s, "values": self.values,
+            "per_experiment": self.per_experiment, "experiment_ids": list(self.experiment_ids),
         })
+
+    @classmethod
+    def from_json_dict(cls, d: dict) -> DeclaredFitResult:
+        """The result ``to_json_dict`` wrote (without the declaration; non-finite numbers,
+        stored as null, come back as NaN): ``from_json_dict(r.to_json_dict()) == r``."""
+        def num(v):
+            return math.nan if v is None else float(v)
+
+        def tup(q):
+            return {k: tuple(v) if isinstance(v, list) else v for k, v in q.items()}
+
+        cov = d["covariance"]
+        return cls(
+            model=d["model"], model_source=d["model_source"], method=d["method"],
+            estimates=tuple(Estimate(p["name"], p["unit"], num(p["declared"]),
+                                     num(p["estimate"]), num(p["stderr"]),
+                                     (num(p["ci95_low"]), num(p["ci95_high"])), p["status"],
+                                     p["experiment"]) for p in d["parameters"]),
+            equations=tuple(EquationReport(**tup(q)) for q in d["equations"]),
+            values=np.array(d["values"], dtype=float),
+            per_experiment={n: np.array(v, dtype=float)
+                            for n, v in d["per_experiment"].items()},
+            experiment_ids=tuple(d["experiment_ids"]),
+            covariance=np.array(cov["matrix"], dtype=float),
+            covariance_names=tuple(cov["names"]), covariance_kind=d["covariance_kind"],
+            hac_bandwidth=d["hac_bandwidth"], output_error=d["output_error"],
+            optima=tuple(Optimum(**o) for o in d["optima"]),
+            combinations=tuple(d["combinations"]), notes=tuple(d["notes"]),
+            warnings=tuple(d["warnings"]), n_samples=d["n_samples"], data_source=d["data"],
+            elapsed_s=num(d["elapsed_s"]), simulation_fit=d["fit_percent_simulation"],
+            one_step_fit=d["fit_percent_one_step"], loss=d["loss"],
+            failed_starts=tuple(FailedStart(**f) for f in d["failed_starts"]),
+            on_bounds=tuple(d["on_bounds"]))
+
+    def __eq__(self, other) -> bool:
+        """Equal when their JSON is (arrays compared by value, NaN equal to NaN)."""
+        if not isinstance(other, DeclaredFitResult):
+            return NotImplemented
+        return self.to_json_dict() == other.to_json_dict()
+
+    __hash__ = None
 
     def write(self, path: str | Path, model: Model, provenance: dict | None = None,
               extra: dict | None = None) -> Path:
