@@ -25,3 +25,20 @@ def test_the_validation_reads_as_one_table_per_channel_and_a_frame():
     assert row["rmse"] == pytest.approx(r.yardsticks["persistence"]["by_time"]["T_cab"]
                                         [f"{row['time_s']:g}"]["rmse_K"])
     assert (df[df.predictor == "model"]["rmse"] < 1e-9).all()   # its own parameters: exact
+
+
+def test_the_horizon_curves_are_a_figure_of_every_step():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    m = load("cabin3")
+    ds = _cabin3_record(m.values.copy(), np.random.default_rng(0), n=200)
+    r = validate_model(m, ds, declared_parameters(m), starts=4, horizon=30, warmup=20,
+                       yardsticks=True)
+    fig = r.plot_horizon()
+    assert len(fig.axes) == len(r.channels)
+    lines = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    assert set(lines) == {"model", "persistence", "arx", "subspace"}
+    persistence = lines["persistence"].get_ydata()
+    assert len(persistence) == 30
+    np.testing.assert_allclose(persistence, r.by_step()["persistence"]["T_cab"]["rmse"])

@@ -205,6 +205,26 @@ class DeclaredValidation:
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
 
+    def plot_horizon(self):
+        """A matplotlib figure: the RMSE at every prediction step 1 .. horizon against the
+        prediction time, a panel per channel, the model and each yardstick."""
+        import matplotlib.pyplot as plt
+
+        steps = self.by_step()
+        fig, axes = plt.subplots(len(self.channels), 1, squeeze=False, sharex=True,
+                                 figsize=(6.0, 2.2 * len(self.channels)))
+        t = self.horizon_s[1:]
+        for ax, c, u in zip(axes[:, 0], self.channels, self.units, strict=True):
+            for who, chans in steps.items():
+                if c in chans:
+                    ax.plot(t[:len(chans[c]["rmse"])], np.array(chans[c]["rmse"], float),
+                            label=who, lw=2.0 if who == "model" else 1.0)
+            ax.set_ylabel(f"{c} RMSE [{u}]")
+        axes[-1, 0].set_xlabel("prediction time [s]")
+        axes[0, 0].legend(fontsize="small")
+        fig.tight_layout()
+        return fig
+
     def __repr__(self) -> str:
         return f"DeclaredValidation(\n{self.summary()}\n)"
 
