@@ -660,7 +660,8 @@ class ChannelMap:
     """How columns of a foreign file become acid channels.
 
     ``time``: name of the time column, in ``time_unit`` (s unless the map says
-    ``time = { column = "...", unit = "ms" }``); ``channels``: {acid name:
+    ``time = { column = "...", unit = "ms" }``; a map with ``Ts`` may leave it out: the rows
+    are then one ``Ts`` apart from 0 s); ``channels``: {acid name:
     :class:`ChannelSource`}; ``Ts``: the sample time of the dataset, s (``None``: the file's
     own, which must be uniform); ``sep``, ``encoding``, ``decimal``: how a CSV file is
     written (default ``","``, ``"utf-8"``, ``"."``; ``.gz`` files are decompressed);
@@ -694,7 +695,7 @@ class ChannelMap:
         T_ain = { expr = "T_evap + 2", unit = "degC" }                          # assumed
     """
 
-    time: str
+    time: str | None      # None: no time column, the rows are one Ts apart
     channels: Mapping[str, ChannelSource]
     Ts: float | None = None
     resample: str | None = None
@@ -751,9 +752,11 @@ class ChannelMap:
         unknown = [k for k in d if k not in MAP_KEYS]
         if unknown:
             raise DataError(f"{source}: unknown key {unknown[0]!r} (known: {', '.join(MAP_KEYS)})")
-        if "time" not in d or "channels" not in d:
-            raise DataError(f"{source}: needs 'time' and a [channels] table")
-        time_col, time_unit = _time_entry(d["time"], source)
+        if "channels" not in d or ("time" not in d and d.get("Ts") is None):
+            raise DataError(f"{source}: needs 'time' (or Ts, for rows one Ts apart) and a "
+                            "[channels] table")
+        # no time column: the rows are one Ts apart from 0 s
+        time_col, time_unit = _time_entry(d["time"], source) if "time" in d else (None, "s")
         if not isinstance(d["channels"], Mapping):
             raise DataError(f"{source}: [channels] must be a table of channel = column entries")
         chans = {name: _channel_entry(name, spec, source)
@@ -944,8 +947,8 @@ def _numeric_column(values, name: str, source: str) -> np.ndarray:
 def _missing_columns(columns: Mapping[str, object], cmap: ChannelMap, source: str,
                      hint: str = "") -> None:
     """One error naming every column of the map the file lacks (and its channel)."""
-    wanted = [(cmap.time, "time")] + [(s.column, repr(n)) for n, s in cmap.channels.items()
-                                      if s.column is not None]
+    wanted = [(cmap.time, "time")] * (cmap.time is not None) + [
+        (s.column, repr(n)) for n, s in cmap.channels.items() if s.column is not None]
     missing = [(c, n) for c, n in wanted if c not in columns]
     if not missing:
         return
@@ -965,7 +968,11 @@ def _assemble(columns: Mapping[str, np.ndarray], cmap: ChannelMap, source: str,
     """Columns of one file -> a checked dataset: units converted to acid's, assumed channels
     evaluated, censored samples masked, sensors checked, the record resampled."""
     _missing_columns(columns, cmap, source, hint)
-    time = to_base(_numeric_column(columns[cmap.time], cmap.time, source), cmap.time_unit)
+    if cmap.time is not None:
+        time = to_base(_numeric_column(columns[cmap.time], cmap.time, source), cmap.time_unit)
+    else:   # rows one Ts apart (the map's Ts is required without a time column)
+        n = len(next(iter(columns.values()))) if columns else 0
+        time = np.arange(n) * float(cmap.Ts)
     raw: dict[str, np.ndarray] = {}
     for name, s in cmap.channels.items():
         if s.column is None:

@@ -123,3 +123,50 @@ def _eval(node: ast.AST, values: Mapping[str, np.ndarray]):
         return op(_eval(node.left, values), _eval(node.comparators[0], values)).astype(float)
     fn, _ = _FUNCS[node.func.id]
     return fn(*(_eval(a, values) for a in node.args))
+
+
+# ------------------------------------------------------------ smooth helpers for declarations
+# Differentiable stand-ins for the kinks of max, min, sqrt at 0 and a threshold in if_else,
+# for the equations of a declared model (``acid.models`` exports them). They work on CasADi
+# symbols and on plain floats. A fit follows gradients: a parameter that enters only through
+# ``if_else(x > threshold, ...)`` gets none and stays at its declared value; written with
+# ``smooth_step`` the threshold is fitted like any other parameter.
+
+def smooth_max(a, b, width):
+    """max(a, b) rounded over ``width`` (same unit as a and b): 0.5 (a + b +
+    sqrt((a - b)^2 + width^2)); above the max by width / 2 where a == b and by less than
+    width^2 / (4 |a - b|) away from it; differentiable everywhere for width > 0."""
+    import casadi as ca
+
+    return 0.5 * (a + b + ca.sqrt((a - b) * (a - b) + width * width))
+
+
+def smooth_min(a, b, width):
+    """min(a, b) rounded over ``width``: 0.5 (a + b - sqrt((a - b)^2 + width^2))."""
+    import casadi as ca
+
+    return 0.5 * (a + b - ca.sqrt((a - b) * (a - b) + width * width))
+
+
+def smooth_sqrt(x, width):
+    """sqrt(max(x, 0)) without the infinite slope at 0 nor NaN below it:
+    sqrt(smooth_max(x, 0, width)); sqrt(width / 2) at x = 0, within width^2 / (8 x^1.5) of
+    sqrt(x) for x >> width (``width`` in the unit of x)."""
+    import casadi as ca
+
+    return ca.sqrt(smooth_max(x, 0.0, width))
+
+
+def smooth_step(x, threshold, width):
+    """A soft ``x > threshold``: 0.5 (1 + tanh((x - threshold) / width)), 0 well below the
+    threshold, 1 well above it (0.12 / 0.88 at one width either side); its gradient with
+    respect to ``threshold`` is not zero, so a fitted threshold moves."""
+    import casadi as ca
+
+    return 0.5 * (1.0 + ca.tanh((x - threshold) / width))
+
+
+def soft_if_else(x, threshold, above, below, width):
+    """``if_else(x > threshold, above, below)`` blended over ``width``:
+    below + (above - below) * smooth_step(x, threshold, width)."""
+    return below + (above - below) * smooth_step(x, threshold, width)

@@ -201,7 +201,9 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
         say(f"identified combination: {c}")
     if result.simulation_fit:
         say(f"{oe_window}-step simulation fit from measured states: " + ", ".join(
-            f"{c} {v:.2f} %" for c, v in result.simulation_fit.items()))
+            f"{c} {v:.2f} %" for c, v in result.simulation_fit.items()) + "; NMSE (mean "
+            "squared error / the channel's variance, comparable across models): " + ", ".join(
+            f"{c} {v:.4g}" for c, v in result.nmse.items()))
     for line in result.notes:
         note(line)
     for line in result.warnings:

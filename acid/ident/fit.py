@@ -36,7 +36,7 @@ from acid import __version__
 from acid._io import file_sha256
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
-from acid.ident import linear, oe
+from acid.ident import hac, linear, oe
 from acid.ident.data import ModelData
 from acid.ident.result import (  # noqa: F401 (the fit's result types, read from here too)
     DeclaredFitResult,
@@ -65,6 +65,7 @@ DIVERGED_ERROR_RATIO = 100.0
 
 
 # -------------------------------------------------------------------------- fitter
+@hac.warnings_as_note
 def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
               fix: dict | None = None, free: tuple[str, ...] = (), fit_starts: int = 1,
               seed: int = 0, oe_window: int = 300, covariance: str = "hac",

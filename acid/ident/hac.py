@@ -74,3 +74,33 @@ def resolve_bandwidth(spec, h: np.ndarray, g: np.ndarray) -> int:
     if spec == "nw":
         return int(4 * (h.shape[0] / 100.0) ** (2.0 / 9.0))
     return int(spec)
+
+
+def warnings_as_note(fit):
+    """``fit`` (returning a result with ``notes``) with numpy's floating-point warnings
+    raised in this module (scores so large that their products overflow) turned into one
+    note of the result instead of lines on the terminal; other warnings pass through."""
+    import dataclasses
+    import functools
+    import warnings
+
+    @functools.wraps(fit)
+    def wrapped(*args, **kwargs):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = fit(*args, **kwargs)
+        ours = [w for w in caught if issubclass(w.category, RuntimeWarning)
+                and w.filename == __file__]
+        for w in caught:
+            if w not in ours:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        if not ours:
+            return result
+        what = sorted({str(w.message) for w in ours})
+        return dataclasses.replace(result, notes=(*result.notes, (
+            "standard errors: the Newey-West covariance of the scores met "
+            f"{'; '.join(what)} (scores too large for float64): the standard errors and "
+            "intervals may be inf or NaN; declare the parameters in units that keep them "
+            "near 1")))
+
+    return wrapped

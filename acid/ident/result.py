@@ -122,6 +122,16 @@ class DeclaredFitResult:
                               "ci95_low": e.ci95[0], "ci95_high": e.ci95[1],
                               "status": e.status} for e in self.estimates])
 
+    @property
+    def nmse(self) -> dict:
+        """{channel: normalised mean squared error} of the fitted table's simulations
+        (``simulation_fit``): the channel's mean squared error divided by its variance over
+        the same samples, (1 - fit % / 100) ** 2. 0 is perfect, 1 is no better than the
+        channel's mean; unlike the optimiser's cost it compares fits of different models
+        on the same data."""
+        return {k: (1.0 - v / 100.0) ** 2 if math.isfinite(v) else math.nan
+                for k, v in self.simulation_fit.items()}
+
     def summary(self) -> str:
         """The fit as text: what was fitted how, the parameter table, the per-channel error
         RMS (output error: simulation over windows; prediction error: one-step innovations),
@@ -139,6 +149,9 @@ class DeclaredFitResult:
                          f"{e.status}")
         if rms:
             lines.append("  error RMS: " + ", ".join(f"{k} {v:.4g}" for k, v in rms.items()))
+        if self.simulation_fit:
+            lines.append("  NMSE (simulation, MSE / variance): " + ", ".join(
+                f"{k} {v:.4g}" for k, v in self.nmse.items()))
         lines += [f"  on a bound: {b}" for b in self.on_bounds]
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
@@ -174,13 +187,56 @@ class DeclaredFitResult:
             "output_error": self.output_error, "loss": self.loss,
             "fit_percent_simulation": self.simulation_fit,
             "fit_percent_one_step": self.one_step_fit,
+            "nmse_simulation": self.nmse,
             "optima": [vars(o) for o in self.optima],
             "failed_starts": [vars(f) for f in self.failed_starts],
             "on_bounds": list(self.on_bounds),
             "covariance": {"names": list(self.covariance_names), "matrix": self.covariance},
             "notes": list(self.notes), "warnings": list(self.warnings),
-            "elapsed_s": self.elapsed_s,
+            "elapsed_s": self.elapsed_s, "values": self.values,
+            "per_experiment": self.per_experiment, "experiment_ids": list(self.experiment_ids),
         })
+
+    @classmethod
+    def from_json_dict(cls, d: dict) -> DeclaredFitResult:
+        """The result ``to_json_dict`` wrote (without the declaration; non-finite numbers,
+        stored as null, come back as NaN): ``from_json_dict(r.to_json_dict()) == r``."""
+        def num(v):
+            return math.nan if v is None else float(v)
+
+        def tup(q):
+            return {k: tuple(v) if isinstance(v, list) else v for k, v in q.items()}
+
+        cov = d["covariance"]
+        return cls(
+            model=d["model"], model_source=d["model_source"], method=d["method"],
+            estimates=tuple(Estimate(p["name"], p["unit"], num(p["declared"]),
+                                     num(p["estimate"]), num(p["stderr"]),
+                                     (num(p["ci95_low"]), num(p["ci95_high"])), p["status"],
+                                     p["experiment"]) for p in d["parameters"]),
+            equations=tuple(EquationReport(**tup(q)) for q in d["equations"]),
+            values=np.array(d["values"], dtype=float),
+            per_experiment={n: np.array(v, dtype=float)
+                            for n, v in d["per_experiment"].items()},
+            experiment_ids=tuple(d["experiment_ids"]),
+            covariance=np.array(cov["matrix"], dtype=float),
+            covariance_names=tuple(cov["names"]), covariance_kind=d["covariance_kind"],
+            hac_bandwidth=d["hac_bandwidth"], output_error=d["output_error"],
+            optima=tuple(Optimum(**o) for o in d["optima"]),
+            combinations=tuple(d["combinations"]), notes=tuple(d["notes"]),
+            warnings=tuple(d["warnings"]), n_samples=d["n_samples"], data_source=d["data"],
+            elapsed_s=num(d["elapsed_s"]), simulation_fit=d["fit_percent_simulation"],
+            one_step_fit=d["fit_percent_one_step"], loss=d["loss"],
+            failed_starts=tuple(FailedStart(**f) for f in d["failed_starts"]),
+            on_bounds=tuple(d["on_bounds"]))
+
+    def __eq__(self, other) -> bool:
+        """Equal when their JSON is (arrays compared by value, NaN equal to NaN)."""
+        if not isinstance(other, DeclaredFitResult):
+            return NotImplemented
+        return self.to_json_dict() == other.to_json_dict()
+
+    __hash__ = None
 
     def write(self, path: str | Path, model: Model, provenance: dict | None = None,
               extra: dict | None = None) -> Path:

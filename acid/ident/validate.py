@@ -172,6 +172,62 @@ class DeclaredValidation:
         return {"model": self.by_time,
                 **{k: y["by_time"] for k, y in self.yardsticks.items()}}
 
+    def to_frame(self):
+        """The errors by prediction time as a pandas DataFrame, a row per predictor (the
+        model, then each yardstick), channel and time: predictor, channel, time_s, rmse,
+        p90_abs, n (the starts scored there)."""
+        import pandas as pd
+
+        return pd.DataFrame([{"predictor": who, "channel": c, "time_s": float(t),
+                              "rmse": v.get("rmse_K"), "p90_abs": v.get("p90_K"),
+                              "n": v.get("n")}
+                             for who, chans in self.by_horizon_table().items()
+                             for c, times in chans.items() for t, v in times.items()])
+
+    def summary(self) -> str:
+        """The validation as text: the windows, one table of RMSE by prediction time (the
+        model and each yardstick), the model's metrics over the whole horizon, notes."""
+        lines = [f"{self.model}: {self.n_starts} windows of {self.horizon} steps "
+                 f"({self.horizon * self.Ts:g} s)"]
+        for c, u in zip(self.channels, self.units, strict=True):
+            m = self.metrics.get(c, {})
+            lines.append(f"  {c} [{u}]: RMSE {m.get('rmse', math.nan):.4g}, fit "
+                         f"{m.get('fit_percent', math.nan):.1f} % over steps 1..horizon")
+            table = {who: chans.get(c, {}) for who, chans in self.by_horizon_table().items()}
+            times = list(table.get("model", {}))
+            if times:
+                width = max(len(w) for w in table)
+                lines.append(f"    {'RMSE at':<{width}} " + " ".join(
+                    f"{float(t):>8g}s" for t in times))
+                for who, row in table.items():
+                    lines.append(f"    {who:<{width}} " + " ".join(
+                        f"{row.get(t, {}).get('rmse_K', math.nan):>9.4g}" for t in times))
+        lines += [f"  note: {n}" for n in self.notes]
+        return "\n".join(lines)
+
+    def plot_horizon(self):
+        """A matplotlib figure: the RMSE at every prediction step 1 .. horizon against the
+        prediction time, a panel per channel, the model and each yardstick."""
+        import matplotlib.pyplot as plt
+
+        steps = self.by_step()
+        fig, axes = plt.subplots(len(self.channels), 1, squeeze=False, sharex=True,
+                                 figsize=(6.0, 2.2 * len(self.channels)))
+        t = self.horizon_s[1:]
+        for ax, c, u in zip(axes[:, 0], self.channels, self.units, strict=True):
+            for who, chans in steps.items():
+                if c in chans:
+                    ax.plot(t[:len(chans[c]["rmse"])], np.array(chans[c]["rmse"], float),
+                            label=who, lw=2.0 if who == "model" else 1.0)
+            ax.set_ylabel(f"{c} RMSE [{u}]")
+        axes[-1, 0].set_xlabel("prediction time [s]")
+        axes[0, 0].legend(fontsize="small")
+        fig.tight_layout()
+        return fig
+
+    def __repr__(self) -> str:
+        return f"DeclaredValidation(\n{self.summary()}\n)"
+
     def to_json_dict(self) -> dict:
         return json_safe({
             "model": self.model, "horizon": self.horizon, "warmup": self.warmup,

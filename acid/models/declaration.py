@@ -253,6 +253,7 @@ class Model:
         self.continuous = ode is not None
         self._step_fn, self._ode_fn, self._output_fn = step, ode, output
         self._trace()
+        self._warn_zero_gradients()
         #: ``checks(s) -> [problem, ...]``: what makes values implausible (``s`` by name)
         self.checks = checks
         self.groups = {**{g: v for g, v in _numbered_groups(self.parameter_names).items()
@@ -461,6 +462,26 @@ class Model:
         y = h + y_int if out_names else h
         self.F = ca.Function("F", [x, u, d, p], [x_next, y], ["x", "u", "d", "p"],
                              ["x_next", "y"])
+
+    def _warn_zero_gradients(self) -> None:
+        """Name every free parameter the equations read only through a comparison (a
+        threshold in ``if_else``, ``x > p``): its gradient is zero everywhere, so a fit
+        leaves it at its declared value. Structural (CasADi's zero), so never a false alarm."""
+        eqs = [*self.equations_raw.values(), *self.equations_next.values()]
+        if not eqs or not self.parameters:
+            return
+        e = ca.vertcat(*eqs)
+        flat = [p.name for i, p in enumerate(self.parameters) if not p.fixed
+                and ca.depends_on(e, self._p[i]) and ca.jacobian(e, self._p[i]).is_zero()]
+        if flat:
+            import warnings
+
+            warnings.warn(
+                f"model {self.name!r}: parameter(s) {', '.join(flat)} reach the equations "
+                "only through a comparison (e.g. a threshold in if_else): the gradient is zero "
+                "everywhere and a fit leaves them at their declared values; write the switch "
+                "with smooth_step or soft_if_else, or declare them fixed=True",
+                UserWarning, stacklevel=4)
 
     def _constraint(self, c: Constraint) -> tuple:
         """(constraint, f(p, u, d) -> value, names of the signals it reads), checked affine

@@ -1,0 +1,44 @@
+"""A validation result reads as a table (``summary()``, ``repr``) and a DataFrame."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_ident_validate import _cabin3_record
+
+from acid.ident.validate import declared_parameters, validate_model
+from acid.models import load
+
+
+def test_the_validation_reads_as_one_table_per_channel_and_a_frame():
+    m = load("cabin3")
+    ds = _cabin3_record(m.values.copy(), np.random.default_rng(0), n=300)
+    r = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=30,
+                       yardsticks=True)
+    text = repr(r)
+    assert text.startswith("DeclaredValidation(\ncabin3: 6 windows of 50 steps (250 s)")
+    assert r.summary() in text and "persistence" in text and "note: " in text
+    assert len(text.splitlines()) < 40                       # no arrays printed
+    df = r.to_frame()
+    assert set(df["predictor"]) == {"model", "persistence", "arx", "subspace"}
+    row = df[(df.predictor == "persistence") & (df.channel == "T_cab")].iloc[0]
+    assert row["rmse"] == pytest.approx(r.yardsticks["persistence"]["by_time"]["T_cab"]
+                                        [f"{row['time_s']:g}"]["rmse_K"])
+    assert (df[df.predictor == "model"]["rmse"] < 1e-9).all()   # its own parameters: exact
+
+
+def test_the_horizon_curves_are_a_figure_of_every_step():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    m = load("cabin3")
+    ds = _cabin3_record(m.values.copy(), np.random.default_rng(0), n=200)
+    r = validate_model(m, ds, declared_parameters(m), starts=4, horizon=30, warmup=20,
+                       yardsticks=True)
+    fig = r.plot_horizon()
+    assert len(fig.axes) == len(r.channels)
+    lines = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    assert set(lines) == {"model", "persistence", "arx", "subspace"}
+    persistence = lines["persistence"].get_ydata()
+    assert len(persistence) == 30
+    np.testing.assert_allclose(persistence, r.by_step()["persistence"]["T_cab"]["rmse"])
