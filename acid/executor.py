@@ -330,7 +330,8 @@ class DaskExecutor(Executor):
     thread each), or the existing cluster at ``address``.
 
     Workers of an existing cluster must have the same acid version installed (checked when
-    connecting) and, for ``acid reproduce``, see the output folder (a shared filesystem).
+    connecting); they need not share a filesystem with this process (``acid sweep`` and
+    ``acid reproduce`` send inputs with the tasks and write what comes back).
     """
 
     def __init__(self, workers: int | None = None, address: str | None = None):

@@ -15,9 +15,11 @@ line saying so. (An integrity check against accidents and casual edits, not a si
 
 Stages run on :mod:`acid.executor` -- in this process (``jobs=1``) or on Dask (a local
 cluster of ``jobs`` worker processes, or an existing cluster): the same mechanism as
-``acid sweep``. The output folder is held for the whole run (:func:`acid.outdir.claim`: a
-concurrent second run into it stops with a one-line message; a later run reuses what is
-cached) and temporaries of a killed run are removed when the next one starts.
+``acid sweep``. On an existing cluster no shared disk is assumed: a stage's input folders
+travel with its task and its files come back through the client. The output folder is held
+for the whole run (:func:`acid.outdir.claim`: a concurrent second run into it stops with a
+one-line message; a later run reuses what is cached) and temporaries of a killed run are
+removed when the next one starts.
 """
 
 from __future__ import annotations
@@ -132,42 +134,113 @@ def _check_record(workdir: Path, key: str) -> tuple[dict | None, str]:
     return d, ""
 
 
-def _run_stage(stage: Stage, root: Path, inputs: dict[str, Path], key: str,
-               report: ProgressReporter) -> tuple[dict, float]:
-    """Run one stage into a temporary folder, then move it into place (task side)."""
+def _seal(stage: Stage, key: str, tmp: Path, summary: dict, seconds: float) -> None:
+    """Write the record of a stage's finished folder ``tmp`` and move it into place."""
+    final = tmp.parent / stage.name
+    files = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*") if p.is_file())
+    record = {"stage": stage.name, "key": key, "summary": summary, "seconds": seconds,
+              "files": files, "file_sha256": {f: file_sha256(tmp / f) for f in files},
+              "acid_version": __version__}
+    record = json_safe(record)  # as write_json writes it, so that the hash reads back
+    record["content_sha256"] = _content_hash(record)
+    write_json(tmp / STAGE_RECORD, record)
+    if final.exists():
+        # move the old result aside first: the swap leaves either the old or the new
+        # folder in place, never a mixture
+        old = Path(tempfile.mkdtemp(prefix=f".{stage.name}.old.", suffix=TMP_DIR_SUFFIX,
+                                    dir=final.parent))
+        os.replace(final, old / "x")
+        os.replace(tmp, final)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(tmp, final)
+
+
+def _stage_tmp(root: Path, stage: Stage) -> Path:
     final = root / "stages" / stage.name
     final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{stage.name}.", suffix=TMP_DIR_SUFFIX,
-                                dir=final.parent))
+    return Path(tempfile.mkdtemp(prefix=f".{stage.name}.", suffix=TMP_DIR_SUFFIX,
+                                 dir=final.parent))
 
+
+def _progress(stage: Stage, report: ProgressReporter) -> ProgressFn:
     def progress(done: int, total: int) -> None:
         report(stage.name, int(done), int(total), final=done >= total)
 
+    return progress
+
+
+def _run_stage(stage: Stage, root: Path, inputs: dict[str, Path], key: str,
+               report: ProgressReporter) -> tuple[dict, float]:
+    """Run one stage into a temporary folder, then move it into place (task side, on a
+    worker that sees ``root``: this process, or a local cluster)."""
+    tmp = _stage_tmp(root, stage)
     t0 = time.perf_counter()
     try:
-        summary = stage.func(tmp, inputs, stage.config, progress)
+        summary = stage.func(tmp, inputs, stage.config, _progress(stage, report))
         seconds = time.perf_counter() - t0
-        files = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*") if p.is_file())
-        record = {"stage": stage.name, "key": key, "summary": summary, "seconds": seconds,
-                  "files": files, "file_sha256": {f: file_sha256(tmp / f) for f in files},
-                  "acid_version": __version__}
-        record = json_safe(record)  # as write_json writes it, so that the hash reads back
-        record["content_sha256"] = _content_hash(record)
-        write_json(tmp / STAGE_RECORD, record)
-        if final.exists():
-            # move the old result aside first: the swap leaves either the old or the new
-            # folder in place, never a mixture
-            old = Path(tempfile.mkdtemp(prefix=f".{stage.name}.old.", suffix=TMP_DIR_SUFFIX,
-                                        dir=final.parent))
-            os.replace(final, old / "x")
-            os.replace(tmp, final)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, final)
+        _seal(stage, key, tmp, summary, seconds)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return summary, seconds
+
+
+def folder_files(folder: Path) -> dict[str, bytes]:
+    """Every file below ``folder``: relative path -> content (what travels to a worker)."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def _scratch_dir() -> str | None:
+    """The worker's own directory when on a Dask worker (else the system's temporaries)."""
+    try:
+        from distributed import get_worker
+
+        return get_worker().local_directory
+    except (ImportError, ValueError):
+        return None
+
+
+def _run_stage_detached(stage: Stage, inputs: dict[str, dict[str, bytes]],
+                        report: ProgressReporter) -> tuple[dict, float, dict[str, bytes]]:
+    """Run one stage on a worker that does not see the output folder (task side): its
+    inputs' files arrive with the task and are written into a scratch folder of the worker,
+    the stage runs there, and its files go back to the client with the summary."""
+    base = Path(tempfile.mkdtemp(prefix=f"acid-{stage.name}-", dir=_scratch_dir()))
+    try:
+        paths = {}
+        for dep, files in inputs.items():
+            paths[dep] = base / "inputs" / dep
+            for rel, data in files.items():
+                (paths[dep] / rel).parent.mkdir(parents=True, exist_ok=True)
+                (paths[dep] / rel).write_bytes(data)
+        work = base / "work"
+        work.mkdir()
+        t0 = time.perf_counter()
+        summary = stage.func(work, paths, stage.config, _progress(stage, report))
+        seconds = time.perf_counter() - t0
+        return summary, seconds, folder_files(work)
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
+
+
+def _install(stage: Stage, root: Path, key: str, summary: dict, seconds: float,
+             files: dict[str, bytes]) -> None:
+    """Write what a detached stage sent back into its folder under ``root`` (client side)."""
+    tmp = _stage_tmp(root, stage)
+    try:
+        for rel, data in files.items():
+            target = (tmp / rel).resolve()
+            if tmp.resolve() not in target.parents:
+                raise AcidError(f"stage {stage.name}: a worker sent back a file outside its "
+                                f"folder ({rel!r})")
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(data)
+        _seal(stage, key, tmp, summary, seconds)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
 
 
 def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
@@ -188,7 +261,9 @@ def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
     ----------
     jobs : 1 runs in this process; more starts a local Dask cluster of that many worker
         processes (in this process, with a ``notice``, when Dask is not installed).
-    scheduler : address of an existing Dask cluster instead (its workers must see ``root``).
+    scheduler : address of an existing Dask cluster instead. Its workers need not see
+        ``root``: each stage's inputs travel with its task and its files come back to this
+        process (:func:`folder_files`), which writes them.
     executor : an open executor to use instead of starting one.
     """
     root = Path(root)
@@ -214,6 +289,7 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
     pending = list(stages)
     running: dict = {}
     report = ex.reporter(on_progress or (lambda name, done, total: None), "stages")
+    detached = ex.kind == "cluster"  # an existing cluster: no shared disk assumed
 
     def finish(stage: Stage, summary: dict, seconds: float, cached: bool) -> None:
         out = StageOutcome(stage.name, stage.title, root / "stages" / stage.name, summary,
@@ -238,7 +314,11 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
             inputs = {d: outcomes[d].workdir for d in s.depends}
             if on_start:
                 on_start(s.name)
-            running[ex.submit(_run_stage, s, root, inputs, keys[s.name], report)] = s
+            if detached:
+                shipped = {d: folder_files(p) for d, p in inputs.items()}
+                running[ex.submit(_run_stage_detached, s, shipped, report)] = s
+            else:
+                running[ex.submit(_run_stage, s, root, inputs, keys[s.name], report)] = s
         if not running:
             if pending and not ready:
                 raise AcidError("pipeline has a dependency cycle: "
@@ -248,6 +328,10 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
         ex.pump()
         for fut in done:
             s = running.pop(fut)
-            summary, seconds = ex.result(fut)
+            if detached:
+                summary, seconds, files = ex.result(fut)
+                _install(s, root, keys[s.name], summary, seconds, files)
+            else:
+                summary, seconds = ex.result(fut)
             finish(s, summary, seconds, False)
     return outcomes

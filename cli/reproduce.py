@@ -40,7 +40,9 @@ def reproduce(
                                   "processes (a local Dask cluster; 1: in this process)."),
     scheduler: str | None = typer.Option(None, "--scheduler",
                                          help="Run the stages on this existing Dask cluster "
-                                              "(scheduler address; its workers must see OUT)."),
+                                              "(scheduler address; its workers need not see "
+                                              "OUT: results come back through this "
+                                              "process)."),
     force: bool = typer.Option(False, "--force", help="Ignore the cache and redo every stage."),
     json_path: Path | None = typer.Option(None, "--json",
                                           help="Also write the summary here (it is always "

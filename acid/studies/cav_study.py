@@ -1246,7 +1246,13 @@ def cav_study(params: ModelParams, cycles, config: StudyConfig | None = None,
         out = {name: out[name] for name in names}
     if progress is not None and (len(names) == 1 or jobs <= 1):
         progress(total, total)
+    return study_result(params, econ, out, config, econ_summary, time.perf_counter() - t0)
+
+
+def study_result(params: ModelParams, econ: EconParams, cycles: dict, config: StudyConfig,
+                 econ_summary: dict | None, elapsed_s: float) -> CavStudyResult:
+    """The study's result from its cycles (``{name: study_cycle(...)}``, run anywhere)."""
     summary = dict(econ_summary or {}, name=econ.name, provenance=econ.provenance,
                    power_map_domain={k: list(v) for k, v in econ.power_map.domain.items()})
-    return CavStudyResult(config=config, cycles=out, params_name=params.name, econ=summary,
-                          elapsed_s=time.perf_counter() - t0)
+    return CavStudyResult(config=config, cycles=dict(cycles), params_name=params.name,
+                          econ=summary, elapsed_s=elapsed_s)
