@@ -169,3 +169,23 @@ def validate_with_error_model(model, ds, params, *, n_estimation: int, channel: 
     figs, verdicts = interval_tables(errors, exp, names, res.Ts, times_s,
                                      n_resamples=n_resamples, seed=seed)
     return ErrorModelValidation(ch, errors, exp, names, em, res.Ts, figs, verdicts)
+
+
+def summary(v: ErrorModelValidation, scopes=("pooled",)) -> str:
+    """Pooled (or per-experiment) RMSE / p90 with intervals and verdicts, as text."""
+    st = v.residual.settings
+    lines = [f"{v.channel}: grey box plus residual ARX (na={st['na']}, nb={st['nb']}, fitted on "
+             f"{st['windows']} estimation windows, {st['samples']} samples); 95 % intervals"]
+    for f in v.figures:
+        if f.scope in scopes:
+            flag = "" if f.resolved else "  not resolved"
+            lines.append(f"  {f.scope:>8} {f.time_s:6g} s {f.predictor:>12}: RMSE {f.rmse:.2f} "
+                         f"[{f.rmse_lo:.2f}, {f.rmse_hi:.2f}]  p90 {f.p90:.2f} "
+                         f"[{f.p90_lo:.2f}, {f.p90_hi:.2f}]  {f.n_starts} starts / "
+                         f"{f.n_experiments} exp.{flag}")
+    for d in v.verdicts:
+        if d.scope in scopes:
+            lines.append(f"  {d.scope:>8} {d.time_s:6g} s grey box + ARX vs {d.yardstick}: "
+                         f"{d.verdict}, {d.difference:+.2f} [{d.lo:+.2f}, {d.hi:+.2f}] K")
+    return "\n".join(lines)
+
