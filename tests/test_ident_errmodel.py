@@ -40,3 +40,18 @@ def test_too_few_windows_is_one_error():
     with pytest.raises(DataError, match="at least 3"):
         fit_residual_model(w, "T_cab")
 
+
+
+def test_cli_error_model_refusals(tmp_path):
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    d = tmp_path / "d.h5"
+    d.touch()
+    r = CliRunner().invoke(app, ["validate", str(d), "--model", "car_cabin", "--error-model",
+                                 "armax", "--error-model-data", str(d)])
+    assert r.exit_code == 2 and "--error-model must be 'arx'" in r.output
+    r = CliRunner().invoke(app, ["validate", str(d), "--model", "car_cabin",
+                                 "--error-model", "arx"])
+    assert r.exit_code == 2 and "needs --error-model-data" in r.output
