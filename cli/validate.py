@@ -114,6 +114,12 @@ def validate(
     prior: list[str] | None = typer.Option(
         None, "--prior", help="With --cv: NAME=MEAN,SD, a Gaussian prior on a parameter in "
                               "each fold's fit (as `acid fit`; repeatable)."),
+    error_model: str | None = typer.Option(
+        None, "--error-model",
+        help="'arx': add to --model's prediction an ARX model of its residual, fitted on "
+             "the windows of --error-model-data (estimation trips); DATA is held out."),
+    error_model_data: Path | None = typer.Option(
+        None, "--error-model-data", help="With --error-model: the estimation dataset."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -144,6 +150,13 @@ def validate(
             f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
     designs = _designs(starts_design, placement, non_overlapping)
     require_range(resamples, "--resamples", 10, 1_000_000)
+    require(not prior or cv is not None, "--prior",
+            "is for --cv (the folds' fits); give priors to `acid fit`")
+    if error_model is not None:
+        return _with_error_model(data, model, params, error_model, error_model_data,
+                                 starts=starts, horizon=horizon, to_end=to_end,
+                                 warm_start=warm_start, hold_all=exogenous == "hold",
+                                 resamples=resamples, seed=seed)
     if cv is not None:
         require(cv == "experiments", "--cv", f"must be 'experiments', got {cv!r}")
         require(model is not None, "--cv", "needs --model (the declared model to fit)")
@@ -155,7 +168,6 @@ def validate(
             folds=cv_folds, hold_all=exogenous == "hold", to_end=to_end,
             warm_start=warm_start, resamples=resamples, method=method, max_evals=max_evals,
             prior=prior)
-    require(not prior, "--prior", "is for --cv (the folds' fits); give priors to `acid fit`")
     if starts_design is not None and len(designs) == 1:
         from acid.ident.crossval import design_options
 
@@ -174,6 +186,30 @@ def validate(
                       non_overlapping=non_overlapping, yardsticks=yardsticks,
                       to_end=to_end, warm_start=warm_start, values=ps, beside=other,
                       figures=out, intervals=(designs, resamples) if intervals else None)
+
+
+def _with_error_model(data, model, params, kind, est, *, hold_all, **opts) -> None:
+    """--error-model: grey box plus residual ARX (``acid.ident.errmodel``), printed."""
+    from acid.data import Dataset
+    from acid.ident.errmodel import summary, validate_with_error_model
+    from acid.ident.validate import read_parameters
+    from acid.models.loader import load
+
+    require(kind == "arx", "--error-model", f"must be 'arx', got {kind!r}")
+    require(model is not None, "--error-model", "needs --model (the declared model)")
+    require(est is not None, "--error-model", "needs --error-model-data (estimation data)")
+    check_paths(inputs={"--error-model-data": est})
+    m = load(model)
+    a, b = Dataset.from_hdf5(est), Dataset.from_hdf5(data)
+    both = Dataset.concatenate([a, b])
+    both.source = f"{est} + {data}"
+    ps = None if params == "paper" else read_parameters(m, params)
+    hold = tuple(d.name for d in m.disturbances) if hold_all else ()
+    resamples, seed = opts.pop("resamples"), opts.pop("seed")
+    v = validate_with_error_model(m, both, ps, n_estimation=len(a), hold=hold,
+                                  fit_starts=opts["starts"], n_resamples=resamples,
+                                  seed=seed, **opts)
+    print(summary(v))
 
 
 def _designs(spec: str | None, placement: str, non_overlapping: bool) -> tuple[str, ...]:
