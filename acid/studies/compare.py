@@ -171,7 +171,7 @@ def families(quick: bool = False, econ: bool = True) -> tuple[Family, ...]:
            Family("own", "plant's own loops, configured coil", "none", (math.nan,))]
     if econ:
         out.append(Family("E", "economic NMPC, speed preview", "comfort weight, W/K^2 s",
-                          (3.0, 30.0) if quick else (3.0, 30.0, 300.0)))
+                          (3.0, 30.0) if quick else (30.0, 300.0, 3000.0)))
     return tuple(out)
 
 
