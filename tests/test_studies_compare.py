@@ -120,3 +120,15 @@ def test_a_saving_bought_with_comfort_is_not_read_as_one():
     assert cmp.verdict("a", "b", names, [1.0] * 5, base,
                        discomfort_gap_Kmin=2.0).word == cmp.UNEQUAL
     assert cmp.verdict("b", "a", names, base, [1.0] * 5, T_cab_gap_K=0.3).word == cmp.COSTS
+
+
+def test_single_pass_is_charged_back_under_both_conventions():
+    """From a 40 degC soak the first pass carries the pull-down; charged by either common
+    continuation (tail(end) - tail(start)) it lands near the periodic figure, not 3x it."""
+    s = cmp.RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30, tail_s=600.0)
+    hot = cmp.periodic_run(_sc(32.0, soak_K=None), "F", C2K(8.0), s, charge=True)
+    assert hot.first_pass_J > 3.0 * hot.energy_J
+    for charge in cmp.CHARGES:
+        e = hot.single_charged_J(charge)
+        assert abs(e - hot.energy_J) / hot.energy_J < 0.3, (charge, e, hot.energy_J)
+    assert math.isnan(cmp.periodic_run(_sc(32.0), "F", C2K(8.0), S).single_own_J)

@@ -190,10 +190,15 @@ class RunSettings:
     tol_E: float = 5e-4
     max_passes: int = 400
     econ_horizon_s: float = 60.0
+    tail_s: float = 2400.0
 
 
 #: ``--quick``: looser periodic tolerances (tests and smoke runs)
-QUICK = RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30)
+QUICK = RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30, tail_s=600.0)
+
+#: the two charge conventions of a single pass: the continuation that prices a state
+CHARGES = {"own": "the plant's own loops at its configured coil",
+           "pi": "acid's sampled fixed-coil PI at the plant's configured coil"}
 
 
 def _controller(family: str, knob: float, settings: RunSettings, cfg, drive, econ):
@@ -241,6 +246,13 @@ class PeriodicRun:
     residual_K: float
     first_pass_J: float
     end: dict = field(default_factory=dict)
+    single_own_J: float = math.nan
+    single_pi_J: float = math.nan
+
+    def single_charged_J(self, charge: str) -> float:
+        """The first pass from the common start with its state change charged: ``E +
+        tail(end) - tail(start)``, the tail under ``charge`` (:data:`CHARGES`), J."""
+        return {"own": self.single_own_J, "pi": self.single_pi_J}[charge]
 
 
 def _pass(plant, ctrl, drive, T_set: float):
@@ -267,8 +279,11 @@ def _pass(plant, ctrl, drive, T_set: float):
 
 
 def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings = RunSettings(),
-                 econ=None, start: dict | None = None) -> PeriodicRun:
-    """Repeat the scenario's cycle until the pass-end states repeat (module docstring)."""
+                 econ=None, start: dict | None = None, charge: bool = False) -> PeriodicRun:
+    """Repeat the scenario's cycle until the pass-end states repeat (module docstring).
+
+    ``charge``: also the single pass beside it, the first pass from ``start`` with its state
+    change charged under both conventions (:data:`CHARGES`, ``settings.tail_s`` long)."""
     import warnings
 
     from acid.errors import ExtrapolationWarning
@@ -283,12 +298,14 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     plant = HifiPlant(pcfg, mode="nominal" if nominal else "direct")
     plant.reset(start if start is not None else sc.start())
     prev = plant_state(plant)
+    start_state = dict(prev)
     first = E_prev = math.nan
+    first_end: dict = {}
     res, last = math.inf, {}
     for p in range(1, settings.max_passes + 1):
         E, T, rh = _pass(plant, ctrl, drive, settings.T_set)
         if p == 1:
-            first = E
+            first, first_end = E, plant_state(plant)
         now = plant_state(plant)
         steps = {"T": max(abs(now[k] - prev[k]) for k in PERIODIC_KEYS if k in now),
                  "w": abs(now["w_cab"] - prev["w_cab"]) * settings.tol_K / settings.tol_w,
@@ -306,9 +323,41 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
         if p >= 3 and res < settings.tol_K:
             break
     out = np.maximum(0.0, np.maximum(T - settings.T_high, settings.T_low - T))
+    charged = {c: first + tail_J(sc, first_end, c, settings)
+               - tail_J(sc, start_state, c, settings) for c in CHARGES} if charge else {}
     return PeriodicRun(sc.name, family, float(knob), E, float(np.sum(out) * drive.Ts / 60.0),
                        float(np.mean(rh)), float(np.mean(T)), p, bool(res < settings.tol_K),
-                       float(res), first, plant_state(plant))
+                       float(res), first, plant_state(plant),
+                       charged.get("own", math.nan), charged.get("pi", math.nan))
+
+
+def tail_J(sc: Scenario, state: dict, charge: str, settings: RunSettings) -> float:
+    """Energy of the common continuation from ``state`` (J): ``settings.tail_s`` at the
+    cycle's mean speed and ambient under ``charge`` (:data:`CHARGES`). The same state costs
+    the same under one convention, so ``E + tail(end) - tail(start)`` charges a pass the
+    state it leaves behind."""
+    from acid.control.pi_baselines import PlantPI
+    from acid.plant.hifi import HifiPlant
+    from acid.psychro import P_ATM
+
+    if charge not in CHARGES:
+        raise ConfigError(f"unknown charge convention {charge!r}")
+    cfg, drive = sc.plant_config(), sc.drive()
+    v, T_amb = float(np.mean(drive.v)), float(np.mean(drive.T_amb))
+    plant = HifiPlant(cfg, mode="nominal" if charge == "own" else "direct")
+    plant.reset(state)
+    ctrl = None if charge == "own" else PlantPI(cfg, drive.Ts, settings.T_set,
+                                                float(cfg.T_ew_set),
+                                                float(getattr(cfg, "p_atm", P_ATM)))
+    E = 0.0
+    for k in range(int(round(settings.tail_s / drive.Ts))):
+        if ctrl is None:
+            row = plant.step(0.0, 0.0, v, T_amb=T_amb, T_cab_set=settings.T_set)
+        else:
+            u = ctrl.make_step(plant.measure(), k)
+            row = plant.step(float(u[0]), float(u[1]), v, T_amb=T_amb)
+        E += (float(row["P_comp"]) + float(row["P_bl"])) * drive.Ts
+    return E
 
 
 # ------------------------------------------------------------------------------ statistics
@@ -331,13 +380,18 @@ class Verdict:
     seed: int
     discomfort_gap_Kmin: float = 0.0
     T_cab_gap_K: float = 0.0
+    single_own_pct: float = math.nan
+    single_pi_pct: float = math.nan
 
     def summary(self) -> str:
+        single = "" if math.isnan(self.single_own_pct) else (
+            f" (single pass, charged: {self.single_own_pct:+.2f} % by the plant's loops, "
+            f"{self.single_pi_pct:+.2f} % by acid's PI; figures, not verdicts)")
         return (f"{self.candidate} vs {self.baseline}: {self.mean_pct:+.2f} % "
                 f"[{self.boot_lo:+.2f}, {self.boot_hi:+.2f}] bootstrap 95 %, "
                 f"[{self.t_lo:+.2f}, {self.t_hi:+.2f}] paired t, n = {len(self.scenarios)}, "
                 f"comfort gap {self.discomfort_gap_Kmin:+.2f} K min, mean T_cab "
-                f"{self.T_cab_gap_K:+.2f} K: {self.word}")
+                f"{self.T_cab_gap_K:+.2f} K: {self.word}{single}")
 
     def __repr__(self) -> str:
         return f"Verdict({self.summary()})"
@@ -351,8 +405,9 @@ class Verdict:
         d["scenarios"] = tuple(d["scenarios"])
         d["savings_pct"] = tuple(_num(x) for x in d["savings_pct"])
         for k in ("mean_pct", "boot_lo", "boot_hi", "t_lo", "t_hi", "discomfort_gap_Kmin",
-                  "T_cab_gap_K"):
-            d[k] = _num(d[k])
+                  "T_cab_gap_K", "single_own_pct", "single_pi_pct"):
+            if k in d:
+                d[k] = _num(d[k])
         return cls(**d)
 
 
@@ -472,7 +527,8 @@ class CompareResult:
                    {k: _num(v) for k, v in d["tuned"].items()},
                    tuple(PeriodicRun(**fix(r, ("knob", "energy_J", "discomfort_Kmin",
                                                "rh_mean", "mean_T_cab", "residual_K",
-                                               "first_pass_J"))) for r in d["held_out"]),
+                                               "first_pass_J", "single_own_J",
+                                               "single_pi_J"))) for r in d["held_out"]),
                    tuple(Verdict.from_dict(v) for v in d["verdicts"]), dict(d["settings"]))
 
     def to_json(self) -> str:
@@ -480,8 +536,8 @@ class CompareResult:
 
 
 def _task(sc: Scenario, family: str, knob: float, settings: RunSettings, econ,
-          start: dict | None = None):
-    return periodic_run(sc, family, knob, settings, econ, start)
+          start: dict | None = None, charge: bool = False):
+    return periodic_run(sc, family, knob, settings, econ, start, charge)
 
 
 def _map(tasks, executor, progress):
@@ -564,7 +620,7 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
     tuned = {f.key: tune_knob([p for p in fronts if p.family == f.key], level) for f in fams}
     if progress:
         progress("held out: " + ", ".join(s.name for s in scenarios.held_out))
-    htasks = [(sc, f.key, tuned[f.key], settings, econ, starts[sc.name]) for f in fams
+    htasks = [(sc, f.key, tuned[f.key], settings, econ, starts[sc.name], True) for f in fams
               for sc in scenarios.held_out]
     hruns = _map(htasks, executor, progress)
     by = {(r.family, r.scenario): r for r in hruns}
@@ -587,9 +643,15 @@ def judge(by: dict, names: Sequence[str], c: str, b: str, seed: int = 0, n_boot:
         return float(np.mean([getattr(by[c, n], attr) - getattr(by[b, n], attr)
                               for n in names]))
 
-    return verdict(c, b, names, [by[c, n].energy_J for n in names],
-                   [by[b, n].energy_J for n in names], seed, n_boot, min_scenarios,
-                   gap("discomfort_Kmin"), gap("mean_T_cab"))
+    def single(charge):
+        return float(np.mean([100.0 * (by[b, n].single_charged_J(charge)
+                                       - by[c, n].single_charged_J(charge))
+                              / by[b, n].single_charged_J(charge) for n in names]))
+
+    v = verdict(c, b, names, [by[c, n].energy_J for n in names],
+                [by[b, n].energy_J for n in names], seed, n_boot, min_scenarios,
+                gap("discomfort_Kmin"), gap("mean_T_cab"))
+    return dataclasses.replace(v, single_own_pct=single("own"), single_pi_pct=single("pi"))
 
 
 def plot_fronts(result: CompareResult, path) -> None:
