@@ -104,7 +104,7 @@ def compare(
         k = result.tuned[f.key]
         pt = min((p for p in result.fronts if p.family == f.key),
                  key=lambda p: abs(p.knob - k) if k == k else 0.0)
-        knob = "-" if k != k else (f"{k - 273.15:.2f} degC" if k > 200 else f"{k:.3g}")
+        knob = "-" if k != k else (f"{k:.3g}" if f.key == "E" else f"{k - 273.15:.2f} degC")
         rows.append([f.key, f.label, knob, f"{pt.energy_J / 1e6:.3f}",
                      f"{pt.discomfort_Kmin:.2f}", f"{100 * pt.rh_mean:.1f}"])
     print_table("families on training (tuned knob, nearest swept point)",
