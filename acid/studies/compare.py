@@ -400,11 +400,16 @@ class Verdict:
         return f"Verdict({self.summary()})"
 
     def to_dict(self) -> dict:
-        return _json_safe(dataclasses.asdict(self))
+        """Its fields, and the field names every verdict of acid reports
+        (:meth:`acid.studies.verdict.Verdict.to_dict`, as heating-control and sweep write
+        them): n, mean, lo/hi (paired t), boot_lo/boot_hi, level, words, decided_by."""
+        return _json_safe({**dataclasses.asdict(self), **{
+            "n": len(self.scenarios), "mean": self.mean_pct, "lo": self.t_lo, "hi": self.t_hi,
+            "level": 0.95, "words": self.word, "decided_by": "both"}})
 
     @classmethod
     def from_dict(cls, d: dict) -> Verdict:
-        d = dict(d)
+        d = {k: v for k, v in d.items() if k not in _SHARED}
         d["scenarios"] = tuple(d["scenarios"])
         d["savings_pct"] = tuple(_num(x) for x in d["savings_pct"])
         for k in ("mean_pct", "boot_lo", "boot_hi", "t_lo", "t_hi", "discomfort_gap_Kmin",
@@ -412,6 +417,10 @@ class Verdict:
             if k in d:
                 d[k] = _num(d[k])
         return cls(**d)
+
+
+#: the shared verdict field names :meth:`Verdict.to_dict` adds (read back from its own)
+_SHARED = ("n", "mean", "lo", "hi", "level", "words", "decided_by")
 
 
 def _num(x):
