@@ -750,16 +750,16 @@ class CavStudyResult:
                                     "preview_share": "percentage points"},
                           "definitions": DEFINITIONS,
                           "cycles": {k: c.to_json_dict() for k, c in self.cycles.items()},
-                          "verdicts": [v.to_dict() for v in self.verdicts()],
+                          "verdicts": self.verdicts(),
                           "verdict_rule": VERDICT_RULE})
 
     def verdicts(self, seed: int = 0) -> list:
         """D and E against F read by the comparison engine's rule
-        (:func:`acid.studies.compare.verdict`), paired over the cycles on the tail-corrected
-        energies, under each charge (``"paper"``: the paper NMPC's continuation, ``"pi"``:
-        F's PI loops). Its cycles are one run each and no held-out set: below the engine's
-        minimum of scenarios the word is "not resolved"."""
-        from acid.studies.compare import verdict
+        (:mod:`acid.studies.verdict`, as acid compare reads it), paired over the cycles on
+        the tail-corrected energies, under each charge (``"paper"``: the paper NMPC's
+        continuation, ``"pi"``: F's PI loops). Its cycles are one run each and no held-out
+        set: below the engine's minimum of scenarios the word is "not resolved"."""
+        from acid.studies.verdict import MIN_SCENARIOS, at_equal_comfort, paired_verdict
 
         out = []
         for key in ("D", "E"):
@@ -774,9 +774,11 @@ class CavStudyResult:
                 e_b = [getattr(c.results[BEST_PI], attr) for c in cyc]
                 if not all(math.isfinite(x) for x in e_c + e_b):
                     continue
-                v = verdict(f"{key} ({charge} charge)", BEST_PI, names, e_c, e_b, seed=seed,
-                            T_cab_gap_K=dT)
-                out.append(v)
+                s = [100.0 * (b - c) / b for b, c in zip(e_b, e_c, strict=True)]
+                v = paired_verdict(s, min_count=MIN_SCENARIOS, seed=seed, decide="both")
+                out.append({"candidate": f"{key} ({charge} charge)", "baseline": BEST_PI,
+                            "scenarios": names, "savings_pct": s, "T_cab_gap_K": dT,
+                            **v.to_dict(), "word": at_equal_comfort(v.words, 0.0, dT)})
         return out
 
 

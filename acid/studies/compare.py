@@ -40,11 +40,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acid.errors import ConfigError
-from acid.studies.verdict import paired_verdict
+from acid.studies.verdict import (  # noqa: F401 (the engine's rule, re-exported)
+    MAX_DISCOMFORT_GAP_KMIN,
+    MAX_WARMER_K,
+    MIN_SCENARIOS,
+    UNEQUAL,
+    paired_verdict,
+)
 from acid.units import C2K
 
-#: fewest held-out scenarios a verdict word other than "not resolved" needs
-MIN_SCENARIOS = 5
 #: default cycles and ambients (degC) of the default scenario set
 DEFAULT_CYCLES = ("udds", "sc03", "hwfet", "us06", "stopgo")
 DEFAULT_AMBIENTS_C = (30.0, 38.0)
@@ -52,11 +56,6 @@ DEFAULT_AMBIENTS_C = (30.0, 38.0)
 PERIODIC_KEYS = ("T_cab", "T_int", "T_int_slow", "T_shell")
 SAVES, NONE, COSTS, UNRESOLVED = ("saves", "no resolvable difference", "costs",
                                   "not resolved")
-UNEQUAL = "not at equal comfort"
-#: comfort gaps beyond which a saving is not read (candidate minus baseline, held-out mean):
-#: discomfort, K min per pass, and mean cabin temperature, K (0.02 K is about 0.1 % energy)
-MAX_DISCOMFORT_GAP_KMIN = 0.1
-MAX_WARMER_K = 0.05
 
 
 # ------------------------------------------------------------------------------ scenarios
