@@ -62,6 +62,23 @@ def parse_fix(items: list[str] | None) -> dict[str, float]:
     return out
 
 
+def parse_prior(items: list[str] | None) -> dict[str, tuple[float, float]]:
+    """``--prior NAME=MEAN,SD`` options as {name: (mean, sd)} (one line naming the bad one)."""
+    out: dict[str, tuple[float, float]] = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        try:
+            mean, sd = (float(v) for v in value.split(","))
+        except ValueError:
+            mean = sd = math.nan
+        if not sep or not name.strip() or not (math.isfinite(mean) and math.isfinite(sd)
+                                                 and sd > 0):
+            raise ConfigError(f"--prior {item!r}: expected NAME=MEAN,SD with finite numbers "
+                              "in the parameter's unit and SD > 0")
+        out[name.strip()] = (mean, sd)
+    return out
+
+
 @dataclasses.dataclass(frozen=True)
 class PaperOptions:
     """What ``acid fit --model paper`` adds: the reference values (``--reference``: shown
@@ -80,7 +97,7 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                  estimation_fraction: float, more: list[Path] = (), loss: str = "squared",
                  strict: bool = False, oe_estimate_x0: bool = True,
                  paper: PaperOptions | None = None, max_evals: int = 100,
-                 oe_solver: str = "dense") -> None:
+                 oe_solver: str = "dense", prior: list[str] | None = None) -> None:
     """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``
     (for the paper's model, ``paper``: also the params.json keys the controllers read)."""
     from acid.ident.fit import METHODS, fit_model, provenance
@@ -92,6 +109,9 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     require_range(fit_starts, "--fit-starts", 1, MAX_STARTS)
     model = load(model_file)
     fixes = parse_fix(fix)
+    priors = parse_prior(prior)
+    if priors:
+        model = model.with_priors(priors)
     start, ref = None, None
     if paper is not None:
         from acid.models.params import load_params
@@ -110,11 +130,12 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                  for p in parts]
         est = Dataset.concatenate([est, *parts])
         est.source = str(data)
-    result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
-                       fit_starts=fit_starts, seed=seed, oe_window=oe_window,
-                       covariance=covariance, hac_bandwidth=bandwidth, loss=loss,
-                       oe_estimate_x0=oe_estimate_x0, start=start, strict=strict,
-                       max_nfev=max_evals, oe_solver=oe_solver)
+    with progress_bar(f"fit {model.name}", None) as update:
+        result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
+                           fit_starts=fit_starts, seed=seed, oe_window=oe_window,
+                           covariance=covariance, hac_bandwidth=bandwidth, loss=loss,
+                           oe_estimate_x0=oe_estimate_x0, start=start, strict=strict,
+                           max_nfev=max_evals, oe_solver=oe_solver, progress=update)
     prov = provenance(ds, result.method, loss)
     prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
                 records=[str(data), *map(str, more)])
@@ -434,7 +455,7 @@ def cross_validate_declared(data: Path, model_file: str, json_path: Path | None,
                             starts: int, horizon: int, warmup: int, seed: int, designs,
                             folds: int | None, hold_all: bool, to_end: bool,
                             warm_start: str, resamples: int, method: str,
-                            max_evals: int) -> None:
+                            max_evals: int, prior: list[str] | None = None) -> None:
     """``acid validate --cv experiments``: leave-experiments-out cross-validation of the
     declared model (``acid.ident.crossval.cross_validate``), printed and in --json."""
     from acid.ident.crossval import cross_validate
@@ -447,6 +468,9 @@ def cross_validate_declared(data: Path, model_file: str, json_path: Path | None,
     if folds is not None:
         require_range(folds, "--cv-folds", 2, 100_000)
     model = load(model_file)
+    priors = parse_prior(prior)
+    if priors:
+        model = model.with_priors(priors)
     ds = Dataset.from_hdf5(data, min_samples=2)
     with progress_bar(f"cross-validate {model.name}", None) as update:
         cv = cross_validate(model, ds, fit_options={"method": method, "max_nfev": max_evals},

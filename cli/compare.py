@@ -104,7 +104,8 @@ def compare(
         k = result.tuned[f.key]
         pt = min((p for p in result.fronts if p.family == f.key),
                  key=lambda p: abs(p.knob - k) if k == k else 0.0)
-        knob = "-" if k != k else (f"{k:.3g}" if f.key == "E" else f"{k - 273.15:.2f} degC")
+        knob = "-" if k != k else (f"{k - 273.15:.2f} degC" if f.knob.endswith(", K")
+                                   else f"{k:.3g} {f.knob.rsplit(', ', 1)[-1]}")
         rows.append([f.key, f.label, knob, f"{pt.energy_J / 1e6:.3f}",
                      f"{pt.discomfort_Kmin:.2f}", f"{100 * pt.rh_mean:.1f}"])
     print_table("families on training (tuned knob, nearest swept point)",
@@ -116,11 +117,19 @@ def compare(
                   f"[{v.boot_lo:+.2f}, {v.boot_hi:+.2f}]", f"[{v.t_lo:+.2f}, {v.t_hi:+.2f}]",
                   f"{v.discomfort_gap_Kmin:+.2f}", f"{v.T_cab_gap_K:+.2f}", v.word,
                   f"{v.single_own_pct:+.2f}", f"{v.single_pi_pct:+.2f}"]
+                 if v.scenarios else [f"{v.candidate} vs {v.baseline}", *"-----", v.word, "-",
+                                      "-"]
                  for v in result.verdicts])
     say("saving % and its intervals: periodic steady state; 1 pass: the first pass from the "
         "common start, its end state charged by a common continuation (the plant's own "
         "loops, or acid's PI), mean over the held-out set: figures beside the verdict, not "
         "verdicts")
+    off = sorted({(r.family, r.scenario, n) for r in result.held_out for n in r.extrapolated})
+    for fam in sorted({f for f, _, _ in off}):
+        runs = sorted({sc for f, sc, _ in off if f == fam})
+        names = sorted({n for f, _, n in off if f == fam})
+        say(f"{fam} planned outside its econ model's identification data ({', '.join(names)}) "
+            f"on {len(runs)} held-out run(s): {', '.join(runs)}")
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         cmp.plot_fronts(result, out / "fronts.png")

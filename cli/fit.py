@@ -90,6 +90,11 @@ def fit(
     fix: list[str] | None = typer.Option(
         None, "--fix", help="NAME=VALUE: hold a parameter of a declared model (a model "
                             "file, paper or econ) at VALUE (repeatable)."),
+    prior: list[str] | None = typer.Option(
+        None, "--prior", help="NAME=MEAN,SD: a Gaussian prior on a parameter of a declared "
+                              "model, in its unit (repeatable; replaces a declared prior): "
+                              "output error and prediction error then maximise the "
+                              "posterior."),
     free: list[str] | None = typer.Option(
         None, "--free", help="NAME: estimate a parameter the declared model (a model "
                              "file, paper or econ) declares fixed (repeatable)."),
@@ -117,7 +122,7 @@ def fit(
             f"model file FILE.py, got {model!r}")
     # econ keeps its family's fitter unless an option only the declared fitter has is given
     require_range(seed, "--seed", 0, 2**32 - 1, integer=True)
-    if model == "econ" and (fix or free or fit_starts != 1):
+    if model == "econ" and (fix or free or prior or fit_starts != 1):
         declared = True
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
                         "--model": model_file_input(model),
@@ -151,6 +156,7 @@ def fit(
         require(method in METHODS, "--method",
                 f"must be one of {', '.join(METHODS)}, got {method!r}")
         return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
+                            prior=prior,
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                             covariance=covariance, bandwidth=bandwidth,
                             estimation_fraction=estimation_fraction,

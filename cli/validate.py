@@ -111,6 +111,9 @@ def validate(
                                help="With --cv: the fit method of each fold (as `acid fit`)."),
     max_evals: int = typer.Option(100, "--max-evals",
                                   help="With --cv: the fit's evaluation budget (as `acid fit`)."),
+    prior: list[str] | None = typer.Option(
+        None, "--prior", help="With --cv: NAME=MEAN,SD, a Gaussian prior on a parameter in "
+                              "each fold's fit (as `acid fit`; repeatable)."),
 ) -> None:
     """Predict open loop from many start instants and report the errors vs horizon.
 
@@ -150,7 +153,9 @@ def validate(
             data, model, json_path, starts=starts, horizon=horizon,
             warmup=warmup_samples(warmup, _sample_time(data)), seed=seed, designs=designs,
             folds=cv_folds, hold_all=exogenous == "hold", to_end=to_end,
-            warm_start=warm_start, resamples=resamples, method=method, max_evals=max_evals)
+            warm_start=warm_start, resamples=resamples, method=method, max_evals=max_evals,
+            prior=prior)
+    require(not prior, "--prior", "is for --cv (the folds' fits); give priors to `acid fit`")
     if starts_design is not None and len(designs) == 1:
         from acid.ident.crossval import design_options
 

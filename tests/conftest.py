@@ -12,6 +12,8 @@ map, built once per session (~0.1 s).
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
@@ -28,6 +30,11 @@ _PROFILE = {"deadline": None, "database": None, "derandomize": False,
 settings.register_profile("acid-ci", max_examples=150, **_PROFILE)
 settings.register_profile("acid-thorough", max_examples=1500, **_PROFILE)
 settings.load_profile("acid-ci")
+
+# pytest-xdist starts its workers with COLUMNS=80: the CLI would then cut its tables at 80
+# columns instead of the width it renders into a log (LOG_COLUMNS), unlike a plain pytest run.
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ.pop("COLUMNS", None)
 
 
 @pytest.fixture

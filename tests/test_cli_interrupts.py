@@ -18,7 +18,7 @@ from acid.data import Dataset
 from acid_cli.main import app
 
 ACID = [sys.executable, "-c", "from acid_cli.main import app; app()"]
-LONG = ["excite", "--plant", "model", "--duration", "2500000"]  # ~5 s of simulation
+LONG = ["excite", "--plant", "model", "--duration", "250000"]  # 50,000 steps: ~5 s quiet
 
 
 def _start(out, ignore_sigint: bool = False) -> subprocess.Popen:

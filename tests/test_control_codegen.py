@@ -298,6 +298,7 @@ def test_the_compiler_is_bounded_by_cpu_time(tmp_path, monkeypatch):
 def test_a_compile_killed_for_cpu_time_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setattr(codegen, "COMPILE_CPU_S", 1)
     monkeypatch.setattr(codegen, "_compiler_identity", lambda cc: "spin: 0")
+    monkeypatch.setattr(codegen, "host_cpu", lambda cc: "")  # its probe would spin for 60 s
     cc = _script(tmp_path, f'exec {sys.executable} -c "while True: pass"\n')
     with pytest.raises(CodegenError, match="CPU seconds"):
         compile_function(_fn("acid_test_spin"), cc=[str(cc)], directory=tmp_path)

@@ -123,6 +123,9 @@ def test_cross_validation_folds_never_see_their_held_out_experiment():
     # results as objects: JSON round trip, a table, a frame, a repr
     back = CrossValidation.from_dict(json.loads(json.dumps(cv.to_dict())))
     assert back.to_dict() == cv.to_dict()
+    rows = cv.parameters()     # every estimated shared parameter, its value in each fold
+    assert rows and all(len(r["values"]) == 3 and r["spread"] >= 0 for r in rows)
+    assert all(r["spread"] == max(r["values"]) - min(r["values"]) for r in rows)
     assert isinstance(back.intervals[0], ValidationIntervals)
     assert "not resolved" in cv.summary() or "*" in cv.summary()
     assert set(cv.to_frame().columns) >= {"scope", "predictor", "time_s", "rmse_lo", "design"}

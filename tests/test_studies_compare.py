@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -111,6 +112,11 @@ def test_compare_result_round_trips_json():
     assert back.to_dict() == r.to_dict()
     assert "held out: stopgo@36C" in r.summary() and "CompareResult(" in repr(r)
     assert "not resolved" in repr(r.verdicts[0])
+    # the envelope's record survives JSON
+    off = dataclasses.replace(r, held_out=(dataclasses.replace(r.held_out[0],
+                                                               extrapolated=("Q_e", "T_evap")),))
+    assert cmp.CompareResult.from_dict(json.loads(off.to_json())).held_out[0].extrapolated == (
+        "Q_e", "T_evap")
 
 
 def test_a_saving_bought_with_comfort_is_not_read_as_one():
@@ -148,3 +154,30 @@ def test_verdict_json_has_the_fields_of_every_acid_verdict():
     for k in ("n", "mean", "lo", "hi", "boot_lo", "boot_hi", "level", "words"):
         assert d[k] == (pytest.approx(ref[k]) if isinstance(ref[k], float) else ref[k]), k
     assert cmp.Verdict.from_dict(json.loads(json.dumps(d))) == v
+def _run(E: float, T: float, Kmin: float = 0.0) -> cmp.PeriodicRun:
+    return cmp.PeriodicRun("s", "Fs", C2K(7.0), E, Kmin, 0.4, T, 3, True, 0.0, E)
+
+
+def test_matching_interpolates_energy_to_the_baseline_mean_cabin_temperature():
+    at, lowered = _run(1.00e6, C2K(24.10)), _run(1.06e6, C2K(23.80), Kmin=0.3)
+    m = cmp.match_to_mean(at, lowered, C2K(24.00))
+    assert m.mean_T_cab == C2K(24.00)
+    assert m.energy_J == pytest.approx(1.02e6, rel=1e-12)            # a third of the span
+    assert m.discomfort_Kmin == pytest.approx(0.1, rel=1e-9)
+    assert cmp.match_to_mean(at, _run(1.0e6, C2K(24.105)), C2K(24.0)) is None  # no slope
+    assert cmp.match_to_mean(at, lowered, C2K(23.0)) is None       # too far outside
+
+
+def test_a_warmer_family_is_judged_again_at_the_baseline_mean():
+    """Fs holds the cabin warmer than F (acid's sampled PI): the matched verdict compares it
+    at F's mean cabin temperature, and its energy there is above its unmatched energy."""
+    sset = cmp.ScenarioSet((_sc(29.0),), tuple(_sc(a) for a in AMBIENTS), "test")
+    fams = (cmp.Family("F", "F", "coil, K", (C2K(8.0),)),
+            cmp.Family("Fs", "Fs", "coil, K", (C2K(8.0),)))
+    res = cmp.compare(sset, fams, S, n_boot=2000)
+    names = {v.candidate: v for v in res.verdicts}
+    raw, matched = names["Fs"], names["Fs" + cmp.MATCHED]
+    assert raw.T_cab_gap_K > 0.01                       # warmer than F, as measured
+    assert abs(matched.T_cab_gap_K) < 1e-9 and len(matched.scenarios) >= 4
+    assert matched.mean_pct < raw.mean_pct              # the warmer cabin was part of the saving
+    assert {r.family for r in res.held_out} == {"F", "Fs", "Fs" + cmp.LOWERED}

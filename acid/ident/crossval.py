@@ -362,6 +362,7 @@ class CrossValidation:
     def to_dict(self) -> dict:
         return json_safe({"model": self.model, "channel": self.channel,
                           "fit_options": self.fit_options, "folds": list(self.folds),
+                          "parameters": self.parameters(),
                           "intervals": [iv.to_dict() for iv in self.intervals],
                           "robust": self.robust, "settings": self.settings})
 
@@ -377,6 +378,25 @@ class CrossValidation:
         return pd.concat([iv.to_frame().assign(design=iv.design) for iv in self.intervals],
                          ignore_index=True)
 
+    def parameters(self) -> list[dict]:
+        """Per estimated parameter (shared by all experiments): its value in every fold, the
+        spread across folds (max - min) also in units of the median fold standard error,
+        and the folds where it ended on a declared bound."""
+        rows = []
+        for name in self.folds[0]["values"] if self.folds else ():
+            if not any(name in f.get("stderr", {}) for f in self.folds):
+                continue                                     # fixed, or per experiment
+            ses = np.array([math.nan if f.get("stderr", {}).get(name) is None
+                            else float(f["stderr"][name]) for f in self.folds])
+            v = [float(f["values"][name]) for f in self.folds]
+            se = float(np.nanmedian(ses)) if np.isfinite(ses).any() else math.nan
+            spread = max(v) - min(v)
+            rows.append({"name": name, "values": v, "spread": spread,
+                         "spread_in_se": spread / se if se > 0 else math.nan,
+                         "on_bound_in_folds": [f["fold"] for f in self.folds if any(
+                             b.split(" at its ")[0] == name for b in f.get("on_bounds", ()))]})
+        return rows
+
     def summary(self) -> str:
         lines = [f"Cross-validation of {self.model!r}: {len(self.folds)} folds, each "
                  f"held-out experiment predicted by a model fitted without it "
@@ -385,6 +405,15 @@ class CrossValidation:
         for f in self.folds:
             lines.append(f"  fold {f['fold']}: held out {', '.join(f['held_out'])} "
                          f"(trained on {len(f['trained_on'])} experiments)")
+        moving = [r for r in self.parameters() if r["on_bound_in_folds"]
+                  or r["spread_in_se"] > 2.0]
+        if moving:
+            lines.append("Parameters across folds (on a bound in some fold, or moving by more "
+                         "than 2 standard errors):")
+            lines += [f"  {r['name']}: {', '.join(f'{x:.4g}' for x in r['values'])} (spread "
+                      f"{r['spread']:.3g} = {r['spread_in_se']:.1f} s.e.)"
+                      + (f"; on a bound in fold {', '.join(map(str, r['on_bound_in_folds']))}"
+                         if r["on_bound_in_folds"] else "") for r in moving]
         for iv in self.intervals:
             lines.append(iv.summary())
         if len(self.intervals) > 1:
@@ -467,7 +496,10 @@ def cross_validate(model, ds: Dataset, *, fit_options: dict | None = None,
                           "trained_on": [names[j] for j in train],
                           "training_samples": int(n_tr), "method": result.method,
                           "values": dict(zip(model.parameter_names,
-                                             map(float, result.values), strict=True))})
+                                             map(float, result.values), strict=True)),
+                          "stderr": {e.name: float(e.stderr) for e in result.estimates
+                                     if e.experiment is None},
+                          "on_bounds": list(result.on_bounds)})
         for d in designs:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")

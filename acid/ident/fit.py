@@ -71,7 +71,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
               hac_bandwidth="auto", solver: str | None = None,
               max_nfev: int = 100, loss: str = "squared", oe_estimate_x0: bool = True,
               start: dict | None = None, strict: bool = False,
-              oe_solver: str = "dense") -> DeclaredFitResult:
+              oe_solver: str = "dense", progress=None) -> DeclaredFitResult:
     """Fit ``model`` (a ``Model`` or a name/path for :func:`acid.models.load`) to ``ds``.
 
     See the module docstring for the methods. ``fix`` {name: value} and ``free`` (names)
@@ -80,7 +80,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     fixing them. ``loss="huber"``: robust to outliers (equation error by CVXPY, output
     error by scipy's Huber loss). ``oe_estimate_x0=False``: output-error windows start from
     the measured states (latent ones are still estimated). ``strict``: a parameter the data
-    do not separate from another is an error, not a reported combination.
+    do not separate from another is an error, not a reported combination. ``progress``:
+    called as ``progress(evaluations, None, label)`` while the optimiser runs (output error
+    and prediction error), the label naming the start, the pass and the loss.
     """
     t0 = time.perf_counter()
     model = load(model)
@@ -112,10 +114,15 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         model = model.with_parameters(fix, tuple(free))
     if start:
         model = _with_values(model, start)
+    priors = [p.name for p in model.parameters if p.prior is not None and not p.fixed]
+    if priors and method in ("ls", "cvx"):
+        raise ConfigError(f"--method {method}: the priors on {', '.join(priors)} are "
+                          "honoured by --method oe, pem or auto (output error)")
     if method == "pem":
         from acid.ident.pem import fit_pem
 
-        return fit_pem(model, ds, fix=fix, max_nfev=max_nfev, t0=t0)
+        return fit_pem(model, ds, fix=fix, max_nfev=max_nfev, t0=t0,
+                       progress=_labelled(progress, "prediction error"))
     data = ModelData.of(model, ds)
     E = data.n_experiments
     names = model.parameter_names
@@ -206,8 +213,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     ls_reached = [s != "not fitted" for s in status]
     latent = [s.name for s in model.states if not s.measured]
     if method == "auto":
-        method = "ls" if all(ls_reached) and not latent and fit_starts == 1 else "oe"
+        method = "ls" if all(ls_reached) and not latent and fit_starts == 1 \
+            and not priors else "oe"
         notes.append(f"method auto: {method} (" + (
+            "declared priors" if priors and method == "oe" else
             "least squares reaches every free parameter" if method == "ls" else
             f"{fit_starts} output-error starts asked for" if fit_starts > 1 else
             "latent states " + ", ".join(latent) if latent and all(ls_reached) else
@@ -231,8 +240,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
 
             def solve(*a, max_nfev, **kw):
                 return solve_ms(*a, max_iter=3 * max_nfev, **kw)
+        dense = oe_solver == "dense"
         res = solve(prob, theta_start, lo, hi, covariance=covariance,
-                    hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
+                    hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss,
+                    **({"progress": _labelled(progress, "start 1")} if dense else {}))
         if fit_starts > 1:
             rng = np.random.default_rng(seed)
             scale = {n: max(float(np.std(prob.meas[..., i][prob.obs[..., i]])), 1e-9)
@@ -243,7 +254,9 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                 try:
                     r = res if s0 is None else solve(
                         prob, s0, lo, hi, reweight=False, covariance=covariance,
-                        hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss)
+                        hac_bandwidth=hac_bandwidth, max_nfev=max_nfev, loss=loss,
+                        **({"progress": _labelled(progress, f"start {k + 1}/{fit_starts}")}
+                           if dense else {}))
                 except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
                     failed.append(FailedStart(k, math.nan, f"the solver failed: {exc}", {
                         c.label: float(v) for c, v in zip(columns, s0, strict=True)}))
@@ -288,6 +301,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
                       "n_parameters": len(columns)}
         if not res.success:
             warn.append(f"output error did not converge ({res.status})")
+        if linear.prior_note(model, columns, theta):
+            notes.append(linear.prior_note(model, columns, theta))
         notes.append(f"output error over {res.n_windows} windows of <= {oe_window} samples, "
                      + ("each window's initial state estimated" if oe_estimate_x0 else
                         "each window started from the measured states") + (
@@ -499,6 +514,25 @@ def _failure(r, scale: dict) -> str:
     if not r.success:
         return f"solver failed or stopped: {r.status} ({r.nfev} evaluations)"
     return ""
+
+
+#: seconds between two progress reports of a running fit (the first is reported at once)
+PROGRESS_EVERY_S = 2.0
+
+
+def _labelled(progress, prefix: str):
+    """``progress`` with ``prefix`` before each label, forwarded at most every
+    ``PROGRESS_EVERY_S`` (a fit evaluates thousands of times; None stays None)."""
+    if progress is None:
+        return None
+    last = [-math.inf]
+
+    def report(done, total=None, label=None):
+        now = time.monotonic()
+        if now - last[0] >= PROGRESS_EVERY_S:
+            last[0] = now
+            progress(done, total, f"{prefix}, {label}")
+    return report
 
 
 def _on_bounds(columns, theta, lo, hi) -> list[str]:

@@ -44,6 +44,19 @@ class Column:
         return self.name if self.experiment is None else f"{self.name}@{self.experiment}"
 
 
+def prior_note(model: Model, columns, theta) -> str:
+    """One note line for the fitted ``columns`` that carry a declared prior: each estimate
+    beside its prior and how far it moved, in the prior's standard deviations ("" without
+    priors)."""
+    parts = []
+    for c, t in zip(columns, theta, strict=True):
+        pr = model.parameters[c.index].prior
+        if pr is not None:
+            parts.append(f"{c.label} {t:.4g} (prior {pr[0]:g} +- {pr[1]:g} "
+                         f"{model.parameters[c.index].unit}, {(t - pr[0]) / pr[1]:+.1f} sd)")
+    return ("maximum a posteriori with declared priors: " + "; ".join(parts)) if parts else ""
+
+
 @dataclass(frozen=True)
 class EquationForm:
     """How one equation can be fitted: ``linear`` True when least squares applies, else

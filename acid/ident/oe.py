@@ -155,6 +155,12 @@ class OEProblem:
         # only, the measured ones then start at their measurement
         self.x0_free = np.array([estimate_x0 or not s.measured for s in model.states],
                                 dtype=bool)
+        # declared priors (mean, sd) of the free columns: MAP rows (theta - mean) / sd
+        pri = [(c, *model.parameters[col.index].prior) for c, col in enumerate(columns)
+               if model.parameters[col.index].prior is not None]
+        self.prior_cols = np.array([c for c, _, _ in pri], dtype=int)
+        self.prior_mean = np.array([m for _, m, _ in pri], dtype=float)
+        self.prior_sd = np.array([sd for _, _, sd in pri], dtype=float)
 
     @property
     def n_theta(self) -> int:
@@ -175,6 +181,24 @@ class OEProblem:
     def residuals(self, z) -> np.ndarray:
         return (self.errors(z) / self.weights)[self.obs]
 
+    def prior_residuals(self, z) -> np.ndarray:
+        """The priors' rows of the MAP objective, ``(theta - mean) / sd`` (empty without)."""
+        return (np.asarray(z)[self.prior_cols] - self.prior_mean) / self.prior_sd
+
+    def prior_jacobian(self, n_z: int) -> np.ndarray:
+        Jp = np.zeros((self.prior_cols.size, n_z))
+        Jp[np.arange(self.prior_cols.size), self.prior_cols] = 1.0 / self.prior_sd
+        return Jp
+
+    def objective_residuals(self, z) -> np.ndarray:
+        """Data rows, then prior rows: half their sum of squares is the negative log
+        posterior (up to a constant) when the data rows are errors over their RMS."""
+        return np.concatenate([self.residuals(z), self.prior_residuals(z)])
+
+    def objective_jacobian(self, z) -> np.ndarray:
+        J = self.jacobian(z)
+        return np.vstack([J, self.prior_jacobian(J.shape[1])])
+
     def jacobian(self, z) -> np.ndarray:
         _, P, x0 = self.unpack(z)
         _, J = simulate_windows(self.model, self.data, self.w.idx, x0, P, free=self.free)
@@ -189,11 +213,12 @@ class OEProblem:
 
 def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
           reweight: bool = True, covariance: str = "hac", hac_bandwidth="auto",
-          max_nfev: int = 100, loss: str = "squared") -> OEResult:
+          max_nfev: int = 100, loss: str = "squared", progress=None) -> OEResult:
     """Minimise from ``theta0`` (clipped into the bounds); ``reweight``: a second pass with
     each channel weighted by its error RMS of the first (channels in their own units).
     ``loss="huber"``: the second pass weights each channel by its robust standard deviation
-    and minimises the Huber loss (threshold ``HUBER_M``), robust to outliers."""
+    and minimises the Huber loss (threshold ``HUBER_M``), robust to outliers. ``progress``:
+    ``progress(evaluations, None, label)`` at every residual evaluation."""
     nx = int(prob.x0_free.sum())
     z = np.concatenate([np.clip(theta0, lo, hi), prob.x0_start[:, prob.x0_free].ravel()])
     zlo = np.concatenate([lo, np.full(prob.nw * nx, -np.inf)])
@@ -206,6 +231,16 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                                hi - 1e-9 * (1 + abs(hi)), z[:len(hi)])
     res = None
     floor = 1e-3 * prob.weights
+    count = {"n": 0, "pass": 1}
+
+    def residuals(v):
+        r = prob.objective_residuals(v)
+        count["n"] += 1
+        if progress is not None:
+            progress(count["n"], None, f"pass {count['pass']}, evaluation {count['n']}, "
+                                       f"loss {0.5 * float(r @ r):.6g}")
+        return r
+
     robust = loss == "huber"
     for it in range(2 if (reweight or robust) else 1):
         if it == 1:
@@ -214,6 +249,7 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                             np.sqrt(np.mean(e[..., i][prob.obs[..., i]] ** 2))
                             for i in range(len(prob.chan))])
             prob.weights = np.maximum(rms, floor)
+        count["pass"] = it + 1
         kwargs = {"loss": "huber", "f_scale": HUBER_M} if robust and it == 1 else {}
         res = None
         with np.errstate(all="ignore"):
@@ -221,14 +257,16 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                 # MINPACK's Levenberg-Marquardt first (its own QR: no BLAS threads, which
                 # slow SVDs 100-fold on a busy machine); kept when it ends inside the bounds
                 res = scipy.optimize.least_squares(
-                    prob.residuals, z, jac=prob.jacobian, method="lm", x_scale="jac",
+                    residuals, z, jac=prob.objective_jacobian, method="lm",
+                    x_scale="jac",
                     ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=2 * max_nfev)
                 inside = np.all((res.x >= zlo) & (res.x <= zhi))
                 if not (inside and res.status > 0 and np.all(np.isfinite(res.x))):
                     res = None
             if res is None:  # trust-region reflective inside the declared bounds
                 res = scipy.optimize.least_squares(
-                    prob.residuals, z, jac=prob.jacobian, bounds=(zlo, zhi), method="trf",
+                    residuals, z, jac=prob.objective_jacobian,
+                    bounds=(zlo, zhi), method="trf",
                     x_scale="jac", ftol=1e-12, xtol=1e-12, gtol=1e-10, max_nfev=max_nfev,
                     **kwargs)
         z = res.x
@@ -239,16 +277,20 @@ def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth,
               loss: str = "squared") -> OEResult:
     J = prob.jacobian(z)
     r = prob.residuals(z)
-    loss_value = float(0.5 * r @ r)
+    rp = prob.prior_residuals(z)
+    loss_value = float(0.5 * (r @ r + rp @ rp))
+    # the curvature (bread, rank, identifiability) carries the priors' rows; the scores
+    # (HAC meat, the residual variance) the data's only
+    Ja = np.vstack([J, prob.prior_jacobian(J.shape[1])])
     n, p = J.shape
     dof = max(n - p, 1)
     frac = 1.0
     if loss == "huber":  # the last pass minimised Huber(r, f_scale=HUBER_M): scores psi(r)
         frac = max(float(np.mean(np.abs(r) <= HUBER_M)), 1.0 / r.size)
         r = np.clip(r, -HUBER_M, HUBER_M)
-    colnorm = np.linalg.norm(J, axis=0)
+    colnorm = np.linalg.norm(Ja, axis=0)
     colnorm = np.where(colnorm > 0, colnorm, 1.0)
-    _, s, Vt = np.linalg.svd(J / colnorm, full_matrices=False)
+    _, s, Vt = np.linalg.svd(Ja / colnorm, full_matrices=False)
     keep = s > 1e-10 * s[0]
     bread = ((Vt[keep].T / s[keep] ** 2) @ Vt[keep]) / np.outer(colnorm, colnorm)
     nth = prob.n_theta
@@ -265,7 +307,7 @@ def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth,
     else:
         cov_z = float(r @ r) / dof * bread / frac**2
     cov = cov_z[:nth, :nth]
-    Jth = J[:, :nth]
+    Jth = Ja[:, :nth]
     cs = np.linalg.norm(Jth, axis=0)
     cs = np.where(cs > 0, cs, 1.0)
     sv = np.linalg.svd(Jth / cs, compute_uv=False) if nth else np.zeros(0)

@@ -59,10 +59,14 @@ def build(prob: OEProblem, theta_scale: np.ndarray):
     meas = prob.meas.reshape(N, -1).T                      # (C, N)
     wmask = prob.obs.reshape(N, -1).T / prob.weights[:, None]
     R = (Yc - ca.DM(meas)) * ca.DM(wmask)
-    f = 0.5 * ca.sumsqr(R)
+    r = ca.vec(R)
+    if prob.prior_cols.size:   # declared priors: the MAP rows (theta - mean) / sd
+        r = ca.vertcat(r, (theta[[int(c) for c in prob.prior_cols]] - ca.DM(prob.prior_mean))
+                       / ca.DM(prob.prior_sd))
+    f = 0.5 * ca.sumsqr(r)
     v = ca.vertcat(t, ca.vec(X))
     return {"x": v, "f": f, "g": g}, SimpleNamespace(
-        N=N, nw=nw, L=L, nx=nx, nth=nth, ng=int(g.numel()), r=ca.vec(R), v=v, g=g)
+        N=N, nw=nw, L=L, nx=nx, nth=nth, ng=int(g.numel()), r=r, v=v, g=g)
 
 
 def gauss_newton(nlp: dict, h) -> ca.Function:

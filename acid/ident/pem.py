@@ -218,7 +218,7 @@ def _curvature_covariance(H: np.ndarray, z, zlo, zhi, rtol: float = 1e-8):
 
 
 def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.ndarray,
-          lo: np.ndarray, hi: np.ndarray, max_nfev: int = 100) -> PEMResult:
+          lo: np.ndarray, hi: np.ndarray, max_nfev: int = 100, progress=None) -> PEMResult:
     """Minimise the innovations' negative log-likelihood over the free ``columns``
     (``acid.ident.linear.Column``; per-experiment ones by experiment) from ``theta0``,
     within [lo, hi]; ``base`` (E, np) the values of everything else per experiment."""
@@ -251,6 +251,11 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
     out = _run(model, chan, L, n)(ca.DM(rec.x0.T), ca.DM(rec.P0.T), flat(rec.u),
                                    flat(rec.d), Pm, flat(rec.m), flat(rec.o))
     J = ca.sum2(out[2])
+    pri = [(c, *model.parameters[col.index].prior) for c, col in enumerate(columns)
+           if model.parameters[col.index].prior is not None]
+    if pri:   # declared priors: -2 log of each Gaussian prior (J is -2 log L + const)
+        J = J + ca.sumsqr((ca.vertcat(*[th[c] for c, _, _ in pri])
+                           - ca.DM([m for _, m, _ in pri])) / ca.DM([sd for _, _, sd in pri]))
     fg = ca.Function("pem_cost", [Z], [J, ca.gradient(J, Z)])
     ev = ca.Function("pem_out", [Z], [out[3], out[4]])
     count = {"n": 0}
@@ -267,6 +272,9 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
             return ref + 1e6 * (1 + abs(ref)), 1e6 * (1 + abs(ref)) * (z - zb)  # back
         if f < best[0]:
             best[:] = [f, z.copy()]
+        if progress is not None:
+            progress(count["n"], max_nfev, f"evaluation {count['n']} of at most {max_nfev}, "
+                                           f"-2 log likelihood {best[0]:.6g}")
         return f, np.asarray(g).ravel()
 
     z0 = np.clip((np.asarray(theta0, float) - a) / b, zlo, zhi)
@@ -343,7 +351,7 @@ def filter_states(model: Model, data: ModelData, P: np.ndarray, k0: np.ndarray,
 
 
 def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
-            t0: float | None = None):
+            t0: float | None = None, progress=None):
     """``fit_model(..., method="pem")``: the declared table fitted by the prediction-error
     method over each whole experiment; a ``DeclaredFitResult`` (standard errors from the
     likelihood's curvature, 95 % normal intervals)."""
@@ -362,7 +370,7 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
     for c in columns:
         base[:, c.index] = 0.0
     res = solve(model, data, columns, base, declared[[c.index for c in columns]], lo, hi,
-                max_nfev=max_nfev)
+                max_nfev=max_nfev, progress=progress)
     values = declared.copy()
     names = model.parameter_names
     per = {p.name: np.full(E, p.value) for p in model.parameters if p.per_experiment}
@@ -394,6 +402,8 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
              "(L-BFGS-B, CasADi gradient)" + (f"; latent: {', '.join(latent)}" if latent
                                               else "")
              + (f"; states with process noise: {', '.join(walks)}" if walks else "")]
+    if linear.prior_note(model, columns, res.theta):
+        notes.append(linear.prior_note(model, columns, res.theta))
     at = [f"{c.label} at its {w} {bd:g}" for c, t, a, z in zip(columns, res.theta, lo, hi,
                                                                 strict=True)
           for bd, w in ((a, "min"), (z, "max"))

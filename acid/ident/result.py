@@ -71,7 +71,7 @@ class FailedStart:
     values: dict
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class DeclaredFitResult:
     """What ``fit_model`` found (frozen; printing lives in the CLI)."""
 
@@ -110,6 +110,41 @@ class DeclaredFitResult:
     on_bounds: tuple[str, ...] = ()
     #: the ``Model`` fitted (``fitted_parameters`` binds the values to it)
     declaration: Model | None = field(default=None, repr=False, compare=False)
+
+    def to_frame(self):
+        """The fitted table as a pandas DataFrame, a row per estimate (per-experiment
+        parameters a row per experiment): name, experiment, unit, declared, value, stderr,
+        ci95_low, ci95_high, status."""
+        import pandas as pd
+
+        return pd.DataFrame([{"name": e.name, "experiment": e.experiment, "unit": e.unit,
+                              "declared": e.declared, "value": e.value, "stderr": e.stderr,
+                              "ci95_low": e.ci95[0], "ci95_high": e.ci95[1],
+                              "status": e.status} for e in self.estimates])
+
+    def summary(self) -> str:
+        """The fit as text: what was fitted how, the parameter table, the per-channel error
+        RMS (output error: simulation over windows; prediction error: one-step innovations),
+        parameters on a bound, warnings."""
+        rms = self.output_error.get("channel_rms") or self.output_error.get(
+            "innovation_rms") or {}
+        lines = [f"{self.model}: {self.method} fit of {self.n_samples} samples "
+                 f"({self.data_source})"]
+        width = max([len(e.name) + (4 if e.experiment is not None else 0)
+                     for e in self.estimates] + [4])
+        lines.append(f"  {'name':<{width}} {'value':>12} {'stderr':>10}  unit  status")
+        for e in self.estimates:
+            label = e.name if e.experiment is None else f"{e.name}@{e.experiment}"
+            lines.append(f"  {label:<{width}} {e.value:>12.5g} {e.stderr:>10.3g}  {e.unit}  "
+                         f"{e.status}")
+        if rms:
+            lines.append("  error RMS: " + ", ".join(f"{k} {v:.4g}" for k, v in rms.items()))
+        lines += [f"  on a bound: {b}" for b in self.on_bounds]
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"DeclaredFitResult(\n{self.summary()}\n)"
 
     def __getstate__(self):   # pickled without the Model (it holds the user's functions)
         return {k: v for k, v in self.__dict__.items() if k != "declaration"}

@@ -80,7 +80,11 @@ class Parameter:
     """A row of the parameter table, in ``unit`` (the equations see the value as written).
 
     ``fixed``: not estimated unless freed; ``per_experiment``: one value per experiment of
-    the dataset (e.g. a solar load that differs between recordings).
+    the dataset (e.g. a solar load that differs between recordings). ``prior``: (mean,
+    standard deviation) in ``unit``, what is known before the data (a data sheet, the
+    literature): output error and prediction error then maximise the posterior (MAP),
+    adding ``((value - mean) / sd)^2`` to the data's weighted squared errors (a Gaussian
+    prior; per experiment for a per-experiment parameter).
     """
 
     name: str
@@ -91,6 +95,7 @@ class Parameter:
     fixed: bool = False
     per_experiment: bool = False
     description: str = ""
+    prior: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -181,6 +186,17 @@ def _numeric(value, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
         raise TypeError(f"{what} must be a number, got {type(value).__name__}")
     return float(value)
+
+
+def check_prior(name: str, prior, unit: str, error) -> None:
+    """A prior is (mean, sd): two finite numbers, sd > 0; else ``error(message)`` is raised
+    (a callable making the exception, or the exception class)."""
+    ok = isinstance(prior, (tuple, list)) and len(prior) == 2 and all(
+        not isinstance(v, bool) and isinstance(v, (int, float, np.floating, np.integer))
+        and math.isfinite(float(v)) for v in prior)
+    if not ok or not float(prior[1]) > 0.0:
+        raise error(f"parameter {name!r}: prior must be (mean, standard deviation) in {unit}, "
+                    f"both finite, the standard deviation > 0, got {prior!r}")
 
 
 # ---------------------------------------------------------------------------- model
@@ -311,6 +327,8 @@ class Model:
             if not math.isfinite(v) or not lo <= v <= hi:
                 raise self._error(f"parameter {p.name!r}: value {p.value!r} must be finite "
                                   f"and within [min, max] = [{lo:g}, {hi:g}]")
+            if p.prior is not None:
+                check_prior(p.name, p.prior, p.unit, self._error)
         for c in self.constants:
             try:
                 _numeric(c.value, f"constant {c.name!r}")
@@ -522,6 +540,20 @@ class Model:
         raise DeclarationError(f"{Path(self.source).name}: model {self.name!r}: unknown "
                                f"parameter {name!r} (parameters: "
                                f"{', '.join(self.parameter_names)})")
+
+    def with_priors(self, priors: Mapping[str, tuple[float, float]]) -> Model:
+        """A copy whose table gives these parameters the prior (mean, sd) (replacing any
+        declared one); checked as a declared prior."""
+        import copy
+        import dataclasses
+
+        for n, pr in priors.items():
+            p = self.parameter(n)
+            check_prior(n, pr, p.unit, DeclarationError)
+        other = copy.copy(self)
+        other.parameters = tuple(dataclasses.replace(p, prior=tuple(map(float, priors[p.name])))
+                                 if p.name in priors else p for p in self.parameters)
+        return other
 
     def with_parameters(self, fix: Mapping[str, float] | None = None,
                         free: tuple[str, ...] = ()) -> Model:

@@ -8,10 +8,20 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import math
+import os
+import select
+import signal
 import sys
+import warnings
 from pathlib import Path
 
 from acid.models.declaration import DeclarationError, Model
+
+#: Seconds a model file may take to load and declare its model (a trial load in a forked
+#: child first, where the platform forks): beyond, an endless loop or a runaway
+#: declaration is refused. ``ACID_MODEL_LOAD_TIMEOUT_S`` changes it (0: no trial load).
+LOAD_TIMEOUT_S = 120.0
 
 #: Built-in declarations: name -> module defining ``model``.
 BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
@@ -34,6 +44,11 @@ def load(spec: str | Path | Model) -> Model:
                                "or a .py file declaring a model")
     if not path.is_file():
         raise DeclarationError(f"{path}: model file not found")
+    _trial_load(path)
+    return _load_file(path)
+
+
+def _load_file(path: Path) -> Model:
     name = f"acid_user_model_{abs(hash(str(path.resolve())))}"
     spec_ = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec_)
@@ -45,6 +60,67 @@ def load(spec: str | Path | Model) -> Model:
         sys.modules.pop(name, None)
         sys.dont_write_bytecode = no_bytecode
     return _model_of(module, str(path))
+
+
+def _timeout_s() -> float:
+    text = os.environ.get("ACID_MODEL_LOAD_TIMEOUT_S", "")
+    try:
+        value = float(text) if text else LOAD_TIMEOUT_S
+    except ValueError:
+        value = math.nan
+    if not (value >= 0.0 and math.isfinite(value)):
+        raise DeclarationError(f"ACID_MODEL_LOAD_TIMEOUT_S must be a number of seconds >= 0, "
+                               f"got {text!r}")
+    return value
+
+
+def _trial_load(path: Path) -> None:
+    """Load ``path`` once in a forked child, its output discarded, bounded by
+    ``LOAD_TIMEOUT_S``: a file that ends the process (``os._exit``, a crash) or never
+    finishes is refused with one line naming the file, before acid runs it itself. Any other
+    failure is left to the real load, which names it. Skipped without ``os.fork`` and with a
+    timeout of 0. The child only runs the user's file: should another thread of the parent
+    hold a lock it needs, the child waits and the timeout names it."""
+    timeout = _timeout_s()
+    if timeout == 0.0 or not hasattr(os, "fork"):
+        return
+    r, w = os.pipe()
+    with warnings.catch_warnings():   # Python >= 3.12 warns of fork with threads running
+        warnings.simplefilter("ignore", DeprecationWarning)
+        pid = os.fork()
+    if pid == 0:                                           # the child: load, report, leave
+        try:
+            os.close(r)
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, 1)
+            os.dup2(null, 2)
+            sys.stdout = sys.stderr = open(os.devnull, "w")   # noqa: SIM115 - os._exit ends it
+            try:
+                _load_file(path)
+            except BaseException:  # noqa: BLE001 - the real load names it
+                pass
+            os.write(w, b"done")
+        finally:
+            os._exit(0)
+    os.close(w)
+    try:
+        ready, _, _ = select.select([r], [], [], timeout)
+        said = os.read(r, 4) if ready else None
+    finally:
+        os.close(r)
+        if not ready:
+            os.kill(pid, signal.SIGKILL)
+        _, status = os.waitpid(pid, 0)
+    if said is None:
+        raise DeclarationError(f"{path.name}: loading the model file did not finish within "
+                               f"{timeout:g} s (an endless loop, or a declaration too large "
+                               "to trace); ACID_MODEL_LOAD_TIMEOUT_S raises the limit")
+    if said != b"done":
+        how = (f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status)
+               else f"exit status {os.WEXITSTATUS(status)}")
+        raise DeclarationError(f"{path.name}: the model file ended the process while acid "
+                               f"loaded it ({how}: os._exit or a crash); a model file only "
+                               "declares")
 
 
 def _user_raised(exc: BaseException, path: Path) -> bool:

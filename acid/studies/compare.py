@@ -27,6 +27,12 @@ Protocol (kelvin inside, degC at the edges):
    with the paired t interval beside it. Words from the interval: "saves" (above 0),
    "costs" (below 0), "no resolvable difference" (straddles 0); fewer than
    ``MIN_SCENARIOS`` held-out scenarios: "not resolved".
+5. **Equal mean cabin temperature.** A family that holds its cabin a little warmer than F
+   buys energy with comfort (0.02 K is about 0.1 %). So every family but F and ``own`` is also
+   run on each held-out scenario with its target lowered by ``MATCH_SHIFT_K``, and its energy
+   and discomfort are interpolated linearly in the mean cabin temperature to F's mean on that
+   scenario (extrapolated at most ``MATCH_EXTRAPOLATE`` spans; beyond, the scenario counts
+   as not matched). The verdicts "X at F's T_cab vs F" read off these matched pairs.
 """
 
 from __future__ import annotations
@@ -56,6 +62,16 @@ DEFAULT_AMBIENTS_C = (30.0, 38.0)
 PERIODIC_KEYS = ("T_cab", "T_int", "T_int_slow", "T_shell")
 SAVES, NONE, COSTS, UNRESOLVED = ("saves", "no resolvable difference", "costs",
                                   "not resolved")
+#: comfort gaps beyond which a saving is not read (candidate minus baseline, held-out mean):
+#: discomfort, K min per pass, and mean cabin temperature, K (0.02 K is about 0.1 % energy)
+#: the second held-out run's lowered target, K, and how far (in spans of the two runs' mean
+#: cabin temperatures) the matched energy may be extrapolated (module docstring, 5.)
+MATCH_SHIFT_K = 0.3
+MATCH_EXTRAPOLATE = 1.0
+#: the suffix of a family's name in a verdict judged at the baseline's mean cabin temperature,
+#: and of its held-out runs at the lowered target
+MATCHED = " at F's T_cab"
+LOWERED = " lowered"
 
 
 # ------------------------------------------------------------------------------ scenarios
@@ -248,6 +264,9 @@ class PeriodicRun:
     residual_K: float
     first_pass_J: float
     end: dict = field(default_factory=dict)
+    #: the econ model's inputs a controller's plans took outside the data its power map was
+    #: identified on (E only: the model's envelope; empty when it stayed inside)
+    extrapolated: tuple[str, ...] = ()
     single_own_J: float = math.nan
     single_pi_J: float = math.nan
 
@@ -304,8 +323,11 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     first = E_prev = math.nan
     first_end: dict = {}
     res, last = math.inf, {}
+    outside: list[str] = []
     for p in range(1, settings.max_passes + 1):
         E, T, rh = _pass(plant, ctrl, drive, settings.T_set)
+        outside += [n for n in getattr(getattr(ctrl, "mpc", None), "extrapolation", ())
+                    if n not in outside]
         if p == 1:
             first, first_end = E, plant_state(plant)
         now = plant_state(plant)
@@ -329,7 +351,7 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
                - tail_J(sc, start_state, c, settings) for c in CHARGES} if charge else {}
     return PeriodicRun(sc.name, family, float(knob), E, float(np.sum(out) * drive.Ts / 60.0),
                        float(np.mean(rh)), float(np.mean(T)), p, bool(res < settings.tol_K),
-                       float(res), first, plant_state(plant),
+                       float(res), first, plant_state(plant), tuple(outside),
                        charged.get("own", math.nan), charged.get("pi", math.nan))
 
 
@@ -536,10 +558,12 @@ class CompareResult:
                    tuple(FrontPoint(**fix(p, ("knob", "energy_J", "discomfort_Kmin",
                                                 "rh_mean"))) for p in d["fronts"]),
                    {k: _num(v) for k, v in d["tuned"].items()},
-                   tuple(PeriodicRun(**fix(r, ("knob", "energy_J", "discomfort_Kmin",
-                                               "rh_mean", "mean_T_cab", "residual_K",
-                                               "first_pass_J", "single_own_J",
-                                               "single_pi_J"))) for r in d["held_out"]),
+                   tuple(PeriodicRun(**{**fix(r, ("knob", "energy_J", "discomfort_Kmin",
+                                                  "rh_mean", "mean_T_cab", "residual_K",
+                                                  "first_pass_J", "single_own_J",
+                                                  "single_pi_J")),
+                                        "extrapolated": tuple(r.get("extrapolated", ()))})
+                         for r in d["held_out"]),
                    tuple(Verdict.from_dict(v) for v in d["verdicts"]), dict(d["settings"]))
 
     def to_json(self) -> str:
@@ -597,12 +621,13 @@ def tune_knob(points: Sequence[FrontPoint], level: float) -> float:
 def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSettings = RunSettings(),
             econ=None, seed: int = 0, n_boot: int = 10000, candidate: str = "E",
             executor=None, progress: Callable[[str], None] | None = None,
-            min_scenarios: int = MIN_SCENARIOS) -> CompareResult:
+            min_scenarios: int = MIN_SCENARIOS, match_mean: bool = True) -> CompareResult:
     """Sweep every family on training, tune at the common comfort level, judge on held-out.
 
     The comfort level is the plant's own loops' mean training discomfort (``own``), or the
     least family mean when ``own`` is absent. Verdicts: ``candidate`` (if run) and every
-    family against ``F``, and ``F`` against ``own``.
+    family against ``F``, and ``F`` against ``own``; with ``match_mean``, every family but
+    ``F`` and ``own`` again at F's mean cabin temperature (module docstring, 5.).
     """
     if progress:
         progress(f"training: {len(scenarios.training)} scenarios x "
@@ -654,9 +679,50 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
     pairs += [(k, "F") for k in keys if k not in ("F", candidate)]
     if "own" in keys and "F" in keys:
         pairs.append(("F", "own"))
-    verdicts = tuple(judge(by, names, c, b, seed, n_boot, min_scenarios) for c, b in pairs)
+    verdicts = [judge(by, names, c, b, seed, n_boot, min_scenarios) for c, b in pairs]
+    if match_mean and "F" in keys:
+        movable = [k for k in keys if k not in ("F", "own")]
+        lowered = dataclasses.replace(settings, T_set=settings.T_set - MATCH_SHIFT_K)
+        mtasks = [(sc, k, tuned[k], lowered, econ, starts[sc.name]) for k in movable
+                  for sc in scenarios.held_out]
+        if progress and mtasks:
+            progress(f"held out at a target {MATCH_SHIFT_K:g} K lower (mean cabin matched to F)")
+        mruns = _map(mtasks, executor, progress)
+        lower = {(r.family, r.scenario): r for r in mruns}
+        for k in sorted(movable, key=lambda k: k != candidate):
+            matched = {n: match_to_mean(by[k, n], lower[k, n], by["F", n].mean_T_cab)
+                       for n in names}
+            ok = [n for n in names if matched[n] is not None]
+            mby = {("F", n): by["F", n] for n in ok}
+            mby.update({(k + MATCHED, n): matched[n] for n in ok})
+            verdicts.append(judge(mby, ok, k + MATCHED, "F", seed, n_boot, min_scenarios)
+                            if ok else Verdict(k + MATCHED, "F", (), (), *(math.nan,) * 5,
+                                               UNRESOLVED, int(n_boot), int(seed)))
+        hruns = hruns + [dataclasses.replace(r, family=r.family + LOWERED) for r in mruns]
     return CompareResult(scenarios, float(level), tuple(fronts), tuned, tuple(hruns),
-                         verdicts, _json_safe(dataclasses.asdict(esettings)))
+                         tuple(verdicts), _json_safe(dataclasses.asdict(esettings)))
+
+
+def match_to_mean(at: PeriodicRun, lowered: PeriodicRun, T_target: float
+                  ) -> PeriodicRun | None:
+    """``at`` (the tuned run) with energy and discomfort interpolated linearly in the mean
+    cabin temperature between it and ``lowered`` (the same family at a lower target) to
+    ``T_target`` (K); None when the two means are too close to define the slope (under
+    0.01 K apart) or the target lies more than ``MATCH_EXTRAPOLATE`` spans outside them."""
+    span = lowered.mean_T_cab - at.mean_T_cab
+    if abs(span) < 0.01:
+        return None
+    f = (T_target - at.mean_T_cab) / span
+    if not -MATCH_EXTRAPOLATE <= f <= 1.0 + MATCH_EXTRAPOLATE:
+        return None
+
+    def lerp(a: float, b: float) -> float:
+        return float(a + f * (b - a))
+
+    return dataclasses.replace(
+        at, energy_J=lerp(at.energy_J, lowered.energy_J),
+        discomfort_Kmin=max(0.0, lerp(at.discomfort_Kmin, lowered.discomfort_Kmin)),
+        rh_mean=lerp(at.rh_mean, lowered.rh_mean), mean_T_cab=float(T_target))
 
 
 def judge(by: dict, names: Sequence[str], c: str, b: str, seed: int = 0, n_boot: int = 10000,
