@@ -116,12 +116,18 @@ def compare(
                 ["_family", "_what", "knob", "MJ/pass", "K min", "RH %"], rows)
     print_table(f"verdicts on held out ({len(sset.held_out)} scenarios, seed {seed})",
                 ["_candidate vs baseline", "saving %", "bootstrap 95 %", "paired t 95 %",
-                 "dK min", "dT_cab K", "_verdict"],
+                 "dK min", "dT_cab K", "_verdict", "1 pass own %", "1 pass PI %"],
                 [[f"{v.candidate} vs {v.baseline}", f"{v.mean_pct:+.2f}",
                   f"[{v.boot_lo:+.2f}, {v.boot_hi:+.2f}]", f"[{v.t_lo:+.2f}, {v.t_hi:+.2f}]",
-                  f"{v.discomfort_gap_Kmin:+.2f}", f"{v.T_cab_gap_K:+.2f}", v.word]
-                 if v.scenarios else [f"{v.candidate} vs {v.baseline}", *"-----", v.word]
+                  f"{v.discomfort_gap_Kmin:+.2f}", f"{v.T_cab_gap_K:+.2f}", v.word,
+                  f"{v.single_own_pct:+.2f}", f"{v.single_pi_pct:+.2f}"]
+                 if v.scenarios else [f"{v.candidate} vs {v.baseline}", *"-----", v.word, "-",
+                                      "-"]
                  for v in result.verdicts])
+    say("saving % and its intervals: periodic steady state; 1 pass: the first pass from the "
+        "common start, its end state charged by a common continuation (the plant's own "
+        "loops, or acid's PI), mean over the held-out set: figures beside the verdict, not "
+        "verdicts")
     off = sorted({(r.family, r.scenario, n) for r in result.held_out for n in r.extrapolated})
     for fam in sorted({f for f, _, _ in off}):
         runs = sorted({sc for f, sc, _ in off if f == fam})

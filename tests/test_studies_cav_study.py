@@ -233,3 +233,17 @@ def test_cli_bad_input_is_one_line(econ_file, args, fragments):
                               "--no-compiled", *args])
     assert res.exit_code == 2
     assert_one_line_error(res, *fragments)
+
+
+def test_json_carries_the_engine_verdict(study):
+    """cav-study's E-vs-F verdict is the engine's rule: one cycle is no verdict."""
+    from acid.studies.cav_study import CavStudyResult
+    from acid.studies.compare import UNRESOLVED
+
+    d = CavStudyResult(SHORT, {"stopgo": study}, "paper", {}, 0.0).to_json_dict()
+    json.dumps(d)
+    vs = {v["candidate"]: v for v in d["verdicts"]}
+    assert {"E (paper charge)", "E (pi charge)"} <= set(vs)
+    for v in vs.values():
+        assert v["baseline"] == "F" and v["word"] == UNRESOLVED and len(v["scenarios"]) == 1
+    assert "acid compare" in d["verdict_rule"]

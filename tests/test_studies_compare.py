@@ -128,6 +128,32 @@ def test_a_saving_bought_with_comfort_is_not_read_as_one():
     assert cmp.verdict("b", "a", names, base, [1.0] * 5, T_cab_gap_K=0.3).word == cmp.COSTS
 
 
+def test_single_pass_is_charged_back_under_both_conventions():
+    """From a 40 degC soak the first pass carries the pull-down; charged by either common
+    continuation (tail(end) - tail(start)) it lands near the periodic figure, not 3x it."""
+    s = cmp.RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30, tail_s=600.0)
+    hot = cmp.periodic_run(_sc(32.0, soak_K=None), "F", C2K(8.0), s, charge=True)
+    assert hot.first_pass_J > 3.0 * hot.energy_J
+    for charge in cmp.CHARGES:
+        e = hot.single_charged_J(charge)
+        assert abs(e - hot.energy_J) / hot.energy_J < 0.3, (charge, e, hot.energy_J)
+    assert math.isnan(cmp.periodic_run(_sc(32.0), "F", C2K(8.0), S).single_own_J)
+
+
+def test_verdict_json_has_the_fields_of_every_acid_verdict():
+    """compare's verdict carries the field names heating-control and sweep write
+    (acid.studies.verdict.Verdict) with the same numbers, and reads back."""
+    from acid.studies.verdict import paired_verdict
+
+    e_b = [2.0, 2.1, 2.2, 2.3, 2.4]
+    e_c = [1.0, 1.2, 1.1, 1.3, 1.0]
+    v = cmp.verdict("a", "b", list("12345"), e_c, e_b)
+    d = v.to_dict()
+    s = [100 * (b - c) / b for b, c in zip(e_b, e_c, strict=True)]
+    ref = paired_verdict(s, decide="both").to_dict()
+    for k in ("n", "mean", "lo", "hi", "boot_lo", "boot_hi", "level", "words"):
+        assert d[k] == (pytest.approx(ref[k]) if isinstance(ref[k], float) else ref[k]), k
+    assert cmp.Verdict.from_dict(json.loads(json.dumps(d))) == v
 def _run(E: float, T: float, Kmin: float = 0.0) -> cmp.PeriodicRun:
     return cmp.PeriodicRun("s", "Fs", C2K(7.0), E, Kmin, 0.4, T, 3, True, 0.0, E)
 

@@ -749,7 +749,45 @@ class CavStudyResult:
                           "units": {"energy": "MJ", "temperature": "K", "saving": "%",
                                     "preview_share": "percentage points"},
                           "definitions": DEFINITIONS,
-                          "cycles": {k: c.to_json_dict() for k, c in self.cycles.items()}})
+                          "cycles": {k: c.to_json_dict() for k, c in self.cycles.items()},
+                          "verdicts": self.verdicts(),
+                          "verdict_rule": VERDICT_RULE})
+
+    def verdicts(self, seed: int = 0) -> list:
+        """D and E against F read by the comparison engine's rule
+        (:mod:`acid.studies.verdict`, as acid compare reads it), paired over the cycles on
+        the tail-corrected energies, under each charge (``"paper"``: the paper NMPC's
+        continuation, ``"pi"``: F's PI loops). Its cycles are one run each and no held-out
+        set: below the engine's minimum of scenarios the word is "not resolved"."""
+        from acid.studies.verdict import MIN_SCENARIOS, at_equal_comfort, paired_verdict
+
+        out = []
+        for key in ("D", "E"):
+            cyc = [c for c in self.cycles.values() if key in c.results and BEST_PI in c.results]
+            if not cyc:
+                continue
+            names = [c.scenario.name for c in cyc]
+            dT = float(np.mean([c.controller_json(key)["mean_T_cab_K"]
+                                - c.controller_json(BEST_PI)["mean_T_cab_K"] for c in cyc]))
+            for charge, attr in (("paper", "tail_corrected_J"), ("pi", "tail_corrected_pi_J")):
+                e_c = [getattr(c.results[key], attr) for c in cyc]
+                e_b = [getattr(c.results[BEST_PI], attr) for c in cyc]
+                if not all(math.isfinite(x) for x in e_c + e_b):
+                    continue
+                s = [100.0 * (b - c) / b for b, c in zip(e_b, e_c, strict=True)]
+                v = paired_verdict(s, min_count=MIN_SCENARIOS, seed=seed, decide="both")
+                out.append({"candidate": f"{key} ({charge} charge)", "baseline": BEST_PI,
+                            "scenarios": names, "savings_pct": s, "T_cab_gap_K": dT,
+                            **v.to_dict(), "word": at_equal_comfort(v.words, 0.0, dT)})
+        return out
+
+
+#: how ``verdicts`` in the JSON are read
+VERDICT_RULE = ("the comparison engine's rule (acid compare): saving % of F paired over the "
+                "cycles, 95 % bootstrap and paired-t intervals, 'saves'/'costs' only when both "
+                "exclude 0, 'not resolved' below 5 paired scenarios, 'not at equal comfort' "
+                "when the candidate runs the cabin warmer; the held-out verdict at equal "
+                "comfort over a training/held-out scenario set is acid compare --json")
 
 
 DEFINITIONS = {

@@ -46,11 +46,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acid.errors import ConfigError
-from acid.studies.verdict import paired_verdict
+from acid.studies.verdict import (  # noqa: F401 (the engine's rule, re-exported)
+    MAX_DISCOMFORT_GAP_KMIN,
+    MAX_WARMER_K,
+    MIN_SCENARIOS,
+    UNEQUAL,
+    paired_verdict,
+)
 from acid.units import C2K
 
-#: fewest held-out scenarios a verdict word other than "not resolved" needs
-MIN_SCENARIOS = 5
 #: default cycles and ambients (degC) of the default scenario set
 DEFAULT_CYCLES = ("udds", "sc03", "hwfet", "us06", "stopgo")
 DEFAULT_AMBIENTS_C = (30.0, 38.0)
@@ -58,10 +62,8 @@ DEFAULT_AMBIENTS_C = (30.0, 38.0)
 PERIODIC_KEYS = ("T_cab", "T_int", "T_int_slow", "T_shell")
 SAVES, NONE, COSTS, UNRESOLVED = ("saves", "no resolvable difference", "costs",
                                   "not resolved")
-UNEQUAL = "not at equal comfort"
 #: comfort gaps beyond which a saving is not read (candidate minus baseline, held-out mean):
 #: discomfort, K min per pass, and mean cabin temperature, K (0.02 K is about 0.1 % energy)
-MAX_DISCOMFORT_GAP_KMIN = 0.1
 #: the second held-out run's lowered target, K, and how far (in spans of the two runs' mean
 #: cabin temperatures) the matched energy may be extrapolated (module docstring, 5.)
 MATCH_SHIFT_K = 0.3
@@ -70,7 +72,6 @@ MATCH_EXTRAPOLATE = 1.0
 #: and of its held-out runs at the lowered target
 MATCHED = " at F's T_cab"
 LOWERED = " lowered"
-MAX_WARMER_K = 0.05
 
 
 # ------------------------------------------------------------------------------ scenarios
@@ -185,7 +186,7 @@ def families(quick: bool = False, econ: bool = True) -> tuple[Family, ...]:
            Family("own", "plant's own loops, configured coil", "none", (math.nan,))]
     if econ:
         out.append(Family("E", "economic NMPC, speed preview", "comfort weight, W/K^2 s",
-                          (3.0, 30.0) if quick else (3.0, 30.0, 300.0)))
+                          (3.0, 30.0) if quick else (30.0, 300.0, 3000.0)))
     return tuple(out)
 
 
@@ -204,10 +205,16 @@ class RunSettings:
     tol_E: float = 5e-4
     max_passes: int = 400
     econ_horizon_s: float = 60.0
+    tail_s: float = 2400.0
+    econ_ref_offset_K: float = 0.0
 
 
 #: ``--quick``: looser periodic tolerances (tests and smoke runs)
-QUICK = RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30)
+QUICK = RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30, tail_s=600.0)
+
+#: the two charge conventions of a single pass: the continuation that prices a state
+CHARGES = {"own": "the plant's own loops at its configured coil",
+           "pi": "acid's sampled fixed-coil PI at the plant's configured coil"}
 
 
 def _controller(family: str, knob: float, settings: RunSettings, cfg, drive, econ):
@@ -235,7 +242,9 @@ def _controller(family: str, knob: float, settings: RunSettings, cfg, drive, eco
                                             T_cab_min=settings.T_low - 1.0,
                                             T_cab_max=settings.T_high + 1.0,
                                             comfort_weight=float(knob)))
-        return False, EconPreview(mpc, drive, settings.T_set), cfg
+        # E's comfort price pulls toward T_set - offset: the offset (tuned on training, see
+        # compare) moves E's mean cabin onto F's, so E is judged at equal mean comfort
+        return False, EconPreview(mpc, drive, settings.T_set - settings.econ_ref_offset_K), cfg
     raise ConfigError(f"unknown controller family {family!r}")
 
 
@@ -258,6 +267,13 @@ class PeriodicRun:
     #: the econ model's inputs a controller's plans took outside the data its power map was
     #: identified on (E only: the model's envelope; empty when it stayed inside)
     extrapolated: tuple[str, ...] = ()
+    single_own_J: float = math.nan
+    single_pi_J: float = math.nan
+
+    def single_charged_J(self, charge: str) -> float:
+        """The first pass from the common start with its state change charged: ``E +
+        tail(end) - tail(start)``, the tail under ``charge`` (:data:`CHARGES`), J."""
+        return {"own": self.single_own_J, "pi": self.single_pi_J}[charge]
 
 
 def _pass(plant, ctrl, drive, T_set: float):
@@ -284,8 +300,11 @@ def _pass(plant, ctrl, drive, T_set: float):
 
 
 def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings = RunSettings(),
-                 econ=None, start: dict | None = None) -> PeriodicRun:
-    """Repeat the scenario's cycle until the pass-end states repeat (module docstring)."""
+                 econ=None, start: dict | None = None, charge: bool = False) -> PeriodicRun:
+    """Repeat the scenario's cycle until the pass-end states repeat (module docstring).
+
+    ``charge``: also the single pass beside it, the first pass from ``start`` with its state
+    change charged under both conventions (:data:`CHARGES`, ``settings.tail_s`` long)."""
     import warnings
 
     from acid.errors import ExtrapolationWarning
@@ -300,7 +319,9 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     plant = HifiPlant(pcfg, mode="nominal" if nominal else "direct")
     plant.reset(start if start is not None else sc.start())
     prev = plant_state(plant)
+    start_state = dict(prev)
     first = E_prev = math.nan
+    first_end: dict = {}
     res, last = math.inf, {}
     outside: list[str] = []
     for p in range(1, settings.max_passes + 1):
@@ -308,7 +329,7 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
         outside += [n for n in getattr(getattr(ctrl, "mpc", None), "extrapolation", ())
                     if n not in outside]
         if p == 1:
-            first = E
+            first, first_end = E, plant_state(plant)
         now = plant_state(plant)
         steps = {"T": max(abs(now[k] - prev[k]) for k in PERIODIC_KEYS if k in now),
                  "w": abs(now["w_cab"] - prev["w_cab"]) * settings.tol_K / settings.tol_w,
@@ -326,9 +347,41 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
         if p >= 3 and res < settings.tol_K:
             break
     out = np.maximum(0.0, np.maximum(T - settings.T_high, settings.T_low - T))
+    charged = {c: first + tail_J(sc, first_end, c, settings)
+               - tail_J(sc, start_state, c, settings) for c in CHARGES} if charge else {}
     return PeriodicRun(sc.name, family, float(knob), E, float(np.sum(out) * drive.Ts / 60.0),
                        float(np.mean(rh)), float(np.mean(T)), p, bool(res < settings.tol_K),
-                       float(res), first, plant_state(plant), tuple(outside))
+                       float(res), first, plant_state(plant), tuple(outside),
+                       charged.get("own", math.nan), charged.get("pi", math.nan))
+
+
+def tail_J(sc: Scenario, state: dict, charge: str, settings: RunSettings) -> float:
+    """Energy of the common continuation from ``state`` (J): ``settings.tail_s`` at the
+    cycle's mean speed and ambient under ``charge`` (:data:`CHARGES`). The same state costs
+    the same under one convention, so ``E + tail(end) - tail(start)`` charges a pass the
+    state it leaves behind."""
+    from acid.control.pi_baselines import PlantPI
+    from acid.plant.hifi import HifiPlant
+    from acid.psychro import P_ATM
+
+    if charge not in CHARGES:
+        raise ConfigError(f"unknown charge convention {charge!r}")
+    cfg, drive = sc.plant_config(), sc.drive()
+    v, T_amb = float(np.mean(drive.v)), float(np.mean(drive.T_amb))
+    plant = HifiPlant(cfg, mode="nominal" if charge == "own" else "direct")
+    plant.reset(state)
+    ctrl = None if charge == "own" else PlantPI(cfg, drive.Ts, settings.T_set,
+                                                float(cfg.T_ew_set),
+                                                float(getattr(cfg, "p_atm", P_ATM)))
+    E = 0.0
+    for k in range(int(round(settings.tail_s / drive.Ts))):
+        if ctrl is None:
+            row = plant.step(0.0, 0.0, v, T_amb=T_amb, T_cab_set=settings.T_set)
+        else:
+            u = ctrl.make_step(plant.measure(), k)
+            row = plant.step(float(u[0]), float(u[1]), v, T_amb=T_amb)
+        E += (float(row["P_comp"]) + float(row["P_bl"])) * drive.Ts
+    return E
 
 
 # ------------------------------------------------------------------------------ statistics
@@ -351,29 +404,44 @@ class Verdict:
     seed: int
     discomfort_gap_Kmin: float = 0.0
     T_cab_gap_K: float = 0.0
+    single_own_pct: float = math.nan
+    single_pi_pct: float = math.nan
 
     def summary(self) -> str:
+        single = "" if math.isnan(self.single_own_pct) else (
+            f" (single pass, charged: {self.single_own_pct:+.2f} % by the plant's loops, "
+            f"{self.single_pi_pct:+.2f} % by acid's PI; figures, not verdicts)")
         return (f"{self.candidate} vs {self.baseline}: {self.mean_pct:+.2f} % "
                 f"[{self.boot_lo:+.2f}, {self.boot_hi:+.2f}] bootstrap 95 %, "
                 f"[{self.t_lo:+.2f}, {self.t_hi:+.2f}] paired t, n = {len(self.scenarios)}, "
                 f"comfort gap {self.discomfort_gap_Kmin:+.2f} K min, mean T_cab "
-                f"{self.T_cab_gap_K:+.2f} K: {self.word}")
+                f"{self.T_cab_gap_K:+.2f} K: {self.word}{single}")
 
     def __repr__(self) -> str:
         return f"Verdict({self.summary()})"
 
     def to_dict(self) -> dict:
-        return _json_safe(dataclasses.asdict(self))
+        """Its fields, and the field names every verdict of acid reports
+        (:meth:`acid.studies.verdict.Verdict.to_dict`, as heating-control and sweep write
+        them): n, mean, lo/hi (paired t), boot_lo/boot_hi, level, words, decided_by."""
+        return _json_safe({**dataclasses.asdict(self), **{
+            "n": len(self.scenarios), "mean": self.mean_pct, "lo": self.t_lo, "hi": self.t_hi,
+            "level": 0.95, "words": self.word, "decided_by": "both"}})
 
     @classmethod
     def from_dict(cls, d: dict) -> Verdict:
-        d = dict(d)
+        d = {k: v for k, v in d.items() if k not in _SHARED}
         d["scenarios"] = tuple(d["scenarios"])
         d["savings_pct"] = tuple(_num(x) for x in d["savings_pct"])
         for k in ("mean_pct", "boot_lo", "boot_hi", "t_lo", "t_hi", "discomfort_gap_Kmin",
-                  "T_cab_gap_K"):
-            d[k] = _num(d[k])
+                  "T_cab_gap_K", "single_own_pct", "single_pi_pct"):
+            if k in d:
+                d[k] = _num(d[k])
         return cls(**d)
+
+
+#: the shared verdict field names :meth:`Verdict.to_dict` adds (read back from its own)
+_SHARED = ("n", "mean", "lo", "hi", "level", "words", "decided_by")
 
 
 def _num(x):
@@ -492,7 +560,8 @@ class CompareResult:
                    {k: _num(v) for k, v in d["tuned"].items()},
                    tuple(PeriodicRun(**{**fix(r, ("knob", "energy_J", "discomfort_Kmin",
                                                   "rh_mean", "mean_T_cab", "residual_K",
-                                                  "first_pass_J")),
+                                                  "first_pass_J", "single_own_J",
+                                                  "single_pi_J")),
                                         "extrapolated": tuple(r.get("extrapolated", ()))})
                          for r in d["held_out"]),
                    tuple(Verdict.from_dict(v) for v in d["verdicts"]), dict(d["settings"]))
@@ -502,8 +571,8 @@ class CompareResult:
 
 
 def _task(sc: Scenario, family: str, knob: float, settings: RunSettings, econ,
-          start: dict | None = None):
-    return periodic_run(sc, family, knob, settings, econ, start)
+          start: dict | None = None, charge: bool = False):
+    return periodic_run(sc, family, knob, settings, econ, start, charge)
 
 
 def _map(tasks, executor, progress):
@@ -585,10 +654,23 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
     level = own[0].discomfort_Kmin if own else min(
         max(p.discomfort_Kmin for p in fronts if p.family == f.key) for f in fams)
     tuned = {f.key: tune_knob([p for p in fronts if p.family == f.key], level) for f in fams}
+    # E's second knob, its cabin reference: on training at the swept weight nearest the tuned
+    # one, E's mean cabin minus F's at its tuned coil (nearest swept) is taken off E's reference
+    esettings = settings
+    if "E" in tuned and "F" in tuned and "E" in [f.key for f in fams]:
+        def train_mean(fam):
+            ks = sorted({t[2] for t in tasks if t[1] == fam}, key=lambda k: abs(k - tuned[fam]))
+            return float(np.mean([r.mean_T_cab for r, t in zip(runs, tasks, strict=True)
+                                  if t[1] == fam and t[2] == ks[0]]))
+        esettings = dataclasses.replace(settings, econ_ref_offset_K=float(
+            np.clip(train_mean("E") - train_mean("F"), -1.0, 1.0)))
+        if progress:
+            progress(f"E's cabin reference {esettings.econ_ref_offset_K:+.3f} K off the "
+                     "set-point (its training mean matched to F's)")
     if progress:
         progress("held out: " + ", ".join(s.name for s in scenarios.held_out))
-    htasks = [(sc, f.key, tuned[f.key], settings, econ, starts[sc.name]) for f in fams
-              for sc in scenarios.held_out]
+    htasks = [(sc, f.key, tuned[f.key], esettings if f.key == "E" else settings, econ,
+               starts[sc.name], True) for f in fams for sc in scenarios.held_out]
     hruns = _map(htasks, executor, progress)
     by = {(r.family, r.scenario): r for r in hruns}
     names = [s.name for s in scenarios.held_out]
@@ -618,7 +700,7 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
                                                UNRESOLVED, int(n_boot), int(seed)))
         hruns = hruns + [dataclasses.replace(r, family=r.family + LOWERED) for r in mruns]
     return CompareResult(scenarios, float(level), tuple(fronts), tuned, tuple(hruns),
-                         tuple(verdicts), _json_safe(dataclasses.asdict(settings)))
+                         tuple(verdicts), _json_safe(dataclasses.asdict(esettings)))
 
 
 def match_to_mean(at: PeriodicRun, lowered: PeriodicRun, T_target: float
@@ -651,9 +733,15 @@ def judge(by: dict, names: Sequence[str], c: str, b: str, seed: int = 0, n_boot:
         return float(np.mean([getattr(by[c, n], attr) - getattr(by[b, n], attr)
                               for n in names]))
 
-    return verdict(c, b, names, [by[c, n].energy_J for n in names],
-                   [by[b, n].energy_J for n in names], seed, n_boot, min_scenarios,
-                   gap("discomfort_Kmin"), gap("mean_T_cab"))
+    def single(charge):
+        return float(np.mean([100.0 * (by[b, n].single_charged_J(charge)
+                                       - by[c, n].single_charged_J(charge))
+                              / by[b, n].single_charged_J(charge) for n in names]))
+
+    v = verdict(c, b, names, [by[c, n].energy_J for n in names],
+                [by[b, n].energy_J for n in names], seed, n_boot, min_scenarios,
+                gap("discomfort_Kmin"), gap("mean_T_cab"))
+    return dataclasses.replace(v, single_own_pct=single("own"), single_pi_pct=single("pi"))
 
 
 def plot_fronts(result: CompareResult, path) -> None:

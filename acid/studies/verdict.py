@@ -79,6 +79,25 @@ class Verdict:
         return f"Verdict({self.summary()})"
 
 
+#: fewest paired scenarios the comparison engine reads a word from (else "not resolved")
+MIN_SCENARIOS = 5
+#: comfort gaps beyond which a saving is not read (candidate minus baseline, mean over the
+#: pairs): discomfort, K min per pass, and mean cabin temperature, K (0.02 K ~ 0.1 % energy)
+MAX_DISCOMFORT_GAP_KMIN = 0.1
+MAX_WARMER_K = 0.05
+UNEQUAL = "not at equal comfort"
+
+
+def at_equal_comfort(words: str, discomfort_gap_Kmin: float = 0.0,
+                     T_cab_gap_K: float = 0.0) -> str:
+    """The engine's comfort rule: a candidate less comfortable than its baseline that would
+    "save" or show no difference reads "not at equal comfort"."""
+    if words in ("saves", "no resolvable difference") and (
+            discomfort_gap_Kmin > MAX_DISCOMFORT_GAP_KMIN or T_cab_gap_K > MAX_WARMER_K):
+        return UNEQUAL
+    return words
+
+
 def _words(lo: float, hi: float) -> str:
     return "saves" if lo > 0.0 else "costs" if hi < 0.0 else "no resolvable difference"
 
