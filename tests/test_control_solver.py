@@ -102,8 +102,8 @@ class _LateCall(solver_mod._Call):
             def wait(self, timeout=None):
                 while True:  # until the worker has taken the job (no verdict on time)
                     with call.lock:
-                        if call.started:
-                            return done.is_set()
+                        if call.started:   # the caller gives up now, even if a fast solve
+                            return False   # has already finished (a busy machine)
                     threading.Event().wait(0.001)
 
         self.done = _Late()

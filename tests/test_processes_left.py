@@ -60,7 +60,13 @@ def group(pgid: int) -> list[psutil.Process]:
 def _left(pgid: int, timeout: float = 15.0) -> list[str]:
     """What is still running in the group after ``timeout`` s (empty: nothing left)."""
     wait_for(lambda: not group(pgid), timeout)
-    return [" ".join(p.cmdline())[:120] for p in group(pgid)]
+    left = []
+    for p in group(pgid):
+        try:
+            left.append(" ".join(p.cmdline())[:120])
+        except psutil.Error:       # ended between the listing and the reading
+            pass
+    return left
 
 
 def _wait_for_workers(p: subprocess.Popen, n: int = 2, timeout: float = 120.0) -> int:
@@ -73,8 +79,14 @@ def _wait_for_workers(p: subprocess.Popen, n: int = 2, timeout: float = 120.0) -
             kids = psutil.Process(p.pid).children(recursive=True)
         except psutil.NoSuchProcess:
             return True
-        k = sum("resource_tracker" not in " ".join(c.cmdline()) for c in kids
-                if c.is_running())
+        k = 0
+        for c in kids:   # a child may end (or be a zombie) between listing and reading it
+            try:
+                if c.status() != psutil.STATUS_ZOMBIE \
+                        and "resource_tracker" not in " ".join(c.cmdline()):
+                    k += 1
+            except psutil.Error:
+                pass
         seen[0] = max(seen[0], k)
         return k >= n or p.poll() is not None
 
