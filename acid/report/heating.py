@@ -1,4 +1,4 @@
-"""The report's heating section (issue 25) from ``acid.claims.results.HeatingStage``: the
+"""The report's heating section from ``acid.claims.results.HeatingStage``: the
 heating plant's credentials that need no logs, each with the criterion ``acid heating-check``
 states for it, and the whole year at a few ambients (information: no criterion, no verdict).
 acid's own checks, not the paper's claims. No computation here."""

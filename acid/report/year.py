@@ -1,4 +1,4 @@
-"""The whole-year figure (issue 25) from ``acid.plant.year.YearResult``: the share of range the
+"""The whole-year figure from ``acid.plant.year.YearResult``: the share of range the
 climate costs, and the climate energy, against ambient (degC).
 
 One colour per drive cycle, one marker per vehicle (the first filled, the others hollow);

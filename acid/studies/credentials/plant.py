@@ -1,6 +1,6 @@
 """``acid plant-check``: the plant's credentials, each computed beside a published reference.
 
-Checks (issue 9), each a row ``CheckRow(name, value, reference, unit, passed)``:
+Checks, each a row ``CheckRow(name, value, reference, unit, passed)``:
 
 (a) Table I: the nominal controller at 0-25 m/s for 600 s (compressor + blower), each speed
     within +-5 % of the paper, strictly decreasing, E(25)/E(0) in 0.77-0.83 [Wang2018];
@@ -15,9 +15,9 @@ Checks (issue 9), each a row ``CheckRow(name, value, reference, unit, passed)``:
     a published performance chart [NissanGTR];
 (e) pull-down: cabin air 10 min after a 55 degC soak against the JAF user test [JAF2016], and,
     as information without a verdict, the time from a 60 degC soak at 43 degC ambient and
-    1000 W/m^2 to 25 degC beside the 20-30 min that PLANT.md gives for real cars (the
+    1000 W/m^2 to 25 degC beside the 20-30 min that acid's plant design takes for real cars (the
     project's design target: no published test with its conditions was found);
-(f) steady COP over compressor speed, vehicle speed and ambient (directions of PLANT.md
+(f) steady COP over compressor speed, vehicle speed and ambient (directions of the plant design
     behaviours 2-4) and the steady COP at 30 degC, standstill, 1.8 kW of cooling;
 (g) steady COP at 25 m/s against standstill at equal cooling load (1.8 kW, 30 degC).
 
