@@ -21,3 +21,23 @@ def test_the_cav_study_is_one_independent_task_per_cycle():
         assert len({c.pop("cycle") for c in configs}) == len(cycles)
         assert all(c == configs[0] for c in configs)
         assert stages["cav"].config["cycles"] == list(opts.cav_cycles)
+
+
+def test_the_engine_is_one_task_per_scenario_and_judges_after_all_of_them():
+    from acid.studies.reproduce import engine_scenarios, engine_stage
+
+    for opts in (ReproduceOptions(), ReproduceOptions.quick()):
+        stages = {s.name: s for s in build_stages(opts)}
+        config = stages["engine"].config
+        training, held = engine_scenarios(config)
+        assert len(training) == len(held) == len(opts.engine_cycles or config["cycles"])
+        train = [engine_stage("train", n) for n in training]
+        judged = [engine_stage("held", n) for n in held]
+        for t in train:   # training needs only the econ model
+            assert stages[t].depends == ("econ",)
+        for j in judged:  # a held-out task needs the knobs tuned on every training task
+            assert set(stages[j].depends) == {"econ", *train}
+        plans = [f"plan_{c}" for c in config["plan_cycles"]]
+        assert set(stages["engine"].depends) == {"econ", *train, *judged, *plans}
+        assert all(stages[p].depends == ("econ",) for p in plans)
+        assert not set(train) & set(judged)

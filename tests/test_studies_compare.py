@@ -181,3 +181,38 @@ def test_a_warmer_family_is_judged_again_at_the_baseline_mean():
     assert abs(matched.T_cab_gap_K) < 1e-9 and len(matched.scenarios) >= 4
     assert matched.mean_pct < raw.mean_pct              # the warmer cabin was part of the saving
     assert {r.family for r in res.held_out} == {"F", "Fs", "Fs" + cmp.LOWERED}
+
+
+def test_a_shared_start_carries_no_other_controller_loop_memory():
+    """Every run on a scenario starts from F's periodic state; the plant's own loops at their
+    configured coil must not run their first pass at F's coil (the low-load reset's
+    effective set-point was restored with the state: F and own read 0.00 % single-pass)."""
+    from acid.plant.hifi import LOOP_KEYS, physical_state
+
+    sc = _sc(34.0)
+    warm = cmp.periodic_run(sc, "F", C2K(10.0), settings=S)
+    assert warm.end["T_evap_set_eff"] > C2K(9.0)          # F's loop memory is in the state
+    assert not set(LOOP_KEYS) & set(physical_state(warm.end))
+    own = cmp.periodic_run(sc, "own", math.nan, settings=S, start=warm.end)
+    F = cmp.periodic_run(sc, "F", C2K(10.0), settings=S, start=warm.end)
+    # the configured coil (3 degC) cools harder from the first pass: it costs more
+    assert own.first_pass_J > 1.01 * F.first_pass_J
+    assert own.energy_J > 1.01 * F.energy_J
+
+
+def test_the_engine_pieces_in_any_order_give_the_same_verdicts():
+    """``acid reproduce`` runs the engine as one task per scenario and hands the runs over in
+    its own order: tuning and verdicts must not depend on it."""
+    sset = cmp.default_set(("stopgo",), (30.0, 31.0, 32.0, 33.0), stopgo_s=SG)
+    fams = tuple(f for f in cmp.families(quick=True, econ=False) if f.key in ("F", "own"))
+    direct = cmp.compare(sset, fams, S, min_scenarios=2, n_boot=200)
+    allsc = sset.training + sset.held_out
+    starts = {sc.name: cmp.periodic_run(*t).end
+              for sc, t in zip(allsc, cmp.warm_tasks(allsc, fams, S), strict=True)}
+    tasks = cmp.training_tasks(sset.training, fams, S, None, starts)[::-1]
+    tuning = cmp.tune(fams, tasks, [cmp.periodic_run(*t) for t in tasks], S)
+    assert tuning.tuned == direct.tuned and tuning.fronts == direct.fronts
+    held = cmp.held_out_tasks(sset.held_out, fams, tuning, S, None, starts)[::-1]
+    again = cmp.assemble(sset, fams, S, tuning, held, [cmp.periodic_run(*t) for t in held],
+                         min_scenarios=2, n_boot=200)
+    assert again.verdicts == direct.verdicts

@@ -56,8 +56,9 @@ def headline_rows(summary: Mapping, headline: Sequence[HeadlineRow] = HEADLINE
 
 
 def _compact(text: str) -> str:
-    """An estimate without its interval (the headline keeps value ± stderr)."""
-    return text.split(" [", 1)[0]
+    """An estimate without its interval when it has a standard error (the headline keeps
+    value ± stderr); an interval that is the estimate's only uncertainty is kept."""
+    return text.split(" [", 1)[0] if " ± " in text else text
 
 
 def headline_markdown(summary: Mapping, headline: Sequence[HeadlineRow] = HEADLINE) -> str:

@@ -33,13 +33,20 @@ class ReproduceOptions:
     econ_duration_s: float = 6 * 3600.0
     econ_horizon_s: float = 120.0
     econ_compiled: bool = True
+    #: the comparison engine at ``acid compare --quick``'s sizes (fewer knobs, a shorter
+    #: stop-and-go cycle, looser periodic tolerances)
+    engine_quick: bool = False
+    #: the engine's drive cycles (each at 30 and 38 degC, one trains, one is held out);
+    #: empty: ``acid compare``'s default set
+    engine_cycles: tuple[str, ...] = ()
 
     @classmethod
     def quick(cls) -> ReproduceOptions:
         return cls(sweep_duration_s=300.0, excite_duration_s=2 * 3600.0, starts=12,
                    horizon=120, timing_repeats=1, cav_warmup_s=300.0,
                    cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0,
-                   econ_compiled=False)
+                   econ_compiled=False, engine_quick=True,
+                   engine_cycles=("hwfet", "stopgo"))
 
 
 def run_mode(opts: ReproduceOptions | dict) -> str:

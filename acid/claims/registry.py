@@ -36,6 +36,7 @@ from acid.claims.core import (
 from acid.claims.results import (
     CavStudyStage,
     EconStage,
+    EngineStage,
     FitStage,
     HeatingStage,
     MpcStage,
@@ -296,6 +297,31 @@ def _energy_claims() -> list[Claim]:
             f"{cyc.upper()}: speed preview's share of the saving (E minus D)", None,
             Measured(CavStudyStage, f"{at}.preview_share_points", spec=".2f", unit="points"),
             BeyondThePaper(), note="the paper's mechanism: speed known in advance"))
+    for key, label in (("E_vs_F", "economic NMPC with preview (E) against the fixed coil on "
+                                  "the plant's own loops (F)"),
+                       ("E_matched_vs_F", "E against F at F's mean cabin temperature"),
+                       ("F_vs_own", "F against the plant's own loops at their configured "
+                                    "coil")):
+        out.append(Claim(
+            f"engine.{key}", "Beyond the paper",
+            f"{label}: saving on held-out scenarios at periodic steady state, knobs tuned on "
+            "training (95 % bootstrap interval)", None,
+            Measured(EngineStage, f"savings.{key}", spec="+.2f", unit="%"), BeyondThePaper(),
+            note="the comparison engine (acid compare); its verdict word is in the report's "
+                 "energy answer"))
+    for cyc in ENERGY_CYCLES:
+        out.append(Claim(
+            f"engine.{cyc}.plan_spread", "Beyond the paper",
+            f"{cyc.upper()} (held out, periodic steady state): the best known plan's spread "
+            "over its independent formulations, replayed on the plant", None,
+            Measured(EngineStage, f"best_plans.{cyc}.spread_pct", spec=".2f", unit="%"),
+            BeyondThePaper(), note="cyclic whole-cycle optimum, direct and multiple shooting"))
+        out.append(Claim(
+            f"engine.{cyc}.E_gap", "Beyond the paper",
+            f"{cyc.upper()} (held out, periodic steady state): E at F's mean T_cab above the "
+            "best known operation (the plan or F, whichever is cheaper)", None,
+            Measured(EngineStage, f"best_plans.{cyc}.E_gap_pct", spec="+.2f", unit="%"),
+            BeyondThePaper(), note="a feasible operation, not a bound"))
     out.append(Claim(
         "econ.power_map_rms", "Beyond the paper",
         "econ model: compressor power map RMS error (% of the mean power)", None,
@@ -359,14 +385,14 @@ HEADLINE: tuple[HeadlineRow, ...] = (
     HeadlineRow("*beyond the paper*: economic NMPC with preview, saving vs the paper's NMPC at "
                 "equal mean T_cab, end state charged back, UDDS / SC03",
                 tuple(f"energy.{c}.E.saving" for c in ENERGY_CYCLES)),
-    HeadlineRow("*beyond the paper*: the same against the best fixed-coil PI at equal comfort "
-                "(RH in the band), UDDS / SC03",
-                tuple(f"energy.{c}.E.vs_best_pi" for c in ENERGY_CYCLES)),
-    HeadlineRow("*beyond the paper*: its gap to the best known plan (perfect information, "
-                "replayed on the plant), UDDS / SC03",
-                tuple(f"energy.{c}.E.gap_to_best_plan" for c in ENERGY_CYCLES)),
-    HeadlineRow("*beyond the paper*: the best known plan's spread over independent optima, "
-                "UDDS / SC03", tuple(f"energy.{c}.plan_spread" for c in ENERGY_CYCLES)),
+    HeadlineRow("*beyond the paper*: economic NMPC vs the best fixed coil on held-out "
+                "scenarios, periodic steady state, at F's mean T_cab: saving, % [95 % interval]",
+                ("engine.E_matched_vs_F",)),
+    HeadlineRow("*beyond the paper*: E above the best known operation (the periodic "
+                "whole-cycle plan or F, whichever is cheaper), held out, UDDS / SC03",
+                tuple(f"engine.{c}.E_gap" for c in ENERGY_CYCLES)),
+    HeadlineRow("*beyond the paper*: the periodic plan's spread over independent formulations, "
+                "UDDS / SC03", tuple(f"engine.{c}.plan_spread" for c in ENERGY_CYCLES)),
     HeadlineRow("*beyond the paper*: speed preview's share of that saving (points), UDDS / SC03",
                 tuple(f"energy.{c}.preview_share" for c in ENERGY_CYCLES)),
 )

@@ -505,6 +505,138 @@ class CavStudyStage(StageResult):
         return cls(cycles=cycles)
 
 
+@dataclass(frozen=True)
+class EngineVerdict(JsonDataclass):
+    """One verdict of the comparison engine (``acid compare``): ``candidate`` against
+    ``baseline`` over the held-out scenarios, saving in % of the baseline (positive: the
+    candidate uses less), its 95 % paired-bootstrap and paired-t intervals, the word read
+    from them, the comfort gaps (candidate minus baseline: K min per pass, K) and the
+    single-pass charged figures under both charge conventions (figures, not verdicts)."""
+
+    candidate: str
+    baseline: str
+    scenarios: tuple[str, ...]
+    savings_pct: tuple[float, ...]
+    mean_pct: float
+    boot_lo: float
+    boot_hi: float
+    t_lo: float
+    t_hi: float
+    word: str
+    discomfort_gap_Kmin: float = math.nan
+    T_cab_gap_K: float = math.nan
+    single_own_pct: float = math.nan
+    single_pi_pct: float = math.nan
+
+
+def engine_key(candidate: str, baseline: str) -> str:
+    """The key of a verdict in :attr:`EngineStage.savings`: "E_vs_F", and "E_matched_vs_F"
+    for E at F's mean cabin temperature."""
+    return candidate.replace(" at F's T_cab", "_matched") + "_vs_" + baseline
+
+
+@dataclass(frozen=True)
+class BestPlan(JsonDataclass):
+    """The best known operation on one held-out scenario under periodic steady state
+    (kJ per pass, K; ``plan["E_at_F_kJ"]``: E interpolated to F's mean cabin temperature
+    there): the cyclic whole-cycle plan (least replayed energy over its
+    formulations and starts, ``spread_pct`` between the formulations), beside F at its tuned
+    coil and E on the same scenario; ``best`` names the least of them at equal mean cabin
+    temperature (a plan is matched to the engine's set-point, F holds it) and ``E_gap_pct``
+    how far E (at F's mean cabin temperature) lies above it."""
+
+    scenario: str
+    plan_kJ: float
+    formulation: str
+    spread_pct: float
+    formulations_kJ: dict[str, float]
+    plan_mean_T_cab_K: float
+    F_kJ: float
+    F_mean_T_cab_K: float
+    E_kJ: float = math.nan
+    best: str = ""
+    best_kJ: float = math.nan
+    E_gap_pct: float = math.nan
+
+
+def _best_plan(result, plan: Mapping) -> BestPlan:
+    from acid.units import C2K
+
+    name = plan["scenario"]
+    runs = {r.family: r for r in result.held_out if r.scenario == name}
+    F = runs.get("F")
+    w = plan["winner"]
+    cands = {"plan": float(w["replay_energy_kJ"])}
+    if F is not None:
+        cands["F"] = F.energy_J / 1e3
+    best = min(cands, key=cands.get)
+    E_kJ = _f(plan.get("E_at_F_kJ"))
+    return BestPlan(
+        scenario=name, plan_kJ=cands["plan"], formulation=f"{w['formulation']} ({w['start']})",
+        spread_pct=_f(plan.get("spread_pct")),
+        formulations_kJ={k: _f(c.get("replay_energy_kJ"))
+                         for k, c in plan.get("by_formulation", {}).items()},
+        plan_mean_T_cab_K=C2K(_f(w.get("replay_mean_T_cab_degC"))),
+        F_kJ=cands.get("F", math.nan),
+        F_mean_T_cab_K=F.mean_T_cab if F is not None else math.nan, E_kJ=E_kJ, best=best,
+        best_kJ=cands[best], E_gap_pct=100.0 * (E_kJ - cands[best]) / cands[best])
+
+
+@stage_result("engine")
+@dataclass(frozen=True)
+class EngineStage(StageResult):
+    """The comparison engine on acid's plant (``acid compare`` with the reproduction's econ
+    model): knobs tuned on ``training``, verdicts over ``held_out``, periodic steady state.
+    ``tuned`` knobs in SI (coil set-points K, E's comfort weight W/K^2 s);
+    ``extrapolated``: per family, the held-out scenarios on which its econ model's plans
+    left the model's identification data."""
+
+    training: tuple[str, ...]
+    held_out: tuple[str, ...]
+    rule: str
+    comfort_level_Kmin: float
+    tuned: dict[str, float]
+    econ_ref_offset_K: float
+    verdicts: tuple[EngineVerdict, ...]
+    extrapolated: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    periodic_passes_max: int = 0
+    all_converged: bool = True
+    #: every verdict's saving (%) with its 95 % bootstrap interval, keyed
+    #: :func:`engine_key` ("E_vs_F", "E_matched_vs_F", "F_vs_own", ...)
+    savings: dict[str, Estimate] = field(default_factory=dict)
+    #: the best known operation per energy-study cycle (its held-out scenario)
+    best_plans: dict[str, BestPlan] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, result, plans: Mapping[str, Mapping] | None = None) -> EngineStage:
+        """From ``acid.studies.compare.CompareResult`` and, per cycle, the periodic plan set
+        (``acid.control.econ.periodic_plan.PeriodicPlanSet.to_dict()`` with its
+        ``scenario``)."""
+        names = [f.name for f in dataclasses.fields(EngineVerdict)]
+        out: dict[str, list[str]] = {}
+        for r in result.held_out:
+            if r.extrapolated:
+                out.setdefault(r.family, []).append(r.scenario)
+        return cls(training=tuple(s.name for s in result.scenarios.training),
+                   held_out=tuple(s.name for s in result.scenarios.held_out),
+                   rule=result.scenarios.rule, comfort_level_Kmin=result.comfort_level_Kmin,
+                   tuned={k: float(v) for k, v in result.tuned.items()},
+                   econ_ref_offset_K=_f(result.settings.get("econ_ref_offset_K")),
+                   verdicts=tuple(EngineVerdict(**{n: getattr(v, n) for n in names})
+                                  for v in result.verdicts),
+                   extrapolated={k: tuple(sorted(v)) for k, v in out.items()},
+                   periodic_passes_max=max((r.passes for r in result.held_out), default=0),
+                   all_converged=all(r.converged for r in result.held_out),
+                   savings={engine_key(v.candidate, v.baseline): Estimate(
+                       float(v.mean_pct), ci95_low=float(v.boot_lo),
+                       ci95_high=float(v.boot_hi)) for v in result.verdicts},
+                   best_plans={c: _best_plan(result, p) for c, p in (plans or {}).items()})
+
+    def verdict(self, candidate: str, baseline: str) -> EngineVerdict | None:
+        return next((v for v in self.verdicts if v.candidate == candidate
+                     and v.baseline == baseline), None)
+
+
 @stage_result("econ")
 @dataclass(frozen=True)
 class EconStage(StageResult):
@@ -642,7 +774,8 @@ class StudyResults:
 
 
 __all__ = ["STAGE_RESULTS", "CavComparisonSummary", "CavStudyStage", "ChannelErrors",
-           "EconStage", "EnergyController", "EnergyCycle", "HeatingStage", "YearShare",
+           "BestPlan", "EconStage", "EngineStage", "EngineVerdict", "EnergyController",
+           "EnergyCycle", "HeatingStage", "YearShare", "engine_key",
            "ClosedLoopSummary", "Estimate", "ExcitationStage", "FitStage", "JsonDataclass",
            "MpcStage", "PlantCheckStage", "PlantCredential", "StageResult",
            "StudyResults", "SweepStage", "TimingSummary", "ValidationStage", "field_type",

@@ -72,6 +72,21 @@ INITIAL_KEYS = ("T_cab", "T_int", "T_shell", "T_evap", "T_cw", "w_cab", "T_int_s
                 "ac_state", "cut_out",
                 "ac_demand", "T_e_last", "T_c_last", "p_dis_last")
 
+#: The states of the plant's own loops (nominal mode: compressor and blower PI integrators,
+#: the low-load reset's effective evaporator set-point, the A/C's on/off logic): the
+#: controller's memory, not the car's. A start shared by controllers with other set-points
+#: drops them (:func:`physical_state`), or the loops would run a pass at the set-point the
+#: state was saved under.
+LOOP_KEYS = ("comp_integrator", "blower_integrator", "T_evap_set_eff", "ac_state", "cut_out",
+             "ac_demand")
+
+
+def physical_state(state: dict[str, float]) -> dict[str, float]:
+    """``state`` without :data:`LOOP_KEYS`: what a start shared by different controllers
+    may carry (temperatures K, humidity kg/kg, compressor speed, the cycle's last solution)."""
+    return {k: v for k, v in state.items() if k not in LOOP_KEYS}
+
+
 #: Units (inside: K for temperatures) of the states ``acid.data.CHANNELS`` does not know.
 STATE_UNITS = {"N_comp_state": "rpm", "comp_integrator": "rpm",
                "blower_integrator": "kg/s", "T_evap_set_eff": "K", "ac_state": "1",

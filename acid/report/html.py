@@ -31,6 +31,8 @@ class ReportSection:
     paragraphs: tuple[str, ...] = ()
     header: tuple[str, ...] = ()
     rows: tuple[tuple[str, ...], ...] = ()
+    #: shown right after the summary, before the figures (the energy answer)
+    lead: bool = False
 
 
 @dataclass(frozen=True)
@@ -191,8 +193,11 @@ def _anchors(report: Report) -> list[str]:
 def _contents(report: Report) -> list[str]:
     """The table of contents: every heading of the page, linked."""
     e = html.escape
-    items = [("summary", "Summary"), ("figures", "Figures")]
-    items += list(zip(_anchors(report), (s.title for s in report.sections), strict=True))
+    sections = list(zip(_anchors(report), report.sections, strict=True))
+    items = [("summary", "Summary")]
+    items += [(a, s.title) for a, s in sections if s.lead]
+    items += [("figures", "Figures")]
+    items += [(a, s.title) for a, s in sections if not s.lead]
     items += [("claims", "Paper vs acid: every claim")]
     if any(v.claim.paper is None for v in report.verdicts):
         items.append(("beyond", "Beyond the paper"))
@@ -211,10 +216,13 @@ def _fold(rows: list[str], n: int, what: str) -> list[str]:
             "</details>"]
 
 
-def _sections(report: Report) -> list[str]:
+def _sections(report: Report, lead: bool = False) -> list[str]:
+    """The studies' sections: those marked ``lead`` when ``lead``, else the others."""
     e = html.escape
     out = []
     for s, anchor in zip(report.sections, _anchors(report), strict=True):
+        if s.lead != lead:
+            continue
         out.append(f"<h2 id={anchor}>{e(s.title)}</h2>")
         out += [f"<p>{e(p)}</p>" for p in s.paragraphs]
         if s.header:
@@ -261,8 +269,8 @@ def render_report(report: Report) -> str:
            f"</title><style>{_CSS}</style></head><body>", f"<h1>{e(report.title)}</h1>"]
     out.append("<p class=meta>" + " &middot; ".join(f"{e(k)}: {e(str(v))}"
                                                      for k, v in report.meta.items()) + "</p>")
-    out += (_contents(report) + _summary(report) + _figures(report) + _sections(report)
-            + _claims(report))
+    out += (_contents(report) + _summary(report) + _sections(report, lead=True)
+            + _figures(report) + _sections(report) + _claims(report))
     out.append("<h2 id=stages>Stages</h2><table><tr><th>stage</th><th>time (s)</th>"
                "<th>cache</th></tr>")
     for s in report.stages:

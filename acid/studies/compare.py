@@ -308,7 +308,7 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     import warnings
 
     from acid.errors import ExtrapolationWarning
-    from acid.plant.hifi import HifiPlant
+    from acid.plant.hifi import HifiPlant, physical_state
     from acid.studies.cav_study import plant_state
 
     warnings.simplefilter("ignore", ExtrapolationWarning)  # E's econ model off its data
@@ -317,7 +317,8 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     cfg = sc.plant_config()
     nominal, ctrl, pcfg = _controller(family, knob, settings, cfg, drive, econ)
     plant = HifiPlant(pcfg, mode="nominal" if nominal else "direct")
-    plant.reset(start if start is not None else sc.start())
+    # a shared start carries the car's states, never another controller's loop memory
+    plant.reset(physical_state(start) if start is not None else sc.start())
     prev = plant_state(plant)
     start_state = dict(prev)
     first = E_prev = math.nan
@@ -361,7 +362,7 @@ def tail_J(sc: Scenario, state: dict, charge: str, settings: RunSettings) -> flo
     the same under one convention, so ``E + tail(end) - tail(start)`` charges a pass the
     state it leaves behind."""
     from acid.control.pi_baselines import PlantPI
-    from acid.plant.hifi import HifiPlant
+    from acid.plant.hifi import HifiPlant, physical_state
     from acid.psychro import P_ATM
 
     if charge not in CHARGES:
@@ -369,7 +370,7 @@ def tail_J(sc: Scenario, state: dict, charge: str, settings: RunSettings) -> flo
     cfg, drive = sc.plant_config(), sc.drive()
     v, T_amb = float(np.mean(drive.v)), float(np.mean(drive.T_amb))
     plant = HifiPlant(cfg, mode="nominal" if charge == "own" else "direct")
-    plant.reset(state)
+    plant.reset(physical_state(state))  # the tail's loops start from their own memory
     ctrl = None if charge == "own" else PlantPI(cfg, drive.Ts, settings.T_set,
                                                 float(cfg.T_ew_set),
                                                 float(getattr(cfg, "p_atm", P_ATM)))
@@ -618,30 +619,47 @@ def tune_knob(points: Sequence[FrontPoint], level: float) -> float:
     return best.knob
 
 
-def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSettings = RunSettings(),
-            econ=None, seed: int = 0, n_boot: int = 10000, candidate: str = "E",
-            executor=None, progress: Callable[[str], None] | None = None,
-            min_scenarios: int = MIN_SCENARIOS, match_mean: bool = True) -> CompareResult:
-    """Sweep every family on training, tune at the common comfort level, judge on held-out.
+@dataclass(frozen=True)
+class Tuning:
+    """What the training set decided: the fronts (mean over training per family and knob),
+    the common comfort level (K min per pass), the tuned knob of each family, and the
+    settings E is judged with (its cabin reference offset, K)."""
+
+    fronts: tuple[FrontPoint, ...]
+    level: float
+    tuned: dict
+    esettings: RunSettings
+
+
+def _mid_knob(fams: Sequence[Family]) -> float:
+    mid = [f for f in fams if f.key == "F"]
+    return mid[0].knobs[len(mid[0].knobs) // 2] if mid else C2K(8.0)
+
+
+def warm_tasks(scenarios: Sequence[Scenario], fams: Sequence[Family],
+               settings: RunSettings) -> list[tuple]:
+    """The common start of every run on a scenario: the periodic state of F's middle knob
+    (a warm start: the periodic state does not depend on the start, it only saves passes;
+    only the car's states are shared, see :func:`acid.plant.hifi.physical_state`)."""
+    return [(sc, "F", _mid_knob(fams), settings, None) for sc in scenarios]
+
+
+def training_tasks(scenarios: Sequence[Scenario], fams: Sequence[Family],
+                   settings: RunSettings, econ, starts: dict) -> list[tuple]:
+    """Every family at every knob on each training scenario (arguments of one run)."""
+    return [(sc, f.key, k, settings, econ, starts[sc.name]) for f in fams for k in f.knobs
+            for sc in scenarios]
+
+
+def tune(fams: Sequence[Family], tasks: Sequence[tuple], runs: Sequence[PeriodicRun],
+         settings: RunSettings) -> Tuning:
+    """Fronts, comfort level and tuned knobs from the training runs (``tasks`` as made by
+    :func:`training_tasks`, in any order; ``runs`` their results).
 
     The comfort level is the plant's own loops' mean training discomfort (``own``), or the
-    least family mean when ``own`` is absent. Verdicts: ``candidate`` (if run) and every
-    family against ``F``, and ``F`` against ``own``; with ``match_mean``, every family but
-    ``F`` and ``own`` again at F's mean cabin temperature (module docstring, 5.).
-    """
-    if progress:
-        progress(f"training: {len(scenarios.training)} scenarios x "
-                 f"{sum(len(f.knobs) for f in fams)} family settings")
-    # every run starts from the periodic state of F's middle knob (a warm start: the
-    # periodic state does not depend on the start, it only saves passes)
-    allsc = scenarios.training + scenarios.held_out
-    mid = [f for f in fams if f.key == "F"]
-    mid_knob = mid[0].knobs[len(mid[0].knobs) // 2] if mid else C2K(8.0)
-    warm = _map([(sc, "F", mid_knob, settings, None) for sc in allsc], executor, progress)
-    starts = {sc.name: r.end for sc, r in zip(allsc, warm, strict=True)}
-    tasks = [(sc, f.key, k, settings, econ, starts[sc.name]) for f in fams for k in f.knobs
-             for sc in scenarios.training]
-    runs = _map(tasks, executor, progress)
+    least family mean when ``own`` is absent. E's second knob, its cabin reference: on
+    training at the swept weight nearest the tuned one, E's mean cabin minus F's at its
+    tuned coil (nearest swept) is taken off E's reference."""
     fronts = []
     for f in fams:
         for k in f.knobs:
@@ -654,24 +672,43 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
     level = own[0].discomfort_Kmin if own else min(
         max(p.discomfort_Kmin for p in fronts if p.family == f.key) for f in fams)
     tuned = {f.key: tune_knob([p for p in fronts if p.family == f.key], level) for f in fams}
-    # E's second knob, its cabin reference: on training at the swept weight nearest the tuned
-    # one, E's mean cabin minus F's at its tuned coil (nearest swept) is taken off E's reference
     esettings = settings
-    if "E" in tuned and "F" in tuned and "E" in [f.key for f in fams]:
+    if "E" in tuned and "F" in tuned:
         def train_mean(fam):
             ks = sorted({t[2] for t in tasks if t[1] == fam}, key=lambda k: abs(k - tuned[fam]))
             return float(np.mean([r.mean_T_cab for r, t in zip(runs, tasks, strict=True)
                                   if t[1] == fam and t[2] == ks[0]]))
         esettings = dataclasses.replace(settings, econ_ref_offset_K=float(
             np.clip(train_mean("E") - train_mean("F"), -1.0, 1.0)))
-        if progress:
-            progress(f"E's cabin reference {esettings.econ_ref_offset_K:+.3f} K off the "
-                     "set-point (its training mean matched to F's)")
-    if progress:
-        progress("held out: " + ", ".join(s.name for s in scenarios.held_out))
-    htasks = [(sc, f.key, tuned[f.key], esettings if f.key == "E" else settings, econ,
-               starts[sc.name], True) for f in fams for sc in scenarios.held_out]
-    hruns = _map(htasks, executor, progress)
+    return Tuning(tuple(fronts), float(level), tuned, esettings)
+
+
+def held_out_tasks(scenarios: Sequence[Scenario], fams: Sequence[Family], tuning: Tuning,
+                   settings: RunSettings, econ, starts: dict,
+                   match_mean: bool = True) -> list[tuple]:
+    """Each family at its tuned knob on each held-out scenario (single pass charged beside),
+    and, with ``match_mean``, every family but F and ``own`` again at a target
+    ``MATCH_SHIFT_K`` lower (module docstring, 5.)."""
+    keys = [f.key for f in fams]
+    out = [(sc, f.key, tuning.tuned[f.key], tuning.esettings if f.key == "E" else settings,
+            econ, starts[sc.name], True) for f in fams for sc in scenarios]
+    if match_mean and "F" in keys:
+        lowered = dataclasses.replace(settings, T_set=settings.T_set - MATCH_SHIFT_K)
+        out += [(sc, k, tuning.tuned[k], lowered, econ, starts[sc.name]) for k in keys
+                if k not in ("F", "own") for sc in scenarios]
+    return out
+
+
+def assemble(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSettings,
+             tuning: Tuning, tasks: Sequence[tuple], runs: Sequence[PeriodicRun],
+             seed: int = 0, n_boot: int = 10000, candidate: str = "E",
+             min_scenarios: int = MIN_SCENARIOS, match_mean: bool = True) -> CompareResult:
+    """The verdicts from the held-out runs (``tasks`` from :func:`held_out_tasks`, in any
+    order, and their ``runs``): ``candidate`` (if run) and every family against ``F``,
+    ``F`` against ``own``; with ``match_mean`` every family but ``F`` and ``own`` again at
+    F's mean cabin temperature."""
+    lowered = [r for r, t in zip(runs, tasks, strict=True) if len(t) < 7]
+    hruns = [r for r, t in zip(runs, tasks, strict=True) if len(t) == 7]
     by = {(r.family, r.scenario): r for r in hruns}
     names = [s.name for s in scenarios.held_out]
     keys = [f.key for f in fams]
@@ -681,15 +718,8 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
         pairs.append(("F", "own"))
     verdicts = [judge(by, names, c, b, seed, n_boot, min_scenarios) for c, b in pairs]
     if match_mean and "F" in keys:
-        movable = [k for k in keys if k not in ("F", "own")]
-        lowered = dataclasses.replace(settings, T_set=settings.T_set - MATCH_SHIFT_K)
-        mtasks = [(sc, k, tuned[k], lowered, econ, starts[sc.name]) for k in movable
-                  for sc in scenarios.held_out]
-        if progress and mtasks:
-            progress(f"held out at a target {MATCH_SHIFT_K:g} K lower (mean cabin matched to F)")
-        mruns = _map(mtasks, executor, progress)
-        lower = {(r.family, r.scenario): r for r in mruns}
-        for k in sorted(movable, key=lambda k: k != candidate):
+        lower = {(r.family, r.scenario): r for r in lowered}
+        for k in sorted((k for k in keys if k not in ("F", "own")), key=lambda k: k != candidate):
             matched = {n: match_to_mean(by[k, n], lower[k, n], by["F", n].mean_T_cab)
                        for n in names}
             ok = [n for n in names if matched[n] is not None]
@@ -698,9 +728,38 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
             verdicts.append(judge(mby, ok, k + MATCHED, "F", seed, n_boot, min_scenarios)
                             if ok else Verdict(k + MATCHED, "F", (), (), *(math.nan,) * 5,
                                                UNRESOLVED, int(n_boot), int(seed)))
-        hruns = hruns + [dataclasses.replace(r, family=r.family + LOWERED) for r in mruns]
-    return CompareResult(scenarios, float(level), tuple(fronts), tuned, tuple(hruns),
-                         tuple(verdicts), _json_safe(dataclasses.asdict(esettings)))
+        hruns += [dataclasses.replace(r, family=r.family + LOWERED) for r in lowered]
+    return CompareResult(scenarios, tuning.level, tuning.fronts, tuning.tuned, tuple(hruns),
+                         tuple(verdicts), _json_safe(dataclasses.asdict(tuning.esettings)))
+
+
+def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSettings = RunSettings(),
+            econ=None, seed: int = 0, n_boot: int = 10000, candidate: str = "E",
+            executor=None, progress: Callable[[str], None] | None = None,
+            min_scenarios: int = MIN_SCENARIOS, match_mean: bool = True) -> CompareResult:
+    """Sweep every family on training, tune at the common comfort level, judge on held-out
+    (:func:`warm_tasks`, :func:`training_tasks`, :func:`tune`, :func:`held_out_tasks`,
+    :func:`assemble`; ``acid reproduce`` runs the same pieces as tasks of its graph)."""
+    if progress:
+        progress(f"training: {len(scenarios.training)} scenarios x "
+                 f"{sum(len(f.knobs) for f in fams)} family settings")
+    allsc = scenarios.training + scenarios.held_out
+    warm = _map(warm_tasks(allsc, fams, settings), executor, progress)
+    starts = {sc.name: r.end for sc, r in zip(allsc, warm, strict=True)}
+    tasks = training_tasks(scenarios.training, fams, settings, econ, starts)
+    tuning = tune(fams, tasks, _map(tasks, executor, progress), settings)
+    if progress and tuning.esettings is not settings:
+        progress(f"E's cabin reference {tuning.esettings.econ_ref_offset_K:+.3f} K off the "
+                 "set-point (its training mean matched to F's)")
+    if progress:
+        progress("held out: " + ", ".join(s.name for s in scenarios.held_out)
+                 + (f" (and at a target {MATCH_SHIFT_K:g} K lower: mean cabin matched to F)"
+                    if match_mean else ""))
+    htasks = held_out_tasks(scenarios.held_out, fams, tuning, settings, econ, starts,
+                            match_mean)
+    return assemble(scenarios, fams, settings, tuning, htasks,
+                    _map(htasks, executor, progress), seed, n_boot, candidate,
+                    min_scenarios, match_mean)
 
 
 def match_to_mean(at: PeriodicRun, lowered: PeriodicRun, T_target: float
@@ -744,14 +803,12 @@ def judge(by: dict, names: Sequence[str], c: str, b: str, seed: int = 0, n_boot:
     return dataclasses.replace(v, single_own_pct=single("own"), single_pi_pct=single("pi"))
 
 
-def plot_fronts(result: CompareResult, path) -> None:
-    """Energy vs discomfort per family on training (one PNG)."""
+def fronts_figure(result: CompareResult):
+    """Energy vs discomfort per family on training (a matplotlib figure)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from acid._io import save_figure
 
     fig, ax = plt.subplots(figsize=(6, 4))
     for fam in dict.fromkeys(p.family for p in result.fronts):
@@ -761,6 +818,17 @@ def plot_fronts(result: CompareResult, path) -> None:
     ax.axvline(result.comfort_level_Kmin, color="k", lw=0.8, ls="--", label="comfort level")
     ax.set_xlabel("discomfort, K min per pass outside the band (training mean)")
     ax.set_ylabel("energy per pass, MJ (periodic steady state)")
-    ax.legend()
+    ax.legend(loc="center left", bbox_to_anchor=(1.02, 0.5))
+    fig.tight_layout()
+    return fig
+
+
+def plot_fronts(result: CompareResult, path) -> None:
+    """:func:`fronts_figure` as one PNG."""
+    import matplotlib.pyplot as plt
+
+    from acid._io import save_figure
+
+    fig = fronts_figure(result)
     save_figure(fig, path)
     plt.close(fig)

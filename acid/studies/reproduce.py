@@ -38,6 +38,7 @@ from acid import __version__
 from acid._io import write_json
 from acid.claims import ClaimVerdict, evaluate, summary_claims
 from acid.claims.options import ReproduceOptions, is_quick, run_mode
+from acid.claims.registry import ENERGY_CYCLES
 from acid.claims.results import (
     CavStudyStage,
     EconStage,
@@ -323,6 +324,163 @@ PLANT_CHECK_CAPTIONS = {
 }
 
 
+# ------------------------------------------------------------------ the comparison engine
+#: the file an engine task leaves for the next (its periodic runs, pickled)
+ENGINE_RUNS_FILE = "runs.pkl"
+#: the file of a best-known-plan task (every formulation and start, replayed)
+PLANS_FILE = "plans.json"
+
+
+def _engine_setup(inputs: dict, config: dict):
+    """(scenario set, families, run settings, econ model) of the engine's tasks: ``acid
+    compare``'s defaults (``--quick``'s in a quick run) with the reproduction's econ model."""
+    from acid.models.econ_params import EconParams
+    from acid.studies import compare as cmp
+
+    quick = bool(config["quick"])
+    sset = cmp.default_set(config["cycles"], config["ambients_C"], seed=config["seed"],
+                           stopgo_s=160.0 if quick else 800.0)
+    econ = EconParams.from_json(inputs["econ"] / "econ_params.json")
+    return sset, cmp.families(quick=quick), cmp.QUICK if quick else cmp.RunSettings(), econ
+
+
+def engine_scenarios(config: dict) -> tuple[list[str], list[str]]:
+    """The training and held-out scenario names of the engine (no model needed)."""
+    from acid.studies import compare as cmp
+
+    sset = cmp.default_set(config["cycles"], config["ambients_C"], seed=config["seed"])
+    return [s.name for s in sset.training], [s.name for s in sset.held_out]
+
+
+def engine_stage(kind: str, scenario: str) -> str:
+    """The stage name of one engine task: ``kind`` "train" or "held" on ``scenario``."""
+    return f"engine_{kind}_" + scenario.replace("@", "_").replace(".", "p")
+
+
+def _runs_on(tasks: list[tuple], progress) -> list:
+    from acid.studies.compare import periodic_run
+
+    out = []
+    for i, t in enumerate(tasks):
+        out.append(periodic_run(*t))
+        progress(i + 1, len(tasks))
+    return out
+
+
+def _pickle(path: Path, obj) -> None:
+    import pickle
+
+    path.write_bytes(pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL))
+
+
+def _unpickle(path: Path):
+    import pickle
+
+    return pickle.loads(path.read_bytes())
+
+
+def stage_engine_train(workdir: Path, inputs: dict, config: dict, progress) -> dict:
+    """One training scenario of the engine: its common start, then every family at every
+    knob at periodic steady state (``acid.studies.compare.training_tasks``)."""
+    from acid.studies import compare as cmp
+
+    sset, fams, settings, econ = _engine_setup(inputs, config)
+    sc = next(s for s in sset.training if s.name == config["scenario"])
+    warm = _runs_on(cmp.warm_tasks([sc], fams, settings), lambda i, n: None)[0]
+    tasks = cmp.training_tasks([sc], fams, settings, econ, {sc.name: warm.end})
+    runs = _runs_on(tasks, progress)
+    _pickle(workdir / ENGINE_RUNS_FILE, [(t[1], t[2], r) for t, r in zip(tasks, runs,
+                                                                         strict=True)])
+    return {"scenario": sc.name, "runs": len(runs)}
+
+
+def _engine_tuning(inputs: dict, config: dict, sset, fams, settings):
+    """The engine's :class:`~acid.studies.compare.Tuning` from the training tasks' runs."""
+    from acid.studies import compare as cmp
+
+    keys, runs = [], []
+    for sc in sset.training:
+        for family, knob, r in _unpickle(inputs[engine_stage("train", sc.name)]
+                                         / ENGINE_RUNS_FILE):
+            keys.append((sc, family, knob))
+            runs.append(r)
+    return cmp.tune(fams, keys, runs, settings)
+
+
+def stage_engine_held(workdir: Path, inputs: dict, config: dict, progress) -> dict:
+    """One held-out scenario of the engine: every family at its knob tuned on training
+    (and at a lowered target, to match F's mean cabin temperature)."""
+    from acid.studies import compare as cmp
+
+    sset, fams, settings, econ = _engine_setup(inputs, config)
+    tuning = _engine_tuning(inputs, config, sset, fams, settings)
+    sc = next(s for s in sset.held_out if s.name == config["scenario"])
+    warm = _runs_on(cmp.warm_tasks([sc], fams, settings), lambda i, n: None)[0]
+    tasks = cmp.held_out_tasks([sc], fams, tuning, settings, econ, {sc.name: warm.end})
+    runs = _runs_on(tasks, progress)
+    _pickle(workdir / ENGINE_RUNS_FILE, [(len(t) == 7, r) for t, r in zip(tasks, runs,
+                                                                          strict=True)])
+    return {"scenario": sc.name, "runs": len(runs)}
+
+
+def plan_stage(cycle: str) -> str:
+    """The stage name of the best known plan on ``cycle``'s held-out scenario."""
+    return f"plan_{cycle}"
+
+
+def stage_plan(workdir: Path, inputs: dict, config: dict, progress) -> dict:
+    """The best known plan on one held-out scenario of the engine: the cyclic whole-cycle
+    optimum on the econ model in two formulations (direct, multiple shooting) from several
+    seeded starts, each replayed on the plant at periodic steady state at the engine's mean
+    cabin temperature (``acid.control.econ.periodic_plan``)."""
+    from acid.control.econ.best_plan import PlanConfig
+    from acid.control.econ.periodic_plan import periodic_plans
+    from acid.plant.hifi import HifiPlant
+
+    sset, _, settings, econ = _engine_setup(inputs, config)
+    sc = next(s for s in sset.held_out if s.cycle == config["cycle"])
+    drive, cfg = sc.drive(), sc.plant_config()
+    plans = periodic_plans(econ, drive.v, drive.T_amb,
+                           PlanConfig(T_mean=settings.T_set, T_low=settings.T_low,
+                                      T_high=settings.T_high),
+                           plant_factory=lambda: HifiPlant(cfg, mode="direct"),
+                           n_random=1, seed=config["seed"])
+    write_json(workdir / PLANS_FILE, {"scenario": sc.name, **plans.to_dict()})
+    progress(1, 1)
+    return {"scenario": sc.name, "plan_kJ": plans.winner.energy_J / 1e3,
+            "spread_pct": plans.spread_pct}
+
+
+def stage_engine(workdir: Path, inputs: dict, config: dict, progress) -> dict:
+    """The engine's verdicts on the held-out scenarios (``acid compare``), from its tasks."""
+    from acid.claims.results import EngineStage
+    from acid.studies import compare as cmp
+
+    sset, fams, settings, _ = _engine_setup(inputs, config)
+    tuning = _engine_tuning(inputs, config, sset, fams, settings)
+    tasks, runs = [], []
+    for sc in sset.held_out:
+        for charged, r in _unpickle(inputs[engine_stage("held", sc.name)] / ENGINE_RUNS_FILE):
+            tasks.append((None,) * (7 if charged else 6))
+            runs.append(r)
+    res = cmp.assemble(sset, fams, settings, tuning, tasks, runs, seed=config["seed"])
+    write_json(workdir / "compare.json", res.to_dict())
+    plans = {c: json.loads((inputs[plan_stage(c)] / PLANS_FILE).read_text())
+             for c in config.get("plan_cycles", ())}
+    for p in plans.values():   # E at F's mean cabin temperature on the plan's scenario
+        by = {r.family: r for r in res.held_out if r.scenario == p["scenario"]}
+        if {"E", "E" + cmp.LOWERED, "F"} <= set(by):
+            m = cmp.match_to_mean(by["E"], by["E" + cmp.LOWERED], by["F"].mean_T_cab)
+            p["E_at_F_kJ"] = (m or by["E"]).energy_J / 1e3
+    write_figure_index(workdir, [save_report_figure(
+        cmp.fronts_figure(res), workdir, "engine_fronts",
+        "The comparison engine: energy per pass against discomfort on the training "
+        "scenarios, one line per controller family swept over its knob (periodic steady "
+        "state); the dashed line is the common comfort level")])
+    progress(1, 1)
+    return EngineStage.of(res, plans).to_json_dict()
+
+
 def stage_plant_check(workdir: Path, inputs: dict, config: dict, progress) -> dict:
     """The plant's credentials, each beside a published reference (``acid plant-check``)."""
     from acid.report.plant import plant_check_figures
@@ -373,6 +531,31 @@ def stage_heating(workdir: Path, inputs: dict, config: dict, progress) -> dict:
                         year=points, switch_over_C=year.switch_C).to_json_dict()
 
 
+def engine_stages(opts: ReproduceOptions) -> list[Stage]:
+    """The comparison engine as tasks: one per training scenario, one per held-out scenario
+    (after every training task: the knobs are tuned on all of them), then the verdicts."""
+    from acid.studies.compare import DEFAULT_AMBIENTS_C, DEFAULT_CYCLES
+
+    config = {"quick": opts.engine_quick, "cycles": list(opts.engine_cycles or DEFAULT_CYCLES),
+              "ambients_C": list(DEFAULT_AMBIENTS_C), "seed": opts.excite_seed}
+    training, held = engine_scenarios(config)
+    train = [Stage(engine_stage("train", n), f"comparison engine, training on {n}",
+                   stage_engine_train, {**config, "scenario": n}, depends=("econ",))
+             for n in training]
+    judged = [Stage(engine_stage("held", n), f"comparison engine, held out {n}",
+                    stage_engine_held, {**config, "scenario": n},
+                    depends=("econ", *(s.name for s in train))) for n in held]
+    # the best known plan on the held-out scenarios of the energy study's cycles
+    plan_cycles = [c for c in ENERGY_CYCLES if c in config["cycles"]]
+    plans = [Stage(plan_stage(c), f"best known plan (periodic), {c.upper()}", stage_plan,
+                   {**config, "cycle": c}, depends=("econ",)) for c in plan_cycles]
+    return [*train, *judged, *plans, Stage(
+        "engine", "comparison engine: verdicts on held-out scenarios", stage_engine,
+        {**config, "plan_cycles": plan_cycles},
+        depends=("econ", *(s.name for s in train), *(s.name for s in judged),
+                 *(s.name for s in plans)))]
+
+
 def build_stages(opts: ReproduceOptions) -> list[Stage]:
     """The stage graph of the reproduction (the cav study's cycles are independent tasks)."""
     cav = {"warmup_s": opts.cav_warmup_s, "tail_s": opts.cav_tail_s,
@@ -401,6 +584,7 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
         Stage("cav", "where the energy is: " + ", ".join(c.upper() for c in opts.cav_cycles),
               stage_cav, {**cav, "cycles": list(opts.cav_cycles)},
               depends=("fit", "econ", *(cav_cycle_stage(c) for c in opts.cav_cycles))),
+        *engine_stages(opts),
         Stage("plant_check", "plant credentials (acid plant-check)", stage_plant_check, {}),
         Stage("heating", "winter: heating credentials and the year", stage_heating, HEATING_YEAR),
     ]
