@@ -66,7 +66,9 @@ def test_the_best_known_operation_is_the_cheaper_of_the_plan_and_F():
     st = EngineStage.of(res, {"udds": plan})
     b = st.best_plans["udds"]
     assert b.best == "F" and b.best_kJ == 1000.0
-    assert abs(b.E_gap_pct - 0.5) < 1e-9
+    assert abs(b.E_gap_pct - 0.5) < 1e-9 and abs(b.gaps_pct["plan"] - 1.2) < 1e-9
+    cheaper = EngineStage.of(res, {"udds": {**plan, "E_at_F_kJ": 990.0}}).best_plans["udds"]
+    assert cheaper.best == "E" and cheaper.E_gap_pct == 0.0   # E's operation is then the best
     assert EngineStage.from_json_dict(st.to_json_dict()) == st
     sec = next(s for s in sections_for(StudyResults({"engine": st}))
                if s.title.startswith("The energy answer"))

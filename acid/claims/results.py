@@ -541,9 +541,10 @@ class BestPlan(JsonDataclass):
     (kJ per pass, K; ``plan["E_at_F_kJ"]``: E interpolated to F's mean cabin temperature
     there): the cyclic whole-cycle plan (least replayed energy over its
     formulations and starts, ``spread_pct`` between the formulations), beside F at its tuned
-    coil and E on the same scenario; ``best`` names the least of them at equal mean cabin
-    temperature (a plan is matched to the engine's set-point, F holds it) and ``E_gap_pct``
-    how far E (at F's mean cabin temperature) lies above it."""
+    coil and E on the same scenario; ``best`` names the least of the three at equal mean
+    cabin temperature (a plan is matched to the engine's set-point, F holds it, E is
+    interpolated to F's mean): the best known operation ("when another formulation finds a
+    cheaper plan, that becomes the plan"); ``E_gap_pct`` how far E lies above it."""
 
     scenario: str
     plan_kJ: float
@@ -557,6 +558,8 @@ class BestPlan(JsonDataclass):
     best: str = ""
     best_kJ: float = math.nan
     E_gap_pct: float = math.nan
+    #: each operation's energy above the best known one, %
+    gaps_pct: dict[str, float] = field(default_factory=dict)
 
 
 def _best_plan(result, plan: Mapping) -> BestPlan:
@@ -566,11 +569,13 @@ def _best_plan(result, plan: Mapping) -> BestPlan:
     runs = {r.family: r for r in result.held_out if r.scenario == name}
     F = runs.get("F")
     w = plan["winner"]
+    E_kJ = _f(plan.get("E_at_F_kJ"))
     cands = {"plan": float(w["replay_energy_kJ"])}
     if F is not None:
         cands["F"] = F.energy_J / 1e3
+    if math.isfinite(E_kJ):
+        cands["E"] = E_kJ
     best = min(cands, key=cands.get)
-    E_kJ = _f(plan.get("E_at_F_kJ"))
     return BestPlan(
         scenario=name, plan_kJ=cands["plan"], formulation=f"{w['formulation']} ({w['start']})",
         spread_pct=_f(plan.get("spread_pct")),
@@ -579,7 +584,8 @@ def _best_plan(result, plan: Mapping) -> BestPlan:
         plan_mean_T_cab_K=C2K(_f(w.get("replay_mean_T_cab_degC"))),
         F_kJ=cands.get("F", math.nan),
         F_mean_T_cab_K=F.mean_T_cab if F is not None else math.nan, E_kJ=E_kJ, best=best,
-        best_kJ=cands[best], E_gap_pct=100.0 * (E_kJ - cands[best]) / cands[best])
+        best_kJ=cands[best], E_gap_pct=100.0 * (E_kJ - cands[best]) / cands[best],
+        gaps_pct={k: 100.0 * (v - cands[best]) / cands[best] for k, v in cands.items()})
 
 
 @stage_result("engine")

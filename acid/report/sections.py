@@ -91,10 +91,14 @@ def _energy_answer(r: EngineStage) -> ReportSection:
             f"{b.scenario}: the plan {format_number(b.plan_kJ, '.1f')} kJ per pass ({forms}; "
             f"spread {format_number(b.spread_pct, '.2f')} %, mean T_cab "
             f"{format_number(b.plan_mean_T_cab_K - 273.15, '.2f')} °C), F "
-            f"{format_number(b.F_kJ, '.1f')} kJ ({format_number(b.F_mean_T_cab_K - 273.15, '.2f')}"
-            f" °C): the best known operation is {'the plan' if b.best == 'plan' else b.best}"
-            + (f"; E at F's T_cab lies {format_number(b.E_gap_pct, '+.2f')} % from it"
-               if math.isfinite(b.E_gap_pct) else ""))
+            f"{format_number(b.F_kJ, '.1f')} kJ "
+            f"({format_number(b.F_mean_T_cab_K - 273.15, '.2f')} °C)"
+            + (f", E at F's T_cab {format_number(b.E_kJ, '.1f')} kJ"
+               if math.isfinite(b.E_kJ) else "")
+            + f": the best known operation is {'the plan' if b.best == 'plan' else b.best}"
+            + "; the others above it by " + ", ".join(
+                f"{'the plan' if k == 'plan' else k} {format_number(g, '+.2f')} %"
+                for k, g in b.gaps_pct.items() if k != b.best))
     best = ((" The best known plan (perfect information; the cyclic whole-cycle optimum on "
              "the econ model, two formulations from several seeded starts, each replayed on "
              "the plant pass after pass at the engine's mean cabin temperature; when another "
