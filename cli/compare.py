@@ -39,6 +39,11 @@ def compare(
              "default: identified here from an `acid excite --model econ` record."),
     identify_duration: float = typer.Option(10800.0, "--identify-duration",
                                             help="Length of that record, s."),
+    identify_seeds: str | None = typer.Option(
+        None, "--identify-seeds",
+        help="Comma-separated seeds of the econ model's identification records (default: "
+             "--seed). With several, every family is judged once per record and E's verdict "
+             "holds only where every record gives the same word."),
     econ: bool = typer.Option(True, "--econ/--no-econ",
                               help="Include the economic NMPC family E."),
     seed: int = typer.Option(0, "--seed", help="Seed of the split and of the bootstrap."),
@@ -70,6 +75,19 @@ def compare(
     require_range(seed, "--seed", 0, 2**63 - 1, integer=True)
     # the econ model's identification record: a day or a week of simulation is the bound
     require_range(identify_duration, "--identify-duration", 3600.0, 7 * 86400.0, "s")
+    try:
+        seeds = ([int(x) for x in identify_seeds.split(",") if x.strip()]
+                 if identify_seeds is not None else [seed])
+    except ValueError:
+        seeds = []
+    require(bool(seeds) and len(set(seeds)) == len(seeds), "--identify-seeds",
+            "give distinct integer seeds, comma-separated")
+    for s in seeds:
+        require_range(s, "--identify-seeds", 0, 2**63 - 1, integer=True)
+    require(econ_params is None or identify_seeds is None, "--identify-seeds",
+            "the econ model comes from --econ-params; give one or the other")
+    require(econ or identify_seeds is None, "--identify-seeds",
+            "without E (--no-econ) no econ model is identified")
     check_paths(inputs={"--econ-params": econ_params, "--plant-config": plant_config},
                 outputs={"--json": json_path}, folders={"--out": (out, ("fronts.png",))})
     from acid.studies.cav_study import available_cycles
@@ -84,23 +102,47 @@ def compare(
                            refrigerant=refrigerant)
     say(f"training: {', '.join(s.name for s in sset.training)}")
     say(f"held out: {', '.join(s.name for s in sset.held_out)} ({sset.rule})")
-    params = None
-    if econ:
-        if econ_params is not None:
-            from acid.models.econ_params import EconParams
-
-            params = EconParams.from_json(econ_params)
-        else:
-            from acid.studies.cav_study import default_plant_factory, identify_econ
-
-            line(f"identifying the econ model ({identify_duration:g} s record)")
-            params, _ = identify_econ(default_plant_factory(), identify_duration, seed=seed)
     fams = cmp.families(quick=quick, econ=econ)
+    results = []
     with open_executor(jobs, notice=line) as ex:
-        result = cmp.compare(sset, fams, cmp.QUICK if quick else cmp.RunSettings(),
-                             econ=params, seed=seed,
-                             executor=None if jobs == 1 else ex, progress=line)
-    say(f"comfort level: {result.comfort_level_Kmin:.2f} K min per pass outside "
+        for s in seeds if econ and econ_params is None else [seed]:
+            params = None
+            if econ and econ_params is not None:
+                from acid.models.econ_params import EconParams
+
+                params = EconParams.from_json(econ_params)
+            elif econ:
+                from acid.studies.cav_study import default_plant_factory, identify_econ
+
+                line(f"identifying the econ model ({identify_duration:g} s record, seed {s})")
+                params, _ = identify_econ(default_plant_factory(), identify_duration, seed=s)
+            results.append(cmp.compare(sset, fams, cmp.QUICK if quick else cmp.RunSettings(),
+                                       econ=params, seed=seed,
+                                       executor=None if jobs == 1 else ex, progress=line))
+            _print_result(results[-1], fams, sset, seed,
+                          f"econ model of record seed {s}: " if len(seeds) > 1 else "")
+    if len(results) > 1:
+        rows = []
+        for cand in ("E", "E" + cmp.MATCHED):
+            word, vs = cmp.across_records(results, cand, "F")
+            rows.append([f"{cand} vs F", *(f"{v.mean_pct:+.2f} [{v.boot_lo:+.2f}, "
+                                           f"{v.boot_hi:+.2f}] {v.word}" for v in vs), word])
+        print_table(f"E judged with econ models of {len(seeds)} identification records",
+                    ["_candidate vs baseline", *(f"_record seed {s}" for s in seeds),
+                     "_across records"], rows)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        cmp.plot_fronts(results[0], out / "fronts.png")
+        say(f"fronts written to {out / 'fronts.png'}")
+    write_summary(json_path, results[0].to_dict() if len(results) == 1 else {
+        "records": {str(s): r.to_dict() for s, r in zip(seeds, results, strict=True)},
+        "across_records": {cand: cmp.across_records(results, cand, "F")[0]
+                           for cand in ("E", "E" + cmp.MATCHED)}})
+
+
+def _print_result(result, fams, sset, seed: int, prefix: str) -> None:
+    """The families' tuned knobs and the verdicts of one comparison."""
+    say(f"{prefix}comfort level: {result.comfort_level_Kmin:.2f} K min per pass outside "
         f"{result.settings['T_low'] - 273.15:g}-{result.settings['T_high'] - 273.15:g} degC "
         "(the plant's own loops on training)")
     rows = []
@@ -112,9 +154,9 @@ def compare(
                                    else f"{k:.3g} {f.knob.rsplit(', ', 1)[-1]}")
         rows.append([f.key, f.label, knob, f"{pt.energy_J / 1e6:.3f}",
                      f"{pt.discomfort_Kmin:.2f}", f"{100 * pt.rh_mean:.1f}"])
-    print_table("families on training (tuned knob, nearest swept point)",
+    print_table(f"{prefix}families on training (tuned knob, nearest swept point)",
                 ["_family", "_what", "knob", "MJ/pass", "K min", "RH %"], rows)
-    print_table(f"verdicts on held out ({len(sset.held_out)} scenarios, seed {seed})",
+    print_table(f"{prefix}verdicts on held out ({len(sset.held_out)} scenarios, seed {seed})",
                 ["_candidate vs baseline", "saving %", "bootstrap 95 %", "paired t 95 %",
                  "dK min", "dT_cab K", "_verdict", "1 pass own %", "1 pass PI %"],
                 [[f"{v.candidate} vs {v.baseline}", f"{v.mean_pct:+.2f}",
@@ -134,9 +176,3 @@ def compare(
         names = sorted({n for f, _, n in off if f == fam})
         say(f"{fam} planned outside its econ model's identification data ({', '.join(names)}) "
             f"on {len(runs)} held-out run(s): {', '.join(runs)}")
-    if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        cmp.plot_fronts(result, out / "fronts.png")
-        say(f"fronts written to {out / 'fronts.png'}")
-    write_summary(json_path, result.to_dict())
-

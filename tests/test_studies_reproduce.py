@@ -60,6 +60,15 @@ def test_report_and_every_figure_exist(quick_run):
     assert "Conclusion (from the numbers)" not in html  # a quick run supports no conclusion
     assert "Table I: the paper vehicle and acid" in html
     assert not re.search(r"-0\.0+(?!\d)", html)  # no negative zero (-0.0012 is a number)
+    # the energy answer (the engine's held-out verdicts) opens the report, before the figures
+    assert html.index("The energy answer") < html.index("id=figures")
+    assert (out / "stages/engine/engine_fronts.png").stat().st_size > 10_000
+    # no energy verdict word without its interval anywhere on the page
+    from html import unescape
+
+    from acid.report.verdict_words import unjudged_statements
+
+    assert unjudged_statements(unescape(re.sub(r"<[^>]+>", " ", html))) == []
 
 
 def test_every_labelled_line_of_every_figure_is_visible(quick_run):

@@ -102,7 +102,7 @@ def _energy_answer(r: EngineStage) -> ReportSection:
     best = ((" The best known plan (perfect information; the cyclic whole-cycle optimum on "
              "the econ model, two formulations from several seeded starts, each replayed on "
              "the plant pass after pass at the engine's mean cabin temperature; when another "
-             "operation is cheaper under the same accounting, it is the best known one): "
+             "operation uses less energy under the same accounting, it is the best known one): "
              + "; ".join(plans) + ".") if plans else "")
     return ReportSection(
         "The energy answer: verdicts on held-out scenarios",

@@ -762,6 +762,23 @@ def compare(scenarios: ScenarioSet, fams: Sequence[Family], settings: RunSetting
                     min_scenarios, match_mean)
 
 
+#: the word when the econ model's identification records disagree on a verdict
+RECORD_DEPENDENT = "depends on the identification record"
+
+
+def across_records(results: Sequence[CompareResult], candidate: str, baseline: str
+                   ) -> tuple[str, tuple[Verdict, ...]]:
+    """One verdict judged again with econ models identified on different excitation records
+    (one :class:`CompareResult` per record, same scenarios): its word where every record
+    gives the same word, else :data:`RECORD_DEPENDENT`; and the verdict of each record."""
+    vs = tuple(v for r in results for v in r.verdicts
+               if v.candidate == candidate and v.baseline == baseline)
+    if len(vs) != len(results):
+        raise ConfigError(f"no verdict {candidate} vs {baseline} in every record")
+    words = {v.word for v in vs}
+    return (vs[0].word if len(words) == 1 else RECORD_DEPENDENT), vs
+
+
 def match_to_mean(at: PeriodicRun, lowered: PeriodicRun, T_target: float
                   ) -> PeriodicRun | None:
     """``at`` (the tuned run) with energy and discomfort interpolated linearly in the mean
