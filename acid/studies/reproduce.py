@@ -341,7 +341,11 @@ def _engine_setup(inputs: dict, config: dict):
     sset = cmp.default_set(config["cycles"], config["ambients_C"], seed=config["seed"],
                            stopgo_s=160.0 if quick else 800.0)
     econ = EconParams.from_json(inputs["econ"] / "econ_params.json")
-    return sset, cmp.families(quick=quick), cmp.QUICK if quick else cmp.RunSettings(), econ
+    fams = cmp.families(quick=quick)
+    if quick:   # a smoke run: E at one comfort weight (its front is a point)
+        fams = tuple(dataclasses.replace(f, knobs=f.knobs[-1:]) if f.key == "E" else f
+                     for f in fams)
+    return sset, fams, cmp.QUICK if quick else cmp.RunSettings(), econ
 
 
 def engine_scenarios(config: dict) -> tuple[list[str], list[str]]:
