@@ -667,18 +667,6 @@ class CompiledFunction:
         did not converge)."""
         return self._fn(self._arg, self._res, self._iw_p, self._w_p, self._mem)
 
-    def rebind(self, index: int, buffer: np.ndarray, output: bool) -> None:
-        """Point input (or output) ``index`` at ``buffer`` (float64, contiguous, the same
-        size) instead of its own: two calls can then hand data to each other by swapping
-        buffers instead of copying them."""
-        bufs, ptrs = (self.outputs, self._res) if output else (self.inputs, self._arg)
-        if buffer.dtype != np.float64 or buffer.shape != bufs[index].shape \
-                or not buffer.flags.c_contiguous:
-            raise ValueError(f"{self.name}: buffer {index} must be float64 of shape "
-                             f"{bufs[index].shape}")
-        bufs[index] = buffer
-        ptrs[index] = buffer.ctypes.data
-
     def __call__(self, *args) -> list[np.ndarray]:
         """Convenience: copy ``args`` into the inputs, call, return copies of the outputs
         (raises RuntimeError on a non-zero return code)."""

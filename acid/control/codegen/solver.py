@@ -439,14 +439,29 @@ class StepSolver:
     def _load(self) -> None:
         self._cf, self.build_info = compile_function(self.fn, hot=self.hot)
         cf = self._cf
-        iin = {n: i for i, n in enumerate(self.fn.name_in())}
-        iout = {n: i for i, n in enumerate(self.fn.name_out())}
-        self.inputs = {n: cf.inputs[i] for n, i in iin.items()}
-        self.outputs = {n: cf.outputs[i] for n, i in iout.items()}
-        # the carried blocks: two buffers each, the outputs of one step the inputs of the next
-        self._pairs = [(iout[o], iin[i]) for o, i in _CARRIED]
-        self._spare = {k: np.zeros_like(cf.inputs[ki]) for k, ki in self._pairs}
-        self.warm = False
+        names_in, names_out = self.fn.name_in(), self.fn.name_out()
+        iin = {n: i for i, n in enumerate(names_in)}
+        iout = {n: i for i, n in enumerate(names_out)}
+        # the carried blocks: two buffers each (A, B), ping-pong: a step reads A and writes
+        # B, the next reads B and writes A; both arrangements are prepared once, a commit
+        # only switches pointers
+        pairs = [(iout[o], iin[i]) for o, i in _CARRIED]
+        views = []
+        for flip in (False, True):
+            ins, outs = list(cf.inputs), list(cf.outputs)
+            ptr_in, ptr_out = [], []
+            for ko, ki in pairs:
+                a, b = cf.inputs[ki], cf.outputs[ko]
+                if flip:
+                    a, b = b, a
+                ins[ki], outs[ko] = a, b
+                ptr_in.append((ki, a.ctypes.data))
+                ptr_out.append((ko, b.ctypes.data))
+            views.append((dict(zip(names_in, ins, strict=True)),
+                          dict(zip(names_out, outs, strict=True)), ptr_in, ptr_out))
+        self._views = views
+        self._parity = 0
+        self.inputs, self.outputs = views[0][0], views[0][1]
 
     def step(self, warm: bool) -> tuple[bool, int]:
         """One call (warm-started from the carried solution when ``warm``): (finished, C
@@ -463,7 +478,7 @@ class StepSolver:
             if started:
                 self._worker.stop()
                 self._worker = None
-                prev = {n: self.inputs[n].copy() for _, n in _CARRIED}
+                prev = {n: b.copy() for n, b in self.inputs.items()}
                 cf.abandon()
                 self._load()
                 for n, v in prev.items():
@@ -474,24 +489,22 @@ class StepSolver:
         return True, out
 
     def commit(self) -> None:
-        """Make the last step's solution the next step's warm start (a pointer swap)."""
-        cf = self._cf
-        for ko, ki in self._pairs:
-            new_in, new_out = cf.outputs[ko], self._spare[ko]
-            self._spare[ko] = cf.inputs[ki]
-            cf.rebind(ki, new_in, output=False)
-            cf.rebind(ko, new_out, output=True)
-        self._refresh()
+        """Make the last step's solution the next step's warm start (pointers switched, no
+        copy)."""
+        self._parity ^= 1
+        ins, outs, ptr_in, ptr_out = self._views[self._parity]
+        arg, res = self._cf._arg, self._cf._res
+        for i, ptr in ptr_in:
+            arg[i] = ptr
+        for i, ptr in ptr_out:
+            res[i] = ptr
+        # the inputs that are not carried keep their buffers (the same objects)
+        self.inputs, self.outputs = ins, outs
 
     def load(self, w, lam_x, lam_g) -> None:
         """Copy a solution found elsewhere in as the next step's warm start."""
         for (_, n), v in zip(_CARRIED, (w, lam_x, lam_g), strict=True):
             self.inputs[n][:] = v
-
-    def _refresh(self) -> None:
-        cf = self._cf
-        self.inputs = dict(zip(self.fn.name_in(), cf.inputs, strict=True))
-        self.outputs = dict(zip(self.fn.name_out(), cf.outputs, strict=True))
 
     def close(self) -> None:
         if self._worker is not None:
