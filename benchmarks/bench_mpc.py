@@ -19,8 +19,16 @@ What is compared
    warm-starts from its previous solution, as in closed loop); the whole ``make_step`` wall
    time is measured for each; first moves and objectives are compared.
 
+With ``--acados-python PY`` (an interpreter with acados, e.g. ``pip install
+comma-deps-acados`` in a Python 3.12 virtualenv: acados ships its own CasADi, so it is a
+benchmark-only peer in its own environment), acados's SQP (exact Hessian, HPIPM, the same
+tolerance) solves the same problem on the same states, interleaved
+(``benchmarks/peer_acados.py``, its step timed inside its own process).
+
 Prints median / p95 / max per-step time of acid with its solver as generated C (the
-default, no wall-clock cap), of acid with the same solver inside CasADi, of acid with the
+default: the whole step, guess, solve, convergence check and trajectory, is one C call; no
+wall-clock cap), of the same with the solver, its check and the trajectory as 3 separate
+C calls, the one C call alone (its share of the step), of acid with the same solver inside CasADi, of acid with the
 ECU-like wall-clock cap (``max_solve_s=2.5``: the solve in a worker thread), and of do-mpc,
 measured interleaved on the same states in one run; the ratio do-mpc / acid; and the
 largest relative differences of the first move and of the objective (acid against do-mpc,
@@ -149,10 +157,61 @@ def build_dompc(params: ModelParams, config: NMPCConfig):
     return mpc, set_preview
 
 
+class AcadosPeer:
+    """``benchmarks/peer_acados.py`` running under another interpreter (acados's own
+    environment), one JSON line per message; ``step`` returns (moves (N, 2), ms, status)."""
+
+    def __init__(self, python: str, params: ModelParams, config: NMPCConfig, build: str):
+        import json
+        import subprocess
+
+        self._json = json
+        self.proc = subprocess.Popen(
+            [python, str(Path(__file__).parent / "peer_acados.py")], stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE, text=True)
+        par = {"gamma": [float(v) for v in params.gamma],
+               "tau": [float(v) for v in params.tau], "beta": [float(v) for v in params.beta],
+               "c_p": float(params.c_p), "eta_cop": float(params.eta_cop),
+               "Ts": float(params.Ts)}
+        cfg = {k: float(getattr(config, k)) for k in (
+            "N", "cost_scale", "T_amb", "W_bl_min", "W_bl_max", "T_evap_set_min",
+            "T_evap_set_max", "T_cab_min", "T_evap_min", "T_evap_max", "slack_penalty", "tol")}
+        self._send({"params": par, "config": cfg, "T_int": MODEL_T_INT,
+                    "T_shell": MODEL_T_SHELL, "build": build})
+        if not self._read().get("ready"):
+            raise RuntimeError("acados peer did not start")
+
+    def _send(self, msg):
+        self.proc.stdin.write(self._json.dumps(msg) + "\n")
+        self.proc.stdin.flush()
+
+    def _read(self) -> dict:
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError("acados peer ended (see its messages above)")
+        return self._json.loads(line)
+
+    def step(self, x0, ub, reset: bool):
+        self._send({"x": [float(v) for v in x0], "ub": [float(v) for v in ub],
+                    "reset": bool(reset)})
+        r = self._read()
+        return np.array(r["U"]), float(r["ms"]), int(r["status"]), int(r["iterations"])
+
+    def close(self):
+        self.proc.stdin.close()
+        self.proc.wait(timeout=60)
+
+
 def dompc_solution(mpc, x0, ub, params: ModelParams, config: NMPCConfig):
     """(first move, objective in W) of do-mpc's last solve, evaluated like acid's."""
     N = config.N
     U = np.array([np.asarray(mpc.opt_x_num_unscaled["_u", k, 0]).ravel() for k in range(N)])
+    return plan_objective(U, x0, ub, params, config)
+
+
+def plan_objective(U, x0, ub, params: ModelParams, config: NMPCConfig):
+    """(first move, objective in W) of a plan U (N, 2) from x0, by the paper's eqs. 1-5."""
+    N = config.N
     T_cab, T_evap, T_ain = [float(x0[0])], [float(x0[1])], []
     for k in range(N):
         c, e, a = _step(T_cab[k], T_evap[k], U[k, 0], U[k, 1], MODEL_T_INT, MODEL_T_SHELL,
@@ -179,6 +238,7 @@ def _stats(ms):
 #: the targets: whole-step median, speed-up over do-mpc, the same optimum
 TARGET_MEDIAN_MS = 0.35
 TARGET_RATIO = 30.0
+TARGET_RATIO_ACADOS = 4.0
 TARGET_SAME_OPTIMUM = 1e-6
 
 
@@ -187,6 +247,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--repeats", type=int, default=3, help="replays of the state sequence")
     ap.add_argument("--solver", default="sqp", choices=("fatrop", "ipopt", "sqp"))
     ap.add_argument("--json", default=None, help="write the results here")
+    ap.add_argument("--acados-python", default=None,
+                    help="an interpreter with acados (comma-deps-acados): adds acados's SQP "
+                         "with HPIPM as a peer (benchmarks/peer_acados.py)")
+    ap.add_argument("--acados-build", default="/tmp/acid-bench-acados",
+                    help="folder for the acados peer's generated solver")
     args = ap.parse_args(argv)
 
     params = paper()
@@ -203,6 +268,9 @@ def main(argv=None) -> dict:
             "capped": NMPC(params, dataclasses.replace(config, max_solve_s=2.5)),
             "fatrop": NMPC(params, dataclasses.replace(config, solver="fatrop"))}
     theirs, set_preview = build_dompc(params, config)
+    acados = (AcadosPeer(args.acados_python, params, config, args.acados_build)
+              if args.acados_python else None)
+    t_acados, du_a, dobj_a, st_a, it_a = [], [], [], [], []
 
     # one untimed call each: first-call set-up (allocation, do-mpc's data structures)
     set_preview(cases[0][1])
@@ -252,8 +320,18 @@ def main(argv=None) -> dict:
             u_dm, obj_dm = dompc_solution(theirs, x0, ub, params, config)
             du.append(float(np.max(np.abs(sol.u - u_dm) / np.abs(u_dm))))
             dobj.append(abs(sol.objective - obj_dm) / abs(obj_dm))
+            if acados is not None:
+                U_a, ms, status, its = acados.step(x0, ub, first)
+                t_acados.append(ms)
+                st_a.append(status)
+                it_a.append(its)
+                u_a, obj_a = plan_objective(U_a, x0, ub, params, config)
+                du_a.append(float(np.max(np.abs(sol.u - u_a) / np.abs(u_a))))
+                dobj_a.append(abs(sol.objective - obj_a) / abs(obj_a))
 
     load = os.getloadavg()[0]
+    if acados is not None:
+        acados.close()
     so, sc, st = _stats(t_ours["compiled"]), _stats(t_ours["casadi"]), _stats(t_theirs)
     su = _stats(t_ours["capped"])
     ssep = _stats(t_ours["separate"])
@@ -315,10 +393,26 @@ def main(argv=None) -> dict:
     print(f"  same optimum: first move max rel diff {out['max_rel_diff_first_move']:.1e}, "
           f"objective {out['max_rel_diff_objective']:.1e} -> {same} "
           f"(<= {TARGET_SAME_OPTIMUM:g})")
+    if acados is not None:
+        sa = _stats(t_acados)
+        out["acados_ms"] = sa
+        out["ratio_acados_median"] = sa["median"] / so["median"]
+        out["acados_failed"] = int(sum(1 for v in st_a if v != 0))
+        out["acados_iterations_mean"] = float(np.mean(it_a))
+        out["max_rel_diff_first_move_vs_acados"] = float(max(du_a))
+        out["max_rel_diff_objective_vs_acados"] = float(max(dobj_a))
+        print(f"  acados (SQP, exact Hessian, HPIPM; own env)  median {sa['median']:7.3f}  "
+              f"p95 {sa['p95']:7.3f}  max {sa['max']:7.3f}; acados / acid "
+              f"{out['ratio_acados_median']:.1f}x (median, target >= {TARGET_RATIO_ACADOS:g}x); "
+              f"{out['acados_iterations_mean']:.2f} SQP iterations a step, "
+              f"{out['acados_failed']} not converged")
+        print(f"  same optimum vs acados: first move max rel diff "
+              f"{out['max_rel_diff_first_move_vs_acados']:.1e}, objective "
+              f"{out['max_rel_diff_objective_vs_acados']:.1e}")
     met = {"median": so["median"] <= TARGET_MEDIAN_MS and out["backend"] == "compiled",
            "ratio": out["ratio_median"] >= TARGET_RATIO, "optimum": same}
     out["targets_met"] = met
-    print(f"VERDICT paper NMPC (issue 22): median {so['median']:.3f} ms ({out['backend']}), "
+    print(f"VERDICT paper NMPC: median {so['median']:.3f} ms ({out['backend']}), "
           f"target <= {TARGET_MEDIAN_MS} ms -> {'MET' if met['median'] else 'NOT MET'}; "
           f"{out['ratio_median']:.1f}x do-mpc, target >= {TARGET_RATIO:g}x -> "
           f"{'MET' if met['ratio'] else 'NOT MET'}; same optimum (<= "
