@@ -25,14 +25,14 @@ benchmark-only peer in its own environment), acados's SQP (exact Hessian, HPIPM,
 tolerance) solves the same problem on the same states, interleaved
 (``benchmarks/peer_acados.py``, its step timed inside its own process).
 
-Prints median / p95 / max per-step time of acid with its solver as generated C (the
-default: the whole step, guess, solve, convergence check and trajectory, is one C call; no
-wall-clock cap), of the same with the solver, its check and the trajectory as 3 separate
-C calls, the one C call alone (its share of the step), of acid with the same solver inside CasADi, of acid with the
-ECU-like wall-clock cap (``max_solve_s=2.5``: the solve in a worker thread), and of do-mpc,
-measured interleaved on the same states in one run; the ratio do-mpc / acid; and the
-largest relative differences of the first move and of the objective (acid against do-mpc,
-both solved to 1e-10 without bound relaxation). Run with ``OMP_NUM_THREADS=1
+Prints median / p95 / max per-step time of acid with its solver as generated C (the default:
+the whole step, guess, solve, convergence check and trajectory, is one C call; no wall-clock
+cap), of the same with the solver, its check and the trajectory as 3 separate C calls, the
+one C call alone (its share of the step), of acid with the same solver inside CasADi, of
+acid with the ECU-like wall-clock cap (``max_solve_s=2.5``: the step in a worker thread),
+and of do-mpc, measured interleaved on the same states in one run; the ratio do-mpc / acid;
+and the largest relative differences of the first move and of the objective (acid against
+do-mpc, both solved to 1e-10 without bound relaxation). Run with ``OMP_NUM_THREADS=1
 OPENBLAS_NUM_THREADS=1`` so that IPOPT's linear algebra does not spin threads between the
 timed calls.
 """
@@ -161,7 +161,8 @@ class AcadosPeer:
     """``benchmarks/peer_acados.py`` running under another interpreter (acados's own
     environment), one JSON line per message; ``step`` returns (moves (N, 2), ms, status)."""
 
-    def __init__(self, python: str, params: ModelParams, config: NMPCConfig, build: str):
+    def __init__(self, python: str, params: ModelParams, config: NMPCConfig, build: str,
+                 **options):
         import json
         import subprocess
 
@@ -177,7 +178,7 @@ class AcadosPeer:
             "N", "cost_scale", "T_amb", "W_bl_min", "W_bl_max", "T_evap_set_min",
             "T_evap_set_max", "T_cab_min", "T_evap_min", "T_evap_max", "slack_penalty", "tol")}
         self._send({"params": par, "config": cfg, "T_int": MODEL_T_INT,
-                    "T_shell": MODEL_T_SHELL, "build": build})
+                    "T_shell": MODEL_T_SHELL, "build": build, **options})
         if not self._read().get("ready"):
             raise RuntimeError("acados peer did not start")
 

@@ -93,6 +93,8 @@ def build(msg: dict):
     opt.nlp_solver_type = "SQP"
     opt.hessian_approx = "EXACT"
     opt.regularize_method = msg.get("regularize", "PROJECT")
+    if msg.get("globalization"):
+        opt.globalization = msg["globalization"]
     opt.qp_solver = "PARTIAL_CONDENSING_HPIPM"
     opt.qp_solver_iter_max = 100
     opt.nlp_solver_max_iter = 100
@@ -116,6 +118,7 @@ def main() -> None:
     import numpy as np
 
     setup = json.loads(sys.stdin.readline())
+    shift = bool(setup.get("shift", True))
     out = sys.stdout
     saved = os.dup(1)
     os.dup2(2, 1)   # whatever the build prints (compiler, acados) goes to stderr
@@ -135,6 +138,12 @@ def main() -> None:
         if msg.get("reset"):
             solver.reset()
         t0 = time.perf_counter()
+        if shift and not msg.get("reset"):   # the previous solution shifted by one stage
+            X = [solver.get(k, "x") for k in range(N + 1)]
+            U = [solver.get(k, "u") for k in range(N)]
+            for k in range(N):
+                solver.set(k, "x", X[k + 1])
+                solver.set(k, "u", U[min(k + 1, N - 1)])
         solver.set(0, "lbx", x0)
         solver.set(0, "ubx", x0)
         for k in range(1, N + 1):

@@ -606,6 +606,7 @@ class NMPC:
             self._step = StepSolver(fn, timeout_s=cfg.max_solve_s)
         except CodegenError:   # the separate calls (NLPSolver notices why)
             self._step = None
+        self._lbx_in = None   # the lbx the step's input buffer holds (None: unknown)
         self._report = names
 
     def _fallback_solver(self) -> NLPSolver | None:
@@ -792,8 +793,10 @@ class NMPC:
             st.load(self._w_prev, self._lam_x_prev, self._lam_g_prev)
         inp["x0"][:] = x   # the paper NLP's states are not scaled
         inp["p"][:] = pv
-        inp["lbx"][:] = lbx
-        inp["ubx"][:] = ubx
+        if lbx is not self._lbx_in:   # the bounds change only with a pinned first move
+            inp["lbx"][:] = lbx
+            inp["ubx"][:] = ubx
+            self._lbx_in = lbx if lbx is self._lbx0 else None
         if not warm:
             cfg = self.config
             inp["u_guess"][:] = (np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
