@@ -74,3 +74,30 @@ def test_a_capped_fused_step_runs_in_the_worker_with_the_same_moves(fused):
     u_c, _ = _closed_loop(capped, 4)
     assert capped._step._worker is not None
     np.testing.assert_array_equal(u_f, u_c)
+
+
+def test_a_fused_step_past_its_cap_is_abandoned_and_reloaded(fused, monkeypatch):
+    import warnings
+
+    from test_control_solver import _LateCall
+
+    from acid.control.codegen import solver as solver_mod
+    from acid.errors import SolverWarning
+
+    capped = NMPC(paper(), NMPCConfig(max_solve_s=1e-3))
+    first = capped._step._cf
+    x, ub = [C2K(27.0), C2K(6.0)], C2K(25.0)
+    with monkeypatch.context() as m:
+        m.setattr(solver_mod, "_Call", _LateCall)
+        with pytest.warns(SolverWarning, match="timeout"):
+            u = capped.make_step(x, ub, C2K(30.0), C2K(33.0))
+    np.testing.assert_array_equal(u, capped.config.u_safe)
+    assert capped._step.timeouts == 1 and capped._step._cf is not first   # reloaded
+    # from its own copy of the library: the abandoned call shares no static memory with it
+    assert capped._step._cf._lib._handle != first._lib._handle
+    capped._step.timeout_s = None
+    fused.reset()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SolverWarning)
+        np.testing.assert_array_equal(capped.make_step(x, ub, C2K(30.0), C2K(33.0)),
+                                      fused.make_step(x, ub, C2K(30.0), C2K(33.0)))

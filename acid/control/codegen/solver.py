@@ -23,15 +23,18 @@ same way: build the NLP once, then ``solve`` every sample.
 from __future__ import annotations
 
 import queue
+import shutil
+import tempfile
 import threading
 import time
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from acid.control.codegen.build import CodegenError, compile_function
+from acid.control.codegen.build import CodegenError, CompiledFunction, compile_function
 from acid.errors import CodegenWarning
 
 #: NLP solver function inputs and outputs, in CasADi's order
@@ -436,9 +439,19 @@ class StepSolver:
         self._worker: _Worker | None = None
         self._load()
 
-    def _load(self) -> None:
-        self._cf, self.build_info = compile_function(self.fn, hot=self.hot)
-        cf = self._cf
+    def _load(self, private: bool = False) -> None:
+        """Load the compiled step; ``private``: from a copy of the library, so that a call
+        abandoned in the loaded one (still running in its thread) shares no static memory
+        (the inner solver's memory pool) with the calls that follow."""
+        cf, self.build_info = compile_function(self.fn, hot=self.hot)
+        if private:
+            src = Path(self.build_info["path"])
+            with tempfile.TemporaryDirectory(prefix="acid-step-") as tmp:
+                dst = Path(tmp) / src.name
+                shutil.copyfile(src, dst)
+                cf.close()
+                cf = CompiledFunction(self.fn, dst)   # mapped: the file can go
+        self._cf = cf
         names_in, names_out = self.fn.name_in(), self.fn.name_out()
         iin = {n: i for i, n in enumerate(names_in)}
         iout = {n: i for i, n in enumerate(names_out)}
@@ -480,7 +493,7 @@ class StepSolver:
                 self._worker = None
                 prev = {n: b.copy() for n, b in self.inputs.items()}
                 cf.abandon()
-                self._load()
+                self._load(private=True)
                 for n, v in prev.items():
                     self.inputs[n][:] = v
             return False, -1
