@@ -266,3 +266,35 @@ def test_comfort_price_holds_a_reference_and_is_not_counted_as_energy(econ_truth
 def test_comfort_weight_must_be_non_negative():
     with pytest.raises(ConfigError, match="comfort_weight"):
         EconNMPCConfig(comfort_weight=-1.0)
+
+
+@pytest.mark.slow
+def test_the_compiled_sqp_step_is_one_c_call_with_casadis_moves(econ_truth, monkeypatch):
+    # the whole step (warm-start shift or cold guess, SQP, convergence check, the stages'
+    # outputs) is one generated C function; 3 intervals keep its compile short
+    from acid.control.codegen import build
+
+    cfg = _cfg(intervals=(5.0,) * 3, compiled=True)
+    fused = EconNMPC(econ_truth, cfg)
+    if fused._step is None:
+        pytest.skip("no working C compiler")
+    ref = EconNMPC(econ_truth, cfg.replace(compiled=False))
+    calls = []
+    real = build.CompiledFunction.call
+
+    def counted(self):
+        calls.append(self.name)
+        return real(self)
+
+    monkeypatch.setattr(build.CompiledFunction, "call", counted)
+    plant = econ_plant(econ_truth.theta_all)
+    plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
+    for k in range(5):
+        m = plant.measure()
+        x = [m[n] for n in ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")]
+        n0 = len(calls)
+        u = fused.make_step(x, 12.0 + k, C2K(30.0))
+        assert calls[n0:] == ["acid_econ_nmpc_step"]
+        np.testing.assert_allclose(u, ref.make_step(x, 12.0 + k, C2K(30.0)), rtol=1e-12)
+        plant.step(u[0], u[1], 12.0 + k, T_amb=C2K(30.0))
+    assert fused.fallbacks == 0 and fused.backend == "compiled"
