@@ -594,10 +594,15 @@ class NMPC:
             + cfg.slack_penalty * (ca.sum1(s_cab) + ca.sum1(s_evap))
         names = ["W_bl", "T_evap_set", "T_cab", "T_evap", "T_ain", "P_comp", "P_bl",
                  "slack_cab", "slack_evap", "objective"]
-        post = ca.Function("acid_nmpc_post", [w, p],
-                           [U[0, :].T, U[1, :].T, X[0, :].T, X[1, :].T,
-                            Y[self._i_T_ain, :].T, P_comp, P_bl, s_cab, s_evap, objective],
-                           ["w", "p"], names)
+        parts = [U[0, :].T, U[1, :].T, X[0, :].T, X[1, :].T, Y[self._i_T_ain, :].T, P_comp,
+                 P_bl, s_cab, s_evap, objective]
+        # one output vector (one copy a step); its pieces as slices
+        ends = np.cumsum([e.numel() for e in parts])
+        self._report = dict(zip(names, (slice(a, b) for a, b in
+                                        zip(np.r_[0, ends[:-1]], ends, strict=True)),
+                                strict=True))
+        post = ca.Function("acid_nmpc_post", [w, p], [ca.vertcat(*parts)], ["w", "p"],
+                           ["report"])
         plugin, opts = self._solver_options(cfg.solver)
         fn = step_function("acid_nmpc_step", ocp.nlp, plugin, dict(opts, error_on_fail=True),
                            lbg=self._lbg, ubg=self._ubg, shift_w=self._shift_w,
@@ -607,7 +612,6 @@ class NMPC:
         except CodegenError:   # the separate calls (NLPSolver notices why)
             self._step = None
         self._lbx_in = None   # the lbx the step's input buffer holds (None: unknown)
-        self._report = names
 
     def _fallback_solver(self) -> NLPSolver | None:
         """The solver of ``config.fallback_solver`` (None when there is none), built at its
@@ -819,12 +823,13 @@ class NMPC:
                                    lam_x=o["lam_x"].copy(), lam_g=o["lam_g"].copy(),
                                    success=False, status=status, iterations=-1,
                                    solve_time_s=dt)
-        W, Tset = o["W_bl"].copy(), o["T_evap_set"].copy()
-        sol = MPCSolution(u=np.array([W[0], Tset[0]]), T_cab=o["T_cab"].copy(),
-                          T_evap=o["T_evap"].copy(), T_ain=o["T_ain"].copy(), W_bl=W,
-                          T_evap_set=Tset, P_comp=o["P_comp"].copy(), P_bl=o["P_bl"].copy(),
-                          slack_cab=o["slack_cab"].copy(), slack_evap=o["slack_evap"].copy(),
-                          objective=float(o["objective"][0]), status="Solve_Succeeded",
+        r, k = o["report"].copy(), self._report
+        W, Tset = r[k["W_bl"]], r[k["T_evap_set"]]
+        sol = MPCSolution(u=np.array([W[0], Tset[0]]), T_cab=r[k["T_cab"]],
+                          T_evap=r[k["T_evap"]], T_ain=r[k["T_ain"]], W_bl=W,
+                          T_evap_set=Tset, P_comp=r[k["P_comp"]], P_bl=r[k["P_bl"]],
+                          slack_cab=r[k["slack_cab"]], slack_evap=r[k["slack_evap"]],
+                          objective=float(r[k["objective"]][0]), status="Solve_Succeeded",
                           success=True, iterations=-1, solve_time_s=dt, disturbance=d.copy())
         st.commit()   # this solution becomes the next step's warm start (no copy)
         inp = st.inputs
@@ -891,11 +896,13 @@ class NMPC:
         v = np.array([np.ravel(T_int)[0], np.ravel(T_shell)[0]], dtype=float)
         sol, d, x_hat = None, np.zeros(_NX), x
         margin = (0.0, 0.0)
-        measured = bool(np.isfinite(x).all() and np.isfinite(v).all())
+        x0, x1, v0, v1 = float(x[0]), float(x[1]), float(v[0]), float(v[1])
+        measured = (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(v0)
+                    and math.isfinite(v1))
         if not measured:
             status, ok = f"non-finite measurement (x = {x.tolist()}, v = {v.tolist()})", False
         else:
-            if not (_T_LO <= x.min() and x.max() <= _T_HI):  # x is finite here
+            if not (_T_LO <= x0 <= _T_HI and _T_LO <= x1 <= _T_HI):  # x is finite here
                 _check_kelvin(x, "state x = [T_cab, T_evap]")
             if self.estimator is not None:
                 u_v = self._applied if self._applied is not None else (None, None)
