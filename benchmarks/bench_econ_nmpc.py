@@ -20,7 +20,8 @@ Prints median / p95 / max per step, the solves the fallback solver (IPOPT) had t
 the SQP iterations per step (inside CasADi: the generated C does not report them; the
 compiled solver runs the same algorithm), the load average beside each figure, the ratio of
 the economic NMPC to the paper's NMPC (stable across machines and loads) and one verdict
-line against issue 22's target: median at most 2 ms per step, compiled. Wall-clock numbers
+line against the target: median at most 2 ms per step, compiled; and the largest relative
+difference of the first moves from IPOPT's at tolerance 1e-10. Wall-clock numbers
 on a shared machine are noisy: the verdict is a line, never an assertion.
 """
 
@@ -43,8 +44,13 @@ from acid.signals import drive_cycle
 from acid.studies.cav_study import default_plant_factory, identify_econ
 from acid.units import C2K
 
-#: issue 22: the economic NMPC's median step, compiled, ms
+#: the economic NMPC's median step, compiled, ms
 TARGET_MS = 2.0
+#: IPOPT's tolerance here: the economic cost is flat in the moves near the optimum, so at
+#: IPOPT's default (1e-6) its first moves sit up to 9e-4 (relative) from the optimum
+IPOPT_TOL = 1e-10
+#: first moves of the SQP and of IPOPT at IPOPT_TOL, largest relative difference
+TARGET_SAME_MOVES = 1e-6
 
 
 def record(econ, cycle: str, config: EconNMPCConfig | None = None):
@@ -99,7 +105,8 @@ def main() -> None:
     moves = {}
     for name, opts in (("econ_compiled", {"compiled": True}),
                        ("econ_casadi", {"compiled": False}),
-                       ("econ_ipopt", {"solver": "ipopt", "compiled": False})):
+                       ("econ_ipopt", {"solver": "ipopt", "compiled": False,
+                                       "tol": IPOPT_TOL})):
         runs = []
         for _ in range(max(1, args.repeats)):
             mpc = EconNMPC(econ, cfg.replace(**opts))
@@ -138,8 +145,14 @@ def main() -> None:
           f"{results['econ_casadi']['median_ms'] / e['median_ms']:.1f}x;  largest move "
           f"difference compiled vs CasADi: "
           f"{np.max(np.abs(moves['econ_compiled'] - moves['econ_casadi'])):.1e}")
+    d_ip = float(np.max(np.abs(moves["econ_compiled"] - moves["econ_ipopt"])
+                        / np.abs(moves["econ_ipopt"])))
+    print(f"  first moves, compiled SQP vs IPOPT (tol {IPOPT_TOL:g}): largest relative "
+          f"difference {d_ip:.1e} (target <= {TARGET_SAME_MOVES:g}: "
+          f"{'MET' if d_ip <= TARGET_SAME_MOVES else 'NOT MET'})")
+    results["max_rel_diff_moves_vs_ipopt"] = d_ip
     met = e["median_ms"] <= TARGET_MS and e["backend"] == "compiled"
-    print(f"VERDICT economic NMPC (issue 22): median {e['median_ms']:.2f} ms per step "
+    print(f"VERDICT economic NMPC: median {e['median_ms']:.2f} ms per step "
           f"({e['backend']}), target <= {TARGET_MS:g} ms -> {'MET' if met else 'NOT MET'}; "
           f"{e['rescues']} of {len(steps)} solves finished by the convexified SQP, "
           f"{e['fallbacks']} by IPOPT; load "

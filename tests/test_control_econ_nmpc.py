@@ -179,6 +179,36 @@ def test_sqp_warm_started_reaches_the_interior_point_optimum(econ_truth):
 
 
 
+def test_first_moves_match_ipopt_at_tight_tolerance_with_the_default_horizon(econ_truth):
+    # the economic cost is flat in the moves near its optimum: IPOPT at its default tol
+    # (1e-6, scaled) stops up to 1e-3 (relative) from the optimal moves; at 1e-10 IPOPT
+    # and the warm-started SQP (24 x 5 s, steady terminal price) agree to 1e-9
+    cfg = EconNMPCConfig(T_cab_min=C2K(22.0), T_cab_max=C2K(24.0), compiled=False)
+    sqp = EconNMPC(econ_truth, cfg)
+    tight = EconNMPC(econ_truth, cfg.replace(solver="ipopt", tol=1e-10))
+    plant = econ_plant(econ_truth.theta_all)
+    plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
+    for k in range(4):
+        m = plant.measure()
+        x = [m[n] for n in ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")]
+        v = 12.0 + 3.0 * np.sin(k)
+        u = sqp.make_step(x, v, C2K(30.0))
+        ref = tight.solve(x, v, C2K(30.0))
+        tight.reset()
+        assert ref.success and np.max(np.abs(u - ref.u) / np.abs(ref.u)) < 1e-8
+        plant.step(u[0], u[1], v, T_amb=C2K(30.0))
+    assert sqp.fallbacks == 0 and sqp.solver_fallbacks == 0
+
+
+def test_ipopt_after_a_failed_sqp_solves_to_the_sqps_accuracy(econ_truth):
+    off = EconNMPC(econ_truth, _cfg(solver="sqp", sqp_rescue=False))
+    _declared_unconverged(off._solver)
+    sol = off.solve(X, 12.0, C2K(30.0))
+    ref = EconNMPC(econ_truth, _cfg(solver="ipopt", tol=1e-10)).solve(X, 12.0, C2K(30.0))
+    assert "ipopt after sqp" in sol.status and sol.success
+    assert np.max(np.abs(sol.u - ref.u) / np.abs(ref.u)) < 1e-8
+
+
 def _declared_unconverged(solver):
     """Make ``solver`` (an NLPSolver) report every result as not converged."""
     solve = solver.solve
@@ -236,3 +266,35 @@ def test_comfort_price_holds_a_reference_and_is_not_counted_as_energy(econ_truth
 def test_comfort_weight_must_be_non_negative():
     with pytest.raises(ConfigError, match="comfort_weight"):
         EconNMPCConfig(comfort_weight=-1.0)
+
+
+@pytest.mark.slow
+def test_the_compiled_sqp_step_is_one_c_call_with_casadis_moves(econ_truth, monkeypatch):
+    # the whole step (warm-start shift or cold guess, SQP, convergence check, the stages'
+    # outputs) is one generated C function; 3 intervals keep its compile short
+    from acid.control.codegen import build
+
+    cfg = _cfg(intervals=(5.0,) * 3, compiled=True)
+    fused = EconNMPC(econ_truth, cfg)
+    if fused._step is None:
+        pytest.skip("no working C compiler")
+    ref = EconNMPC(econ_truth, cfg.replace(compiled=False))
+    calls = []
+    real = build.CompiledFunction.call
+
+    def counted(self):
+        calls.append(self.name)
+        return real(self)
+
+    monkeypatch.setattr(build.CompiledFunction, "call", counted)
+    plant = econ_plant(econ_truth.theta_all)
+    plant.reset(dict(zip(("T_cab", "T_int", "T_shell", "T_evap", "w_cab"), X, strict=True)))
+    for k in range(5):
+        m = plant.measure()
+        x = [m[n] for n in ("T_cab", "T_int", "T_shell", "T_evap", "w_cab")]
+        n0 = len(calls)
+        u = fused.make_step(x, 12.0 + k, C2K(30.0))
+        assert calls[n0:] == ["acid_econ_nmpc_step"]
+        np.testing.assert_allclose(u, ref.make_step(x, 12.0 + k, C2K(30.0)), rtol=1e-12)
+        plant.step(u[0], u[1], 12.0 + k, T_amb=C2K(30.0))
+    assert fused.fallbacks == 0 and fused.backend == "compiled"

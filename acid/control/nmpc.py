@@ -119,7 +119,8 @@ from acid.errors import ConfigError, DataError, SolverWarning
 from acid.paper import TABLE_II
 
 __all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog", "predict"]
-from acid.control.codegen.solver import NLPSolver
+from acid.control.codegen.build import CodegenError
+from acid.control.codegen.solver import NLPResult, NLPSolver, StepSolver, step_function
 from acid.models.paper import model as PAPER_MODEL
 from acid.models.params import PARAMETER_TABLE, ModelParams, as_params
 from acid.units import C2K
@@ -504,7 +505,7 @@ class NMPC:
     @property
     def backend(self) -> str:
         """``"compiled"`` (generated C) or ``"casadi"``."""
-        return self._nlp.backend
+        return "compiled" if self._step is not None else self._nlp.backend
 
     # ----------------------------------------------------------------- build
     def _build(self) -> None:
@@ -514,9 +515,6 @@ class NMPC:
         ocp = self._ocp = OCP(PAPER_MODEL, ocp_spec(cfg))
         self._w, self._g, self._p = ocp.w, ocp.g, ocp.par
         self._nlp_dict = ocp.nlp
-        self._nlp = NLPSolver("acid_nmpc", ocp.nlp, *self._solver_options(cfg.solver),
-                              compiled=cfg.compiled, verify=_verify(cfg.solver),
-                              timeout_s=cfg.max_solve_s)
         self._fallback_nlp: NLPSolver | None = None
         if cfg.max_solve_s is not None:  # a real-time run builds it now, not mid-run
             self._fallback_solver()
@@ -548,6 +546,72 @@ class NMPC:
                                            np.full(N + 1, self.params.c_p)))
         self._eta_default.setflags(write=False)
         self._Q_default.setflags(write=False)
+        # the SQP's whole step (guess, solve, convergence check, plan and trajectory) as
+        # one generated C call when it compiles; the separate solver is then CasADi's (it
+        # only serves a build without a compiler)
+        self._step: StepSolver | None = None
+        self._build_step()
+        self._nlp = NLPSolver("acid_nmpc", ocp.nlp, *self._solver_options(cfg.solver),
+                              compiled=cfg.compiled if self._step is None else False,
+                              verify=_verify(cfg.solver), timeout_s=cfg.max_solve_s)
+
+    def _build_step(self) -> None:
+        """``self._step``: one generated C function per step (:func:`step_function`) for the
+        SQP when generated C is allowed and compiles; None otherwise."""
+        cfg, ocp, N = self.config, self._ocp, self.N
+        if cfg.solver != "sqp" or cfg.compiled is False:
+            return
+        w, p = ca.SX.sym("w", ocp.w.size), ca.SX.sym("p", ocp.par.size)
+        ug, x0 = ca.SX.sym("u_guess", _NU), ca.SX.sym("x0", _NX)
+        ip = ocp._ip
+        th, dist = p[ip["theta"].ravel().tolist()], p[ip["dist"].ravel().tolist()]
+        D = ca.reshape(p[ip["d"].ravel().tolist()], ip["d"].shape[1], N)
+        Q = ca.reshape(p[ip["q"].ravel().tolist()], ip["q"].shape[1], ip["q"].shape[0])
+        xm = p[ip["x0"].ravel().tolist()]   # the measured state, K
+        ix, iu = ocp.w.index("x"), self._iu
+        xoff, xscl = ca.DM(ocp.x_offset), ca.DM(ocp.x_scale)
+        uoff, uscl = ca.DM(ocp.u_offset), ca.DM(ocp.u_scale)
+        # the cold guess: the model run with u_guess held (as _initial_guess)
+        Xc = ocp.trajectory(xm, ca.repmat(ug, 1, N), D, Q, th, dist)[0]
+        wc = ca.SX.zeros(ocp.w.size)
+        wc[ix.ravel().tolist()] = ca.vec((Xc - ca.repmat(xoff, 1, N + 1))
+                                         / ca.repmat(xscl, 1, N + 1))
+        wc[iu.ravel().tolist()] = ca.repmat((ug - uoff) * uscl, N, 1)
+        cold = ca.Function("acid_nmpc_cold", [x0, p, ug], [wc])
+        # what a step reports (as _solution): the clipped plan and its trajectory
+        U = ca.repmat(uoff, 1, N) + ca.reshape(w[iu.ravel().tolist()], _NU, N) \
+            / ca.repmat(uscl, 1, N)
+        U = ca.fmin(ca.fmax(U, ca.repmat(ca.DM(self._u_lo), 1, N)),
+                    ca.repmat(ca.DM(self._u_hi), 1, N))
+        X, Y, terms = ocp.trajectory(xm, U, D, Q, th, dist)
+        T_cab, T_evap = X[0, 1:].T, X[1, 1:].T
+        s_cab = ca.fmax(ca.fmax(T_cab - p[ip["T_cab_hi"].ravel().tolist()],
+                                p[ip["T_cab_lo"].ravel().tolist()] - T_cab), 0)
+        s_evap = ca.fmax(ca.fmax(T_evap - p[ip["T_evap_hi"].ravel().tolist()],
+                                 p[ip["T_evap_lo"].ravel().tolist()] - T_evap), 0)
+        P_comp, P_bl = terms[self._i_P[0], :].T, terms[self._i_P[1], :].T
+        objective = ca.sum1(P_comp) + ca.sum1(P_bl) \
+            + cfg.slack_penalty * (ca.sum1(s_cab) + ca.sum1(s_evap))
+        names = ["W_bl", "T_evap_set", "T_cab", "T_evap", "T_ain", "P_comp", "P_bl",
+                 "slack_cab", "slack_evap", "objective"]
+        parts = [U[0, :].T, U[1, :].T, X[0, :].T, X[1, :].T, Y[self._i_T_ain, :].T, P_comp,
+                 P_bl, s_cab, s_evap, objective]
+        # one output vector (one copy a step); its pieces as slices
+        ends = np.cumsum([e.numel() for e in parts])
+        self._report = dict(zip(names, (slice(a, b) for a, b in
+                                        zip(np.r_[0, ends[:-1]], ends, strict=True)),
+                                strict=True))
+        post = ca.Function("acid_nmpc_post", [w, p], [ca.vertcat(*parts)], ["w", "p"],
+                           ["report"])
+        plugin, opts = self._solver_options(cfg.solver)
+        fn = step_function("acid_nmpc_step", ocp.nlp, plugin, dict(opts, error_on_fail=True),
+                           lbg=self._lbg, ubg=self._ubg, shift_w=self._shift_w,
+                           shift_g=self._shift_g, ix0=ix[0], cold=cold, post=post)
+        try:
+            self._step = StepSolver(fn, timeout_s=cfg.max_solve_s)
+        except CodegenError:   # the separate calls (NLPSolver notices why)
+            self._step = None
+        self._lbx_in = None   # the lbx the step's input buffer holds (None: unknown)
 
     def _fallback_solver(self) -> NLPSolver | None:
         """The solver of ``config.fallback_solver`` (None when there is none), built at its
@@ -688,15 +752,25 @@ class NMPC:
              np.column_stack((np.full(N + 1, amb), eta, np.full(N + 1, self.params.c_p))))
         pv = self._ocp.parameters(self._pvec, x0=x, dist=d, d=D, q=Q, bounds={
             ("T_cab", "hi"): ub[1:], ("T_cab", "lo"): lb[1:]})
-        w0 = self._initial_guess(x, D, Q, u_prev, d)
-        lam_x0 = lam_g0 = None
-        if self._lam_g_prev is not None:
-            lam_g0 = self._lam_g_prev[self._shift_g]
-            lam_x0 = self._lam_x_prev[self._shift_w]
-        res = self._nlp.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0, lam_g0)
+        w0 = lam_x0 = lam_g0 = None
+        if self._step is not None:   # one C call: guess, solve, check, plan, trajectory
+            sol, res = self._solve_step(x, pv, lbx, ubx, u_prev, d)
+            if sol is not None:
+                return sol
+        else:
+            w0 = self._initial_guess(x, D, Q, u_prev, d)
+            if self._lam_g_prev is not None:
+                lam_g0 = self._lam_g_prev[self._shift_g]
+                lam_x0 = self._lam_x_prev[self._shift_w]
+            res = self._nlp.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0, lam_g0)
         fallback = (self._fallback_solver() if not res.success and res.status != "timeout"
                     else None)
         if fallback is not None:
+            if w0 is None:   # the fused step's guess, recomputed (a rare path)
+                w0 = self._initial_guess(x, D, Q, u_prev, d)
+                if self._lam_g_prev is not None:
+                    lam_g0 = self._lam_g_prev[self._shift_g]
+                    lam_x0 = self._lam_x_prev[self._shift_w]
             first = res
             res = fallback.solve(w0, pv, lbx, ubx, self._lbg, self._ubg, lam_x0,
                                            lam_g0)
@@ -711,6 +785,57 @@ class NMPC:
             self._lam_x_prev = res.lam_x
         return self._solution(res.x, x, D, Q, ub, lb, d, res.status, res.success,
                               res.iterations, res.solve_time_s)
+
+    def _solve_step(self, x, pv, lbx, ubx, u_prev, d) -> tuple[MPCSolution | None, NLPResult]:
+        """One call of the fused step (:attr:`_step`): (the solution, None) when it
+        converged, else (None, the failed result for the fallback solver)."""
+        st = self._step
+        t0 = time.perf_counter()
+        inp = st.inputs
+        warm = self._w_prev is not None
+        if warm and self._w_prev is not inp["w_prev"]:   # found by the fallback solver
+            st.load(self._w_prev, self._lam_x_prev, self._lam_g_prev)
+        inp["x0"][:] = x   # the paper NLP's states are not scaled
+        inp["p"][:] = pv
+        if lbx is not self._lbx_in:   # the bounds change only with a pinned first move
+            inp["lbx"][:] = lbx
+            inp["ubx"][:] = ubx
+            self._lbx_in = lbx if lbx is self._lbx0 else None
+        if not warm:
+            cfg = self.config
+            inp["u_guess"][:] = (np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
+                                 if u_prev is not None else 0.5 * (cfg.u_min + cfg.u_max))
+        finished, flag = st.step(warm)
+        dt = time.perf_counter() - t0
+        if not finished:
+            nan = np.full(inp["w_prev"].size, np.nan)
+            return None, NLPResult(x=nan, f=float("nan"), lam_x=nan,
+                                   lam_g=np.full(inp["lam_g_prev"].size, np.nan),
+                                   success=False, status="timeout", iterations=-1,
+                                   solve_time_s=dt)
+        o = st.outputs
+        pr, du = float(o["pr_inf"][0]), float(o["du_inf"][0])
+        tol_pr, tol_du = SQP_ACCEPT
+        if flag or not (pr <= tol_pr and du <= tol_du and np.isfinite(o["w"].sum())):
+            status = (f"failed (code {flag})" if flag else
+                      f"not converged (primal {pr:.1e}, dual {du:.1e}; Solve_Succeeded)")
+            return None, NLPResult(x=o["w"].copy(), f=float(o["f"][0]),
+                                   lam_x=o["lam_x"].copy(), lam_g=o["lam_g"].copy(),
+                                   success=False, status=status, iterations=-1,
+                                   solve_time_s=dt)
+        r, k = o["report"].copy(), self._report
+        W, Tset = r[k["W_bl"]], r[k["T_evap_set"]]
+        sol = MPCSolution(u=np.array([W[0], Tset[0]]), T_cab=r[k["T_cab"]],
+                          T_evap=r[k["T_evap"]], T_ain=r[k["T_ain"]], W_bl=W,
+                          T_evap_set=Tset, P_comp=r[k["P_comp"]], P_bl=r[k["P_bl"]],
+                          slack_cab=r[k["slack_cab"]], slack_evap=r[k["slack_evap"]],
+                          objective=float(r[k["objective"]][0]), status="Solve_Succeeded",
+                          success=True, iterations=-1, solve_time_s=dt, disturbance=d.copy())
+        st.commit()   # this solution becomes the next step's warm start (no copy)
+        inp = st.inputs
+        self._w_prev, self._lam_x_prev = inp["w_prev"], inp["lam_x_prev"]
+        self._lam_g_prev = inp["lam_g_prev"]
+        return sol, None
 
     def _check_inputs(self, x, ub, lb, Ti, Tsh, amb, eta, d) -> None:
         """Finite, plausible kelvin temperatures and positive efficiencies, or an error."""
@@ -771,11 +896,13 @@ class NMPC:
         v = np.array([np.ravel(T_int)[0], np.ravel(T_shell)[0]], dtype=float)
         sol, d, x_hat = None, np.zeros(_NX), x
         margin = (0.0, 0.0)
-        measured = bool(np.isfinite(x).all() and np.isfinite(v).all())
+        x0, x1, v0, v1 = float(x[0]), float(x[1]), float(v[0]), float(v[1])
+        measured = (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(v0)
+                    and math.isfinite(v1))
         if not measured:
             status, ok = f"non-finite measurement (x = {x.tolist()}, v = {v.tolist()})", False
         else:
-            if not (_T_LO <= x.min() and x.max() <= _T_HI):  # x is finite here
+            if not (_T_LO <= x0 <= _T_HI and _T_LO <= x1 <= _T_HI):  # x is finite here
                 _check_kelvin(x, "state x = [T_cab, T_evap]")
             if self.estimator is not None:
                 u_v = self._applied if self._applied is not None else (None, None)

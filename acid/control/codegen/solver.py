@@ -23,15 +23,18 @@ same way: build the NLP once, then ``solve`` every sample.
 from __future__ import annotations
 
 import queue
+import shutil
+import tempfile
 import threading
 import time
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from acid.control.codegen.build import CodegenError, compile_function
+from acid.control.codegen.build import CodegenError, CompiledFunction, compile_function
 from acid.errors import CodegenWarning
 
 #: NLP solver function inputs and outputs, in CasADi's order
@@ -347,3 +350,183 @@ class NLPSolver:
         nan = np.full(self.n_x, np.nan)
         return NLPResult(x=nan, f=float("nan"), lam_x=nan, lam_g=np.full(self.n_g, np.nan),
                          success=False, status="timeout", iterations=-1, solve_time_s=dt)
+
+
+# --------------------------------------------------------------- one C call per step
+#: inputs of a fused step function, in order (see :func:`step_function`)
+STEP_INPUTS = ("w_prev", "lam_x_prev", "lam_g_prev", "warm", "x0", "p", "lbx", "ubx",
+               "u_guess")
+#: its first outputs; the caller's ``post`` outputs follow
+STEP_OUTPUTS = ("w", "f", "lam_x", "lam_g", "pr_inf", "du_inf")
+#: the pairs (output, input) through which one step hands its solution to the next
+_CARRIED = (("w", "w_prev"), ("lam_x", "lam_x_prev"), ("lam_g", "lam_g_prev"))
+
+
+def step_function(name: str, nlp: dict, plugin: str, options: dict, *, lbg, ubg,
+                  shift_w, shift_g, ix0, cold: ca.Function, post: ca.Function) -> ca.Function:
+    """A whole NMPC step as ONE CasADi function (an MX graph of calls), to be generated as
+    one C function:
+
+    ``(w_prev, lam_x_prev, lam_g_prev, warm, x0, p, lbx, ubx, u_guess) ->
+    (w, f, lam_x, lam_g, pr_inf, du_inf, *post(w, p))``
+
+    * the initial point: with ``warm`` = 1 the previous solution ``w_prev`` and its
+      multipliers shifted by one stage (``w_prev[shift_w]``, ``lam_g_prev[shift_g]``), the
+      measured state ``x0`` (NLP scaling) written into ``w[ix0]``; with ``warm`` = 0
+      ``cold(x0, p, u_guess)`` and zero multipliers (only the branch taken is evaluated);
+    * the solve: ``nlpsol(name, plugin, nlp, options)`` with ``lbg``/``ubg`` as constants
+      (a solver generated with ``error_on_fail`` makes the whole call return non-zero when
+      it fails);
+    * the convergence check: :func:`kkt_function`'s primal infeasibility and the largest
+      entry of the Lagrangian's gradient at the result;
+    * ``post(w, p)``: what the caller reports (e.g. the clipped plan and its trajectory).
+
+    The caller feeds ``w``, ``lam_x``, ``lam_g`` back as the next step's ``*_prev``
+    (:class:`StepSolver` swaps buffers, no copy).
+    """
+    solver = ca.nlpsol(name + "_nlp", plugin, nlp, options)
+    nw, ng, npar = solver.nnz_in(0), solver.nnz_in(4), solver.nnz_in(1)
+    nx0, nug = len(ix0), cold.nnz_in(2)
+    W, LX, LG = ca.MX.sym("w_prev", nw), ca.MX.sym("lam_x_prev", nw), ca.MX.sym("lam_g_prev", ng)
+    warm, x0, p = ca.MX.sym("warm"), ca.MX.sym("x0", nx0), ca.MX.sym("p", npar)
+    lbx, ubx, ug = ca.MX.sym("lbx", nw), ca.MX.sym("ubx", nw), ca.MX.sym("u_guess", nug)
+    ix0 = [int(i) for i in ix0]
+    # the warm branch: a permutation, then the measured state
+    ws, wc = ca.MX.sym("w_prev", nw), ca.MX.sym("x0", nx0)
+    wl, gl = ca.MX.sym("lam_x_prev", nw), ca.MX.sym("lam_g_prev", ng)
+    pp, uu = ca.MX.sym("p", npar), ca.MX.sym("u_guess", nug)
+    w_warm = ws[[int(i) for i in shift_w]]
+    w_warm[ix0] = wc
+    warm_fn = ca.Function(name + "_warm", [ws, wl, gl, wc, pp, uu],
+                          [w_warm, wl[[int(i) for i in shift_w]],
+                           gl[[int(i) for i in shift_g]]])
+    cold_fn = ca.Function(name + "_cold", [ws, wl, gl, wc, pp, uu],
+                          [cold(wc, pp, uu), ca.DM.zeros(nw), ca.DM.zeros(ng)])
+    guess = ca.Function.conditional(name + "_guess", [cold_fn, warm_fn], cold_fn)
+    w0, lx0, lg0 = guess(warm, W, LX, LG, x0, p, ug)
+    lbg, ubg = ca.DM(np.asarray(lbg, float)), ca.DM(np.asarray(ubg, float))
+    sol = solver(x0=w0, p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, lam_x0=lx0, lam_g0=lg0)
+    kkt = kkt_function(name + "_kkt", nlp)
+    pr, du = kkt(sol["x"], p, sol["lam_x"], sol["lam_g"], lbx, ubx, lbg, ubg)
+    extra = post(sol["x"], p)
+    extra = list(extra) if isinstance(extra, (list, tuple)) else [extra]
+    return ca.Function(name, [W, LX, LG, warm, x0, p, lbx, ubx, ug],
+                       [sol["x"], sol["f"], sol["lam_x"], sol["lam_g"], pr, du, *extra],
+                       list(STEP_INPUTS), list(STEP_OUTPUTS) + post.name_out())
+
+
+class StepSolver:
+    """A :func:`step_function` as one compiled C call, with the previous solution carried
+    from one call to the next by swapping buffers.
+
+    Fill :attr:`inputs` (by name: ``x0``, ``p``, ``lbx``, ``ubx``, ``u_guess``; ``warm`` is
+    set by :meth:`step`), call :meth:`step`, read :attr:`outputs` (views valid until the
+    next step). After a successful step :meth:`commit` makes its ``w``, ``lam_x``,
+    ``lam_g`` the next step's ``*_prev`` (a pointer swap); :meth:`load` copies a solution
+    found elsewhere (e.g. by a fallback solver) in instead.
+
+    Raises :class:`CodegenError` when it cannot be generated, compiled or loaded (the
+    caller keeps its separate calls then). ``timeout_s``: the call runs in a worker thread
+    and is abandoned after that many seconds (as :class:`NLPSolver`).
+    """
+
+    def __init__(self, fn: ca.Function, timeout_s: float | None = None, hot: bool = True):
+        self.fn = fn
+        self.name = fn.name()
+        self.timeout_s = timeout_s
+        self.hot = hot
+        self.timeouts = 0
+        self._worker: _Worker | None = None
+        self._load()
+
+    def _load(self, private: bool = False) -> None:
+        """Load the compiled step; ``private``: from a copy of the library, so that a call
+        abandoned in the loaded one (still running in its thread) shares no static memory
+        (the inner solver's memory pool) with the calls that follow."""
+        cf, self.build_info = compile_function(self.fn, hot=self.hot)
+        if private:
+            src = Path(self.build_info["path"])
+            with tempfile.TemporaryDirectory(prefix="acid-step-") as tmp:
+                dst = Path(tmp) / src.name
+                shutil.copyfile(src, dst)
+                cf.close()
+                cf = CompiledFunction(self.fn, dst)   # mapped: the file can go
+        self._cf = cf
+        names_in, names_out = self.fn.name_in(), self.fn.name_out()
+        iin = {n: i for i, n in enumerate(names_in)}
+        iout = {n: i for i, n in enumerate(names_out)}
+        # the carried blocks: two buffers each (A, B), ping-pong: a step reads A and writes
+        # B, the next reads B and writes A; both arrangements are prepared once, a commit
+        # only switches pointers
+        pairs = [(iout[o], iin[i]) for o, i in _CARRIED]
+        views = []
+        for flip in (False, True):
+            ins, outs = list(cf.inputs), list(cf.outputs)
+            ptr_in, ptr_out = [], []
+            for ko, ki in pairs:
+                a, b = cf.inputs[ki], cf.outputs[ko]
+                if flip:
+                    a, b = b, a
+                ins[ki], outs[ko] = a, b
+                ptr_in.append((ki, a.ctypes.data))
+                ptr_out.append((ko, b.ctypes.data))
+            views.append((dict(zip(names_in, ins, strict=True)),
+                          dict(zip(names_out, outs, strict=True)), ptr_in, ptr_out))
+        self._views = views
+        self._parity = 0
+        self.inputs, self.outputs = views[0][0], views[0][1]
+
+    def step(self, warm: bool) -> tuple[bool, int]:
+        """One call (warm-started from the carried solution when ``warm``): (finished, C
+        return code). Not finished: the call timed out (abandoned, the library reloaded)."""
+        self.inputs["warm"][0] = 1.0 if warm else 0.0
+        cf = self._cf
+        if self.timeout_s is None:
+            return True, cf.call()
+        if self._worker is None:
+            self._worker = _Worker(f"{self.name}-step")
+        finished, started, out, exc = self._worker.run(cf.call, self.timeout_s)
+        if not finished:
+            self.timeouts += 1
+            if started:
+                self._worker.stop()
+                self._worker = None
+                prev = {n: b.copy() for n, b in self.inputs.items()}
+                cf.abandon()
+                self._load(private=True)
+                for n, v in prev.items():
+                    self.inputs[n][:] = v
+            return False, -1
+        if exc is not None:
+            raise exc
+        return True, out
+
+    def commit(self) -> None:
+        """Make the last step's solution the next step's warm start (pointers switched, no
+        copy)."""
+        self._parity ^= 1
+        ins, outs, ptr_in, ptr_out = self._views[self._parity]
+        arg, res = self._cf._arg, self._cf._res
+        for i, ptr in ptr_in:
+            arg[i] = ptr
+        for i, ptr in ptr_out:
+            res[i] = ptr
+        # the inputs that are not carried keep their buffers (the same objects)
+        self.inputs, self.outputs = ins, outs
+
+    def load(self, w, lam_x, lam_g) -> None:
+        """Copy a solution found elsewhere in as the next step's warm start."""
+        for (_, n), v in zip(_CARRIED, (w, lam_x, lam_g), strict=True):
+            self.inputs[n][:] = v
+
+    def close(self) -> None:
+        if self._worker is not None:
+            self._worker.stop()
+            self._worker = None
+        self._cf.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # noqa: S110 - interpreter shutdown
+            pass
