@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.errors import DataError
+from acid.ident.envelope import envelope_ranges
 from acid.ident.fit import DeclaredFitResult
 from acid.models import econ
 from acid.models.econ import MAP_INPUTS, PowerMap
@@ -97,6 +98,8 @@ def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
                        steady_max_pct=100.0 * float(np.max(np.abs(e / P)[steady])))
     domain = {n: (float(v.min()), float(v.max())) for (n, _), v in
               zip(MAP_INPUTS, (Q_e, T_ev, d[:, 0], d[:, 1]), strict=True)}
+    envelope = envelope_ranges(Q_e=Q_e, T_evap=T_ev, T_cab=x[k, 0], W_bl=u[:, 0],
+                               T_amb=d[:, 1])
     se = {e.name: e.stderr for e in fit.estimates}
     prov = {**provenance(ds, "acid.ident staged fit (acid.models.econ.FIT_STAGES)"),
             "skip_s": econ.FIT_SKIP_S, **({"data_seed": ds.metadata["seed"]}
@@ -104,7 +107,7 @@ def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
     params = EconParams.from_vector(
         fit.values, power_map=PowerMap(coef=fit.values[len(NAMES) + 1:len(NAMES) + 16],
                                        stderr=tuple(se[n] for n in econ.MAP_NAMES),
-                                       domain=domain, quality=quality),
+                                       domain=domain, quality=quality, envelope=envelope),
         stderr={n: se[n] for n in NAMES + ("C_ew",)}, Ts=float(ds.Ts), name="econ-fit",
         provenance=prov)
     return EconFit(params=params, fit=fit)

@@ -250,6 +250,9 @@ class EconNMPC:
         for name, (lo, hi) in self._power_map.domain.items():
             tol = max(0.02 * (hi - lo), 0.05)
             self._map_ok[name] = (lo - tol, hi + tol)
+        from acid.ident.envelope import Envelope
+
+        self.envelope = Envelope.of(params)   # the identification data's ranges
         self._build()
         self.reset()
 
@@ -342,6 +345,10 @@ class EconNMPC:
         self.fallbacks = 0
         self.log = EconStepLog()
         self.extrapolation: list[str] = []
+        from acid.ident.envelope import Excursion
+
+        #: the applied (first) interval of every solved plan against the model's envelope
+        self.envelope_steps = Excursion()
         self._applied = None  # (u, d) applied over the last period, for the estimator
         if getattr(self, "estimator", None) is not None:
             self.estimator.reset()
@@ -496,6 +503,8 @@ class EconNMPC:
         P_c = np.asarray(econ.compressor_power(self._s, Q_e, T_ev, v, Ta))
         if ok:
             self._warn_outside(Q_e=Q_e, T_evap=T_ev)
+        self.envelope_steps = self.envelope_steps.merged(self.envelope.check(
+            Q_e=Q_e[:1], T_evap=T_ev[:1], T_cab=X[:1, 0], W_bl=Uc[:1, 0], T_amb=Ta[:1]))
         return EconSolution(
             u=Uc[0].copy(), x=X, t=self._t.copy(), W_bl=Uc[:, 0], T_evap_set=Uc[:, 1], Q_e=Q_e,
             P_comp=P_c, P_bl=P_bl, slack=np.maximum(w[self._is], 0.0), terminal_prices=lam,
