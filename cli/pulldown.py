@@ -54,7 +54,7 @@ def pulldown(
     say("exciting the plant (old record, pull-downs, held-out pull-downs)")
     old, pd, held = study.records(settings)
     say("identifying the old and the new econ model")
-    models = study.identify_pair(old, pd)
+    models = study.identify_pair(old, pd, settings.new_skip_s)
     envelopes = {k: Envelope.of(getattr(models, k)) for k in ("old", "new")}
     for k, env in envelopes.items():
         say(f"{k} model's envelope: {env.describe()}")
@@ -80,12 +80,17 @@ def pulldown(
                  "mean T_cab degC", "E saves %"], rows)
     for r in loop["rows"]:
         say(f"{r['E'].name}: {r['E'].envelope_line}")
+    for key, pts in loop["equal_comfort"].items():
+        for q in pts:
+            say(f"E ({key} model) at {q['F']}'s comfort ({q['discomfort_Kmin']:.1f} K min): "
+                f"{q['E_J'] / 1e6:.3f} MJ vs {q['F_J'] / 1e6:.3f} MJ ({q['saving_pct']:+.2f} %)")
     write_summary(json_path, {
         "command": "pulldown", "acid_version": __version__,
         "settings": dataclasses.asdict(settings),
         "envelopes": {k: e.to_dict() for k, e in envelopes.items()},
         "validation_T_cab_p90_K": val,
         "front": [dataclasses.asdict(x) for x in loop["front"]],
+        "equal_comfort": loop["equal_comfort"],
         "closed_loop": [{"model": r["model"], "saving_pct": r["saving_pct"],
                          "E": dataclasses.asdict(r["E"]), "F": dataclasses.asdict(r["F"])}
                         for r in loop["rows"]]})

@@ -29,6 +29,18 @@ def test_fixed_coil_is_the_engines_run_with_its_trace():
     assert r.above_Kmin <= r.discomfort_Kmin + 1e-12
 
 
+def test_at_equal_comfort_interpolates_inside_es_span_only():
+    def run(name, d, E):
+        return study.LoopResult(name, E, d, d, 100.0, C2K(24.0))
+
+    front = [run("F a", 5.0, 100.0), run("F b", 8.0, 90.0), run("F c", 20.0, 80.0)]
+    e = [run("E 1", 4.0, 110.0), run("E 2", 12.0, 70.0)]
+    out = study.at_equal_comfort(front, e)
+    assert [q["F"] for q in out] == ["F a", "F b"]       # 20 K min: outside E's span
+    assert out[0]["E_J"] == pytest.approx(105.0) and out[1]["E_J"] == pytest.approx(90.0)
+    assert out[0]["saving_pct"] == pytest.approx(-5.0) and out[1]["saving_pct"] == 0.0
+
+
 @pytest.mark.slow
 def test_econ_run_counts_steps_outside_the_models_envelope(econ_truth):
     r = study.econ_run(econ_truth, 300.0, SHORT)

@@ -9,7 +9,10 @@ edges):
    the economic NMPC is identified on today) and a pull-down record (``--design pulldown``,
    the same preset, hot soaks in ``soak_bounds`` and cold soaks at the ambient); the *old*
    model is identified on the old record, the *new* one on both joined as separate
-   experiments. Each model carries its envelope (:mod:`acid.ident.envelope`).
+   experiments, with only the first ``new_skip_s`` (60 s) of each experiment left out of the
+   fit instead of the econ fit's ``FIT_SKIP_S`` (600 s, which drops most of a pull-down:
+   measured, the new model's data then end at 26.8 degC cabin and 4.7 kW, the pull-down's
+   own range unseen). Each model carries its envelope (:mod:`acid.ident.envelope`).
 2. **Validation** (:func:`validate_pair`): both models open loop on held-out pull-downs
    (another seed; hot and cold soaks), the project's validator with its yardsticks
    (persistence, ARX, subspace) fitted on each model's own record, the speed and ambient
@@ -21,8 +24,9 @@ edges):
    (discomfort: K min outside 23-25 degC), run again. E is the engine's economic NMPC with
    speed preview (the same construction as the engine's E) on the old and the new model;
    its applied steps are checked against the model's envelope. Reported: energy, the
-   saving against the best fixed coil, time to 25 degC, K min above the band, and the
-   envelope count with the worst excursion.
+   saving against the best fixed coil, time to 25 degC, K min above the band, the
+   envelope count with the worst excursion, and (:func:`at_equal_comfort`) E's energy
+   interpolated along its swept weights to each fixed coil's discomfort.
 """
 
 from __future__ import annotations
@@ -56,6 +60,7 @@ class PulldownSettings:
     validation_horizon_s: float = 1500.0
     validation_starts: int = 24
     T_reach_C: float = 25.0
+    new_skip_s: float = 60.0
 
 
 @dataclass(frozen=True)
@@ -68,12 +73,13 @@ class Models:
     pulldown_record: object
 
 
-def _identify(ds):
+def _identify(ds, skip_s: float | None = None):
     from acid.ident.econ import identify
 
+    kw = {} if skip_s is None else {"skip_s": float(skip_s)}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # carried by the fit report
-        return identify(ds).params
+        return identify(ds, **kw).params
 
 
 def records(settings: PulldownSettings = PulldownSettings(), plant_factory=None):
@@ -93,12 +99,14 @@ def records(settings: PulldownSettings = PulldownSettings(), plant_factory=None)
     return excite(make(), old), excite(make(), pd), excite(make(), held)
 
 
-def identify_pair(old_record, pulldown_record) -> Models:
-    """The old model (old record) and the new one (old record + pull-downs)."""
+def identify_pair(old_record, pulldown_record, new_skip_s: float = 60.0) -> Models:
+    """The old model (old record, the econ fit as it is) and the new one (old record +
+    pull-downs, ``new_skip_s`` left out at each experiment's start)."""
     from acid.data import Dataset
 
     both = Dataset.concatenate([old_record, pulldown_record])
-    return Models(_identify(old_record), _identify(both), old_record, pulldown_record)
+    return Models(_identify(old_record), _identify(both, new_skip_s), old_record,
+                  pulldown_record)
 
 
 def validate_pair(models: Models, held_out, settings: PulldownSettings = PulldownSettings()
@@ -242,6 +250,22 @@ def best_fixed_coil(front: list[LoopResult], level_Kmin: float,
     return fixed_coil(tune_knob(pts, level_Kmin), settings)
 
 
+def at_equal_comfort(front: list[LoopResult], runs: list[LoopResult]) -> list[dict]:
+    """E's energy at each fixed coil's discomfort: E's swept weights (``runs``, one model)
+    interpolated linearly in discomfort (K min outside the band), only inside their span;
+    the saving against that coil, % (positive: E uses less)."""
+    pts = sorted((r.discomfort_Kmin, r.energy_J) for r in runs)
+    out = []
+    for f in front:
+        d = f.discomfort_Kmin
+        if len(pts) < 2 or not pts[0][0] <= d <= pts[-1][0]:
+            continue
+        E = float(np.interp(d, [p[0] for p in pts], [p[1] for p in pts]))
+        out.append({"F": f.name, "discomfort_Kmin": d, "F_J": f.energy_J, "E_J": E,
+                    "saving_pct": 100.0 * (f.energy_J - E) / f.energy_J})
+    return out
+
+
 def closed_loop(models: Models, settings: PulldownSettings = PulldownSettings(),
                 progress=None) -> dict:
     """F's front, E on the old and the new model, each E against F at its comfort."""
@@ -262,4 +286,6 @@ def closed_loop(models: Models, settings: PulldownSettings = PulldownSettings(),
             rows.append({"model": key, "E": e, "F": f, "saving_pct": saving})
             say(f"{e.name}: {e.energy_J / 1e6:.3f} MJ vs {f.name} {f.energy_J / 1e6:.3f} MJ "
                 f"({saving:+.2f} %); {e.envelope_line}")
-    return {"front": front, "rows": rows}
+    equal = {key: at_equal_comfort(front, [r["E"] for r in rows if r["model"] == key])
+             for key in ("old", "new")}
+    return {"front": front, "rows": rows, "equal_comfort": equal}
