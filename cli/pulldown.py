@@ -49,6 +49,13 @@ def pulldown(
     require_range(t_amb, "--t-amb", 20.0, 50.0, "degC")
     require_range(soak, "--soak", t_amb, 80.0, "degC")
     check_paths(outputs={"--json": json_path})
+    from acid.errors import AcidError, ConfigError
+    from acid.signals import drive_cycle
+
+    try:   # an unknown cycle fails before minutes of excitation
+        drive_cycle(cycle, n=1, Ts=5.0)
+    except AcidError as exc:
+        raise ConfigError(f"--cycle: {exc}") from None
     settings = study.PulldownSettings(seed=seed, T_amb_C=t_amb, soak_C=soak, cycle=cycle,
                                       **(QUICK if quick else {}))
     say("exciting the plant (old record, pull-downs, held-out pull-downs)")
