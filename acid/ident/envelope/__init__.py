@@ -98,6 +98,16 @@ class Envelope:
     def __post_init__(self):
         object.__setattr__(self, "ranges", {k: (float(v[0]), float(v[1]))
                                             for k, v in (self.ranges or {}).items()})
+        object.__setattr__(self, "_bounds", {k: self.bounds(k) for k in self.ranges})
+
+    def inside(self, **values: float) -> bool:
+        """Whether one step's scalar values all lie inside (the cheap test, per step)."""
+        b = self._bounds
+        for name, v in values.items():
+            lo_hi = b.get(name)
+            if lo_hi is not None and not lo_hi[0] <= v <= lo_hi[1]:
+                return False
+        return True
 
     @classmethod
     def of(cls, params) -> Envelope:
