@@ -30,13 +30,17 @@ from acid import signals
 from acid.data import Dataset
 from acid.errors import ConfigError
 from acid.plant.base import InputSchedule, Plant
-from acid.units import C2K, in_degC
+from acid.units import C2K, K2C, in_degC
 
 SIGNAL_TYPES = ("aprbs", "prbs", "multisine")
 
 #: Fixed child-stream index of every random source (never renumber; append new ones).
 STREAMS = {"W_bl": 0, "T_evap_set": 1, "T_int": 2, "T_shell": 3, "noise": 4, "v_veh": 5,
-           "T_amb": 6}
+           "T_amb": 6, "soak": 7, "segments": 8}
+
+#: Record designs: ``random`` (one experiment from the plant's initial state) and
+#: ``pulldown`` (soak-and-pull-down segments, :mod:`acid.excite_pulldown`).
+DESIGNS = ("random", "pulldown")
 
 #: Levels of a random speed signal (equally spaced, both bounds included: standstill is one).
 SPEED_LEVELS = 7
@@ -91,6 +95,12 @@ class ExcitationSpec:
         ``ambient_time_constant`` s); the plant's configured ambient when None.
     steady_fraction : share of the W_bl and T_evap_set steps held for ``steady_dwell``
         (s) instead of the APRBS dwell: near-steady operating points (0: none).
+    design : ``DESIGNS``: ``pulldown`` makes the record of separate experiments of
+        ``segment_duration`` s each, every one starting from a soak (cabin, interior, shell,
+        evaporator and condenser walls at one temperature: drawn in ``soak_bounds`` degC, or
+        the segment's ambient for a share ``cold_fraction`` of them), then a full-power hold
+        (highest blower, lowest coil set-point) of ``full_power_dwell`` s (at most half a
+        segment), then the random inputs (:func:`excite_pulldown`).
     """
 
     signal: str = "aprbs"
@@ -121,9 +131,14 @@ class ExcitationSpec:
     ambient_time_constant: float = 600.0
     steady_fraction: float = 0.0
     steady_dwell: tuple[float, float] = (600.0, 1200.0)
+    design: str = "random"
+    segment_duration: float = 1800.0
+    soak_bounds: tuple[float, float] = (30.0, 55.0)
+    cold_fraction: float = 0.25
+    full_power_dwell: tuple[float, float] = (300.0, 900.0)
 
     def __post_init__(self):
-        for name in ("T_evap_set_bounds", "T_int_bounds", "T_shell_bounds"):
+        for name in ("T_evap_set_bounds", "T_int_bounds", "T_shell_bounds", "soak_bounds"):
             # degC bounds; acid.degC(...) / acid.kelvin(...) values are converted, not guessed
             object.__setattr__(self, name, tuple(float(in_degC(t)) for t in getattr(self, name)))
         for name in ("signal", "signal_T_evap_set"):
@@ -180,6 +195,29 @@ class ExcitationSpec:
         if min(self.speed_dwell[0], self.ambient_dwell[0], self.steady_dwell[0]) <= 0 \
                 or self.ambient_time_constant < 0:
             raise ConfigError("dwell times must be positive and time constants >= 0 s")
+        self._check_design()
+
+    def _check_design(self) -> None:
+        if self.design not in DESIGNS:
+            raise ConfigError(f"--design: unknown design {self.design!r} (choose "
+                              f"{', '.join(DESIGNS)})")
+        for name in ("soak_bounds", "full_power_dwell"):
+            lo, hi = getattr(self, name)
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise ConfigError(f"{name} must satisfy low < high, got ({lo}, {hi})")
+        if not (-40.0 <= self.soak_bounds[0] and self.soak_bounds[1] <= 80.0):
+            raise ConfigError(f"--soak-range must lie within -40..80 degC, got "
+                              f"{self.soak_bounds}")
+        if not 0.0 <= self.cold_fraction <= 1.0:
+            raise ConfigError(f"--cold-fraction must lie in [0, 1], got {self.cold_fraction}")
+        if self.design != "pulldown":
+            return
+        seg = self.segment_duration
+        if not (math.isfinite(seg) and 2 * self.Ts <= seg <= self.duration):
+            raise ConfigError(f"--segment-duration must lie in [{2 * self.Ts:g}, --duration "
+                              f"{self.duration:g}] s, got {seg}")
+        if not 0 < self.full_power_dwell[0]:   # a draw is cut at half a segment
+            raise ConfigError(f"full-power hold {self.full_power_dwell} s must be positive")
 
     @property
     def n_samples(self) -> int:
@@ -265,7 +303,8 @@ _SPEC_UNITS = {"W_bl_bounds": "kg/s", "T_evap_set_bounds": "degC", "min_dwell": 
                "speed": "m/s", "T_int_bounds": "degC", "T_shell_bounds": "degC",
                "exogenous_dwell": "s", "exogenous_time_constant": "s", "noise": "K",
                "speed_bounds": "m/s", "speed_dwell": "s", "T_amb_bounds": "degC",
-               "ambient_dwell": "s", "ambient_time_constant": "s", "steady_dwell": "s"}
+               "ambient_dwell": "s", "ambient_time_constant": "s", "steady_dwell": "s",
+               "segment_duration": "s", "soak_bounds": "degC", "full_power_dwell": "s"}
 
 #: What each model family needs from an excitation (``acid excite --model NAME``): the
 #: paper's model is identified at one speed and ambient; the economic model
@@ -305,6 +344,8 @@ def excite(plant: Plant, spec: ExcitationSpec,
     if abs(plant.Ts - spec.Ts) > 1e-9:
         raise ConfigError(f"excitation sample time {spec.Ts:g} s differs from the plant's "
                           f"{plant.Ts:g} s")
+    if spec.design == "pulldown":
+        return excite_pulldown(plant, spec, progress)
     schedule = make_schedule(spec)
     initial = None
     if uses_exogenous_schedule(plant):
@@ -318,3 +359,119 @@ def excite(plant: Plant, spec: ExcitationSpec,
         check(schedule)
     return plant.simulate(schedule, initial=initial, progress=progress,
                           metadata={"seed": int(spec.seed)})
+
+
+# --------------------------------------------------------------- soak and pull-down
+# The soak-and-pull-down design (``acid excite --design pulldown``).
+#
+# A record of separate experiments (the project's multi-experiment dataset: the fitter treats
+# each segment's first sample as its own initial state and no regressor crosses a segment
+# boundary). Every segment
+#
+# 1. starts from a **soak**: the plant's cabin, interior (fast and slow), shell, evaporator
+#    and condenser walls all at one temperature -- a **hot soak** drawn uniformly in
+#    ``spec.soak_bounds`` (degC; never below the segment's ambient), or, for a share
+#    ``spec.cold_fraction`` of the segments, a **cold soak** at the segment's ambient (a car
+#    parked in the shade); the cabin air holds the ambient humidity ratio (the plant's own
+#    default for a closed, soaked car);
+# 2. is pulled down at **full power** first (highest blower ``W_bl_bounds[1]``, lowest coil
+#    set-point ``T_evap_set_bounds[0]``) for a hold drawn in ``spec.full_power_dwell`` s (at
+#    most half the segment): the
+#    largest cooling loads and warmest evaporator the plant reaches;
+# 3. continues with the usual random inputs of :func:`acid.excite.make_schedule` (APRBS on
+#    W_bl and T_evap_set, the preset's speed and ambient), from its own seed.
+#
+# Randomness: the soak temperatures, hot/cold draws and hold lengths come from the ``soak``
+# stream of ``spec.seed``; each segment's random inputs from a seed derived from the
+# ``segments`` stream and the segment's index, so reruns are bit-identical and segment ``i``
+# does not depend on how many segments follow it.
+#
+
+#: the plant states a soak sets (those the plant has; T_int/T_shell only where the plant
+#: computes them itself)
+SOAK_KEYS = ("T_cab", "T_int", "T_int_slow", "T_shell", "T_evap", "T_cw")
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One soak-and-pull-down experiment: ``soak_K`` (K; None for a cold soak: the
+    segment's ambient), the full-power hold (samples) and the spec of its random inputs."""
+
+    index: int
+    cold: bool
+    soak_K: float | None
+    hold_samples: int
+    spec: ExcitationSpec
+
+
+def segments(spec: ExcitationSpec) -> list[Segment]:
+    """The segments of ``spec`` (``design == "pulldown"``), deterministic in ``spec.seed``.
+
+    The last segment takes what is left of ``spec.duration`` when it is at least two
+    samples; otherwise the record is ``n * segment_duration`` long."""
+    if spec.design != "pulldown":
+        raise ConfigError(f"segments: design {spec.design!r} is not 'pulldown'")
+    n_seg_samples = int(round(spec.segment_duration / spec.Ts))
+    n_total = spec.n_samples
+    lengths = [n_seg_samples] * (n_total // n_seg_samples)
+    if n_total - sum(lengths) >= 2:
+        lengths.append(n_total - sum(lengths))
+    rng = spec.rng("soak")
+    lo_h, hi_h = (max(1, int(round(t / spec.Ts))) for t in spec.full_power_dwell)
+    out = []
+    for i, n in enumerate(lengths):
+        cold = bool(rng.random() < spec.cold_fraction)
+        soak = float(rng.uniform(*spec.soak_bounds))   # drawn either way: streams stay aligned
+        hold = min(int(rng.integers(lo_h, hi_h + 1)), n // 2)   # at most half a segment
+        seed = int(np.random.SeedSequence(int(spec.seed), spawn_key=(STREAMS["segments"], i))
+                   .generate_state(1, np.uint64)[0] >> np.uint64(1))
+        sub = spec.replace(design="random", duration=n * spec.Ts, seed=seed)
+        out.append(Segment(i, cold, None if cold else C2K(soak), hold, sub))
+    return out
+
+
+def excite_pulldown(plant: Plant, spec: ExcitationSpec,
+                    progress: Callable[[int, int], None] | None = None) -> Dataset:
+    """Run ``plant`` through every segment of ``spec`` from its soak; the segments joined
+    as separate experiments (``Dataset.concatenate``). ``metadata["segments"]`` lists each
+    segment's soak (degC), kind, full-power hold (s) and seed; ``metadata["excitation"]`` is
+    the whole spec."""
+    segs = segments(spec)
+    total = spec.n_samples
+    done = 0
+    exogenous = uses_exogenous_schedule(plant)
+    parts, info = [], []
+    for seg in segs:
+        schedule = make_schedule(seg.spec)
+        h = seg.hold_samples
+        schedule.W_bl[:h] = seg.spec.W_bl_bounds[1]
+        schedule.T_evap_set[:h] = C2K(seg.spec.T_evap_set_bounds[0])
+        if not exogenous:
+            schedule.T_int = schedule.T_shell = None
+            schedule.spec["exogenous"] = "computed by the plant"
+        state = plant.reset()
+        T_amb = float(schedule.T_amb[0]) if schedule.T_amb is not None else float(
+            state.get("T_amb", getattr(plant, "T_amb", C2K(30.0))))
+        soak = T_amb if seg.soak_K is None else max(seg.soak_K, T_amb)
+        keys = [k for k in SOAK_KEYS if k in state
+                and not (exogenous and schedule.T_int is not None and k in ("T_int",
+                                                                            "T_shell"))]
+        initial = {k: soak for k in keys}
+        if exogenous and schedule.T_int is not None and getattr(plant, "name", "") == "model":
+            initial.update(T_int=float(schedule.T_int[0]), T_shell=float(schedule.T_shell[0]))
+        check = getattr(plant, "check_schedule", None)
+        if check is not None:
+            check(schedule)
+        step = None if progress is None else (lambda k, n, d=done: progress(d + k, total))
+        parts.append(plant.simulate(schedule, initial=initial, progress=step,
+                                    metadata={"seed": int(seg.spec.seed)}))
+        done += len(schedule)
+        info.append({"index": seg.index, "kind": "cold" if seg.cold else "hot",
+                     "soak_degC": float(K2C(soak)), "T_amb_degC": float(K2C(T_amb)),
+                     "full_power_s": h * spec.Ts, "seed": int(seg.spec.seed),
+                     "samples": len(schedule)})
+    ds = Dataset.concatenate(parts)
+    ds.metadata.update(excitation={**spec.to_dict(), "n_samples": total, "design": "pulldown"},
+                       seed=int(spec.seed), segments=info,
+                       experiments=[f"{s['kind']}-soak-{s['index']}" for s in info])
+    return ds

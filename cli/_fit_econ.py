@@ -10,6 +10,7 @@ from pathlib import Path
 from acid import __version__
 from acid.data import Dataset
 from acid.ident.econ import REQUIRED, identify
+from acid.ident.envelope import Envelope
 from acid_cli._common import note, print_table, say, warn, write_summary
 
 
@@ -47,6 +48,8 @@ def fit_econ(data: Path, out: Path, estimation_fraction: float, covariance: str,
               f"max {q['steady_max_pct']:.1f} %" if "steady_rms_pct" in q else "")
     say(f"power map P_comp = Q_e f(Q_e, T_evap, v, T_amb): RMS error {q['rms_W']:.1f} W "
         f"({q['rms_pct']:.2f} % of the mean power), R^2 {q['r2']:.4f}, n = {q['n']}{steady}")
+    say(f"envelope (the ranges of the data it was identified on; a controller planning "
+        f"outside them extrapolates): {Envelope.of(params).describe()}")
     for line in fit.notes:
         note(line)
     for line in [*map(str, (w.message for w in caught)), *fit.warnings]:

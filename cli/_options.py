@@ -17,6 +17,7 @@ from collections.abc import Iterable
 CANONICAL: dict[str, str] = {
     "ambient": "--t-amb",             # degC, like --t-low/--t-high and the channel T_amb
     "ambient range": "--t-amb-range",
+    "record design": "--design",      # acid excite: random or soak-and-pull-down segments
     "plant configuration": "--plant-config",  # a TOML file or a vehicle name ('paper')
     "refrigerant": "--refrigerant",
     "FMU map": "--fmu-map",           # read by --plant fmu:..., written by export-fmu

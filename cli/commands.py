@@ -75,6 +75,10 @@ def register(app) -> None:
 
     app.command(name="compare")(compare.compare)
 
+    from acid_cli import pulldown
+
+    app.command(name="pulldown")(pulldown.pulldown)
+
     from acid_cli import car
 
     car_app = type(app)(name="car", no_args_is_help=True, cls=app.info.cls,   # acid's group:

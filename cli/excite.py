@@ -11,7 +11,7 @@ import typer
 
 from acid.data import Dataset
 from acid.errors import ConfigError
-from acid.excite import MODEL_PRESETS, SIGNAL_TYPES, ExcitationSpec, spec_for_model
+from acid.excite import DESIGNS, MODEL_PRESETS, SIGNAL_TYPES, ExcitationSpec, spec_for_model
 from acid.excite import excite as run_excitation
 from acid.plant.vehicles import vehicle_label
 from acid.units import C2K
@@ -23,6 +23,7 @@ from acid_cli._common import (
     progress_bar,
     require,
     require_range,
+    say,
     write_summary,
 )
 from acid_cli._plant import (
@@ -173,6 +174,17 @@ def excite(
     steady_fraction: float | None = typer.Option(
         None, "--steady-fraction",
         help="Share of input steps held 600-1200 s (near-steady operating points)."),
+    design: str = typer.Option(
+        "random", "--design",
+        help="Record design: 'random' (one experiment from the plant's soak) or 'pulldown' "
+             "(separate experiments, each from a hot soak in --soak-range or a cold soak at "
+             "the ambient, pulled down at full power, then random inputs)."),
+    soak_range: tuple[float, float] | None = typer.Option(
+        None, "--soak-range", help="Hot soak temperatures LOW HIGH, degC (--design pulldown; "
+                                   "default 30 55)."),
+    segment_duration: float | None = typer.Option(
+        None, "--segment-duration", help="Length of each pull-down, s (--design pulldown; "
+                                         "default 1800)."),
 ) -> None:
     """Excite a plant with random inputs within Table II bounds and record a dataset at 0.2 Hz."""
     plant_config_given = plant_config
@@ -189,13 +201,19 @@ def excite(
     if model not in MODEL_PRESETS:
         raise ConfigError(f"--model: unknown model family {model!r} (choose "
                           f"{', '.join(MODEL_PRESETS)})")
-    for opt, rng_ in (("--speed-range", speed_range), ("--t-amb-range", t_amb_range)):
+    if design not in DESIGNS:
+        raise ConfigError(f"--design: unknown design {design!r} (choose {', '.join(DESIGNS)})")
+    if design != "pulldown" and (soak_range is not None or segment_duration is not None):
+        raise ConfigError("--soak-range and --segment-duration apply to --design pulldown only")
+    for opt, rng_ in (("--speed-range", speed_range), ("--t-amb-range", t_amb_range),
+                      ("--soak-range", soak_range)):
         if rng_ is not None:
             lo_, hi_ = rng_
             require(all(isinstance(x, (int, float)) and math.isfinite(x) for x in rng_)
                     and lo_ < hi_, opt, f"needs LOW < HIGH, both finite, got {lo_:g} {hi_:g}")
     given = {"speed_bounds": speed_range, "T_amb_bounds": t_amb_range,
-             "steady_fraction": steady_fraction}
+             "steady_fraction": steady_fraction, "soak_bounds": soak_range,
+             "segment_duration": segment_duration}
     options = {k: v for k, v in given.items() if v is not None}
     if cycle is not None or speed != 0.0:
         options.setdefault("speed_bounds", None)   # an explicit profile replaces the preset's
@@ -203,7 +221,7 @@ def excite(
         options["duration"] = duration
     spec = spec_for_model(model, signal=signal, seed=seed, speed=speed, cycle=cycle,
                           min_dwell=min_dwell, max_dwell=max_dwell, noise=noise,
-                          vary_exogenous=vary_exogenous, **options)
+                          vary_exogenous=vary_exogenous, design=design, **options)
     if cycle is not None:
         from acid.signals import drive_cycle
 
@@ -222,10 +240,18 @@ def excite(
     print_table(f"{out}: {len(ds)} samples, {ds.duration:g} s at Ts = {ds.Ts:g} s, "
                 f"plant {plant} ({identity_line(identity)}), seed {seed}",
                 ["channel", "unit", "min", "mean", "max"], _summary_rows(ds))
+    segs = ds.metadata.get("segments") or []
+    if segs:
+        soaks = [s["soak_degC"] for s in segs]
+        say(f"{len(segs)} pull-downs ({sum(s['kind'] == 'cold' for s in segs)} from a cold "
+            f"soak at the ambient), soaks {min(soaks):.1f}-{max(soaks):.1f} degC, full-power "
+            f"holds {min(s['full_power_s'] for s in segs):g}-"
+            f"{max(s['full_power_s'] for s in segs):g} s")
     write_summary(json_out, {
         "command": "excite", "out": str(out), "plant": plant, **identity, "samples": len(ds),
         "duration_s": ds.duration, "Ts_s": ds.Ts, "seed": seed, "elapsed_s": elapsed,
         "excitation": spec.to_dict(),
+        **({"segments": ds.metadata["segments"]} if "segments" in ds.metadata else {}),
         "ranges": {n: {"unit": ds.units[n], "min": float(np.min(v)), "max": float(np.max(v))}
                    for n, v in ds.channels.items()},
     })

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acid.errors import DataError
+from acid.ident.envelope import envelope_ranges
 from acid.ident.fit import DeclaredFitResult
 from acid.models import econ
 from acid.models.econ import MAP_INPUTS, PowerMap
@@ -41,10 +42,12 @@ class EconFit:
         return {**self.fit.to_json_dict(), "power_map_quality": self.power_map_quality}
 
 
-def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
+def identify(ds, covariance: str = "hac", hac_bandwidth="auto",
+             skip_s: float = econ.FIT_SKIP_S) -> EconFit:
     """Identify the econ model from ``ds`` (channels ``REQUIRED``) with acid.ident's staged
     fit of the declaration (``acid.models.econ.FIT_STAGES``); warnings (``warnings.warn``,
-    ``IdentifiabilityWarning``) where the excitation leaves a part unidentified."""
+    ``IdentifiabilityWarning``) where the excitation leaves a part unidentified. ``skip_s``:
+    seconds left out at each experiment's start (``acid.models.econ.FIT_SKIP_S``)."""
     import warnings
 
     from acid.errors import IdentifiabilityWarning
@@ -65,14 +68,14 @@ def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
                             "identifiable; excite it")
     fit = fit_stages(econ.model, ds, [Stage(*s) for s in econ.FIT_STAGES],
                      covariance=covariance, hac_bandwidth=hac_bandwidth,
-                     skip_s=econ.FIT_SKIP_S)
+                     skip_s=skip_s)
     # the map's domain and quality on the rows it was fitted on, as fitted: the model's coil
     # load from the measured state, the wall's storage from the measured end state
     x = np.column_stack([ds.get(n, u) for n, u in zip(econ.STATES, econ.STATE_UNITS,
                                                       strict=True)])
     keep = np.zeros(len(ds), dtype=bool)
     for a, b in ds.segments():
-        keep[a + int(round(econ.FIT_SKIP_S / ds.Ts)): b - 1] = True
+        keep[a + int(round(skip_s / ds.Ts)): b - 1] = True
     k = np.flatnonzero(keep)
     u = np.column_stack([ds.get("W_bl", "kg/s"), ds.get("T_evap_set", "K")])[k]
     d = np.column_stack([ds.get("v_veh", "m/s"), ds.get("T_amb", "K")])[k]
@@ -97,14 +100,16 @@ def identify(ds, covariance: str = "hac", hac_bandwidth="auto") -> EconFit:
                        steady_max_pct=100.0 * float(np.max(np.abs(e / P)[steady])))
     domain = {n: (float(v.min()), float(v.max())) for (n, _), v in
               zip(MAP_INPUTS, (Q_e, T_ev, d[:, 0], d[:, 1]), strict=True)}
+    envelope = envelope_ranges(Q_e=Q_e, T_evap=T_ev, T_cab=x[k, 0], W_bl=u[:, 0],
+                               T_amb=d[:, 1])
     se = {e.name: e.stderr for e in fit.estimates}
     prov = {**provenance(ds, "acid.ident staged fit (acid.models.econ.FIT_STAGES)"),
-            "skip_s": econ.FIT_SKIP_S, **({"data_seed": ds.metadata["seed"]}
+            "skip_s": skip_s, **({"data_seed": ds.metadata["seed"]}
                                           if "seed" in ds.metadata else {})}
     params = EconParams.from_vector(
         fit.values, power_map=PowerMap(coef=fit.values[len(NAMES) + 1:len(NAMES) + 16],
                                        stderr=tuple(se[n] for n in econ.MAP_NAMES),
-                                       domain=domain, quality=quality),
+                                       domain=domain, quality=quality, envelope=envelope),
         stderr={n: se[n] for n in NAMES + ("C_ew",)}, Ts=float(ds.Ts), name="econ-fit",
         provenance=prov)
     return EconFit(params=params, fit=fit)

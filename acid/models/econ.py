@@ -100,12 +100,16 @@ class PowerMap:
         the map is not trusted outside it (:meth:`outside`).
     quality : fit statistics (``rms_W``, ``rms_pct`` of the mean power, ``max_pct``, ``n``,
         ``r2``; the ``steady_*`` numbers over near-steady samples only).
+    envelope : {channel: (low, high)} the model's envelope: the ranges of its identification
+        data in Q_e (W), T_evap, T_cab, T_amb (K) and W_bl (kg/s) (``acid.ident.envelope``);
+        empty for files written before it was stored.
     """
 
     coef: tuple[float, ...]
     stderr: tuple[float, ...] = ()
     domain: dict = field(default_factory=dict)
     quality: dict = field(default_factory=dict, compare=False)
+    envelope: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):
         coef = tuple(float(c) for c in self.coef)
@@ -115,6 +119,8 @@ class PowerMap:
         object.__setattr__(self, "stderr", tuple(float(c) for c in self.stderr))
         dom = {k: (float(v[0]), float(v[1])) for k, v in (self.domain or {}).items()}
         object.__setattr__(self, "domain", dom)
+        object.__setattr__(self, "envelope", {k: (float(v[0]), float(v[1]))
+                                              for k, v in (self.envelope or {}).items()})
 
     def outside(self, **values) -> list[str]:
         """Inputs (``Q_e``, ``T_evap``, ``v_veh``, ``T_amb`` arrays) outside the data's range.

@@ -259,6 +259,9 @@ class EconNMPC:
         for name, (lo, hi) in self._power_map.domain.items():
             tol = max(0.02 * (hi - lo), 0.05)
             self._map_ok[name] = (lo - tol, hi + tol)
+        from acid.ident.envelope import Envelope
+
+        self.envelope = Envelope.of(params)   # the identification data's ranges
         self._build()
         self.reset()
 
@@ -442,6 +445,9 @@ class EconNMPC:
         self.fallbacks = 0
         self.log = EconStepLog()
         self.extrapolation: list[str] = []
+        from acid.ident.envelope import Excursion
+
+        self._env_n, self._env_out = 0, Excursion()   # read as envelope_steps
         self._applied = None  # (u, d) applied over the last period, for the estimator
         if getattr(self, "estimator", None) is not None:
             self.estimator.reset()
@@ -602,12 +608,23 @@ class EconNMPC:
         P_c = np.asarray(econ.compressor_power(self._s, Q_e, T_ev, v, Ta))
         if ok:
             self._warn_outside(Q_e=Q_e, T_evap=T_ev)
+        step = {"Q_e": float(Q_e[0]), "T_evap": float(T_ev[0]), "T_cab": float(X[0, 0]),
+                "W_bl": float(Uc[0, 0]), "T_amb": float(Ta[0])}
+        self._env_n += 1
+        if not self.envelope.inside(**step):
+            self._env_out = self._env_out.merged(self.envelope.check(**step))
         return EconSolution(
             u=Uc[0].copy(), x=X, t=self._t.copy(), W_bl=Uc[:, 0], T_evap_set=Uc[:, 1], Q_e=Q_e,
             P_comp=P_c, P_bl=P_bl, slack=np.maximum(w[self._is], 0.0), terminal_prices=lam,
             energy_J=float(energy), objective=float(res.f) / cfg.cost_scale,
             status=res.status, success=ok, iterations=res.iterations,
             solve_time_s=res.solve_time_s)
+
+    @property
+    def envelope_steps(self):
+        """The applied (first) interval of every solve since the reset against the model's
+        envelope (``acid.ident.envelope.Excursion``: count, steps outside, worst)."""
+        return dataclasses.replace(self._env_out, n=self._env_n)
 
     def _warn_outside(self, **inputs) -> None:
         """One ExtrapolationWarning per power-map input (per reset) that leaves its data.
