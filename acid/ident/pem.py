@@ -13,8 +13,10 @@ Automatica 40 (2004) 225-237). The negative log-likelihood of the innovations,
     J(\\theta) = \\sum_k \\log\\det S_k + e_k^T S_k^{-1} e_k,
 
 with ``e_k`` the measured channels minus their one-step prediction and ``S_k`` its
-covariance, is minimised over the free parameters (bounded, L-BFGS-B) with its gradient
-from CasADi's reverse mode through the whole filter recursion (nothing hand-derived).
+covariance, is minimised over the free parameters (bounded): L-BFGS-B with its gradient
+from CasADi's reverse mode through the whole filter recursion, then Newton steps with the
+exact Hessian (CasADi, forward over reverse; nothing hand-derived) until the Newton decrement
+is below ``DECREMENT_TOL`` (or the budget ends, and the status says how far it was).
 
 What the filter needs the declaration says (``acid.models.State``): ``noise`` (the state's
 random increment per sample, a number or a parameter's name), ``spread`` (the standard
@@ -495,8 +497,8 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
     walks = [s.name for s in model.states if s.noise is not None]
     notes = [f"prediction-error method: an extended Kalman filter over {res.n_records} "
              "whole experiments, the innovations' negative log-likelihood minimised "
-             "(L-BFGS-B, CasADi gradient)" + (f"; latent: {', '.join(latent)}" if latent
-                                              else "")
+             "(L-BFGS-B, then Newton steps with the exact Hessian; CasADi derivatives)"
+             + (f"; latent: {', '.join(latent)}" if latent else "")
              + (f"; states with process noise: {', '.join(walks)}" if walks else "")]
     if linear.prior_note(model, columns, res.theta):
         notes.append(linear.prior_note(model, columns, res.theta))
