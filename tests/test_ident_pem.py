@@ -179,7 +179,7 @@ def test_converges_within_the_default_budget_and_says_how_it_knows(rng, tmp_path
     """L-BFGS-B alone stops at its cap far from the optimum; the Newton steps with the exact
     Hessian end where the Newton decrement is below its tolerance, and the status says
     so with the numbers (decrement, projected gradient, evaluations, Hessians)."""
-    from acid.ident.pem import DECREMENT_TOL
+    from acid.ident.ms.newton import DECREMENT_TOL
 
     m = _room(tmp_path)
     ds, _ = _record(m, rng, 600, 400.0)

@@ -240,7 +240,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         _check_finite_start(model, prob, theta_start, lo, hi, ds.source)
         solve = oe.solve
         if oe_solver == "ms":
-            from acid.ident.oe_ms import solve_ms
+            from acid.ident.ms.shooting import solve_ms
 
             def solve(*a, max_nfev, **kw):
                 return solve_ms(*a, max_iter=3 * max_nfev, **kw)

@@ -15,8 +15,9 @@ Automatica 40 (2004) 225-237). The negative log-likelihood of the innovations,
 with ``e_k`` the measured channels minus their one-step prediction and ``S_k`` its
 covariance, is minimised over the free parameters (bounded): L-BFGS-B with its gradient
 from CasADi's reverse mode through the whole filter recursion, then Newton steps with the
-exact Hessian (CasADi, forward over reverse; nothing hand-derived) until the Newton decrement
-is below ``DECREMENT_TOL`` (or the budget ends, and the status says how far it was).
+exact Hessian (CasADi, forward over reverse; nothing hand-derived) until the Newton
+decrement is below ``acid.ident.ms.newton.DECREMENT_TOL`` (or the budget ends, and the
+status says how far it was).
 
 What the filter needs the declaration says (``acid.models.State``): ``noise`` (the state's
 random increment per sample, a number or a parameter's name), ``spread`` (the standard
@@ -43,6 +44,7 @@ import scipy.optimize
 from acid.errors import ConfigError, DataError
 from acid.ident import linear
 from acid.ident.data import ModelData
+from acid.ident.ms.newton import newton
 from acid.models.declaration import Model
 
 #: Standard deviation (in the state's unit) of a filter's initial value when the
@@ -219,96 +221,12 @@ def _curvature_covariance(H: np.ndarray, z, zlo, zhi, rtol: float = 1e-8):
     return cov, ident, float(w.max() / w[keep].min()) if keep.any() else math.inf
 
 
-#: Converged when the Newton decrement ``g' H^-1 g`` over the parameters inside their bounds
-#: (twice the further decrease of -2 log L a Newton step predicts) is below this and no
-#: parameter on a bound is pulled inwards: the likelihood is then flat to far below its
-#: statistical resolution (a change of 1 in -2 log L).
-DECREMENT_TOL = 1e-6
 #: ``max_nfev`` split: L-BFGS-B gets max_nfev // LBFGS_SHARE gradient evaluations, the Newton
 #: phase max_nfev // HESSIAN_SHARE exact Hessians. Paper model, 1 / 4 h of data, CPU-s with
 #: L-BFGS-B's share 100 / 30 / 10 evaluations: 4.6 / 3.2 / 3.8 and 18.0 / 12.9 / (10 Hessians
 #: not enough from that far) -- a third it is.
 LBFGS_SHARE = 3
 HESSIAN_SHARE = 10
-
-
-@dataclass
-class _Newton:
-    z: np.ndarray
-    loss: float
-    H: np.ndarray
-    decrement: float         # g' H^-1 g over the free parameters at z
-    pgrad: float             # largest |projected gradient| at z (scaled parameters)
-    rel_change: float        # relative change of the loss at the last step
-    hessians: int
-    converged: bool
-
-    def status(self, nfev: int, cap: int, cap_hessians: int) -> str:
-        how = (f"Newton decrement {self.decrement:.2g} (converged below {DECREMENT_TOL:g}), "
-               f"projected gradient {self.pgrad:.2g}, last relative loss change "
-               f"{self.rel_change:.2g}")
-        lb = (f"{nfev} gradient evaluations (cap {cap}) and {self.hessians} exact Hessians "
-              f"(cap {cap_hessians})")
-        if self.converged:
-            return f"converged: {how}; {lb}"
-        return f"not converged after {lb}: {how}"
-
-
-def _newton(hess: ca.Function, cost: ca.Function, z: np.ndarray, zlo, zhi,
-            max_hessians: int, report=None) -> _Newton:
-    """Bounded Newton iterations from ``z``: ``hess(z) -> (J, g, H)`` exact, ``cost(z) ->
-    J`` for the trial steps. A parameter on a bound with the gradient pushing it out stays
-    there; the others take the Newton step, damped (Levenberg-Marquardt) until the loss
-    decreases, clipped into the bounds."""
-    z = np.asarray(z, float).copy()
-
-    def at(v):
-        f, g, H = hess(v)
-        H = np.asarray(H)
-        return float(f), np.asarray(g).ravel(), 0.5 * (H + H.T)
-
-    f, g, H = at(z)
-    n_h, lam, rel = 1, 0.0, math.nan
-    while True:
-        pinned = ((z <= zlo + 1e-10) & (g > 0)) | ((z >= zhi - 1e-10) & (g < 0))
-        free = ~pinned
-        Hf, gf = H[np.ix_(free, free)], g[free]
-        pgrad = float(np.max(np.abs(gf), initial=0.0))
-        dec, convex = 0.0, True
-        if gf.size and np.all(np.isfinite(Hf)):
-            w, V = np.linalg.eigh(Hf)
-            convex = bool(w.min() > 1e-12 * max(abs(w).max(), 1e-300))
-            dec = float(np.sum((V.T @ gf) ** 2 / w)) if convex else math.inf
-        elif gf.size:
-            dec, convex = math.inf, False
-        done = math.isfinite(f) and dec <= DECREMENT_TOL
-        if done or n_h >= max_hessians or not math.isfinite(f):
-            return _Newton(z, f, H, dec, pgrad, rel, n_h, bool(done))
-        # damped step on the free set: (H + lam D) dz = -g, D the curvature's scale
-        D = np.abs(np.diag(Hf))
-        D = np.maximum(D, 1e-12 * max(float(D.max()), 1.0))
-        lam = lam if convex else max(lam, 1e-3)
-        for _ in range(30):
-            dz = np.zeros_like(z)
-            try:
-                dz[free] = np.linalg.solve(Hf + lam * np.diag(D), -gf)
-            except np.linalg.LinAlgError:
-                lam = max(10 * lam, 1e-6)
-                continue
-            zn = np.clip(z + dz, zlo, zhi)
-            fn = float(cost(zn))
-            if math.isfinite(fn) and fn < f:
-                break
-            lam = max(10 * lam, 1e-6)
-        else:      # no decrease along any damping: the loss is flat at round-off here
-            return _Newton(z, f, H, dec, pgrad, rel, n_h, False)
-        lam = lam / 10 if lam > 1e-8 else 0.0
-        rel = abs(fn - f) / max(abs(f), 1.0)
-        z = zn
-        f, g, H = at(z)
-        n_h += 1
-        if report is not None:
-            report(f"Newton step {n_h - 1}, -2 log likelihood {f:.6g}")
 
 
 def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.ndarray,
@@ -389,12 +307,12 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
     except _Cap:
         z = best[1] if best[1] is not None else z0
     hess = ca.Function("pem_hess", [Z], [J, ca.gradient(J, Z), ca.hessian(J, Z)[0]])
-    newton = _newton(hess, ca.Function("pem_loss", [Z], [J]), z, zlo, zhi,
+    newton_ = newton(hess, ca.Function("pem_loss", [Z], [J]), z, zlo, zhi,
                      max_hessians=n_hess, report=None if progress is None else (
                          lambda label: progress(count["n"], None, label)))
     # the covariance from the exact Hessian at the end point (J is -2 log L + const)
-    z, loss, H = newton.z, newton.loss, newton.H
-    status, success = newton.status(count["n"], n_grad, n_hess), newton.converged
+    z, loss, H = newton_.z, newton_.loss, newton_.H
+    status, success = newton_.status(count["n"], n_grad, n_hess), newton_.converged
     cov, identified, cond = _curvature_covariance(H, z, zlo, zhi)
     cov = cov * np.outer(b, b)
     e, s2 = (np.asarray(v).reshape(len(chan), n, L) for v in ev(z))
