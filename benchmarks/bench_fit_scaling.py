@@ -26,7 +26,8 @@ def main() -> None:
     from acid.ident.fit import fit_model
     from acid.plant import make_plant
 
-    print("hours samples  method      CPU-s  loss            rel. param diff to dense OE")
+    print("hours samples  method      CPU-s  loss            ms: rel. param diff to dense OE; "
+          "pem: converged?")
     for h in args.hours:
         ds = excite(make_plant("hifi"), ExcitationSpec(duration=3600.0 * h, seed=1))
         out = {}
@@ -46,9 +47,13 @@ def main() -> None:
                 b = np.array([e.value for e in r.estimates])
                 diff = f"{np.max(np.abs(a - b) / np.maximum(np.abs(a), 1e-12)):.2e}" + (
                     f", loss {abs(loss / out['oe dense'].output_error['loss'] - 1):.1e}")
+            oe_ = r.output_error or {}
+            if label == "pem":     # converged or not, and the evaluations and Hessians
+                diff = oe_.get("status", "").split("; ")[-1].split(": ")[0]
+                diff = ("converged, " if oe_.get("converged") else "NOT converged, ") + diff
             print(f"{h:5g} {len(ds):7d}  {label:9s} {cpu:7.2f}  {loss:<14.8g}  {diff}"
-                  + ("" if not r.output_error or r.output_error.get("converged", True)
-                     else f"  (not converged: {r.output_error.get('status')})"))
+                  + ("" if oe_.get("converged", True) or label == "pem"
+                     else f"  (not converged: {oe_.get('status')})"))
 
 
 if __name__ == "__main__":
