@@ -47,8 +47,8 @@ def fit(
     max_evals: int = typer.Option(
         100, "--max-evals",
         help="A declared model's output-error or prediction-error fit: at most this many "
-             "evaluations of the loss (prediction error: a third of them as gradients, "
-             "then up to a tenth as exact Hessians for Newton steps); the report says "
+             "evaluations of the loss (prediction error: as many gradients, then up to a "
+             "tenth as many exact Hessians for Newton steps); the report says "
              "whether it converged first."),
     reference: str = typer.Option(
         "paper", "--reference",

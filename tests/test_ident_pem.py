@@ -192,7 +192,7 @@ def test_converges_within_the_default_budget_and_says_how_it_knows(rng, tmp_path
     # a tiny budget: not converged, and the status says how far (decrement, gradient)
     capped = fit_model(m, ds, "pem", max_nfev=3)
     assert not capped.output_error["converged"]
-    assert "not converged after 1 gradient evaluations (cap 1)" in \
+    assert "not converged after 3 gradient evaluations (cap 3)" in \
         capped.output_error["status"]
     assert "projected gradient" in capped.output_error["status"]
     assert capped.output_error["loss"] >= oe_["loss"] - 1e-6 * abs(oe_["loss"])
