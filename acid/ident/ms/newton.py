@@ -32,8 +32,9 @@ class Newton:
 
     def status(self, nfev: int, cap: int, cap_hessians: int) -> str:
         how = (f"Newton decrement {self.decrement:.2g} (converged below {DECREMENT_TOL:g}), "
-               f"projected gradient {self.pgrad:.2g}, last relative loss change "
-               f"{self.rel_change:.2g}")
+               f"projected gradient {self.pgrad:.2g}, " + (
+                   f"last relative loss change {self.rel_change:.2g}" if self.hessians > 1
+                   else "no Newton step taken"))
         lb = (f"{nfev} gradient evaluations (cap {cap}) and {self.hessians} exact Hessians "
               f"(cap {cap_hessians})")
         if self.converged:
