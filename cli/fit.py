@@ -47,7 +47,9 @@ def fit(
     max_evals: int = typer.Option(
         100, "--max-evals",
         help="A declared model's output-error or prediction-error fit: at most this many "
-             "evaluations of the loss (the report says whether it converged first)."),
+             "evaluations of the loss (prediction error: as many gradients, then up to a "
+             "tenth as many exact Hessians for Newton steps); the report says "
+             "whether it converged first."),
     reference: str = typer.Option(
         "paper", "--reference",
         help="--model paper: the values shown beside ours, where output error starts and "

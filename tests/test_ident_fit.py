@@ -287,6 +287,27 @@ def test_multi_start_lists_diverged_starts_as_failed_not_as_optima():
     assert res.value("k") == pytest.approx(0.1, rel=1e-6)
     assert "failed" in " ".join(res.notes)
     assert res.to_json_dict()["failed_starts"][0]["reason"] == res.failed_starts[0].reason
+    # the basins in one line: loss x starts per optimum, failed starts per kind
+    note = next(n for n in res.notes if n.startswith("multi-start"))
+    n_best = res.optima[0].n_starts
+    assert f"x {n_best})" in note or f"x {n_best}," in note
+    assert f"{len(res.failed_starts)} failed (" in note and "the solver failed x" in note
+
+
+def test_a_failed_start_that_ended_at_a_converged_optimum_says_so():
+    from acid.ident.fit import _in_basins
+    from acid.ident.linear import Column
+    from acid.ident.result import FailedStart, Optimum
+
+    cols = [Column(0, "a", None), Column(1, "b", None)]
+    best = Optimum(2.0, 3, {"a": 1.0, "b": -4.0}, {"a": 0.0, "b": 0.0})
+    other = Optimum(5.0, 1, {"a": 3.0, "b": 1.0}, {"a": 0.0, "b": 0.0})
+    stopped = FailedStart(4, 5.0 * (1 + 1e-9), "solver failed or stopped: cap",
+                          {"a": 3.0 * (1 + 1e-6), "b": 1.0})
+    away = FailedStart(5, 9.0, "solver failed or stopped: cap", {"a": 0.2, "b": 7.0})
+    out = _in_basins([stopped, away], [best, other], cols)
+    assert out[0].reason.endswith("; it ended at optimum 2")
+    assert out[1] == away
 
 
 def test_a_parameter_ending_on_its_bound_is_named(rng):

@@ -1,4 +1,4 @@
-"""acid.ident.oe_ms: output error as one sparse multiple-shooting NLP (IPOPT) reaches the
+"""acid.ident.ms.shooting: output error as one sparse multiple-shooting NLP (IPOPT) reaches the
 dense output error's optimum, and its size grows linearly with the data."""
 
 from __future__ import annotations
@@ -8,9 +8,10 @@ import pytest
 
 from acid.data import Dataset
 from acid.errors import ConfigError
-from acid.ident import linear, oe, oe_ms
+from acid.ident import linear, oe
 from acid.ident.data import ModelData
 from acid.ident.fit import _window_base, fit_model
+from acid.ident.ms import shooting as oe_ms
 from acid.models import load
 
 TRUTH = np.array([8.0, 80.0, 120.0, 70.0, 15.0, 0.5, 0.15, 0.8, 0.0])

@@ -173,3 +173,26 @@ def test_per_experiment_parameters_and_outputs_of_a_built_in_declaration(rng):
     np.testing.assert_allclose(res.per_experiment["Q_sol"], [200.0, 900.0], rtol=1e-2)
     for name, v in truth.items():
         assert res.value(name) == pytest.approx(v, rel=1e-2), name
+
+
+def test_converges_within_the_default_budget_and_says_how_it_knows(rng, tmp_path):
+    """L-BFGS-B alone stops at its cap far from the optimum; the Newton steps with the exact
+    Hessian end where the Newton decrement is below its tolerance, and the status says
+    so with the numbers (decrement, projected gradient, evaluations, Hessians)."""
+    from acid.ident.ms.newton import DECREMENT_TOL
+
+    m = _room(tmp_path)
+    ds, _ = _record(m, rng, 600, 400.0)
+    res = fit_model(m, ds, "pem")                      # the default budget (100)
+    oe_ = res.output_error
+    assert oe_["converged"], oe_["status"]
+    assert oe_["status"].startswith("converged: Newton decrement")
+    dec = float(oe_["status"].split("Newton decrement ")[1].split(" ")[0])
+    assert dec <= DECREMENT_TOL and "exact Hessians" in oe_["status"]
+    # a tiny budget: not converged, and the status says how far (decrement, gradient)
+    capped = fit_model(m, ds, "pem", max_nfev=3)
+    assert not capped.output_error["converged"]
+    assert "not converged after 3 gradient evaluations (cap 3)" in \
+        capped.output_error["status"]
+    assert "projected gradient" in capped.output_error["status"]
+    assert capped.output_error["loss"] >= oe_["loss"] - 1e-6 * abs(oe_["loss"])

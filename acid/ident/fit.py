@@ -240,7 +240,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         _check_finite_start(model, prob, theta_start, lo, hi, ds.source)
         solve = oe.solve
         if oe_solver == "ms":
-            from acid.ident.oe_ms import solve_ms
+            from acid.ident.ms.shooting import solve_ms
 
             def solve(*a, max_nfev, **kw):
                 return solve_ms(*a, max_iter=3 * max_nfev, **kw)
@@ -276,10 +276,8 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
             if chosen is not None:
                 res = chosen
                 optima = _distinct(runs, columns, lo, hi)
-                notes.append(f"multi-start: {fit_starts} starts, {len(runs)} converged into "
-                             f"{len(optima)} distinct optima, {len(failed)} failed; the best "
-                             f"(loss {optima[0].loss:.6g}, {optima[0].n_starts} start(s)) is "
-                             "reported")
+                failed = _in_basins(failed, optima, columns)
+                notes.append(_basins_note(fit_starts, len(runs), optima, failed))
             else:
                 warn.append(f"multi-start: none of the {fit_starts} starts converged; the "
                             "first start's result is reported")
@@ -547,6 +545,44 @@ def _on_bounds(columns, theta, lo, hi) -> list[str]:
             if math.isfinite(b) and math.isfinite(t) and abs(t - b) <= 1e-8 * (1 + abs(b))]
 
 
+def _same_basin(loss, th, l0, t0, atol: float, rtol_loss: float = 1e-6,
+                rtol_theta: float = 1e-3) -> bool:
+    """Same loss (relative ``rtol_loss`` or ``atol``) and parameters within ``rtol_theta`` of
+    their magnitude."""
+    scale = np.maximum(np.abs(t0), 1e-9)
+    return bool(abs(loss - l0) <= rtol_loss * abs(l0) + atol
+                and np.all(np.abs(th - t0) <= rtol_theta * scale))
+
+
+def _in_basins(failed, optima, columns) -> list[FailedStart]:
+    """Failed starts whose end point is one of the converged optima (a solver stopped at
+    its cap or short of its tolerance there) say so in their reason."""
+    out = []
+    atol = 1e-12 * max(max(abs(o.loss) for o in optima), 1.0)
+    for f in failed:
+        th = np.array([f.values.get(c.label, math.nan) for c in columns])
+        k = next((k for k, o in enumerate(optima) if np.isfinite(f.loss) and _same_basin(
+            f.loss, th, o.loss, np.array([o.values[c.label] for c in columns]), atol)), None)
+        out.append(f if k is None else dataclasses.replace(
+            f, reason=f"{f.reason}; it ended at optimum {k + 1}"))
+    return out
+
+
+def _basins_note(n: int, n_conv: int, optima, failed) -> str:
+    """The multi-start's basins in one line: converged starts per optimum (loss x count),
+    failed starts per kind of failure."""
+    kinds: dict[str, int] = {}
+    for f in failed:
+        kind = f.reason.split(" (")[0].split(":")[0].split(";")[0]
+        kinds[kind] = kinds.get(kind, 0) + 1
+    shown = ", ".join(f"loss {o.loss:.6g} x {o.n_starts}" for o in optima[:5])
+    more = f", {len(optima) - 5} more" if len(optima) > 5 else ""
+    why = f" ({', '.join(f'{k} x {v}' for k, v in kinds.items())})" if kinds else ""
+    return (f"multi-start: {n} starts, {n_conv} converged into {len(optima)} distinct optima "
+            f"({shown}{more}), {len(failed)} failed{why}; the best (loss {optima[0].loss:.6g},"
+            f" {optima[0].n_starts} start(s)) is reported")
+
+
 def _distinct(runs, columns, lo, hi, rtol_loss: float = 1e-6,
               rtol_theta: float = 1e-3) -> list[Optimum]:
     """Runs grouped into optima: same loss (relative ``rtol_loss``, or round-off of the
@@ -558,10 +594,7 @@ def _distinct(runs, columns, lo, hi, rtol_loss: float = 1e-6,
     groups: list[list] = []
     for loss, th in runs:
         for g in groups:
-            l0, t0 = g[0]
-            scale = np.maximum(np.abs(t0), 1e-9)
-            if abs(loss - l0) <= rtol_loss * abs(l0) + atol and \
-                    np.all(np.abs(th - t0) <= rtol_theta * scale):
+            if _same_basin(loss, th, *g[0], atol, rtol_loss, rtol_theta):
                 g.append((loss, th))
                 break
         else:

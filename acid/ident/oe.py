@@ -273,6 +273,47 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     return summarise(prob, z, res, covariance, hac_bandwidth, loss)
 
 
+#: Relative singular-value threshold of the bread's pseudo-inverse.
+RANK_RTOL = 1e-10
+
+
+def _bread_full(Js: np.ndarray, nth: int) -> np.ndarray:
+    """Columns ``:nth`` of ``pinv(Js' Js)`` by one SVD of the whole (n, p) Jacobian."""
+    _, s, Vt = np.linalg.svd(Js, full_matrices=False)
+    keep = s > RANK_RTOL * s[0]
+    return (Vt[keep].T / s[keep] ** 2) @ Vt[keep, :nth]
+
+
+def _bread_columns(Js: np.ndarray, nth: int, win: np.ndarray, nw: int, nxf: int):
+    """Columns ``:nth`` of ``pinv(Js' Js)`` (``Js`` column-scaled ``[theta | x0 of each
+    window]``, rows of window ``win``; the rows past ``win.size`` are the priors', on theta
+    only), in time linear in the windows: each window's initial states are eliminated by
+    the QR of their block (``Js`` is block-diagonal there), leaving the parameters' Schur
+    complement ``J_theta' (I - P_x) J_theta``; its inverse and ``-R^-1 Q' J_theta`` of each
+    window are the columns. The whole SVD (``_bread_full``) where a block or the complement
+    is close to singular, so that the rank truncation stays the pseudo-inverse's."""
+    if nxf == 0 or nw <= 1:
+        return _bread_full(Js, nth)
+    cut = np.searchsorted(win, np.arange(nw + 1))        # rows sorted by window
+    T = Js[:, :nth].copy()
+    blocks = []
+    for w in range(nw):
+        a, b = cut[w], cut[w + 1]
+        Q, R = np.linalg.qr(Js[a:b, nth + w * nxf:nth + (w + 1) * nxf])
+        d = np.abs(np.diag(R))
+        if b - a < nxf or not d.size or d.min() <= 1e-8 * max(d.max(), 1e-300):
+            return _bread_full(Js, nth)
+        QtT = Q.T @ T[a:b]
+        T[a:b] -= Q @ QtT
+        blocks.append((R, QtT))
+    _, s, Vt = np.linalg.svd(T, full_matrices=False)
+    if not s.size or s[-1] <= 1e-8 * s[0]:
+        return _bread_full(Js, nth)
+    Sinv = (Vt.T / s ** 2) @ Vt
+    rows = [Sinv] + [-np.linalg.solve(R, QtT) @ Sinv for R, QtT in blocks]
+    return np.vstack(rows)
+
+
 def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth,
               loss: str = "squared") -> OEResult:
     J = prob.jacobian(z)
@@ -290,23 +331,25 @@ def summarise(prob: OEProblem, z, res, covariance: str, hac_bandwidth,
         r = np.clip(r, -HUBER_M, HUBER_M)
     colnorm = np.linalg.norm(Ja, axis=0)
     colnorm = np.where(colnorm > 0, colnorm, 1.0)
-    _, s, Vt = np.linalg.svd(Ja / colnorm, full_matrices=False)
-    keep = s > 1e-10 * s[0]
-    bread = ((Vt[keep].T / s[keep] ** 2) @ Vt[keep]) / np.outer(colnorm, colnorm)
     nth = prob.n_theta
+    win = np.broadcast_to(np.arange(prob.nw)[:, None, None], prob.obs.shape)[prob.obs]
+    # the parameters' columns of the bread (its other columns never reach their covariance)
+    bread = _bread_columns(Ja / colnorm, nth, win, prob.nw, int(prob.x0_free.sum()))
+    bread = bread / np.outer(colnorm, colnorm[:nth])
     bandwidth = None
     if covariance == "hac":
-        # one score per instant (its channels summed), lags in time inside experiments
+        # one score per instant (its channels summed), lags in time inside experiments;
+        # the meat is bilinear in the scores, so B' meat(h) B = meat(h B): the scores are
+        # projected on the parameters' bread columns first (nth columns, not nth + nw nx)
         inst = np.broadcast_to(prob.w.idx[..., None], prob.obs.shape)[prob.obs]
         uniq, inv = np.unique(inst, return_inverse=True)
         h = np.zeros((uniq.size, p))
         np.add.at(h, inv, J * r[:, None])
         g = segment_ids(uniq, prob.data.segments)
         bandwidth = resolve_bandwidth(hac_bandwidth, h[:, :nth], g)
-        cov_z = n / dof * (bread @ hac_meat(h, g, bandwidth) @ bread) / frac**2
+        cov = n / dof * hac_meat(h @ bread, g, bandwidth) / frac**2
     else:
-        cov_z = float(r @ r) / dof * bread / frac**2
-    cov = cov_z[:nth, :nth]
+        cov = float(r @ r) / dof * bread[:nth] / frac**2
     Jth = Ja[:, :nth]
     cs = np.linalg.norm(Jth, axis=0)
     cs = np.where(cs > 0, cs, 1.0)
