@@ -84,7 +84,7 @@ def pulldown(
                          f"{r['saving_pct']:+.2f}" if x is r["E"] else ""])
     print_table("Pull-down: E against the best fixed coil at its comfort",
                 ["controller", "energy MJ", "K min out", "K min above", "min to 25 degC",
-                 "mean T_cab degC", "E saves %"], rows)
+                 "mean T_cab degC", "E below F %"], rows)
     for r in loop["rows"]:
         say(f"{r['E'].name}: {r['E'].envelope_line}")
     for key, pts in loop["equal_comfort"].items():
