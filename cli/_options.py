@@ -53,3 +53,49 @@ def canonical_args(args: Iterable[str], known: set[str]) -> list[str]:
             arg = new + sep + value
         out.append(arg)
     return out
+
+
+def repeated_options(args: Iterable[str], params) -> str | None:
+    """The complaint about an option given more than once with different values in
+    ``args`` (after ``canonical_args``), or None. ``params``: the command's click parameters.
+    A repeatable option (``multiple``: ``--input``, ``--t-amb`` of some commands) may repeat,
+    the command judges its values; any other keeps one value, so ``--horizon 5 --horizon 7``
+    (which would silently run with 7) is refused, as is a flag given with its negation
+    (``--check --no-check``). The same value twice is harmless and accepted."""
+    owner: dict[str, tuple[object, str | None]] = {}   # spelling -> (param, flag value)
+    for p in params:
+        if getattr(p, "param_type_name", "") != "option" or getattr(p, "multiple", False):
+            continue
+        for o in p.opts:
+            owner[o] = (p, "on" if getattr(p, "is_flag", False) else None)
+        for o in getattr(p, "secondary_opts", ()):
+            owner[o] = (p, "off")
+    seen: dict[object, tuple[str, str]] = {}   # param -> (spelling, value)
+    args = list(args)
+    if "--help" in args:
+        return None
+    i = 0
+    while i < len(args):
+        arg = args[i]
+        if arg == "--":
+            break
+        name, sep, value = arg.partition("=")
+        hit = owner.get(name)
+        i += 1
+        if hit is None:
+            continue
+        p, flag = hit
+        if flag is not None:
+            value = flag
+        elif not sep:
+            n = max(1, p.nargs)
+            value = " ".join(args[i:i + n])
+            i += n
+        before = seen.get(p)
+        if before is not None and before[1] != value:
+            if flag is not None:
+                return f"{before[0]} and {name} are both given: give one of them"
+            return (f"{name} is given twice ({before[1]!r} and {value!r}): give it once "
+                    "(only options that take several values repeat)")
+        seen[p] = (name, value)
+    return None

@@ -20,7 +20,12 @@ from typer.core import TyperCommand, TyperGroup  # noqa: E402
 
 from acid import __version__  # noqa: E402
 from acid_cli._common import ClickException, error_line  # noqa: E402
-from acid_cli._options import canonical_args  # noqa: E402
+from acid_cli._options import canonical_args, repeated_options  # noqa: E402
+
+try:  # typer >= 0.2x vendors click
+    from typer._click.exceptions import UsageError
+except ImportError:  # pragma: no cover - older typer on top of click
+    from click.exceptions import UsageError
 
 
 class FlagsTakeNoValue:
@@ -43,7 +48,11 @@ class AcidCommand(FlagsTakeNoValue, TyperCommand):
 
     def parse_args(self, ctx, args):
         known = {name for p in self.params for name in (*p.opts, *p.secondary_opts)}
-        return super().parse_args(ctx, canonical_args(args, known))
+        args = canonical_args(args, known)
+        twice = None if ctx.resilient_parsing else repeated_options(args, self.params)
+        if twice is not None:
+            raise UsageError(twice, ctx=ctx)
+        return super().parse_args(ctx, args)
 
 
 class AcidTyper(typer.Typer):
