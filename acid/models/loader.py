@@ -83,8 +83,8 @@ MAX_SD = 1e6
 #: likewise, parameters at their declared values. A file is refused only when the step or an
 #: output is NaN or inf at every one of these points (a NaN constant, ``log`` of a declared
 #: value's zero): never for a singularity at one particular point.
-PROBE_KELVIN = (293.15, 303.15, 273.15, 313.15)
-PROBE_OTHER = (0.1, 1.0, 100.0, 1.0e5)
+PROBE_KELVIN = (293.15, 303.15, 273.15, 313.15, 373.15, 573.15, 250.15)
+PROBE_OTHER = (0.1, 1.0, 100.0, 1.0e5, 0.01, 1.0e3, -1.0)
 
 
 def checked(model: Model, path: Path | str) -> Model:
