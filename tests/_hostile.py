@@ -49,6 +49,7 @@ BASE: dict[str, tuple[str, ...]] = {
     "examples": ("examples",),
     "car": ("car",),
     "heating-check": ("heating-check",),
+    "export-fmu": ("export-fmu", "--out", "{w}/p.fmu"),
 }
 TEMPERATURE = ("--t-amb", "--t-low", "--t-high", "--switch-over")
 RANGES = {"--t-amb-range": ("35", "20"), "--speed-range": ("80", "10")}
@@ -61,6 +62,8 @@ class Probe:
     value: str
     nonsense: bool
     args: tuple[str, ...]
+    names: tuple[str, ...] = ()   # what the error line must name (default: the flag)
+    group: str = "value"          # value, twice, file<slot>, out, kept
 
     @property
     def id(self) -> str:
@@ -91,7 +94,9 @@ def numeric_options() -> list[tuple[str, str, str, type, int]]:
             kind = _numeric(getattr(desc, "annotation", None))
             if kind is not None and p.opts and p.opts[0].startswith("--") \
                     and not getattr(p, "is_flag", False):
-                out.append((name, p.name, p.opts[0], kind, max(1, p.nargs)))
+                # a repeatable option: nargs 0 here (not probed twice)
+                out.append((name, p.name, p.opts[0], kind,
+                            0 if getattr(p, "multiple", False) else max(1, p.nargs)))
     return out
 
 
@@ -104,9 +109,92 @@ def probes() -> list[Probe]:
             values.append((BELOW_ZERO_K, True))
         for value, nonsense in values:
             out.append(Probe(command, flag, value, nonsense,
-                             (*base, flag, *([value] * nargs))))
+                             (*base, flag, *([value] * max(1, nargs)))))
         if flag in RANGES:
             out.append(Probe(command, flag, "reversed", True, (*base, flag, *RANGES[flag])))
+        if nargs == 1:   # given twice with different values
+            out.append(Probe(command, flag, "twice", True, (*base, flag, "1", flag, "2"),
+                             group="twice"))
+    return out + file_probes()
+
+
+#: bad files: (name in the workspace, how to make it from the workspace template)
+BAD_FILES = ("empty", "trunc.h5", "trunc.csv", "adir", "nope.h5", "afile")
+#: (command, arguments with {f} where the bad file goes)
+FILE_SLOTS = (
+    ("fit", ("fit", "{f}", "--out", "{w}/q.json")),
+    ("validate", ("validate", "{f}", "--out", "{w}/figs")),
+    ("import", ("import", "{f}", "--map", "{w}/map.toml", "--out", "{w}/run.h5")),
+    ("import", ("import", "{w}/run.csv", "--map", "{f}", "--out", "{w}/run.h5")),
+    ("sweep", ("sweep", "{f}", "--out", "{w}/o")),
+    ("claims", ("claims", "{f}")),
+    ("fit", ("fit", D, "--out", "{w}/q.json", "--reference", "{f}")),
+    ("validate", ("validate", D, "--out", "{w}/figs", "--params", "{f}")),
+    ("excite", ("excite", "--plant", "model", "--out", "{w}/x.h5", "--params", "{f}")),
+    ("excite", ("excite", "--out", "{w}/x.h5", "--plant-config", "{f}")),
+    ("mpc-check", ("mpc-check", "--out", "{w}/mc", "--params", "{f}")),
+    ("export-c", ("export-c", "--out", "{w}/ec", "--params", "{f}")),
+    ("export-c", ("export-c", "--out", "{w}/ec", "--model", "{f}")),
+    ("fit", ("fit", D, "--out", "{w}/q.json", "--model", "{f}")),
+    ("speed-sweep", ("speed-sweep", "--out", "{w}/ss", "--plant-config", "{f}")),
+    ("year-sweep", ("year-sweep", "--out", "{w}/ys", "--plant-config", "{f}")),
+    ("heating-check", ("heating-check", "--logs", "{f}")),
+    ("cav-study", ("cav-study", "--out", "{w}/cs", "--params", "{f}")),
+    ("plant-check", ("plant-check", "--out", "{w}/pc", "--plant-config", "{f}")),
+)
+#: outputs that cannot be written, and an earlier output a failing run must keep
+OUT_SLOTS = (("{w}/afile/sub", "afile"), ("{w}/adir", "adir"))
+
+
+def make_bad_files(w: Path) -> None:
+    (w / "empty").write_bytes(b"")
+    (w / "trunc.h5").write_bytes((w / "d.h5").read_bytes()[:2048])
+    (w / "trunc.csv").write_text((w / "run.csv").read_text()[:300])
+
+
+def file_probes() -> list[Probe]:
+    out = []
+    for k, (command, args) in enumerate(FILE_SLOTS):
+        slot = next(a for a in args if "{f}" in a)
+        i = args.index(slot)
+        flag = args[i - 1] if args[i - 1].startswith("--") else "ARG"
+        for bad in BAD_FILES:
+            if bad == "afile" and flag == "--model":
+                continue
+            f = f"{{w}}/{bad}"
+            if flag == "--model" and bad in ("empty", "adir"):
+                f += ".py" if bad == "empty" else ""
+            out.append(Probe(command, flag, bad, True,
+                             tuple(a.replace("{f}", f) for a in args),
+                             names=(Path(f).name,), group=f"file{k}"))
+    for command, _name, flag, _kind, _n in numeric_options():
+        base = BASE.get(command, (command, "--out", "{w}/o"))
+        has_json = any(o == "--json" for o in _flags(command))
+        for target, culprit in OUT_SLOTS:
+            opt = "--json" if has_json else "--out"
+            out.append(Probe(command, opt, culprit, True, (*base, opt, target),
+                             names=(culprit,), group="out"))
+        if has_json:   # an earlier output kept by a run refused for a nonsense value
+            out.append(Probe(command, flag, "nan+json", True,
+                             (*base, "--json", "{w}/prev.json", flag, "nan"), group="kept"))
+    return _unique(out)
+
+
+def _flags(command: str) -> list[str]:
+    import typer
+
+    from acid_cli.main import app
+
+    cmd = typer.main.get_command(app).commands[command]
+    return [o for p in getattr(cmd, "params", ()) for o in p.opts]
+
+
+def _unique(probes: list[Probe]) -> list[Probe]:
+    seen, out = set(), []
+    for p in probes:
+        if p.args not in seen:
+            seen.add(p.args)
+            out.append(p)
     return out
 
 
@@ -140,6 +228,7 @@ def run_probe(p: Probe, template: Path, w: Path, seconds: float) -> tuple[str, s
         shutil.rmtree(w)
     shutil.copytree(template, w, symlinks=True)
     (w / "s.toml").write_text("[grid]\nambient_C = [30.0]\n")
+    make_bad_files(w)
     before = snapshot(w)
     here = os.getcwd()
     os.chdir(w)
@@ -171,7 +260,7 @@ def run_probe(p: Probe, template: Path, w: Path, seconds: float) -> tuple[str, s
     if "internal error" in flat:
         return "internal", flat[:300], took
     if res.exit_code == 2 and len(lines) == 1 and lines[0].startswith("error:") \
-            and p.flag in flat:
+            and all(n in flat for n in (p.names or (p.flag,))):
         return "clean", flat, took
     return "unclear", f"exit {res.exit_code}: {flat[:300]}", took
 
