@@ -208,11 +208,22 @@ def budget(seconds: float):
     def ring(*_):
         raise _Budget
 
+    def hung():   # the alarm never reached Python (a long C call, or swallowed): say so
+        print(f"hung: still running {10 * seconds:g} s after the budget; stopping the scan",
+              flush=True)
+        os._exit(3)
+
+    import threading
+
+    watchdog = threading.Timer(10 * seconds, hung)
+    watchdog.daemon = True
     old = signal.signal(signal.SIGALRM, ring)
     signal.setitimer(signal.ITIMER_REAL, seconds)
+    watchdog.start()
     try:
         yield
     finally:
+        watchdog.cancel()
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, old)
 
