@@ -167,6 +167,5 @@ def work_limit_error(command: str, flag: str, value) -> str | None:
     lo, hi, unit = limit
     for v in values:
         if isinstance(v, (int, float)) and not (math.isfinite(v) and lo <= v <= hi):
-            return (f"{flag} must be in [{lo:g}, {hi:g}]{' ' + unit if unit else ''}, "
-                    f"got {v!r}")
+            return f"{flag} {v!r}: must be in [{lo:g}, {hi:g}]{' ' + unit if unit else ''}"
     return None
