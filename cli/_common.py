@@ -129,7 +129,12 @@ def handle_errors(func: Callable) -> Callable:
                     raise interrupted() from None
                 error_line(exc)
                 raise typer.Exit(code=exc.exit_code) from None
-            except KeyboardInterrupt:
+            except KeyboardInterrupt as exc:
+                culprit = _raised_by_user_code(exc, guard)
+                if culprit is not None:
+                    error_line(f"{culprit}: raises KeyboardInterrupt, yet no interrupt was "
+                               "sent (a model file's function?): raise an error there instead")
+                    raise typer.Exit(code=2) from None
                 raise interrupted() from None
             except (typer.Exit, typer.Abort, ClickException):
                 raise
@@ -149,6 +154,29 @@ def handle_errors(func: Callable) -> Callable:
                 raise typer.Exit(code=1) from None
 
     return wrapper
+
+
+def _raised_by_user_code(exc: BaseException, guard: InterruptGuard) -> str | None:
+    """``FILE:LINE`` of a user's file (not acid, not an installed package) that raised the
+    ``KeyboardInterrupt`` ``exc`` itself, when no SIGINT/SIGTERM reached the command's guard
+    (its handlers installed, so a real Ctrl-C would have been recorded); else None."""
+    import sysconfig
+
+    if guard.signum is not None or not guard.installed:
+        return None
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    if tb is None:
+        return None
+    path = Path(tb.tb_frame.f_code.co_filename).resolve()
+    here = Path(__file__).resolve().parent
+    ours = [here, here.parent / "acid", *(Path(sysconfig.get_paths()[k]).resolve()
+                                          for k in ("stdlib", "platstdlib", "purelib",
+                                                    "platlib"))]
+    if not path.is_file() or any(path.is_relative_to(p) for p in ours):
+        return None
+    return f"{path.name}:{tb.tb_lineno}"
 
 
 def resolve_examples(value):

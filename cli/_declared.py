@@ -91,6 +91,33 @@ class PaperOptions:
     use_eta_cop: bool = False
 
 
+def _check_one_step_finite(model, ds) -> None:
+    """Refuse a fully measured model whose step at the declared values is NaN or inf for a
+    state from every sample of the data (an equation outside its domain wherever the data
+    go): every method would otherwise fail inside (least squares' SVD) or, a filter skipping
+    the non-finite innovations, report parameters the data never saw (prediction error)."""
+    import numpy as np
+
+    from acid.ident.data import ModelData
+
+    if not all(s.measured for s in model.states):
+        return   # latent states have no data to step from: the fit's own checks apply
+    data = ModelData.of(model, ds)
+    rows = np.isfinite(data.x).all(axis=1) & np.isfinite(data.u).all(axis=1) \
+        & np.isfinite(data.d).all(axis=1)
+    if not rows.any():
+        return
+    with np.errstate(all="ignore"):
+        xn, _ = model.step(data.x[rows], data.u[rows], data.d[rows])
+    dead = ~np.isfinite(xn).any(axis=0)
+    if dead.any():
+        name = model.state_names[int(np.flatnonzero(dead)[0])]
+        raise ConfigError(f"{Path(model.source).name}: model {model.name!r}: the step gives "
+                          f"NaN or inf for state {name!r} from every sample of {ds.source} at "
+                          "the declared values: an equation outside its domain (log or sqrt "
+                          "of a negative number, a division by zero) wherever the data go")
+
+
 def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None, *,
                  method: str, fix: list[str] | None, free: list[str] | None, fit_starts: int,
                  seed: int, oe_window: int, covariance: str, bandwidth,
@@ -130,6 +157,7 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                  for p in parts]
         est = Dataset.concatenate([est, *parts])
         est.source = str(data)
+    _check_one_step_finite(model, est)
     with progress_bar(f"fit {model.name}", None) as update:
         result = fit_model(model, est, method, fix=fixes, free=tuple(free or ()),
                            fit_starts=fit_starts, seed=seed, oe_window=oe_window,

@@ -125,6 +125,11 @@ class InterruptGuard:
                     pass
         return self
 
+    @property
+    def installed(self) -> bool:
+        """Whether this guard's handlers catch SIGINT/SIGTERM (the main thread only)."""
+        return bool(self._saved)
+
     def __exit__(self, *exc) -> None:
         for sig, previous in self._saved.items():
             if previous is None:

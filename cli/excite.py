@@ -60,6 +60,8 @@ def build_plant(name: str, spec: ExcitationSpec, params: Path | None,
     if name.startswith(DECLARED_PREFIX):
         return declared_plant(name[len(DECLARED_PREFIX):], spec, params, plant_config, T_amb,
                               fmu_map)
+    if T_amb is not None and name in ("heating", "hifi"):
+        plant_overrides(t_amb=T_amb)   # within the plant's property tables, naming --t-amb
     if name == "heating":  # the heating plant as the logged i3 (acid.plant.heating_excite)
         from acid.plant.heating_config import winter_plant_config
         from acid.plant.heating_excite import HeatingExcitation

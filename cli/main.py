@@ -20,7 +20,19 @@ from typer.core import TyperCommand, TyperGroup  # noqa: E402
 
 from acid import __version__  # noqa: E402
 from acid_cli._common import ClickException, error_line  # noqa: E402
-from acid_cli._options import canonical_args  # noqa: E402
+from acid_cli._options import (  # noqa: E402
+    canonical_args,
+    limit_help,
+    repeated_options,
+    work_limit_error,
+)
+
+try:  # typer >= 0.2x vendors click
+    from typer._click.core import ParameterSource
+    from typer._click.exceptions import UsageError
+except ImportError:  # pragma: no cover - older typer on top of click
+    from click.core import ParameterSource
+    from click.exceptions import UsageError
 
 
 class FlagsTakeNoValue:
@@ -43,7 +55,25 @@ class AcidCommand(FlagsTakeNoValue, TyperCommand):
 
     def parse_args(self, ctx, args):
         known = {name for p in self.params for name in (*p.opts, *p.secondary_opts)}
-        return super().parse_args(ctx, canonical_args(args, known))
+        args = canonical_args(args, known)
+        twice = None if ctx.resilient_parsing else repeated_options(args, self.params)
+        if twice is not None:
+            raise UsageError(twice, ctx=ctx)
+        rest = super().parse_args(ctx, args)
+        if not ctx.resilient_parsing:
+            for p in self.params:
+                if p.opts and ctx.get_parameter_source(p.name) == ParameterSource.COMMANDLINE:
+                    why = work_limit_error(self.name, p.opts[0], ctx.params.get(p.name))
+                    if why is not None:
+                        raise UsageError(why, ctx=ctx)
+        return rest
+
+    def get_params(self, ctx):
+        params = super().get_params(ctx)
+        for p in params:   # the work limits of WORK_LIMITS, stated in --help
+            if p.opts and getattr(p, "help", None):
+                p.help = limit_help(self.name, p.opts[0], p.help)
+        return params
 
 
 class AcidTyper(typer.Typer):

@@ -26,6 +26,7 @@ from acid_cli._common import (
     plant_inputs,
     print_table,
     progress_bar,
+    require_range,
     say,
     write_summary,
 )
@@ -38,6 +39,10 @@ from acid_cli._plant import (
     plant_option,
     plant_overrides,
 )
+
+#: Largest --backoff-prior, K: the one-step error of a cabin model sampled at 5 s is a
+#: fraction of a kelvin; the margin it sets is capped at 1 K (``BackoffConfig.max_margin``).
+MAX_BACKOFF_PRIOR_K = 10.0
 
 FIGURES = ("fig7_model.png", "fig8_plant.png", "fig9_cav_bound.png",
            "fig10_cav_comparison.png")
@@ -84,7 +89,8 @@ def mpc_check(
     backoff_prior: float = typer.Option(
         PLANT_BACKOFF.sigma0, "--backoff-prior",
         help="Prior standard deviation of that one-step error before any is measured, K "
-             "(0: learn from the errors only)."),
+             "(0: learn from the errors only; at most 10 K: the margin it sets is capped "
+             "at 1 K)."),
     skip_plant: bool = typer.Option(False, "--skip-plant",
                                     help="Only scenario (a), on the control-oriented model."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figures."),
@@ -108,8 +114,7 @@ def mpc_check(
         raise ConfigError(f"--first-move must be 'free' or 'pinned', got {first_move!r}")
     if solver not in SOLVERS:
         raise ConfigError(f"--solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
-    if not (math.isfinite(backoff_prior) and backoff_prior >= 0):
-        raise ConfigError(f"--backoff-prior must be a number >= 0 (K), got {backoff_prior}")
+    require_range(backoff_prior, "--backoff-prior", 0.0, MAX_BACKOFF_PRIOR_K, "K")
     choice = plant_choice(plant, fmu_map, allowed=("hifi",))
     p = load_params(params, allow_unstable=allow_unstable)
     ambient = plant_overrides(t_amb).get("T_amb")

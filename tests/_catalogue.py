@@ -263,6 +263,13 @@ model = Model("mine", states=[State("T_cab", "K"),
                           Parameter("b", "W/K", 50.0, 0.0, 1e3)], Ts=5.0, ode=ode)
 """
 
+#: A one-state model file with a step, for the equation and noise cases.
+_ONE_STATE = ("from acid.models import Model, Parameter, Signal, State, log\n"
+              "model = Model('m', states=[State('T_cab', 'K'{state})],\n"
+              "    inputs=[Signal('W_bl', 'kg/s')],\n"
+              "    parameters=[Parameter('a', '1/s', 0.1, 0.0, 1.0){extra}], Ts=5.0,\n"
+              "    step=lambda s: {{'T_cab': {step}}})\n")
+
 CASES: list[Case] = [
     # ---------------------------------------------------- outputs colliding with inputs
     Case("fit-out-is-data", "collision", ("fit", D, "--out", D), ("--out", "d.h5", "DATA")),
@@ -1016,6 +1023,75 @@ CASES: list[Case] = [
          ("compare", "--seed", "-1", "--json", "{w}/c.json"), ("--seed", "-1")),
     Case("day-seed-negative", "options", ("day", "--seed", "-1", "--out", "{w}/dd"),
          ("--seed", "-1")),
+    # equations NaN/inf at the declared point or on the data, declared noises, interrupts
+    # raised by a model file, options given twice, a bound on a prior
+    Case("fit-model-file-step-nan-everywhere", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"), ("m.py", "'T_cab'", "NaN"),
+         _write("m.py", _ONE_STATE.format(step="s.T_cab * float('nan') + s.a * s.W_bl",
+                                          state="", extra=""))),
+    Case("export-c-model-step-nan", "params",
+         ("export-c", "--model", "{w}/m.py", "--input", "W_bl=0:1", "--out", "{w}/ec"),
+         ("m.py", "'T_cab'", "NaN"),
+         _write("m.py", _ONE_STATE.format(step="s.T_cab * float('nan') + s.a * s.W_bl",
+                                          state="", extra=""))),
+    Case("export-c-model-step-log-zero", "params",
+         ("export-c", "--model", "{w}/m.py", "--input", "W_bl=0:1", "--out", "{w}/ec"),
+         ("m.py", "'T_cab'", "inf"),
+         _write("m.py", _ONE_STATE.format(step="s.T_cab + log(s.a - 0.1) + s.W_bl",
+                                          state="", extra=""))),
+    Case("fit-pem-noise-parameter-1e300", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py", "--method", "pem"),
+         ("m.py", "parameter 'q'", "max 1e+300"),
+         _write("m.py", _ONE_STATE.format(step="s.T_cab + s.a * (s.W_bl - 0.1)",
+                                          state=", noise='q'",
+                                          extra=", Parameter('q', 'K', 0.5, 0.0, 1e300)"))),
+    Case("fit-pem-sensor-parameter-zero", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py", "--method", "pem"),
+         ("m.py", "parameter 'q'", "sensor", "value 0.0"),
+         _write("m.py", _ONE_STATE.format(step="s.T_cab + s.a * (s.W_bl - 0.1)",
+                                          state=", sensor='q'",
+                                          extra=", Parameter('q', 'K', 0.0, 0.0, 1.0)"))),
+    Case("fit-model-file-equation-nan-on-the-data", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"),
+         ("m.py", "'T_cab'", "NaN or inf", "d.h5"),
+         _write("m.py", _ONE_STATE.format(step="s.T_cab + s.a * log(s.W_bl - 0.5)",
+                                          state="", extra=""))),
+    Case("fit-pem-equation-nan-on-the-data", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py", "--method", "pem"),
+         ("m.py", "'T_cab'", "NaN or inf", "d.h5"),
+         _write("m.py", _ONE_STATE.format(step="s.T_cab + s.a * log(s.W_bl - 0.5)",
+                                          state="", extra=""))),
+    Case("fit-model-file-initial-raises-keyboard-interrupt", "params",
+         ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"),
+         ("m.py:3", "KeyboardInterrupt"),
+         _write("m.py", "from acid.models import Model, Parameter, Signal, State\n"
+                        "def start(m):\n"
+                        "    raise KeyboardInterrupt\n"
+                        "model = Model('ki', states=[State('T_cab', 'K'),\n"
+                        "    State('T_m', 'K', measured=False, initial=start)],\n"
+                        "    inputs=[Signal('T_evap_set', 'K')],\n"
+                        "    parameters=[Parameter('a', '1/s', 0.1, 0.0, 1.0)], Ts=5.0,\n"
+                        "    step=lambda s: {'T_cab': s.T_cab + s.a * (s.T_evap_set - s.T_cab)"
+                        " + 0.01 * (s.T_m - s.T_cab), 'T_m': s.T_m})\n")),
+    Case("mpc-check-backoff-prior-1e300", "options",
+         ("mpc-check", "--backoff-prior", "1e300", "--out", "{w}/mc"), ("--backoff-prior",)),
+    Case("export-c-horizon-given-twice", "options",
+         ("export-c", "--horizon", "5", "--horizon", "7", "--out", "{w}/ec"),
+         ("--horizon", "given twice", "'5'", "'7'")),
+    Case("export-c-check-and-no-check", "options",
+         ("export-c", "--check", "--no-check", "--out", "{w}/ec"), ("--check", "--no-check")),
+    Case("excite-heating-plant-80-degC", "options",
+         ("excite", "--plant", "heating", "--t-amb", "80", "--duration", "600", "--out",
+          "{w}/x.h5"), ("--t-amb", "80")),
+    Case("cav-study-jobs-unbounded", "sizes", ("cav-study", "--jobs", "100000", "--json",
+                                                "{w}/c.json"), ("--jobs", "256")),
+    Case("validate-cv-folds-negative", "options", (*V, "--cv-folds", "-1"), ("--cv-folds",)),
+    Case("excite-plant-config-empty", "files",
+         ("excite", "--out", "{w}/x.h5", "--plant-config", "{w}/c.toml"),
+         ("c.toml", "empty"), _write("c.toml", "")),
+    Case("excite-t-amb-range-given-twice", "options",
+         (*EXC, "--t-amb-range", "20", "30", "--t-amb-range", "20", "35", "--out", "{w}/x.h5"),
+         ("--t-amb-range", "given twice")),
 ]
 
 

@@ -127,3 +127,97 @@ def test_generated_model_files_load_or_fail_in_one_line(tmp_path_factory, head, 
         return
     assert model.nx == n_states <= 400 and model.np == n_params <= 5000
     assert math.isfinite(model.Ts) and model.Ts > 0
+
+
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(option=st.sampled_from(OPTIONS), first=st.sampled_from(["1", "2", "0.5"]),
+       second=st.sampled_from(["1", "2", "0.5"]), inline=st.booleans())
+def test_an_option_given_twice_keeps_one_value_or_is_refused(option, first, second, inline):
+    """An option that keeps one value, given twice with different values, is one usage
+    error naming it (never the last value silently); a repeatable one parses."""
+    command, name, flag, _kind = option
+    cmd = ROOT.commands[command]
+    param = next(p for p in cmd.params if p.name == name)
+    n = max(1, param.nargs)
+    one = [f"{flag}={first}"] if inline and n == 1 else [flag, *[first] * n]
+    args = [*one, flag, *[second] * n]
+    parent = ROOT.make_context("acid", [command], resilient_parsing=True)
+    try:
+        cmd.make_context(command, args, parent=parent).close()
+    except ClickException as exc:
+        msg = exc.format_message()
+        assert exc.exit_code == 2 and "\n" not in msg.strip(), msg
+        if not param.multiple and first != second:
+            assert f"{flag} is given twice" in msg, msg
+        return
+    assert param.multiple or first == second, (command, flag, first, second)
+
+
+# ------------------------------------------- the loader's numeric declarations (values)
+SDS = st.one_of(st.sampled_from([None, 0.0, -0.0, -1.0, 1e-9, 0.05, 1e6, 1.1e6, 1e300,
+                                 math.inf, -math.inf, math.nan]),
+                st.floats(allow_nan=True, allow_infinity=True, width=32))
+FACTORS = st.sampled_from([1.0, 0.0, -1.0, 1e300, math.inf, math.nan, 1e-300])
+
+
+def _lit(v) -> str:
+    if v is None:
+        return "None"
+    return {"nan": "float('nan')", "inf": "float('inf')", "-inf": "float('-inf')"}.get(
+        repr(v), repr(v))
+
+
+#: a valid declaration; each example replaces one of these with a generated value
+VALID = {"noise": 0.02, "sensor": 0.05, "spread": 0.1, "lo": 0.001, "value": 0.05, "hi": 0.5,
+         "factor": 1.0, "initial": 293.15}
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(field=st.sampled_from(sorted(VALID)), hostile=st.one_of(SDS, FACTORS),
+       by_name=st.sampled_from(["noise", "sensor", None]))
+def test_declared_noises_bounds_and_equations_load_or_fail_in_one_line(
+        tmp_path_factory, field, hostile, by_name):
+    """Generated numeric declarations (a state's noise, sensor, spread and initial value, the
+    min/value/max of a parameter named as noise or sensor, a factor in the equation; one at
+    a time, the others valid): the file loads, and then what a filter and a simulation read
+    is sound (noise parameters within [0, 1e6], the step's factor finite), or it is one line
+    naming the file."""
+    v = {**VALID, field: hostile}
+    noise, sensor, spread, initial, factor = (v["noise"], v["sensor"], v["spread"],
+                                              v["initial"], v["factor"])
+    q = (v["lo"], v["value"], v["hi"])
+    lo, value, hi = q
+    noise_arg = "'q'" if by_name == "noise" else _lit(noise)
+    sensor_arg = "'q'" if by_name == "sensor" else _lit(sensor)
+    path = tmp_path_factory.mktemp("n") / "decl.py"
+    path.write_text(
+        "from acid.models import Model, Parameter, Signal, State\n"
+        "model = Model('decl', states=[State('T_cab', 'K', noise="
+        f"{noise_arg}, sensor={sensor_arg}, spread={_lit(spread)}),\n"
+        "    State('T_m', 'K', measured=False, initial="
+        f"{_lit(initial) if initial is not None else 293.15})],\n"
+        "    inputs=[Signal('W_bl', 'kg/s')],\n"
+        "    parameters=[Parameter('a', '1/s', 0.1, 0.0, 1.0),\n"
+        f"                Parameter('q', 'K', {_lit(value)}, {_lit(lo)}, {_lit(hi)})],\n"
+        "    Ts=5.0, step=lambda s: {'T_cab': s.T_cab + s.a * (s.T_m - s.T_cab) * "
+        f"{_lit(factor)},\n"
+        "                           'T_m': s.T_m + 0.01 * (s.T_cab - s.T_m) + 0 * s.q})\n")
+    try:
+        model = load(path)
+    except DeclarationError as exc:
+        text = str(exc)
+        assert "\n" not in text.strip() and "decl.py" in text, text
+        return
+    for s in model.states:
+        for what in ("noise", "sensor", "spread"):
+            v = getattr(s, what)
+            if isinstance(v, str):
+                p = model.parameter(v)
+                assert 0.0 <= p.min <= p.value <= p.max <= 1e6, (what, p)
+                assert what != "sensor" or p.min > 0.0, p
+            elif v is not None:
+                assert math.isfinite(v) and 0.0 <= v <= 1e6, (what, v)
+                assert what != "sensor" or v > 0.0, v
+    assert math.isfinite(factor), factor   # NaN/inf in the step at every point: refused

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from acid.errors import ConfigError
 from acid.ident.data import ModelData
 from acid.ident.hac import hac_meat, resolve_bandwidth, segment_ids
 from acid.ident.prior import prior_arrays, prior_note, prior_rows  # noqa: F401
@@ -150,6 +152,15 @@ def regression(model: Model, data: ModelData, group: list[EquationForm], P: np.n
         e0, J = fn.map(rows.size)(*args, P0[rows].T, np.nan_to_num(data.y[rows]).T)
         e0 = np.asarray(e0).ravel()
         J = np.asarray(J).reshape(rows.size, model.np) if model.np else np.zeros((rows.size, 0))
+        bad = ~(np.isfinite(e0) & np.isfinite(J).all(axis=1))
+        bad &= np.all([np.isfinite(a[rows]).all(axis=1) for a in (data.x, data.u, data.d)],
+                      axis=0)   # data missing (read as 0) is not the equation's fault
+        if bad.any():   # else the SVD fails ("did not converge"): name the equation instead
+            raise ConfigError(
+                f"{Path(model.source).name}: model {model.name!r}: equation {f.name!r} gives "
+                f"NaN or inf on the data at sample {int(rows[np.argmax(bad)])} "
+                f"({int(bad.sum())} of {rows.size}): an equation outside its domain (log or "
+                "sqrt of a negative number, a division by zero) at these states and inputs")
         X = np.zeros((rows.size, len(columns)))
         for c, col in enumerate(columns):
             X[:, c] = J[:, col.index]

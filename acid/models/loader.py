@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import importlib
 import importlib.util
+import math
 import os
 import select
 import signal
@@ -25,6 +26,8 @@ import sys
 import time
 import warnings
 from pathlib import Path
+
+import numpy as np
 
 from acid.models.declaration import DeclarationError, Model
 
@@ -69,7 +72,92 @@ def load(spec: str | Path | Model) -> Model:
     if not path.is_file():
         raise DeclarationError(f"{path}: model file not found")
     _check_in_child(path)
-    return _checked_size(_load_file(path), path)
+    return checked(_checked_size(_load_file(path), path), path)
+
+
+#: Largest standard deviation a state's noise or sensor may declare (as the declaration
+#: bounds a number given there), in the state's unit.
+MAX_SD = 1e6
+#: Where the equations are evaluated at load: the states' declared numeric ``initial``
+#: (else a temperature for a kelvin state, a magnitude otherwise), inputs and disturbances
+#: likewise, parameters at their declared values. A file is refused only when the step or an
+#: output is NaN or inf at every one of these points (a NaN constant, ``log`` of a declared
+#: value's zero): never for a singularity at one particular point.
+PROBE_KELVIN = (293.15, 303.15, 273.15, 313.15, 373.15, 573.15, 250.15)
+PROBE_OTHER = (0.1, 1.0, 100.0, 1.0e5, 0.01, 1.0e3, -1.0)
+
+
+def checked(model: Model, path: Path | str) -> Model:
+    """``model`` after the checks of what a loaded file declares: the parameters its states
+    name as noise or sensor (a standard deviation: finite, within [0, 1e6], a sensor's
+    above 0 since a filter divides by its variance), then its equations at the declared
+    point (NaN or inf there is one line naming the file and the state or output)."""
+    where = f"{Path(path).name}: model {model.name!r}"
+    _check_noise_parameters(model, where)
+    _check_equations_finite(model, where)
+    return model
+
+
+def _check_noise_parameters(model: Model, where: str) -> None:
+    names = model.parameter_names
+    for s in model.states:
+        for what in ("noise", "sensor"):
+            ref = getattr(s, what)
+            if not isinstance(ref, str):
+                continue          # a number: the declaration checked it
+            if ref not in names:
+                raise DeclarationError(f"{where}: state {s.name!r}: {what}={ref!r} is not a "
+                                       f"declared parameter ({', '.join(names) or 'none'})")
+            p = model.parameter(ref)
+            lo_ok = p.min > 0.0 if what == "sensor" else p.min >= 0.0
+            if not (lo_ok and math.isfinite(p.max) and p.max <= MAX_SD
+                    and math.isfinite(p.value) and (p.value > 0.0 or what == "noise")):
+                span = "(0" if what == "sensor" else "[0"
+                raise DeclarationError(
+                    f"{where}: parameter {ref!r} (state {s.name!r}'s {what}, a standard "
+                    f"deviation in {s.unit}) must have min, value and max within "
+                    f"{span}, {MAX_SD:g}], got min {p.min!r}, value {p.value!r}, max {p.max!r}")
+
+
+def _probe(rows, i: int) -> np.ndarray:
+    out = []
+    for row in rows:
+        start = getattr(row, "initial", None)
+        if isinstance(start, (int, float)) and not isinstance(start, bool) \
+                and math.isfinite(start) and i == 0:
+            out.append(float(start))
+        else:
+            out.append((PROBE_KELVIN if row.unit == "K" else PROBE_OTHER)[i])
+    return np.array(out, dtype=float)
+
+
+def _check_equations_finite(model: Model, where: str) -> None:
+    """Refuse a model whose step (a state) or an output is NaN or inf at every probe point."""
+    names = [*model.state_names, *model.output_names]
+    bad_everywhere = None
+    first = None
+    for i in range(len(PROBE_OTHER)):
+        try:
+            xn, y = model.step(_probe(model.states, i), _probe(model.inputs, i),
+                               _probe(model.disturbances, i))
+        except Exception as exc:  # noqa: BLE001 - CasADi refused to evaluate the equations
+            raise DeclarationError(f"{where}: its equations cannot be evaluated at the "
+                                   f"declared values: {type(exc).__name__}: "
+                                   f"{str(exc).splitlines()[0] if str(exc) else ''}") from None
+        bad = ~np.isfinite(np.concatenate([np.ravel(xn), np.ravel(y)]))
+        if first is None:
+            first = np.concatenate([np.ravel(xn), np.ravel(y)])
+        bad_everywhere = bad if bad_everywhere is None else bad_everywhere & bad
+        if not bad_everywhere.any():
+            return
+    k = int(np.flatnonzero(bad_everywhere)[0])
+    kind = "state" if k < model.nx else "output"
+    value = "NaN" if np.isnan(first[k]) else "inf"
+    raise DeclarationError(
+        f"{where}: the {'step' if kind == 'state' else 'output'} gives {value} for {kind} "
+        f"{names[k]!r} at the declared values (parameters as declared, states and signals at "
+        "plausible magnitudes): a NaN or inf constant, or an equation outside its domain "
+        "(log or sqrt of a negative number, a division by zero) at the declared parameters")
 
 
 def _load_file(path: Path) -> Model:

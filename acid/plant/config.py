@@ -570,6 +570,9 @@ class PlantConfig:
 
         path = Path(path)
         d = load_toml(path, "plant configuration", ConfigError)
+        if not d:   # an empty (or truncated to nothing) file is not a choice of the defaults
+            raise ConfigError(f"{path}: the plant configuration is empty (no keys); for the "
+                              "defaults name a vehicle ('default', 'paper') instead")
         return cls.from_file_dict(d, str(path))
 
     @classmethod
