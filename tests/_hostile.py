@@ -50,6 +50,7 @@ BASE: dict[str, tuple[str, ...]] = {
     "car": ("car",),
     "heating-check": ("heating-check",),
     "export-fmu": ("export-fmu", "--out", "{w}/p.fmu"),
+    "pulldown": ("pulldown", "--quick"),
 }
 TEMPERATURE = ("--t-amb", "--t-low", "--t-high", "--switch-over")
 RANGES = {"--t-amb-range": ("35", "20"), "--speed-range": ("80", "10")}
