@@ -105,3 +105,29 @@ def test_one_candidate_or_an_unreached_time_is_one_error(selection):
         sel.select_structure(_trips(3, 60), [TRUE], fit_options={"method": "ls"})
     with pytest.raises(DataError, match="no candidate has a resolved"):
         sel.choose(selection.candidates, 9999.0)
+
+
+def test_cli_refuses_a_bad_season_or_one_candidate(tmp_path):
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    runner = CliRunner()
+    r = runner.invoke(app, ["car", "select", str(tmp_path), "--season", "spring"])
+    assert r.exit_code == 2 and "--season" in r.output and "summer" in r.output
+    r = runner.invoke(app, ["car", "select", str(tmp_path), "--candidates", "car_cabin"])
+    assert r.exit_code == 2 and "--candidates" in r.output
+
+
+def test_cross_validations_run_apart_assemble_to_the_same_choice(selection):
+    from acid.ident.crossval import CrossValidation
+
+    runs = [({"big": BIG, "true": TRUE, "small": SMALL}[c.name],
+             CrossValidation.from_dict(json.loads(json.dumps(c.cv.to_dict()))), c.seconds)
+            for c in selection.candidates]
+    again = sel.assemble(runs, 150.0)
+    assert (again.best, again.chosen) == (selection.best, selection.chosen)
+    other = CrossValidation(runs[1][1].model, runs[1][1].channel, {}, runs[1][1].folds[::-1],
+                            runs[1][1].intervals)
+    with pytest.raises(DataError, match="same folds"):
+        sel.assemble([runs[0], (TRUE, other, 0.0)], 150.0)

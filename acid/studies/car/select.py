@@ -179,11 +179,9 @@ def select_structure(ds: Dataset, candidates: Sequence, *, fit_options: dict | N
         raise DataError("structure selection needs at least 2 candidate structures")
     if len({m.name for m in models}) != len(models):
         raise DataError("candidate structures must have different names")
-    names = ds.experiment_names()
-    groups = fold_groups(len(names), folds)
+    groups = fold_groups(len(ds.experiment_names()), folds)
     per = 2 * len(groups)
-    scores: list[CandidateScore] = []
-    yard: dict = {}
+    runs = []
     for k, m in enumerate(models):
         tick = None
         if progress is not None:
@@ -194,28 +192,43 @@ def select_structure(ds: Dataset, candidates: Sequence, *, fit_options: dict | N
                             starts=starts, horizon=horizon, warmup=warmup,
                             exogenous=exogenous, to_end=to_end, warm_start=warm_start,
                             n_resamples=n_resamples, seed=seed, fit=fit, progress=tick)
-        seconds = time.perf_counter() - t0
-        iv = cv.intervals[0]
-        pooled = [f for f in iv.figures if f.scope == "pooled"]
-        verdicts: dict = {}
-        for v in iv.verdicts:
-            if v.scope == "pooled":
-                verdicts.setdefault(v.yardstick, {})[f"{v.time_s:g}"] = (
-                    v.verdict, v.difference, v.lo, v.hi)
-        scores.append(CandidateScore(
-            m.name, sum(not p.fixed for p in m.parameters), len(m.states),
-            tuple(f for f in pooled if f.predictor == "model"), verdicts,
-            tuple(cv.parameters()), seconds, cv))
-        if k == 0:
-            for y in YARDSTICKS:
-                figs = tuple(f for f in pooled if f.predictor == y)
-                if figs:
-                    yard[y] = figs
+        runs.append((m, cv, time.perf_counter() - t0))
+    return assemble(runs, rule_time_s)
+
+
+def score(model, cv: CrossValidation, seconds: float = math.nan) -> CandidateScore:
+    """One candidate's row from its cross-validation (its first start design)."""
+    from acid.models import load
+
+    m = load(model)
+    iv = cv.intervals[0]
+    verdicts: dict = {}
+    for v in iv.verdicts:
+        if v.scope == "pooled":
+            verdicts.setdefault(v.yardstick, {})[f"{v.time_s:g}"] = (
+                v.verdict, v.difference, v.lo, v.hi)
+    return CandidateScore(m.name, sum(not p.fixed for p in m.parameters), len(m.states),
+                          tuple(f for f in iv.figures if f.scope == "pooled"
+                                and f.predictor == "model"), verdicts,
+                          tuple(cv.parameters()), float(seconds), cv)
+
+
+def assemble(runs: Sequence[tuple], rule_time_s: float = 600.0) -> StructureSelection:
+    """The selection from ``runs`` [(model, CrossValidation, seconds)], the candidates'
+    cross-validations on the same folds (checked), e.g. run apart and read back with
+    ``CrossValidation.from_dict``; the yardsticks from the first."""
+    if len(runs) < 2:
+        raise DataError("structure selection needs at least 2 candidate structures")
+    folds = [tuple(tuple(f["held_out"]) for f in cv.folds) for _, cv, _ in runs]
+    if len(set(folds)) != 1:
+        raise DataError("the candidates' cross-validations were not run on the same folds")
+    scores = tuple(score(m, cv, sec) for m, cv, sec in runs)
+    first = runs[0][1]
+    pooled = [f for f in first.intervals[0].figures if f.scope == "pooled"]
+    yard = {y: tuple(f for f in pooled if f.predictor == y) for y in YARDSTICKS
+            if any(f.predictor == y for f in pooled)}
     best, chosen = choose(scores, rule_time_s)
-    return StructureSelection(
-        tuple(scores), yard, tuple(tuple(names[j] for j in g) for g in groups),
-        float(rule_time_s), best, chosen,
-        {"fit_options": dict(fit_options or {}), "folds": len(groups), "starts_per_fold": starts,
-         "horizon": horizon, "warmup": warmup, "exogenous": exogenous, "to_end": to_end,
-         "warm_start": warm_start, "resamples": n_resamples, "seed": seed,
-         "data_source": ds.source})
+    settings = {"fit_options": dict(first.fit_options), "folds": len(first.folds),
+                **first.settings}
+    return StructureSelection(scores, yard, folds[0], float(rule_time_s), best, chosen,
+                              settings)
