@@ -131,3 +131,18 @@ def test_cross_validations_run_apart_assemble_to_the_same_choice(selection):
                             runs[1][1].intervals)
     with pytest.raises(DataError, match="same folds"):
         sel.assemble([runs[0], (TRUE, other, 0.0)], 150.0)
+
+
+@pytest.mark.parametrize("name, season", [("bmw_i3_summer_cabin.json", "summer"),
+                                          ("bmw_i3_winter_heating.json", "winter")])
+def test_the_shipped_structures_load_as_their_candidates(name, season):
+    from acid.examples import resolve
+    from acid.models import load
+    from acid.models.values import ParameterValues
+
+    ps = ParameterValues.from_json(resolve(f"example:{name}"))
+    assert ps.declaration.name in sel.CANDIDATES[season]
+    m = load(ps.declaration.name)
+    for p, v in zip(m.parameters, ps.theta, strict=True):
+        assert p.min <= v <= p.max, p.name
+    assert ps.provenance.get("chosen") == m.name
