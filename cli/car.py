@@ -288,6 +288,7 @@ def car_select(
             f"({len(parts)})")
     ds = Dataset.concatenate(parts)
     ds.source = str(logs)
+    ds.metadata["experiments"] = [{"name": t.experiment_names()[0]} for t in parts]
     opts = {"method": method, "max_nfev": max_evals,
             **({"oe_window": oe_window} if method in ("oe", "auto") else {})}
     Ts = ds.Ts
