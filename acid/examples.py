@@ -27,6 +27,10 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                                       " the trips are not shipped)"),
     "bmw_i3_winter_map.toml": ("import map", "the BMW i3 winter trips (heater, coolant, "
                                              "outlets) for --model heating; not shipped"),
+    "bmw_i3_summer_cabin.json": ("parameter file", "the summer cabin structure `acid car "
+                                 "select` chose, fitted on the 26 BMW i3 summer trips"),
+    "bmw_i3_winter_heating.json": ("parameter file", "the winter heating structure `acid car "
+                                   "select` chose, fitted on the 22 BMW i3 winter trips"),
     "coolsim_map.toml": ("import map", "a CoolSim (MATLAB/Simulink) run saved as a .mat"),
     "acid_hifi_fmu_map.toml": ("FMU map", "acid's plant exported with `acid export-fmu`"),
     "sweep_climates.toml": ("sweep spec", "ICM against NMPC across climates and drive cycles"),

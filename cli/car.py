@@ -25,6 +25,9 @@ from acid_cli._common import (
 
 #: the import map used when --map is not given (the BMW i3 summer trips' channels)
 DEFAULT_MAP = "example:bmw_i3_map.toml"
+#: per season of ``acid car select``: the map, the fit method, the warm start, the warm-up (s)
+SEASONS = {"summer": ("example:bmw_i3_map.toml", "pem", "ekf-trip", 300.0),
+           "winter": ("example:bmw_i3_winter_map.toml", "oe", "fit", 0.0)}
 
 LOGS = typer.Argument(..., metavar="LOGS", help="Folder of the car's trip logs (*.csv.gz or "
                       "*.csv, one trip per file), read through --map.")
@@ -198,3 +201,126 @@ def car_control(
                                                "mean cabin degC", "outside band K s",
                                                "fallbacks"], rows)
     write_summary(json_path, {**s, "params": values.label, "acid_version": __version__})
+
+
+@handle_errors
+def car_select(
+    logs: Path = LOGS,
+    season: str = typer.Option("summer", "--season", help="'summer' (cabin under A/C: the "
+                               "car_cabin candidates) or 'winter' (heater: the heating "
+                               "candidates); sets the default map, method and warm start."),
+    map_path: Path | None = typer.Option(
+        None, "--map", "-m", help="Import map of the logs' channels (default: the i3 map of "
+        "the season)."),
+    candidates: str | None = typer.Option(
+        None, "--candidates", help="Comma-separated candidate structures (built-in names or "
+        ".py declarations; default: summer car_cabin,car_cabin2,car_cabin1, winter "
+        "heating,car_heat2)."),
+    trips: str | None = typer.Option(None, "--trips", help="Comma-separated trip names "
+                                     "used (default: every trip in LOGS)."),
+    folds: int = typer.Option(2, "--folds", help="Folds of trips (the trips taken in turn); "
+                              "the same folds for every candidate and yardstick."),
+    method: str | None = typer.Option(None, "--method", help="Fit method of each fold "
+                                      "(default: summer pem, winter oe)."),
+    max_evals: int = typer.Option(100, "--max-evals", help="Cap on each fold's fit "
+                                  "(optimiser evaluations)."),
+    oe_window: int = typer.Option(240, "--oe-window", help="Output error: samples per "
+                                  "window (as acid fit)."),
+    rule_time: float = typer.Option(600.0, "--rule-time", help="Prediction time of the "
+                                    "rule, s: the fewest free parameters whose pooled RMSE "
+                                    "there lies inside the best candidate's 95 % interval."),
+    starts: int = typer.Option(60, "--starts", help="Prediction starts per fold."),
+    horizon: int = typer.Option(300, "--horizon", help="Prediction horizon, samples."),
+    warm_start: str | None = typer.Option(None, "--warm-start", help="How latent states are "
+                                          "estimated at each start (as acid validate; "
+                                          "default: summer ekf-trip, winter fit)."),
+    warmup: float | None = typer.Option(None, "--warmup", help="Stretch before each start "
+                                        "for the warm start, s (default: summer 300, "
+                                        "winter 0)."),
+    resamples: int = typer.Option(1000, "--resamples", help="Bootstrap resamples of the "
+                                  "intervals."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the resampling."),
+    out: Path | None = typer.Option(None, "--out", help="Refit the chosen structure on every "
+                                    "trip and write its parameter file here."),
+    json_path: Path | None = JSON,
+) -> None:
+    """Candidate structures fitted by leave-trips-out cross-validation on the same folds,
+    scored against persistence, ARX and subspace fitted on the same training trips; the
+    structure chosen by a stated rule (and, with --out, refitted on every trip)."""
+    import math
+
+    from acid.data import Dataset
+    from acid.ident.fit import METHODS, fit_model
+    from acid.ident.validate import REPORT_TIMES_S, WARM_STARTS
+    from acid.studies.car.select import CANDIDATES, select_structure
+    from acid_cli._common import require_range
+
+    require(season in SEASONS, "--season", f"must be one of {', '.join(SEASONS)}, got "
+            f"{season!r}")
+    dmap, dmethod, dwarm, dwarmup = SEASONS[season]
+    method = method or dmethod
+    warm_start = warm_start or dwarm
+    warmup = dwarmup if warmup is None else warmup
+    require(method in METHODS, "--method", f"must be one of {', '.join(METHODS)}, got "
+            f"{method!r}")
+    require(warm_start in WARM_STARTS, "--warm-start",
+            f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
+    require_range(folds, "--folds", 2, 10_000)
+    require_range(max_evals, "--max-evals", 1, 100_000)
+    require_range(oe_window, "--oe-window", 5, 100_000, "samples")
+    require_range(starts, "--starts", 1, 100_000)
+    require_range(horizon, "--horizon", 1, 1_000_000, "samples")
+    require_range(resamples, "--resamples", 10, 1_000_000)
+    require_range(warmup, "--warmup", 0.0, 7 * 86400.0, "s")
+    require(rule_time > 0 and math.isfinite(rule_time), "--rule-time", "must be > 0 s")
+    require(seed >= 0, "--seed", "must be >= 0")
+    names = _names(candidates) or list(CANDIDATES[season])
+    require(len(names) >= 2, "--candidates", "needs at least 2 structures")
+    _folder(logs)
+    check_paths(inputs={"--map": map_path}, outputs={"--out": out, "--json": json_path})
+    from acid.data import ChannelMap
+    from acid.examples import resolve
+    from acid.studies.car.run import load_trips
+
+    cmap = ChannelMap.from_file(map_path if map_path is not None else resolve(dmap))
+    parts = load_trips(logs, cmap, _names(trips) or None)
+    require(len(parts) > folds, "--folds", f"must be below the number of trips "
+            f"({len(parts)})")
+    ds = Dataset.concatenate(parts)
+    ds.source = str(logs)
+    ds.metadata["experiments"] = [{"name": t.experiment_names()[0]} for t in parts]
+    opts = {"method": method, "max_nfev": max_evals,
+            **({"oe_window": oe_window} if method in ("oe", "auto") else {})}
+    Ts = ds.Ts
+    with progress_bar(f"car select ({season})", 2 * folds * len(names)) as update:
+        sel = select_structure(ds, names, fit_options=opts, folds=folds,
+                               rule_time_s=rule_time, starts=starts, horizon=horizon,
+                               warmup=int(math.ceil(warmup / Ts)), exogenous="measured",
+                               to_end=True, warm_start=warm_start, n_resamples=resamples,
+                               seed=seed, progress=update)
+    times = tuple(t for t in sel.times_s() if t in REPORT_TIMES_S)
+    print_table(f"T_cab held out ({len(sel.folds)} folds over {len(parts)} trips): pooled "
+                "RMSE [95 %] / p90, K (* not resolved)",
+                ["_structure", "free", *(f"{t:g} s" for t in times)], sel.rows(times))
+    say(sel.summary().split("\n", 2 + len(sel.candidates) + len(sel.yardsticks))[-1])
+    doc = {"command": "car select", "season": season, "acid_version": __version__,
+           "selection": sel.to_dict()}
+    if out is not None:
+        from acid.models import load
+
+        write_summary(json_path, doc)      # the selection, before the (long) refit
+
+        with progress_bar(f"car select: {sel.chosen} on every trip", None) as update:
+            res = fit_model(sel.chosen, ds, **opts, progress=update)
+        res.write(out, load(sel.chosen),
+                  {"command": "acid car select", "season": season, "trips": len(parts),
+                   "data_source": str(logs), "method": method, "max_evals": max_evals,
+                   "rule": sel.rule, "chosen": sel.chosen})
+        say(f"{sel.chosen} fitted on {len(parts)} trips written to {out}; on a bound: "
+            f"{', '.join(res.on_bounds) or 'none'}")
+        doc["params"] = str(out)
+        doc["fit_on_every_trip"] = {"on_bounds": list(res.on_bounds),
+                                    "values": dict(zip(load(sel.chosen).parameter_names,
+                                                       map(float, res.values), strict=True))}
+    write_summary(json_path, doc)
+

@@ -88,4 +88,5 @@ def register(app) -> None:
     car_app.command(name="fit")(car.car_fit)
     car_app.command(name="validate")(car.car_validate)
     car_app.command(name="control")(car.car_control)
+    car_app.command(name="select")(car.car_select)
     app.add_typer(car_app, name="car")
