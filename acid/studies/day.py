@@ -35,7 +35,7 @@ off-peak price of recharging it over the charger.
 climate, comfort at departure (time to comfort, K.min outside the band), the winter fog
 margin. **The study** (``day_study``): the timer tuned on training days, the three judged on
 held-out days with a departure forecast error of 0, 5 and 15 minutes, paired differences with
-95 % bootstrap intervals (``paired_interval``). SI inside (K, J, s), degC and kWh at the edges.
+95 % intervals read by ``acid.studies.verdict`` (``day_verdict``). SI inside (K, J, s), degC and kWh at the edges.
 """
 
 from __future__ import annotations
@@ -624,43 +624,42 @@ def tune_timer(outcomes: dict[float, Sequence[DayOutcome]],
     return min(outcomes, key=lambda L: plugged_Kmin(outcomes[L]))
 
 
+def fine_leads(outcomes: dict[float, Sequence[DayOutcome]], leads: Sequence[float],
+               target_Kmin: float = COMFORT_TARGET_KMIN) -> tuple[float, ...]:
+    """The whole minutes strictly between the coarse scan's tuned lead and the scanned lead
+    below it (none when the tuned lead is the shortest or no lead meets the target)."""
+    best = tune_timer(outcomes, target_Kmin)
+    if plugged_Kmin(outcomes[best]) > target_Kmin:
+        return ()
+    below = [L for L in leads if L < best]
+    if not below:
+        return ()
+    return tuple(float(m) for m in range(int(math.floor(max(below))) + 1,
+                                         int(math.ceil(best))) if m not in outcomes)
+
+
 def plugged_Kmin(outs: Sequence[DayOutcome]) -> float:
     """Mean K.min outside the band over the first 10 minutes per plugged departure."""
     n = sum(sum(t.plugged for t in o.trips) for o in outs)
     return sum(o.Kmin_plugged for o in outs) / n if n else 0.0
 
 
-@dataclass(frozen=True)
-class PairedInterval:
-    """A paired difference (controller minus baseline) over ``n`` days: mean and 95 %
-    bootstrap interval, and its verdict word (lower is better for every quantity here)."""
-
-    quantity: str
-    n: int
-    mean: float
-    low: float
-    high: float
-    verdict: str
-
-
-def paired_interval(diff: Sequence[float], quantity: str, seed: int = 0,
-                    n_boot: int = 2000, min_n: int = MIN_DAYS_RESOLVED) -> PairedInterval:
-    """Mean of the paired differences ``diff`` (controller minus baseline) with a 95 %
-    percentile bootstrap interval over the days (seeded), read by
-    :func:`acid.studies.verdict.paired_verdict`: "saves" when the interval lies below zero,
-    "costs" above, "no resolvable difference" across it, "not resolved" below ``min_n`` days.
-    A difference identically zero is "no resolvable difference" (the controller against
-    itself)."""
+def day_verdict(diff: Sequence[float], seed: int = 0,
+                min_days: int = MIN_DAYS_RESOLVED) -> dict:
+    """The paired differences ``diff`` (controller minus baseline, one per held-out day;
+    lower is better for every quantity here) read by the project's one reading of an
+    interval, :func:`acid.studies.verdict.paired_verdict`, on the saving (minus the
+    difference): Student's t interval deciding, the paired bootstrap beside it; "not
+    resolved" below ``min_days`` days. Returns ``{n, mean, low, high, boot_low, boot_high,
+    verdict}`` in the difference's sign (``low``/``high``: the t interval)."""
     d = np.asarray(diff, dtype=float)
-    n = int(d.size)
-    if n == 0:
-        return PairedInterval(quantity, 0, math.nan, math.nan, math.nan, "not resolved")
-    # the engine's verdict on the saving (minus the difference), decided by its bootstrap
-    if n == 1:
-        return PairedInterval(quantity, 1, float(d[0]), float(d[0]), float(d[0]), "not resolved")
-    v = paired_verdict(-d, min_count=1, n_boot=n_boot, seed=seed, decide="bootstrap")
-    words = "not resolved" if n < min_n else v.words
-    return PairedInterval(quantity, n, float(d.mean()), -v.boot_hi, -v.boot_lo, words)
+    v = paired_verdict(-d, min_count=min_days, seed=seed)
+    if v.lo is None:
+        mean = float(d.mean()) if d.size else math.nan
+        return {"n": v.n, "mean": mean, "low": math.nan, "high": math.nan,
+                "boot_low": math.nan, "boot_high": math.nan, "verdict": v.words}
+    return {"n": v.n, "mean": -v.mean, "low": -v.hi, "high": -v.lo, "boot_low": -v.boot_hi,
+            "boot_high": -v.boot_lo, "verdict": v.words}
 
 
 # ----------------------------------------------------------------------------- the study
@@ -725,6 +724,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
               jobs: int | None = 1,
               progress: Callable[[int, int, str], None] | None = None) -> DayStudy:
     """Tune the timer over ``leads_min`` on ``n_train`` days per season (departures known),
+    then to the minute below the coarse optimum (:func:`fine_leads`),
     judge none, timer and planner (leads up to the longest of ``leads_min``, a margin of the
     forecast's standard deviation) on ``n_test`` other days for each forecast error; paired
     intervals of timer and planner against none and of the planner against the timer.
@@ -764,6 +764,15 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
             train = make_days(s, n_train, seed, 0.0, first_index=0)
             res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in leads])
             by_lead = {L: [res[(d, "timer", L, leads, 0.0)] for d in train] for L in leads}
+            # to the minute: every whole minute between the coarse optimum and the coarse
+            # lead below it (comfort is monotone in the lead, and so is the energy: a
+            # cheaper feasible lead can only be shorter)
+            fine = fine_leads(by_lead, leads)
+            total[0] += len(fine) * n_train
+            res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in fine])
+            by_lead.update({L: [res[(d, "timer", L, leads, 0.0)] for d in train]
+                            for L in fine})
+            by_lead = dict(sorted(by_lead.items()))
             tuned[s] = tune_timer(by_lead)
             scan[s] = {f"{L:g}": (float(np.mean([o.cost_USD for o in v])), plugged_Kmin(v))
                        for L, v in by_lead.items()}
@@ -789,10 +798,10 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                     pairs += [("planner", plan, "none", none), ("planner", plan, "timer", timer)]
                 for name, a, bname, b in pairs:
                     for key, words in QUANTITIES:
-                        pi = paired_interval([getattr(x, key) - getattr(y, key)
-                                              for x, y in zip(a, b, strict=True)], words, seed)
+                        v = day_verdict([getattr(x, key) - getattr(y, key)
+                                         for x, y in zip(a, b, strict=True)], seed)
                         comps.append({"season": s, "controller": name, "baseline": bname,
-                                      "forecast_sd_min": e, **asdict(pi)})
+                                      "forecast_sd_min": e, "quantity": words, **v})
     return DayStudy(seasons, n_train, n_test, seed, errs, leads, tuned, scan,
                     tuple(outcomes), tuple(comps))
 
@@ -824,6 +833,6 @@ def day_trace(day: DaySpec, controller) -> dict[str, np.ndarray]:
 
 __all__ = ["BAND_C", "CONTROLLERS", "COMFORT_TARGET_KMIN", "Climate", "DayOutcome", "DaySpec",
            "DayStudy", "FORECAST_ERRORS_MIN", "LEADS_MIN", "NoPreconditioning",
-           "PairedInterval", "Planner", "QUICK_LEADS_MIN", "SEASONS", "Tariff", "Timer",
+           "Planner", "QUICK_LEADS_MIN", "SEASONS", "Tariff", "Timer",
            "Trip", "TripOutcome", "controller_of", "day_study", "day_trace", "load_climate",
-           "load_tariff", "make_days", "paired_interval", "plugged_Kmin", "run_day", "tune_timer"]
+           "load_tariff", "make_days", "day_verdict", "fine_leads", "plugged_Kmin", "run_day", "tune_timer"]
