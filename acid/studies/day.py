@@ -35,7 +35,8 @@ off-peak price of recharging it over the charger.
 climate, comfort at departure (time to comfort, K.min outside the band), the winter fog
 margin. **The study** (``day_study``): the timer tuned on training days, the three judged on
 held-out days with a departure forecast error of 0, 5 and 15 minutes, paired differences with
-95 % intervals read by ``acid.studies.verdict`` (``day_verdict``). SI inside (K, J, s), degC and kWh at the edges.
+95 % intervals read by ``acid.studies.verdict`` (``day_verdict``). SI inside (K, J, s),
+degC and kWh at the edges.
 """
 
 from __future__ import annotations
@@ -835,4 +836,5 @@ __all__ = ["BAND_C", "CONTROLLERS", "COMFORT_TARGET_KMIN", "Climate", "DayOutcom
            "DayStudy", "FORECAST_ERRORS_MIN", "LEADS_MIN", "NoPreconditioning",
            "Planner", "QUICK_LEADS_MIN", "SEASONS", "Tariff", "Timer",
            "Trip", "TripOutcome", "controller_of", "day_study", "day_trace", "load_climate",
-           "load_tariff", "make_days", "day_verdict", "fine_leads", "plugged_Kmin", "run_day", "tune_timer"]
+           "load_tariff", "make_days", "day_verdict", "fine_leads", "plugged_Kmin", "run_day",
+           "tune_timer"]
