@@ -152,7 +152,7 @@ def test_the_tuned_timer_is_as_good_as_the_best_lead_of_an_independent_scan():
     finds no cheaper lead that meets the comfort target."""
     leads = (0.0, 10.0, 20.0, 30.0)
     study = D.day_study(("summer",), n_train=2, n_test=1, seed=3, leads_min=leads,
-                        forecast_errors_min=(0.0,), planner=False)
+                        forecast_errors_min=(0.0,), planners=())
     tuned = study.tuned_lead_min["summer"]
     train = D.make_days("summer", 2, 3)
     scan = {}
@@ -168,7 +168,7 @@ def test_the_tuned_timer_is_as_good_as_the_best_lead_of_an_independent_scan():
     assert {c["verdict"] for c in study.comparisons} <= {"not resolved"}
 
 
-def test_the_planner_meets_the_comfort_target_at_no_more_cost_than_a_long_timer(summer):
+def test_the_plant_search_meets_the_comfort_target_at_no_more_cost_than_a_long_timer(summer):
     d, none, _ = summer
     plan = D.run_day(d, D.Planner(40.0))
     long = D.run_day(d, D.Timer(40.0))

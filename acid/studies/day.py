@@ -444,15 +444,17 @@ class ModelPlanner:
     window planned on the declared parked cabin (``acid.models.parked_cabin``, identified on
     the plant's parked records of the training days: ``fit``) by the optimal-control problem
     of :func:`acid.studies.dayplan.plan_power` (grid energy at the hour's price, battery
-    energy at ``V_BAT``, the charger's DC output, the battery's energy left, the cabin
-    ``MARGIN_K`` inside the band over the last ``margin_min`` minutes before the forecast
-    departure), from the cabin measured when the car parks and the day's weather (known).
+    energy at the dearest hour's price, the charger's DC output, the battery's energy left,
+    the cabin ``margin_K`` inside the band over the last ``margin_min`` minutes before the
+    forecast departure; ``margin_K`` tuned on the training days like the timer's lead),
+    from the cabin measured when the car wakes to plan and the day's weather (known).
     Replayed on the plant: the production controller on over the minutes the plan gives at
     least half the full power; a plan that runs up to the forecast departure holds the
     cabin until the car leaves."""
 
     fit: object
     margin_min: float = 0.0
+    margin_K: float = 1.0
     name: str = "planner"
 
     def wake_s(self, trip: Trip) -> float | None:
@@ -474,7 +476,8 @@ class ModelPlanner:
             tariff.price, C2K(BAND_C[car.season]), cap_W=charger.P_ac_W * charger.efficiency,
             eta_charger=charger.efficiency, v_bat=max(tariff.hourly) / charger.efficiency,
             E_avail_kWh=E_RESERVE_FREE * Battery(soc=SOC_START).usable_kWh * SOC_START,
-            margin_min=self.margin_min, T_cab_now=(car.t, float(car.state["T_cab"])))
+            margin_min=self.margin_min, margin_K=self.margin_K,
+            T_cab_now=(car.t, float(car.state["T_cab"])))
 
     def blocks(self, car: _Car, trip: Trip, tariff: Tariff) -> list[tuple[float, float]]:
         if not trip.plugged:
@@ -559,7 +562,8 @@ def controller_of(name: str, lead_min: float = 0.0,
                   fit=None):
     """A controller by name (``CONTROLLERS``): the timer with ``lead_min``, the plant-search
     planner up to the longest of ``leads_min`` with ``margin_min``, the declared-model
-    planner on the identified ``fit`` with ``margin_min``."""
+    planner on the identified ``fit`` with ``margin_min`` and a comfort margin of
+    ``lead_min`` K."""
     if name == "none":
         return NoPreconditioning()
     if name == "timer":
@@ -569,7 +573,7 @@ def controller_of(name: str, lead_min: float = 0.0,
     if name == "planner":
         if fit is None:
             raise ConfigError("the planner needs an identified parked cabin (fit)")
-        return ModelPlanner(fit, margin_min=float(margin_min))
+        return ModelPlanner(fit, margin_min=float(margin_min), margin_K=float(lead_min))
     raise ConfigError(f"unknown controller {name!r} (choose {', '.join(CONTROLLERS)})")
 
 
@@ -821,6 +825,8 @@ class DayStudy:
     #: per season, the identified parked cabin (:class:`acid.studies.dayplan.ParkedFit`)
     fits: dict = field(default_factory=dict)
     planners: tuple[str, ...] = ()
+    #: per season, the declared-model planner's comfort margin tuned on the training days, K
+    margin_K: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         lines = []
@@ -831,7 +837,8 @@ class DayStudy:
                 f = self.fits[s]
                 lines.append(f"{s}: parked cabin identified on {f.n_records} parked phases "
                              f"({f.n_samples} min): simulation error RMS {f.rms_K:.2f} K, "
-                             f"full power {f.P_full_W / 1000:.2f} kW")
+                             f"full power {f.P_full_W / 1000:.2f} kW; comfort margin "
+                             f"tuned: {self.margin_K.get(s, math.nan):g} K")
         for c in self.comparisons:
             lines.append(f"{c['season']} {c['controller']} vs {c['baseline']}, forecast "
                          f"error {c['forecast_sd_min']:g} min, {c['quantity']}: "
@@ -846,7 +853,7 @@ class DayStudy:
                 "scan": self.scan, "comfort_target_Kmin": COMFORT_TARGET_KMIN,
                 "band_C": BAND_C, "min_days_resolved": MIN_DAYS_RESOLVED,
                 "comparisons": _json_safe(list(self.comparisons)),
-                "planners": list(self.planners),
+                "planners": list(self.planners), "planner_margin_K": self.margin_K,
                 "parked_cabin_fit": {k: v.to_dict() for k, v in self.fits.items()},
                 "outcomes": [o.to_dict() for o in self.outcomes]}
 
@@ -858,8 +865,19 @@ class DayStudy:
 
 def _run_task(day: DaySpec, name: str, lead: float, leads: tuple[float, ...],
               sd: float, fit=None) -> DayOutcome:
+    """One day-run; for the planner ``lead`` carries its comfort margin, K."""
     return run_day(day, controller_of(name, lead, leads, margin_min=sd, fit=fit),
                    forecast_sd_min=sd)
+
+
+def _planner_task(d: DaySpec, p: str, leads, e: float, fit, margin_K):
+    return (d, p, margin_K, leads, e, fit) if p == "planner" else (d, p, 0.0, leads, e, None)
+
+
+#: the comfort margins (K inside the band at the forecast departure) the declared-model
+#: planner is tuned over on the training days (negative: the band's edge may be passed by
+#: that much, the drive's first minutes still meeting the target)
+PLAN_MARGINS_K = (-2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 4.0)
 
 
 QUANTITIES = (("E_battery_kWh", "battery energy, kWh"), ("cost_USD", "cost, USD"),
@@ -918,7 +936,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
     n_ctrl = 1 + (1 + len(planners)) * len(errs)
     total[0] = len(seasons) * (n_train * (len(leads) + ("planner" in planners))
                                + n_test * n_ctrl)
-    tuned, scan, outcomes, comps, fits = {}, {}, [], [], {}
+    tuned, scan, outcomes, comps, fits, margin = {}, {}, [], [], {}, {}
     with open_executor(jobs) as ex:
         for s in seasons:
             train = make_days(s, n_train, seed, 0.0, first_index=0)
@@ -940,6 +958,17 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
             if "planner" in planners:
                 recs = run_all(ex, [(d, FIT_LEAD_MIN) for d in train], fn=parked_records)
                 fit = fits[s] = identify(s, [r for v in recs.values() for r in v])
+                # the plan's comfort margin tuned like the timer's lead: the cheapest whose
+                # mean discomfort from a plug over the training days meets the target
+                total[0] += len(PLAN_MARGINS_K) * n_train
+                res = run_all(ex, [(d, "planner", m, leads, 0.0, fit) for d in train
+                                   for m in PLAN_MARGINS_K])
+                by_m = {m: [res[(d, "planner", m, leads, 0.0, fit)] for d in train]
+                        for m in PLAN_MARGINS_K}
+                margin[s] = tune_timer(by_m)
+                scan[f"{s} planner margin K"] = {
+                    f"{m:g}": (float(np.mean([o.cost_USD for o in v])), plugged_Kmin(v))
+                    for m, v in by_m.items()}
             tasks = []
             base_days = make_days(s, n_test, seed, 0.0, first_index=1000)
             tasks += [(d, "none", 0.0, leads, 0.0) for d in base_days]
@@ -947,7 +976,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
             for e in errs:
                 test[e] = make_days(s, n_test, seed, e, first_index=1000)
                 tasks += [(d, "timer", tuned[s], leads, e) for d in test[e]]
-                tasks += [(d, p, 0.0, leads, e, fit if p == "planner" else None)
+                tasks += [_planner_task(d, p, leads, e, fit, margin.get(s))
                           for p in planners for d in test[e]]
             res = run_all(ex, tasks)
             none = [res[(d, "none", 0.0, leads, 0.0)] for d in base_days]
@@ -957,7 +986,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                 outcomes += timer
                 pairs = [("timer", timer, "none", none)]
                 for p in planners:
-                    plan = [res[(d, p, 0.0, leads, e, fit if p == "planner" else None)]
+                    plan = [res[_planner_task(d, p, leads, e, fit, margin.get(s))]
                             for d in test[e]]
                     outcomes += plan
                     pairs += [(p, plan, "none", none), (p, plan, "timer", timer)]
@@ -968,7 +997,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                         comps.append({"season": s, "controller": name, "baseline": bname,
                                       "forecast_sd_min": e, "quantity": words, **v})
     return DayStudy(seasons, n_train, n_test, seed, errs, leads, tuned, scan,
-                    tuple(outcomes), tuple(comps), fits, planners)
+                    tuple(outcomes), tuple(comps), fits, planners, margin)
 
 
 def day_trace(day: DaySpec, controller) -> dict[str, np.ndarray]:

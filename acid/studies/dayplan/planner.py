@@ -16,7 +16,7 @@ one-minute stages::
 
     min  sum_i dt (price_i P_grid,i / eta_charger + v_bat P_bat,i) / 3.6e6      (USD)
     s.t. the model; 0 <= P_grid <= the charger's DC output; P_grid + P_bat <= P_cap(T_cab);
-         E_bat(N) <= the battery's usable energy left;
+         E_bat <= the battery's usable energy left (soft, 1e4 USD per kWh and stage);
          T_cab within the band by ``MARGIN_K`` over the last ``margin_min`` minutes
          before the forecast departure (soft, 10 USD per K and stage)
 
@@ -52,6 +52,8 @@ FIT_LEAD_MIN = 30.0
 #: penalty of the soft bounds, USD per unit and stage (comfort per K, power per kW,
 #: battery per kWh): far above any price, so the bounds hold when they can
 PENALTY = 10.0
+#: the battery's usable energy as good as hard: USD per kWh beyond it and stage
+PENALTY_BATTERY = 1e4
 #: minutes at the start of each pull-down that give the full-power line
 CAP_MINUTES = 3
 
@@ -198,7 +200,7 @@ def _problem(season: str, N: int, cap_W: float, eta_charger: float, v_bat: float
         soft_bounds=(SoftBound("T_cab", penalty=PENALTY, **side),
                      SoftBound("P_over", upper=0.0, penalty=PENALTY, scale=1e-3,
                                expr=lambda s: s.P_el - s.P_cap),
-                     SoftBound("E_bat", upper=1e3, penalty=PENALTY)),
+                     SoftBound("E_bat", upper=1e3, penalty=PENALTY_BATTERY)),
         u_offset={"P_grid": 0.0, "P_bat": 0.0}, u_scale={"P_grid": 1e-3, "P_bat": 1e-3},
         x_offset={"T_cab": 290.0, "T_m": 290.0}, x_scale={"T_cab": 10.0, "T_m": 10.0},
         constants={"eta_charger": eta_charger, "v_bat": v_bat}, cost_scale=10.0)
