@@ -15,7 +15,8 @@ runner = CliRunner()
 def test_help_names_the_options():
     r = runner.invoke(app, ["day", "--help"])
     assert r.exit_code == 0
-    for opt in ("--season", "--days", "--seed", "--jobs", "--quick", "--out", "--json"):
+    for opt in ("--season", "--days", "--seed", "--jobs", "--quick", "--out", "--json",
+                "--planner"):
         assert opt in r.output
 
 
@@ -23,6 +24,12 @@ def test_an_unknown_season_is_one_line_exit_2(tmp_path):
     r = runner.invoke(app, ["day", "--season", "spring", "--out", str(tmp_path / "o")])
     assert r.exit_code == 2
     assert "--season" in r.output and "Traceback" not in r.output
+
+
+def test_an_unknown_planner_is_one_line_exit_2(tmp_path):
+    r = runner.invoke(app, ["day", "--planner", "oracle", "--out", str(tmp_path / "o")])
+    assert r.exit_code == 2
+    assert "--planner" in r.output and "Traceback" not in r.output
 
 
 @pytest.mark.slow

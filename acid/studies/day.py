@@ -877,7 +877,7 @@ def _planner_task(d: DaySpec, p: str, leads, e: float, fit, margin_K):
 #: the comfort margins (K inside the band at the forecast departure) the declared-model
 #: planner is tuned over on the training days (negative: the band's edge may be passed by
 #: that much, the drive's first minutes still meeting the target)
-PLAN_MARGINS_K = (-2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 4.0)
+PLAN_MARGINS_K = tuple(float(m) for m in range(-4, 7))
 
 
 QUANTITIES = (("E_battery_kWh", "battery energy, kWh"), ("cost_USD", "cost, USD"),
