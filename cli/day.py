@@ -31,8 +31,14 @@ def day(
                                "January, heating plant); repeat for both (default both)."),
     days: int = typer.Option(10, "--days", help="Held-out days per season (the timer is "
                                                 "tuned on half as many other days)."),
+    planner: str = typer.Option(
+        "both", "--planner",
+        help="Which planner to judge besides the timer: 'model' (the power plan on the "
+             "declared parked cabin identified on the training days), 'plant-search' (the "
+             "start searched on the plant itself, the slow one) or 'both'."),
     no_planner: bool = typer.Option(False, "--no-planner",
-                                    help="Judge the timer only (the planner is the slow part)."),
+                                    help="Judge the timer only (the planners are the slow "
+                                         "part)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the days (weather, departures, plug, "
                                                "forecast errors)."),
     jobs: int = typer.Option(1, "--jobs", help="Worker processes (1: run in this process; "
@@ -46,10 +52,12 @@ def day(
     """Run a car's day (04:00 to the evening trip: parked and plugged at home, a morning trip,
     parked at work, an evening trip) on acid's plants, with the sun and ambient of the hour
     while parked. Compares no pre-conditioning, a timer (start a tuned lead before the
-    forecast departure, on grid power) and a planner (the cheapest start at the hour's price
-    that meets the same comfort target), on held-out days with departure forecast errors of
-    0, 5 and 15 minutes: battery energy, cost, comfort and total grid energy as paired
-    differences with 95 % bootstrap intervals.
+    forecast departure, on grid power) and two planners: a power plan over the parked window
+    on a declared cabin model identified on the training days (an optimal-control problem:
+    price, charger limit, battery energy, comfort at departure) and the cheapest start
+    searched on the plant itself; on held-out days with departure forecast errors of 0, 5
+    and 15 minutes: battery energy, cost, comfort and total grid energy as paired differences
+    with 95 % intervals.
     """
     from acid.outdir import claim
     from acid.report.day import day_figure
@@ -58,6 +66,8 @@ def day(
     seasons = tuple(season) if season else study.SEASONS
     for s in seasons:
         require(s in study.SEASONS, "--season", f"{s!r}: choose summer or winter")
+    require(planner in ("model", "plant-search", "both"), "--planner",
+            f"{planner!r}: choose model, plant-search or both")
     require_range(days, "--days", 1, 1000, integer=True)
     require_range(jobs, "--jobs", 1, 256, integer=True)
     require_range(seed, "--seed", 0, 2**63 - 1, integer=True)
@@ -65,11 +75,13 @@ def day(
     n_test = 4 if quick else days
     n_train = 3 if quick else max(2, days // 2)
     leads = study.QUICK_LEADS_MIN if quick else study.LEADS_MIN
-    n_ctrl = 1 + len(study.FORECAST_ERRORS_MIN) * (1 if no_planner else 2)
+    planners = () if no_planner else {"model": ("planner",), "plant-search": (
+        "plant-search",), "both": study.PLANNERS}[planner]
+    n_ctrl = 1 + len(study.FORECAST_ERRORS_MIN) * (1 + len(planners))
     total = len(seasons) * (n_train * len(leads) + n_test * n_ctrl)
     with claim(out, "acid day"), progress_bar("day study", total=total) as update:
         result = study.day_study(seasons, n_train=n_train, n_test=n_test, seed=seed,
-                                 leads_min=leads, planner=not no_planner, jobs=jobs,
+                                 leads_min=leads, planners=planners, jobs=jobs,
                                  progress=update)
         traces, labels = {}, {}
         for s in seasons:
@@ -77,7 +89,10 @@ def day(
             pool = study.make_days(s, 20, seed, 0.0, first_index=1000)
             d = next((x for x in pool if all(t.plugged for t in x.trips)), pool[0])
             ctrls = [study.NoPreconditioning(), study.Timer(result.tuned_lead_min[s])]
-            if not no_planner:
+            if "planner" in planners:
+                ctrls.append(study.ModelPlanner(result.fits[s],
+                                                margin_K=result.margin_K[s]))
+            if "plant-search" in planners:
                 ctrls.append(study.Planner())
             traces[s] = {c.name: study.day_trace(d, c) for c in ctrls}
             labels[s] = f"{study.load_climate(s).city}: held-out {d.label}"
@@ -93,10 +108,15 @@ def day(
     for s in seasons:
         say(f"{s}: timer lead tuned on {n_train} training days: "
             f"{result.tuned_lead_min[s]:g} min")
+        if s in result.fits:
+            f = result.fits[s]
+            say(f"{s}: parked cabin identified on {f.n_records} parked phases of the training "
+                f"days ({f.n_samples} min): simulation error RMS {f.rms_K:.2f} K; planner's "
+                f"comfort margin tuned: {result.margin_K[s]:g} K")
         rows = []
         for name in study.CONTROLLERS:
             for e in (result.forecast_errors_min if name != "none" else (0.0,)):
-                if name == "planner" and no_planner:
+                if name in study.PLANNERS and name not in planners:
                     continue
                 m = lambda k, n=name, e=e, s=s: result.mean_of(s, n, e, k)  # noqa: E731
                 rows.append([name, f"{e:g}" if name != "none" else "-",
@@ -118,7 +138,7 @@ def day(
             comp.append([f"{c['controller']} - {c['baseline']}", f"{c['forecast_sd_min']:g}",
                          c["quantity"], f"{c['mean']:+.3f}",
                          f"[{c['low']:+.3f}, {c['high']:+.3f}]", c["verdict"]])
-        print_table(f"{s}: paired differences per held-out day, 95 % bootstrap "
+        print_table(f"{s}: paired differences per held-out day, 95 % t interval "
                     f"(\"not resolved\" below {study.MIN_DAYS_RESOLVED} days)",
                     ["_pair", "forecast error, min", "_quantity", "mean", "interval",
                      "_verdict"], comp)

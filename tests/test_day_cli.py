@@ -15,7 +15,8 @@ runner = CliRunner()
 def test_help_names_the_options():
     r = runner.invoke(app, ["day", "--help"])
     assert r.exit_code == 0
-    for opt in ("--season", "--days", "--seed", "--jobs", "--quick", "--out", "--json"):
+    for opt in ("--season", "--days", "--seed", "--jobs", "--quick", "--out", "--json",
+                "--planner"):
         assert opt in r.output
 
 
@@ -23,6 +24,12 @@ def test_an_unknown_season_is_one_line_exit_2(tmp_path):
     r = runner.invoke(app, ["day", "--season", "spring", "--out", str(tmp_path / "o")])
     assert r.exit_code == 2
     assert "--season" in r.output and "Traceback" not in r.output
+
+
+def test_an_unknown_planner_is_one_line_exit_2(tmp_path):
+    r = runner.invoke(app, ["day", "--planner", "oracle", "--out", str(tmp_path / "o")])
+    assert r.exit_code == 2
+    assert "--planner" in r.output and "Traceback" not in r.output
 
 
 @pytest.mark.slow
@@ -34,7 +41,7 @@ def test_a_quick_summer_run_writes_json_and_figure(tmp_path):
     assert (out / "day.png").stat().st_size > 10_000
     s = json.loads(js.read_text())
     assert s["seasons"] == ["summer"] and s["n_test"] == 4
-    assert s["tuned_lead_min"]["summer"] in s["leads_min"]
+    assert f"{s['tuned_lead_min']['summer']:g}" in s["scan"]["summer"]  # to the minute
     words = {c["verdict"] for c in s["comparisons"]}
     assert words == {"not resolved"}  # 4 held-out days are below the resolved count
     assert "paired differences" in r.output

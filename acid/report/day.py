@@ -11,7 +11,8 @@ from collections.abc import Mapping
 import numpy as np
 from matplotlib.figure import Figure
 
-_STYLES = {"none": ("C3", "-"), "timer": ("C0", "--"), "planner": ("C2", ":")}
+_STYLES = {"none": ("C3", "-"), "timer": ("C0", "--"), "planner": ("C2", ":"),
+           "plant-search": ("C1", "-.")}
 
 
 def day_figure(traces: Mapping[str, Mapping[str, Mapping[str, np.ndarray]]],

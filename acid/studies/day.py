@@ -35,7 +35,8 @@ off-peak price of recharging it over the charger.
 climate, comfort at departure (time to comfort, K.min outside the band), the winter fog
 margin. **The study** (``day_study``): the timer tuned on training days, the three judged on
 held-out days with a departure forecast error of 0, 5 and 15 minutes, paired differences with
-95 % bootstrap intervals (``paired_interval``). SI inside (K, J, s), degC and kWh at the edges.
+95 % intervals read by ``acid.studies.verdict`` (``day_verdict``). SI inside (K, J, s),
+degC and kWh at the edges.
 """
 
 from __future__ import annotations
@@ -53,7 +54,9 @@ from acid.studies.verdict import paired_verdict
 from acid.units import C2K, K2C
 
 SEASONS = ("summer", "winter")
-CONTROLLERS = ("none", "timer", "planner")
+CONTROLLERS = ("none", "timer", "planner", "plant-search")
+#: the planners the study can judge
+PLANNERS = ("planner", "plant-search")
 #: the day starts at 04:00 with every node at the ambient (assumption: the night's soak)
 DAY_START_S = 4 * 3600.0
 #: parked step, s (off plant) and the production controllers' step (the plants' 5 s)
@@ -257,6 +260,8 @@ class _Car:
         self.state = {k: v for k, v in self.on.measure().items() if k in self.keys}
         self.t = t0
         self._sun = -1.0
+        #: (clock time s, cabin K) when the car last parked
+        self.parked_at = (t0, float(self.state["T_cab"]))
 
     def _set_sun(self, plant, mode: str, t: float) -> None:
         G = round(self.clim.G_solar(t, self.day.clouds), 1)
@@ -331,6 +336,12 @@ def _outside_Kmin(rows: Sequence[dict], season: str, window_s: float | None = No
 
 
 # ----------------------------------------------------------------------------- controllers
+def _lead_blocks(trip: Trip, lead_s: float) -> list[tuple[float, float]]:
+    """A lead as on-blocks: the production controller from ``lead_s`` before the forecast
+    departure until the car leaves."""
+    return [(trip.forecast_s - lead_s, math.inf)] if lead_s > 0 else []
+
+
 @dataclass(frozen=True)
 class NoPreconditioning:
     """The plant's own controller from departure; switched off while parked."""
@@ -339,6 +350,9 @@ class NoPreconditioning:
 
     def lead_s(self, car: _Car, trip: Trip, tariff: Tariff) -> float:
         return 0.0
+
+    def blocks(self, car: _Car, trip: Trip, tariff: Tariff) -> list[tuple[float, float]]:
+        return []
 
 
 @dataclass(frozen=True)
@@ -352,23 +366,30 @@ class Timer:
     def lead_s(self, car: _Car, trip: Trip, tariff: Tariff) -> float:
         return 60.0 * self.lead_min if trip.plugged else 0.0
 
+    def blocks(self, car: _Car, trip: Trip, tariff: Tariff) -> list[tuple[float, float]]:
+        return _lead_blocks(trip, self.lead_s(car, trip, tariff))
+
 
 @dataclass(frozen=True)
 class Planner:
-    """For each plugged departure, choose the start on the plant itself (same weather, the
-    forecast departure, the first ``COMFORT_WINDOW_S`` of the drive): the shortest lead, to
-    the minute, whose discomfort is at most ``target_Kmin`` (bisection: a longer lead never
-    leaves a warmer (colder) cabin), then the cheapest of it and the leads 5 and 10 minutes
-    longer that also meet the target (a cheaper hour can pay for a longer lead); none meeting
-    it within ``max_lead_min``: the longest. Cost: grid energy at the hour's price, the
-    drive's battery energy in the window at the off-peak price over the charger. The lead
-    found is lengthened by ``margin_min`` (the study: the departure forecast's stated
-    standard deviation), so that an early departure still finds the cabin nearly ready."""
+    """``plant-search``: for each plugged departure, choose the start on the plant itself
+    (same weather, the forecast departure, the first ``COMFORT_WINDOW_S`` of the drive): the
+    shortest lead, to the minute, whose discomfort is at most ``target_Kmin`` (bisection: a
+    longer lead never leaves a warmer (colder) cabin), then the cheapest of it and the leads 5
+    and 10 minutes longer that also meet the target (a cheaper hour can pay for a longer
+    lead); none meeting it within ``max_lead_min``: the longest. Cost: grid energy at the
+    hour's price, the drive's battery energy in the window at the off-peak price over the
+    charger. The lead found is lengthened by ``margin_min`` (the study: the departure
+    forecast's stated standard deviation), so that an early departure still finds the cabin
+    nearly ready."""
 
     max_lead_min: float = 60.0
     target_Kmin: float = COMFORT_TARGET_KMIN
     margin_min: float = 0.0
-    name: str = "planner"
+    name: str = "plant-search"
+
+    def blocks(self, car: _Car, trip: Trip, tariff: Tariff) -> list[tuple[float, float]]:
+        return _lead_blocks(trip, self.lead_s(car, trip, tariff))
 
     def lead_s(self, car: _Car, trip: Trip, tariff: Tariff) -> float:
         if not trip.plugged:
@@ -417,6 +438,102 @@ class Planner:
         return 60.0 * min(best + self.margin_min, top)
 
 
+@dataclass(frozen=True)
+class ModelPlanner:
+    """``planner``: for each plugged departure, the pre-conditioning power over the parked
+    window planned on the declared parked cabin (``acid.models.parked_cabin``, identified on
+    the plant's parked records of the training days: ``fit``) by the optimal-control problem
+    of :func:`acid.studies.dayplan.plan_power` (grid energy at the hour's price, battery
+    energy at the dearest hour's price, the charger's DC output, the battery's energy left,
+    the cabin ``margin_K`` inside the band over the last ``margin_min`` minutes before the
+    forecast departure; ``margin_K`` tuned on the training days like the timer's lead),
+    from the cabin measured when the car wakes to plan and the day's weather (known).
+    Replayed on the plant: the production controller on over the minutes the plan gives at
+    least half the full power; a plan that runs up to the forecast departure holds the
+    cabin until the car leaves."""
+
+    fit: object
+    margin_min: float = 0.0
+    margin_K: float = 1.0
+    name: str = "planner"
+
+    def wake_s(self, trip: Trip) -> float | None:
+        """When the car wakes to plan (s): the window's start before the forecast departure;
+        the planner reads the cabin then and runs the model from its own soak estimate
+        (the mass) and the measured cabin."""
+        from acid.studies.dayplan import WINDOW_MIN
+
+        return trip.forecast_s - 60.0 * WINDOW_MIN if trip.plugged else None
+
+    def plan(self, car: _Car, trip: Trip, tariff: Tariff):
+        from acid.studies.dayplan import plan_power
+
+        charger = Charger()
+        clim, day = car.clim, car.day
+        return plan_power(
+            self.fit, car.parked_at[1], car.parked_at[0], trip.forecast_s,
+            lambda t: (clim.T_amb_K(t, day.dT_max), clim.G_solar(t, day.clouds)),
+            tariff.price, C2K(BAND_C[car.season]), cap_W=charger.P_ac_W * charger.efficiency,
+            eta_charger=charger.efficiency, v_bat=max(tariff.hourly) / charger.efficiency,
+            E_avail_kWh=E_RESERVE_FREE * Battery(soc=SOC_START).usable_kWh * SOC_START,
+            margin_min=self.margin_min, margin_K=self.margin_K,
+            T_cab_now=(car.t, float(car.state["T_cab"])))
+
+    def blocks(self, car: _Car, trip: Trip, tariff: Tariff) -> list[tuple[float, float]]:
+        if not trip.plugged:
+            return []
+        plan = self.plan(car, trip, tariff)
+        if plan is None:
+            return []
+        out = plan.on_blocks()
+        if out and out[-1][1] >= trip.forecast_s - 1e-6:
+            out[-1] = (out[-1][0], math.inf)
+        return out
+
+
+#: share of the battery's energy at the day's start the parked plan may use (assumption: the
+#: rest is the trips' and a reserve)
+E_RESERVE_FREE = 0.2
+#: the timer lead of the training runs that give the planner's parked records, min
+FIT_LEAD_MIN = 30.0
+
+
+def parked_records(day: DaySpec, lead_min: float = FIT_LEAD_MIN) -> list:
+    """The parked phases of ``day`` under the timer at ``lead_min`` (switched-off soak, then
+    the production controller's pull-down on a plug) as one-minute records
+    (:class:`acid.studies.dayplan.ParkedRecord`): the cabin air at each minute's start, the
+    mean electric power drawn (climate + 12 V base) while on, ambient and sun."""
+    from acid.studies.dayplan import ParkedRecord
+
+    clim, tariff = load_climate(day.season), load_tariff()
+    car = _Car(clim, day, DAY_START_S)
+    timer, P_base = Timer(lead_min), _base_W()
+    out = []
+    for trip in day.trips:
+        t0, T0 = car.t, float(car.state["T_cab"])
+        rows = _park(car, trip, timer, tariff, keep_off=True)
+        H = int(math.floor((trip.depart_s - t0) / 60.0 + 1e-9))
+        T, P = [T0], np.zeros(H)
+        buckets: list[list[dict]] = [[] for _ in range(H)]
+        for r in rows:
+            k = int(math.floor((r["t"] - t0) / 60.0 + 1e-9))
+            if k < H:
+                buckets[k].append(r)
+        H = next((k for k, b in enumerate(buckets) if not b or
+                  abs(sum(r["Ts"] for r in b) - 60.0) > 1e-6), H)
+        for k in range(H):
+            b = buckets[k]
+            T.append(float(b[-1]["T_cab"]))
+            if b[0]["Ts"] < PARKED_TS:
+                P[k] = float(np.mean([_climate_W(r) + P_base for r in b]))
+        ts = t0 + 60.0 * np.arange(H)
+        out.append(ParkedRecord(np.array(T), P[:H],
+                                np.array([clim.T_amb_K(t, day.dT_max) for t in ts]),
+                                np.array([clim.G_solar(t, day.clouds) for t in ts])))
+        car.run(0.0, "drive", _speeds(trip.cycles))
+    return out
+
+
 def _plugged_split(pre: Sequence[dict], charger: Charger, tariff: Tariff, P_base: float
                    ) -> tuple[float, float, float]:
     """Pre-conditioning rows split between the charger and the battery: the DC load
@@ -441,15 +558,22 @@ def _base_W() -> float:
 
 
 def controller_of(name: str, lead_min: float = 0.0,
-                  leads_min: Sequence[float] = LEADS_MIN, margin_min: float = 0.0):
-    """A controller by name (``CONTROLLERS``): the timer with ``lead_min``, the planner up to
-    the longest of ``leads_min`` with ``margin_min``."""
+                  leads_min: Sequence[float] = LEADS_MIN, margin_min: float = 0.0,
+                  fit=None):
+    """A controller by name (``CONTROLLERS``): the timer with ``lead_min``, the plant-search
+    planner up to the longest of ``leads_min`` with ``margin_min``, the declared-model
+    planner on the identified ``fit`` with ``margin_min`` and a comfort margin of
+    ``lead_min`` K."""
     if name == "none":
         return NoPreconditioning()
     if name == "timer":
         return Timer(float(lead_min))
-    if name == "planner":
+    if name == "plant-search":
         return Planner(float(max(leads_min)), margin_min=float(margin_min))
+    if name == "planner":
+        if fit is None:
+            raise ConfigError("the planner needs an identified parked cabin (fit)")
+        return ModelPlanner(fit, margin_min=float(margin_min), margin_K=float(lead_min))
     raise ConfigError(f"unknown controller {name!r} (choose {', '.join(CONTROLLERS)})")
 
 
@@ -538,17 +662,36 @@ def _json_safe(x):
     return x
 
 
-def _park(car: _Car, trip: Trip, lead: float) -> list[dict]:
-    """The parked phase before ``trip``: switched off, then the production controller from
-    ``lead`` s before the forecast departure until the true departure (none when the car
-    leaves first). Returns the pre-conditioning rows. The off phase runs whole 60 s steps:
-    without pre-conditioning the drive starts up to 59 s before the departure."""
-    start = min(trip.forecast_s - lead, trip.depart_s) if lead > 0 else trip.depart_s
-    if start < trip.depart_s:
-        car.run(start, "off")
-        return car.run(trip.depart_s, "on")
-    car.run(trip.depart_s, "off")
-    return []
+def _park(car: _Car, trip: Trip, controller, tariff: Tariff,
+          keep_off: bool = False) -> list[dict]:
+    """The parked phase before ``trip``: switched off, and the production controller over
+    each on-block (start, end) s, cut at the true departure (none when the car leaves
+    first; an end of ``inf``: until the car leaves). Returns the pre-conditioning rows (and
+    the switched-off ones, in time order, with ``keep_off``). The off phases run whole 60 s
+    steps: without pre-conditioning the drive starts up to 59 s before the departure. A
+    controller with a ``wake_s`` is asked for its blocks at that time (the car switched off
+    until then), the others when the car parks."""
+    rows = []
+    car.parked_at = (car.t, float(car.state["T_cab"]))
+    wake = getattr(controller, "wake_s", lambda trip: None)(trip)
+    if wake is not None and wake > car.t:
+        off = car.run(min(wake, trip.depart_s), "off")
+        if keep_off:
+            rows += off
+    for a, b in controller.blocks(car, trip, tariff):
+        a, b = max(a, car.t), min(b, trip.depart_s)
+        if a >= b:
+            continue
+        off = car.run(a, "off")
+        if keep_off:
+            rows += off
+        if car.t < b:
+            rows += car.run(b, "on")
+    if car.t < trip.depart_s:
+        off = car.run(trip.depart_s, "off")
+        if keep_off:
+            rows += off
+    return rows
 
 
 def run_day(day: DaySpec, controller, tariff: Tariff | None = None,
@@ -565,7 +708,7 @@ def run_day(day: DaySpec, controller, tariff: Tariff | None = None,
     car = _Car(clim, day, DAY_START_S)
     outs = []
     for trip in day.trips:
-        pre = _park(car, trip, controller.lead_s(car, trip, tariff))
+        pre = _park(car, trip, controller, tariff)
         v = _speeds(trip.cycles)
         drive = car.run(0.0, "drive", v)
         grid_pre, cost_pre, batt_pre = _plugged_split(pre, charger, tariff, road.P_aux)
@@ -624,43 +767,42 @@ def tune_timer(outcomes: dict[float, Sequence[DayOutcome]],
     return min(outcomes, key=lambda L: plugged_Kmin(outcomes[L]))
 
 
+def fine_leads(outcomes: dict[float, Sequence[DayOutcome]], leads: Sequence[float],
+               target_Kmin: float = COMFORT_TARGET_KMIN) -> tuple[float, ...]:
+    """The whole minutes strictly between the coarse scan's tuned lead and the scanned lead
+    below it (none when the tuned lead is the shortest or no lead meets the target)."""
+    best = tune_timer(outcomes, target_Kmin)
+    if plugged_Kmin(outcomes[best]) > target_Kmin:
+        return ()
+    below = [L for L in leads if L < best]
+    if not below:
+        return ()
+    return tuple(float(m) for m in range(int(math.floor(max(below))) + 1,
+                                         int(math.ceil(best))) if m not in outcomes)
+
+
 def plugged_Kmin(outs: Sequence[DayOutcome]) -> float:
     """Mean K.min outside the band over the first 10 minutes per plugged departure."""
     n = sum(sum(t.plugged for t in o.trips) for o in outs)
     return sum(o.Kmin_plugged for o in outs) / n if n else 0.0
 
 
-@dataclass(frozen=True)
-class PairedInterval:
-    """A paired difference (controller minus baseline) over ``n`` days: mean and 95 %
-    bootstrap interval, and its verdict word (lower is better for every quantity here)."""
-
-    quantity: str
-    n: int
-    mean: float
-    low: float
-    high: float
-    verdict: str
-
-
-def paired_interval(diff: Sequence[float], quantity: str, seed: int = 0,
-                    n_boot: int = 2000, min_n: int = MIN_DAYS_RESOLVED) -> PairedInterval:
-    """Mean of the paired differences ``diff`` (controller minus baseline) with a 95 %
-    percentile bootstrap interval over the days (seeded), read by
-    :func:`acid.studies.verdict.paired_verdict`: "saves" when the interval lies below zero,
-    "costs" above, "no resolvable difference" across it, "not resolved" below ``min_n`` days.
-    A difference identically zero is "no resolvable difference" (the controller against
-    itself)."""
+def day_verdict(diff: Sequence[float], seed: int = 0,
+                min_days: int = MIN_DAYS_RESOLVED) -> dict:
+    """The paired differences ``diff`` (controller minus baseline, one per held-out day;
+    lower is better for every quantity here) read by the project's one reading of an
+    interval, :func:`acid.studies.verdict.paired_verdict`, on the saving (minus the
+    difference): Student's t interval deciding, the paired bootstrap beside it; "not
+    resolved" below ``min_days`` days. Returns ``{n, mean, low, high, boot_low, boot_high,
+    verdict}`` in the difference's sign (``low``/``high``: the t interval)."""
     d = np.asarray(diff, dtype=float)
-    n = int(d.size)
-    if n == 0:
-        return PairedInterval(quantity, 0, math.nan, math.nan, math.nan, "not resolved")
-    # the engine's verdict on the saving (minus the difference), decided by its bootstrap
-    if n == 1:
-        return PairedInterval(quantity, 1, float(d[0]), float(d[0]), float(d[0]), "not resolved")
-    v = paired_verdict(-d, min_count=1, n_boot=n_boot, seed=seed, decide="bootstrap")
-    words = "not resolved" if n < min_n else v.words
-    return PairedInterval(quantity, n, float(d.mean()), -v.boot_hi, -v.boot_lo, words)
+    v = paired_verdict(-d, min_count=min_days, seed=seed)
+    if v.lo is None:
+        mean = float(d.mean()) if d.size else math.nan
+        return {"n": v.n, "mean": mean, "low": math.nan, "high": math.nan,
+                "boot_low": math.nan, "boot_high": math.nan, "verdict": v.words}
+    return {"n": v.n, "mean": -v.mean, "low": -v.hi, "high": -v.lo, "boot_low": -v.boot_hi,
+            "boot_high": -v.boot_lo, "verdict": v.words}
 
 
 # ----------------------------------------------------------------------------- the study
@@ -680,12 +822,23 @@ class DayStudy:
     scan: dict[str, dict[str, tuple[float, float]]]
     outcomes: tuple[DayOutcome, ...]
     comparisons: tuple[dict, ...] = field(default=())
+    #: per season, the identified parked cabin (:class:`acid.studies.dayplan.ParkedFit`)
+    fits: dict = field(default_factory=dict)
+    planners: tuple[str, ...] = ()
+    #: per season, the declared-model planner's comfort margin tuned on the training days, K
+    margin_K: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         lines = []
         for s in self.seasons:
             lines.append(f"{s}: timer lead tuned on {self.n_train} training days: "
                          f"{self.tuned_lead_min[s]:g} min")
+            if s in self.fits:
+                f = self.fits[s]
+                lines.append(f"{s}: parked cabin identified on {f.n_records} parked phases "
+                             f"({f.n_samples} min): simulation error RMS {f.rms_K:.2f} K, "
+                             f"full power {f.P_full_W / 1000:.2f} kW; comfort margin "
+                             f"tuned: {self.margin_K.get(s, math.nan):g} K")
         for c in self.comparisons:
             lines.append(f"{c['season']} {c['controller']} vs {c['baseline']}, forecast "
                          f"error {c['forecast_sd_min']:g} min, {c['quantity']}: "
@@ -700,6 +853,8 @@ class DayStudy:
                 "scan": self.scan, "comfort_target_Kmin": COMFORT_TARGET_KMIN,
                 "band_C": BAND_C, "min_days_resolved": MIN_DAYS_RESOLVED,
                 "comparisons": _json_safe(list(self.comparisons)),
+                "planners": list(self.planners), "planner_margin_K": self.margin_K,
+                "parked_cabin_fit": {k: v.to_dict() for k, v in self.fits.items()},
                 "outcomes": [o.to_dict() for o in self.outcomes]}
 
     def mean_of(self, season: str, controller: str, sd: float, key: str) -> float:
@@ -709,8 +864,20 @@ class DayStudy:
 
 
 def _run_task(day: DaySpec, name: str, lead: float, leads: tuple[float, ...],
-              sd: float) -> DayOutcome:
-    return run_day(day, controller_of(name, lead, leads, margin_min=sd), forecast_sd_min=sd)
+              sd: float, fit=None) -> DayOutcome:
+    """One day-run; for the planner ``lead`` carries its comfort margin, K."""
+    return run_day(day, controller_of(name, lead, leads, margin_min=sd, fit=fit),
+                   forecast_sd_min=sd)
+
+
+def _planner_task(d: DaySpec, p: str, leads, e: float, fit, margin_K):
+    return (d, p, margin_K, leads, e, fit) if p == "planner" else (d, p, 0.0, leads, e, None)
+
+
+#: the comfort margins (K inside the band at the forecast departure) the declared-model
+#: planner is tuned over on the training days (negative: the band's edge may be passed by
+#: that much, the drive's first minutes still meeting the target)
+PLAN_MARGINS_K = tuple(float(m) for m in range(-4, 7))
 
 
 QUANTITIES = (("E_battery_kWh", "battery energy, kWh"), ("cost_USD", "cost, USD"),
@@ -721,27 +888,36 @@ QUANTITIES = (("E_battery_kWh", "battery energy, kWh"), ("cost_USD", "cost, USD"
 
 def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 10,
               seed: int = 0, forecast_errors_min: Sequence[float] = FORECAST_ERRORS_MIN,
-              leads_min: Sequence[float] = LEADS_MIN, planner: bool = True,
+              leads_min: Sequence[float] = LEADS_MIN, planners: Sequence[str] = PLANNERS,
               jobs: int | None = 1,
               progress: Callable[[int, int, str], None] | None = None) -> DayStudy:
     """Tune the timer over ``leads_min`` on ``n_train`` days per season (departures known),
-    judge none, timer and planner (leads up to the longest of ``leads_min``, a margin of the
-    forecast's standard deviation) on ``n_test`` other days for each forecast error; paired
-    intervals of timer and planner against none and of the planner against the timer.
+    then to the minute below the coarse optimum (:func:`fine_leads`); identify the parked
+    cabin on the same days' parked records under the timer at ``FIT_LEAD_MIN``
+    (:func:`parked_records`, :func:`acid.studies.dayplan.identify`); judge none, the timer
+    and the ``planners`` (``planner``: the declared-model plan; ``plant-search``: the start
+    searched on the plant, leads up to the longest of ``leads_min``; both with a margin of
+    the forecast's standard deviation) on ``n_test`` other days for each forecast error;
+    paired intervals of each against none and of each planner against the timer.
     Training days are indices 0.., held-out days 1000..: no day is both."""
     from acid.executor import check_interrupt, open_executor
+    from acid.studies.dayplan import identify
 
     seasons, leads = tuple(seasons), tuple(float(x) for x in leads_min)
     errs = tuple(float(x) for x in forecast_errors_min)
+    planners = tuple(planners)
     for s in seasons:
         load_climate(s)
+    for p in planners:
+        if p not in PLANNERS:
+            raise ConfigError(f"--planner {p!r}: choose {' or '.join(PLANNERS)}")
     if n_train < 1 or n_test < 1:
         raise ConfigError("--days: need at least one training and one held-out day")
     total = [0]
     done = [0]
 
-    def run_all(ex, tasks):
-        handles = {ex.submit(_run_task, *t): t for t in tasks}
+    def run_all(ex, tasks, fn=_run_task):
+        handles = {ex.submit(fn, *t): t for t in tasks}
         out, pending = {}, list(handles)
         while pending:
             check_interrupt()
@@ -752,21 +928,47 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                 done[0] += 1
                 if progress is not None:
                     t = handles[h]
-                    progress(done[0], total[0], f"{t[0].label} {t[1]} {t[2]:g} min, "
-                                                f"error {t[4]:g} min")
+                    progress(done[0], total[0],
+                             f"{t[0].label} {t[1]} {t[2]:g} min, error {t[4]:g} min"
+                             if fn is _run_task else f"{t[0].label} parked records")
         return out
 
-    n_ctrl = 1 + 2 * len(errs) if planner else 1 + len(errs)
-    total[0] = len(seasons) * (n_train * len(leads) + n_test * n_ctrl)
-    tuned, scan, outcomes, comps = {}, {}, [], []
+    n_ctrl = 1 + (1 + len(planners)) * len(errs)
+    total[0] = len(seasons) * (n_train * (len(leads) + ("planner" in planners))
+                               + n_test * n_ctrl)
+    tuned, scan, outcomes, comps, fits, margin = {}, {}, [], [], {}, {}
     with open_executor(jobs) as ex:
         for s in seasons:
             train = make_days(s, n_train, seed, 0.0, first_index=0)
             res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in leads])
             by_lead = {L: [res[(d, "timer", L, leads, 0.0)] for d in train] for L in leads}
+            # to the minute: every whole minute between the coarse optimum and the coarse
+            # lead below it (comfort is monotone in the lead, and so is the energy: a
+            # cheaper feasible lead can only be shorter)
+            fine = fine_leads(by_lead, leads)
+            total[0] += len(fine) * n_train
+            res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in fine])
+            by_lead.update({L: [res[(d, "timer", L, leads, 0.0)] for d in train]
+                            for L in fine})
+            by_lead = dict(sorted(by_lead.items()))
             tuned[s] = tune_timer(by_lead)
             scan[s] = {f"{L:g}": (float(np.mean([o.cost_USD for o in v])), plugged_Kmin(v))
                        for L, v in by_lead.items()}
+            fit = None
+            if "planner" in planners:
+                recs = run_all(ex, [(d, FIT_LEAD_MIN) for d in train], fn=parked_records)
+                fit = fits[s] = identify(s, [r for v in recs.values() for r in v])
+                # the plan's comfort margin tuned like the timer's lead: the cheapest whose
+                # mean discomfort from a plug over the training days meets the target
+                total[0] += len(PLAN_MARGINS_K) * n_train
+                res = run_all(ex, [(d, "planner", m, leads, 0.0, fit) for d in train
+                                   for m in PLAN_MARGINS_K])
+                by_m = {m: [res[(d, "planner", m, leads, 0.0, fit)] for d in train]
+                        for m in PLAN_MARGINS_K}
+                margin[s] = tune_timer(by_m)
+                scan[f"{s} planner margin K"] = {
+                    f"{m:g}": (float(np.mean([o.cost_USD for o in v])), plugged_Kmin(v))
+                    for m, v in by_m.items()}
             tasks = []
             base_days = make_days(s, n_test, seed, 0.0, first_index=1000)
             tasks += [(d, "none", 0.0, leads, 0.0) for d in base_days]
@@ -774,8 +976,8 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
             for e in errs:
                 test[e] = make_days(s, n_test, seed, e, first_index=1000)
                 tasks += [(d, "timer", tuned[s], leads, e) for d in test[e]]
-                if planner:
-                    tasks += [(d, "planner", 0.0, leads, e) for d in test[e]]
+                tasks += [_planner_task(d, p, leads, e, fit, margin.get(s))
+                          for p in planners for d in test[e]]
             res = run_all(ex, tasks)
             none = [res[(d, "none", 0.0, leads, 0.0)] for d in base_days]
             outcomes += none
@@ -783,18 +985,19 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                 timer = [res[(d, "timer", tuned[s], leads, e)] for d in test[e]]
                 outcomes += timer
                 pairs = [("timer", timer, "none", none)]
-                if planner:
-                    plan = [res[(d, "planner", 0.0, leads, e)] for d in test[e]]
+                for p in planners:
+                    plan = [res[_planner_task(d, p, leads, e, fit, margin.get(s))]
+                            for d in test[e]]
                     outcomes += plan
-                    pairs += [("planner", plan, "none", none), ("planner", plan, "timer", timer)]
+                    pairs += [(p, plan, "none", none), (p, plan, "timer", timer)]
                 for name, a, bname, b in pairs:
                     for key, words in QUANTITIES:
-                        pi = paired_interval([getattr(x, key) - getattr(y, key)
-                                              for x, y in zip(a, b, strict=True)], words, seed)
+                        v = day_verdict([getattr(x, key) - getattr(y, key)
+                                         for x, y in zip(a, b, strict=True)], seed)
                         comps.append({"season": s, "controller": name, "baseline": bname,
-                                      "forecast_sd_min": e, **asdict(pi)})
+                                      "forecast_sd_min": e, "quantity": words, **v})
     return DayStudy(seasons, n_train, n_test, seed, errs, leads, tuned, scan,
-                    tuple(outcomes), tuple(comps))
+                    tuple(outcomes), tuple(comps), fits, planners, margin)
 
 
 def day_trace(day: DaySpec, controller) -> dict[str, np.ndarray]:
@@ -805,13 +1008,9 @@ def day_trace(day: DaySpec, controller) -> dict[str, np.ndarray]:
     tariff = load_tariff()
     rows, phase = [], []
     for trip in day.trips:
-        lead = controller.lead_s(car, trip, tariff)
-        start = min(trip.forecast_s - lead, trip.depart_s) if lead > 0 else trip.depart_s
-        for mode, until in (("off", start), ("on", trip.depart_s)):
-            if car.t < until and (mode == "off" or start < trip.depart_s):
-                new = car.run(until, mode)
-                rows += new
-                phase += [0 if mode == "off" else 1] * len(new)
+        new = _park(car, trip, controller, tariff, keep_off=True)
+        rows += new
+        phase += [0 if r["Ts"] == PARKED_TS else 1 for r in new]
         new = car.run(0.0, "drive", _speeds(trip.cycles))
         rows += new
         phase += [2] * len(new)
@@ -823,7 +1022,9 @@ def day_trace(day: DaySpec, controller) -> dict[str, np.ndarray]:
 
 
 __all__ = ["BAND_C", "CONTROLLERS", "COMFORT_TARGET_KMIN", "Climate", "DayOutcome", "DaySpec",
-           "DayStudy", "FORECAST_ERRORS_MIN", "LEADS_MIN", "NoPreconditioning",
-           "PairedInterval", "Planner", "QUICK_LEADS_MIN", "SEASONS", "Tariff", "Timer",
+           "DayStudy", "FORECAST_ERRORS_MIN", "LEADS_MIN", "ModelPlanner", "NoPreconditioning",
+           "PLANNERS", "parked_records",
+           "Planner", "QUICK_LEADS_MIN", "SEASONS", "Tariff", "Timer",
            "Trip", "TripOutcome", "controller_of", "day_study", "day_trace", "load_climate",
-           "load_tariff", "make_days", "paired_interval", "plugged_Kmin", "run_day", "tune_timer"]
+           "load_tariff", "make_days", "day_verdict", "fine_leads", "plugged_Kmin", "run_day",
+           "tune_timer"]
