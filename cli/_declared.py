@@ -416,9 +416,8 @@ def _print_horizon_table(res) -> None:
         who = [w for w in steps if c in steps[w]]
         rows += [[c if i == 0 else "", w, *[cell(steps[w][c], h) for h in cols]]
                  for i, w in enumerate(who)]
-    title = ("Error vs prediction time, the model" + (" and the yardsticks on the same "
-             "windows" if res.yardsticks else "") + f": RMSE / p90 |e| over the "
-             f"{res.n_starts} starts")
+    title = (f"Error vs prediction time: RMSE / p90 |e|, {res.n_starts} starts"
+             + (", the yardsticks on the same windows" if res.yardsticks else ""))
     print_table(title, ["_channel", "_predictor",
                         *[f"{h * res.Ts:g} s" for h in cols]], rows)
     for y in res.yardsticks.values():
