@@ -384,35 +384,11 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                     [[c, *[_num(e[k], 3) for k in ("median_abs", "p90_abs", "max_abs",
                                                     "bias_pct")]]
                      for c, e in res.energy.items()])
-    print_table("Error vs prediction time: RMSE / p90 |e|",
-                ["step", "time (s)", *res.channels],
-                [[str(r["step"]), f"{r['time_s']:g}",
-                  *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
-                    for c in res.channels]] for r in res.by_horizon])
-    if res.yardsticks:
-        ch = [c for c in res.channels if c in next(iter(res.yardsticks.values()))["channels"]]
-        rows = [[c, "model", *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
-                               for r in res.by_horizon]] for c in ch]
-        for name, y in res.yardsticks.items():
-            rows += [[c, f"{name} (yardstick)",
-                      *[f"{_num(r[c]['rmse'], 3)} / {_num(r[c]['p90_abs'], 3)}"
-                        for r in y["by_horizon"]]] for c in ch]
-        rows.sort(key=lambda r: ch.index(r[0]))
-        print_table("Model and yardsticks on the same windows: RMSE / p90 |e| at each step",
-                    ["_channel", "_predictor", *[f"{r['time_s']:g} s" for r in res.by_horizon]],
-                    rows)
-        for y in res.yardsticks.values():
-            say(f"  {y['description']}")
-        times = sorted({t for c in res.by_time.values() for t in c}, key=float)
-        print_table("Model and yardsticks at prediction times: RMSE / p90 |e| (starts that "
-                    "reach it)", ["_predictor", "_channel", *[f"{t} s" for t in times]],
-                    [[name, c, *[(f"{_num(r[t]['rmse_K'], 3)} / {_num(r[t]['p90_K'], 3)} "
-                                  f"({r[t]['n']})") if t in r else "-" for t in times]]
-                     for name, table in [("model", res.by_time)] + [
-                         (f"{k} (yardstick)", y["by_time"]) for k, y in res.yardsticks.items()]
-                     for c, r in table.items()])
+    _print_horizon_table(res)
     for line in res.notes:
-        note(line)
+        # the window design line above already says these two
+        if not line.startswith(("window design:", "held at their start values:")):
+            note(line)
     if yardsticks and estimation is None:
         note(f"ARX and subspace fitted on samples 0..{len(ds) - 1}, the validated samples "
              "themselves (no held-out part): in-sample, they are favoured; yardsticks are "
@@ -441,6 +417,39 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                               **({"intervals": [iv.to_dict() for iv in ivs]} if ivs else {}),
                               **({"beside": {"channels": other.to_json_dict()["channels"]}}
                                  if other is not None else {})})
+
+
+def horizon_columns(res) -> list[int]:
+    """The prediction steps ``acid validate`` tabulates: the first, each of
+    ``REPORT_TIMES_S`` inside the horizon, and the horizon (every step is in --json)."""
+    from acid.ident.validate import REPORT_TIMES_S
+
+    return sorted({1, res.horizon, *[int(round(t / res.Ts)) for t in REPORT_TIMES_S
+                                     if 1 <= int(round(t / res.Ts)) <= res.horizon]})
+
+
+def _print_horizon_table(res) -> None:
+    """One table of the errors vs prediction time: a row per channel and predictor (the
+    model, then each yardstick on the same windows), RMSE / p90 |e| at ``horizon_columns``;
+    a cell whose step fewer starts reach than were placed says how many, in brackets."""
+    steps, cols = res.by_step(), horizon_columns(res)
+
+    def cell(s, h):
+        n = s["n"][h - 1]
+        return (f"{_num(s['rmse'][h - 1], 3)} / {_num(s['p90_abs'][h - 1], 3)}"
+                + (f" ({n})" if n != res.n_starts else ""))
+
+    rows = []
+    for c in res.channels:
+        who = [w for w in steps if c in steps[w]]
+        rows += [[c if i == 0 else "", w, *[cell(steps[w][c], h) for h in cols]]
+                 for i, w in enumerate(who)]
+    title = (f"Error vs prediction time: RMSE / p90 |e|, {res.n_starts} starts"
+             + (", the yardsticks on the same windows" if res.yardsticks else ""))
+    print_table(title, ["_channel", "_predictor",
+                        *[f"{h * res.Ts:g} s" for h in cols]], rows)
+    for y in res.yardsticks.values():
+        say(f"  {y['description']}")
 
 
 def _intervals(res, ds, model, ps, kw, estimation, yardsticks, intervals) -> list:

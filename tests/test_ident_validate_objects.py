@@ -42,3 +42,33 @@ def test_the_horizon_curves_are_a_figure_of_every_step():
     persistence = lines["persistence"].get_ydata()
     assert len(persistence) == 30
     np.testing.assert_allclose(persistence, r.by_step()["persistence"]["T_cab"]["rmse"])
+
+
+def test_the_validation_round_trips_through_json_with_every_step():
+    import json
+
+    from acid.errors import DataError
+    from acid.ident.validate import DeclaredValidation
+
+    m = load("cabin3")
+    ds = _cabin3_record(m.values.copy(), np.random.default_rng(1), n=200)
+    r = validate_model(m, ds, declared_parameters(m), starts=4, horizon=30, warmup=20,
+                       yardsticks=True, estimation=(0, 100), horizons=(1, 7, 30))
+    d = json.loads(json.dumps(r.to_json_dict(), allow_nan=False))   # strict JSON
+    back = DeclaredValidation.from_json_dict(d)
+    assert back == r and back.to_json_dict() == d
+    assert back.summary() == r.summary() and back.to_frame().equals(r.to_frame())
+    assert [row["step"] for row in back.by_horizon] == [1, 7, 30]
+    for who in ("model", "persistence", "arx", "subspace"):        # every step kept
+        assert len(back.by_step()[who]["T_cab"]["rmse"]) == 30
+    np.testing.assert_array_equal(back.starts, r.starts)
+    np.testing.assert_array_equal(back.start_time, r.start_time)
+    assert back.settings["hold"] == r.settings["hold"] and back.window_design == r.window_design
+    # the CLI's --json holds the same keys beside its own: read back alike
+    assert DeclaredValidation.from_json_dict({"command": "validate", **d}) == r
+    # a changed figure is not equal
+    d2 = json.loads(json.dumps(d))
+    d2["by_step"]["arx"]["T_cab"]["rmse"][29] += 1e-9
+    assert DeclaredValidation.from_json_dict(d2) != r
+    with pytest.raises(DataError, match="not a validation summary"):
+        DeclaredValidation.from_json_dict({"model": "cabin3"})

@@ -103,16 +103,28 @@ def test_yardsticks_window_design_and_residuals_are_reported(noisy_model_dataset
     params = tmp_path / "params.json"
     paper().replace(name="fitted", provenance={"estimation_fraction": 0.5}).to_json(params)
     out, summary = tmp_path / "figs", tmp_path / "s.json"
-    res = _invoke(data, "--params", params, "--out", out, "--json", summary)
+    res = _invoke(data, "--params", params, "--out", out, "--json", summary, "--starts", 20,
+                  "--horizon", 120)
     assert res.exit_code == 0, res.output
     text = " ".join(res.output.split())
-    assert "window design: 60 starts, starts 35..40 s apart" in text
-    assert "horizon 1500 s; consecutive windows share 98 % of their samples" in text
+    assert "window design: 20 starts, starts 155..160 s apart" in text
+    assert "horizon 600 s; consecutive windows share 74 % of their samples" in text
     assert "yardstick" in text
     assert "ARX and subspace fitted on samples 0..719 (the estimation part)" in text
     assert "One-step residuals on the validated samples" in text
     assert "noise on the measured state" in text
+    # one table of errors vs prediction time (the yardsticks as its rows), said once
+    assert text.count("Error vs prediction time") == 1 and "at prediction times" not in text
+    assert text.count("window design:") == 1 and "held at their start values" not in text
+    table = res.output[res.output.index("Error vs prediction time"):]
+    assert all(f"{t} s" in table.split("\n")[2] for t in (5, 60, 300, 600))
+    assert all(f" {w} " in table for w in ("model", "persistence", "arx", "subspace"))
     d = json.loads(summary.read_text())
+    from acid.ident.validate import DeclaredValidation
+
+    back = DeclaredValidation.from_json(summary)       # --json is the result's dict
+    assert {k: d[k] for k in back.to_json_dict()} == back.to_json_dict()
+    assert len(back.by_step()["subspace"]["T_ain"]["p90_abs"]) == 120
     assert set(d["yardsticks"]) == {"persistence", "arx", "subspace"}
     assert set(d["yardsticks_by_time"]["arx"]["T_cab"]["60"]) == {"rmse_K", "p90_K", "n"}
     assert d["window_design"]["max_windows_per_sample"] > 1
