@@ -39,8 +39,8 @@ def compare(
              "default: identified here from an `acid excite --model econ` record."),
     identify_duration: float = typer.Option(10800.0, "--identify-duration",
                                             help="Length of that record, s."),
-    identify_seeds: str | None = typer.Option(
-        None, "--identify-seeds",
+    identify_records: str | None = typer.Option(
+        None, "--identify-records",
         help="Comma-separated seeds of the econ model's identification records (default: "
              "--seed). With several, every family is judged once per record and E's verdict "
              "holds only where every record gives the same word."),
@@ -76,17 +76,17 @@ def compare(
     # the econ model's identification record: a day or a week of simulation is the bound
     require_range(identify_duration, "--identify-duration", 3600.0, 7 * 86400.0, "s")
     try:
-        seeds = ([int(x) for x in identify_seeds.split(",") if x.strip()]
-                 if identify_seeds is not None else [seed])
+        seeds = ([int(x) for x in identify_records.split(",") if x.strip()]
+                 if identify_records is not None else [seed])
     except ValueError:
         seeds = []
-    require(bool(seeds) and len(set(seeds)) == len(seeds), "--identify-seeds",
+    require(bool(seeds) and len(set(seeds)) == len(seeds), "--identify-records",
             "give distinct integer seeds, comma-separated")
     for s in seeds:
-        require_range(s, "--identify-seeds", 0, 2**63 - 1, integer=True)
-    require(econ_params is None or identify_seeds is None, "--identify-seeds",
+        require_range(s, "--identify-records", 0, 2**63 - 1, integer=True)
+    require(econ_params is None or identify_records is None, "--identify-records",
             "the econ model comes from --econ-params; give one or the other")
-    require(econ or identify_seeds is None, "--identify-seeds",
+    require(econ or identify_records is None, "--identify-records",
             "without E (--no-econ) no econ model is identified")
     check_paths(inputs={"--econ-params": econ_params, "--plant-config": plant_config},
                 outputs={"--json": json_path}, folders={"--out": (out, ("fronts.png",))})

@@ -42,16 +42,16 @@ def test_a_tiny_run_is_not_resolved_and_writes_json(tmp_path):
     assert (tmp_path / "o" / "fronts.png").stat().st_size > 0
 
 
-def test_identify_seeds_bad_values_are_one_line_errors(tmp_path):
+def test_identify_records_bad_values_are_one_line_errors(tmp_path):
     for bad in ("0,0", "a", "-1", ""):
-        r = CliRunner().invoke(app, ["compare", "--identify-seeds", bad])
+        r = CliRunner().invoke(app, ["compare", "--identify-records", bad])
         assert r.exit_code == 2, (bad, r.output)
-        assert_one_line_error(r, "--identify-seeds")
+        assert_one_line_error(r, "--identify-records")
     p = tmp_path / "e.json"
     p.write_text("{}")
-    r = CliRunner().invoke(app, ["compare", "--identify-seeds", "0,1", "--econ-params", str(p)])
+    r = CliRunner().invoke(app, ["compare", "--identify-records", "0,1", "--econ-params", str(p)])
     assert r.exit_code == 2
-    assert_one_line_error(r, "--identify-seeds")
+    assert_one_line_error(r, "--identify-records")
 
 
 def test_a_verdict_across_records_holds_only_where_every_record_agrees():

@@ -26,7 +26,8 @@ FIGURES = ("stages/sweep/fig3_speed_sweep.png", "stages/validate/fig5_prediction
            "stages/mpc/fig10_cav_comparison.png", "stages/econ/fig_econ_errors.png",
            "stages/cav/energy.png", "stages/cav/cav_udds.png", "stages/cav/cav_sc03.png",
            "stages/plant_check/plant_check_energy.png",
-           "stages/plant_check/plant_check_service.png", "stages/heating/year_share.png")
+           "stages/plant_check/plant_check_service.png", "stages/heating/year_share.png",
+           "stages/engine/engine_fronts.png")
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +63,6 @@ def test_report_and_every_figure_exist(quick_run):
     assert not re.search(r"-0\.0+(?!\d)", html)  # no negative zero (-0.0012 is a number)
     # the energy answer (the engine's held-out verdicts) opens the report, before the figures
     assert html.index("The energy answer") < html.index("id=figures")
-    assert (out / "stages/engine/engine_fronts.png").stat().st_size > 10_000
     # no energy verdict word without its interval anywhere on the page
     from html import unescape
 
@@ -106,7 +106,13 @@ def test_verdicts_come_from_the_registry_and_do_not_contradict(quick_run):
     s = json.loads((out / "summary.json").read_text())
     c = s["claims"]
     assert c["contradictions"] == []
-    assert c["counts"]["agrees"] > 0 and c["counts"]["not measured"] == 0
+    assert c["counts"]["agrees"] > 0
+    # the quick engine runs HWFET and stop-and-go only: the periodic plans on UDDS and SC03
+    # (and, when its two E runs do not bracket F's mean cabin, E at F's T_cab) are not measured;
+    # every other claim is
+    unmeasured = {i["id"] for i in c["items"] if i["verdict"] == "not measured"}
+    assert unmeasured <= {f"engine.{cyc}.{k}" for cyc in ("udds", "sc03")
+                          for k in ("plan_spread", "E_gap")} | {"engine.E_matched_vs_F"}
     results = StudyResults.from_summaries({k: v["summary"] for k, v in s["stages"].items()})
     assert [v.verdict.value for v in evaluate(results, quick=True)] == \
         [i["verdict"] for i in c["items"]]
