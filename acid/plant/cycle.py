@@ -1,9 +1,9 @@
-"""Quasi-static vapour-compression cycle: one algebraic solve per internal step (PLANT.md).
+"""Quasi-static vapour-compression cycle: one algebraic solve per internal step.
 
 Refrigerant-side dynamics (about 1 s) are invisible at the paper's 5 s sampling, so the cycle
 is solved algebraically for the saturation temperatures T_e (evaporator), T_c (condenser)
 given the compressor speed N and the evaporator and condenser wall temperatures T_ew, T_cw
-(the pattern of the Modelica Buildings / AixLib heat-pump models). Second generation (issue 9):
+(the pattern of the Modelica Buildings / AixLib heat-pump models). Second generation:
 
     dT_s = dT_suc0 (m_r / m_r0)^2                   suction line: saturation-temperature drop
     T_s  = T_e - dT_s,  p_s = p_sat(T_s)            compressor suction (low-side service port)
@@ -260,7 +260,7 @@ def motor_power(config: PlantConfig, W: float, N: float) -> float:
     P_el = W + P_loss0 + P_loss_N N / N_max + P_loss_cu (W / P_rated)^2: a no-load loss
     (switching, control), a speed-proportional loss (iron, friction) and a copper loss growing
     with the square of the load; efficiency W / P_el rises from about 0.8 at light load to
-    0.93 at rated (PLANT.md, assumption).
+    0.93 at rated (an assumption).
     """
     if N <= 0.0:
         return 0.0

@@ -14,7 +14,7 @@ Stages (cached by their inputs, see :mod:`acid.pipeline`):
               (A paper NMPC, B ICM, D/E economic NMPC without/with preview, P/F PI baselines,
               the best known plan)
     plant_check  the high-fidelity plant's credentials against published references
-    heating   winter (issue 25): the heating plant's credentials that need no logs and the
+    heating   winter: the heating plant's credentials that need no logs and the
               whole year at three ambients (acid's own checks, not the paper's)
 
 ``sweep`` and the chain excite -> fit -> (validate, mpc) are independent, so ``--jobs 2``
@@ -505,7 +505,7 @@ HEATING_YEAR = {"ambients_C": [-10.0, 5.0, 30.0], "cycles": ["udds"], "vehicles"
 
 
 def stage_heating(workdir: Path, inputs: dict, config: dict, progress) -> dict:
-    """Winter (issue 25): the heating plant's credentials that need no logs (``acid
+    """Winter: the heating plant's credentials that need no logs (``acid
     heating-check``) and the whole year at three ambients (``acid year-sweep``), with its
     figure. acid's own checks; a few seconds of CPU."""
     from acid.claims.results import HeatingStage, PlantCredential, YearShare
