@@ -94,7 +94,27 @@ def test_batch_simulate_returns_datasets_like_the_single_plant():
             np.testing.assert_allclose(d.channels[k], v, rtol=1e-12, atol=1e-12)
 
 
-def test_batch_rejects_members_with_different_cycles():
+def test_batch_rejects_members_with_different_refrigerants():
     base = PlantConfig()
-    with pytest.raises(ConfigError, match="refrigerant cycle"):
-        BatchPlant([base, dataclasses.replace(base, UA_cr0=base.UA_cr0 * 1.1)])
+    with pytest.raises(ConfigError, match="share the refrigerant"):
+        BatchPlant([base, dataclasses.replace(base, refrigerant="R1234yf")])
+
+
+def test_batch_runs_the_shipped_vehicles_together_in_nominal_mode():
+    """Members with different compressors and UA values (the two shipped vehicles) in one
+    batch, the production loops on: each equals its own HifiPlant."""
+    from acid.plant.vehicles import vehicle_config
+
+    cfgs, scheds = [], []
+    for name, T, n in (("default", 35.0, 30), ("paper", 35.0, 30), ("paper", 25.0, 22),
+                       ("default", 28.0, 26)):
+        c = vehicle_config(name)
+        T = C2K(T)
+        cfgs.append(c.replace(T_amb=T, T_cab0=T, T_int0=T, T_shell0=T, T_ew0=T, T_cw0=T))
+        scheds.append(InputSchedule(np.zeros(n), c.T_ew_set, np.linspace(0.0, 20.0, n)))
+    assert BatchPlant(cfgs, mode="nominal")._cyc.params.varying  # the cycles do differ
+    out = BatchPlant(cfgs, mode="nominal").run(scheds)
+    for b in range(len(cfgs)):
+        ref = _single(cfgs[b], "nominal", scheds[b], None)
+        assert _worst(ref, out[b]) < TOL, b
+        assert np.max(ref["N_comp"]) > 0.0

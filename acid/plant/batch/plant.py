@@ -9,9 +9,11 @@ and their length. Every member's cycle is solved by the same Newton iteration as
 state points looked up in the refrigerant tables with numpy index arithmetic, and each member
 stops on its own convergence test, so a member takes exactly the iterations it takes alone.
 
-Members must share the refrigerant cycle (fluid, superheat, subcooling, compressor map, UA
-values, motor losses) and the time steps (``Ts``, ``dt_int``); the measurement noise is not
-modelled (deterministic plants only). The trajectories equal the single plant's to rounding
+Members must share the refrigerant tables (fluid, superheat, subcooling) and the time steps
+(``Ts``, ``dt_int``); they may differ in the compressor map, UA values and motor losses (the
+shipped vehicles in one batch: ``CycleParams`` holds a number where all members agree, an
+array where they differ). The measurement noise is not modelled (deterministic plants
+only). The trajectories equal the single plant's to rounding
 (numpy's ``exp`` and ``**`` may differ from ``math``'s by an ulp); ``tests/test_plant_batch.py``
 checks 1e-9 K and a relative 1e-9 on powers. Energy balances are not accumulated (use
 ``HifiPlant.balance`` for the check).
@@ -43,28 +45,103 @@ from acid.plant.hifi import (
     humidity_ratio,
 )
 
-#: Configuration fields that fix the refrigerant cycle: every member must share them.
+#: Configuration fields of the refrigerant cycle (tables, compressor map, UA values, motor
+#: losses) and the time steps. Members may differ in all of them but ``SHARED_FIELDS``.
 CYCLE_FIELDS = ("refrigerant", "superheat", "subcool", "V_disp", "eta_v0", "k_v", "c_L",
                 "eta_is_max", "k_is", "PR_opt", "c_is_lo", "c_is_hi", "N_max", "UA_er0",
                 "UA_cr0", "n_r", "m_r0", "dT_suc0", "P_loss0", "P_loss_N", "P_loss_cu",
                 "P_rated", "Ts", "dt_int")
+#: Fields every member must share: the refrigerant tables and the time steps.
+SHARED_FIELDS = ("refrigerant", "superheat", "subcool", "Ts", "dt_int")
+#: The cycle's per-member numbers (as ``make_solver`` takes them, derived ones included).
+_PARAM_NAMES = ("eta_v0", "k_v", "c_L", "eta_is_max", "k_is", "PR_opt", "c_is_lo", "c_is_hi",
+                "UA_er0", "UA_cr0", "n_r", "dT_suc0", "P_loss0", "P_loss_N", "P_loss_cu",
+                "Vd60", "inv_Nmax", "inv_m0", "inv_Pr")
+
+
+def check_shared(configs: Sequence[PlantConfig]) -> None:
+    """Refuse (``ConfigError``, one line) members that differ in a ``SHARED_FIELDS`` field."""
+    c0 = configs[0]
+    for c in configs[1:]:
+        diff = [f for f in SHARED_FIELDS if getattr(c, f) != getattr(c0, f)]
+        if diff:
+            raise ConfigError("batch plant members must share the refrigerant and the time "
+                              f"steps; they differ in {', '.join(diff)}")
+
+
+class CycleParams:
+    """The cycle's numbers for a set of members: a float where every member has the same,
+    an array (one per member) otherwise; ``take(idx)`` selects members."""
+
+    __slots__ = (*_PARAM_NAMES, "varying")
+
+    def __init__(self, values: dict, varying: tuple[str, ...]):
+        for k, v in values.items():
+            setattr(self, k, v)
+        self.varying = varying
+
+    @classmethod
+    def of(cls, configs: Sequence[PlantConfig]) -> CycleParams:
+        def one(c):
+            return {"eta_v0": c.eta_v0, "k_v": c.k_v, "c_L": c.c_L,
+                    "eta_is_max": c.eta_is_max, "k_is": c.k_is, "PR_opt": c.PR_opt,
+                    "c_is_lo": c.c_is_lo, "c_is_hi": c.c_is_hi, "UA_er0": c.UA_er0,
+                    "UA_cr0": c.UA_cr0, "n_r": c.n_r, "dT_suc0": c.dT_suc0,
+                    "P_loss0": c.P_loss0, "P_loss_N": c.P_loss_N, "P_loss_cu": c.P_loss_cu,
+                    "Vd60": c.V_disp / 60.0, "inv_Nmax": 1.0 / c.N_max,
+                    "inv_m0": 1.0 / c.m_r0, "inv_Pr": 1.0 / c.P_rated}
+        rows = [one(c) for c in configs]
+        values, varying = {}, []
+        for k in _PARAM_NAMES:
+            col = [float(r[k]) for r in rows]
+            if all(x == col[0] for x in col):
+                values[k] = col[0]
+            else:
+                values[k] = np.array(col)
+                varying.append(k)
+        return cls(values, tuple(varying))
+
+    def take(self, idx: np.ndarray) -> CycleParams:
+        if not self.varying:
+            return self
+        out = CycleParams({k: getattr(self, k) for k in _PARAM_NAMES}, self.varying)
+        for k in self.varying:
+            setattr(out, k, getattr(self, k)[idx])
+        return out
+
+    def tile3(self) -> CycleParams:
+        """The members three times over (the residual and its two neighbours)."""
+        if not self.varying:
+            return self
+        out = CycleParams({k: getattr(self, k) for k in _PARAM_NAMES}, self.varying)
+        for k in self.varying:
+            x = getattr(self, k)
+            setattr(out, k, np.concatenate((x, x, x)))
+        return out
 
 
 class BatchCycle:
-    """The cycle solve of ``acid.plant.cycle.make_solver`` on arrays (one shared config)."""
+    """The cycle solve of ``acid.plant.cycle.make_solver`` on arrays.
 
-    def __init__(self, config: PlantConfig):
+    ``configs``: one ``PlantConfig`` per member (or one for all); the members share the
+    refrigerant tables and may differ in the compressor map, UA values and motor losses."""
+
+    def __init__(self, configs: Sequence[PlantConfig] | PlantConfig):
+        if isinstance(configs, PlantConfig):
+            configs = [configs]
+        configs = list(configs)
+        check_shared(configs)
+        config = configs[0]
         tab = rf.table(config.refrigerant, config.superheat, config.subcool)
         self.P, self.R = np.asarray(tab.p_sat, float), np.asarray(tab.rho1, float)
         self.H1, self.H3 = np.asarray(tab.h1, float), np.asarray(tab.h3, float)
         self.H2S = np.asarray(tab.h2s, float).ravel()
         self.nc = len(tab.Tc2)
         self.i1max, self.iemax, self.icmax = len(tab.p_sat) - 2, len(tab.Te2) - 2, self.nc - 2
-        c = config
-        self.c = c
+        self.SH = config.superheat
         self.inv1, self.inv2 = 1.0 / rf.DT1, 1.0 / rf.DT2
-        self.Vd60 = c.V_disp / 60.0
-        self.inv_Nmax, self.inv_m0, self.inv_Pr = 1.0 / c.N_max, 1.0 / c.m_r0, 1.0 / c.P_rated
+        self.params = CycleParams.of(configs)
+        self.size = len(configs)
 
     def _lin1(self, T):
         x = (T - rf.T1_LO) * self.inv1
@@ -79,10 +156,11 @@ class BatchCycle:
         P = self.P
         return P[i] + f * (P[i + 1] - P[i])
 
-    def state(self, Te, Tc, N, dTs):
-        """Vectorised ``state`` of ``make_solver`` (same operations, element by element)."""
-        c = self.c
-        SH = c.superheat
+    def state(self, Te, Tc, N, dTs, p: CycleParams | None = None):
+        """Vectorised ``state`` of ``make_solver`` (same operations, element by element);
+        ``p``: the members' parameters (default: all members, in order)."""
+        c = self.params if p is None else p
+        SH = self.SH
         P, R, H1, H3, H2S, nc = self.P, self.R, self.H1, self.H3, self.H2S, self.nc
         i, f = self._lin1(Te)
         pe = P[i] + f * (P[i + 1] - P[i])
@@ -113,18 +191,18 @@ class BatchCycle:
         ev = c.eta_v0 - c.k_v * (PR - 1.0) - c.c_L / N
         ev = np.where(ev < 0.05, 0.05, ev)
         d = PR - c.PR_opt
-        r = N * self.inv_Nmax
+        r = N * c.inv_Nmax
         ei = c.eta_is_max - c.k_is * d * d - c.c_is_lo / N - c.c_is_hi * r * r
         ei = np.where(ei < 0.2, 0.2, ei)
         dh = (h2s - h1s) * (Te + SH) / (Ts + SH)
         dh = np.where(dh < 0.0, 0.0, dh)
-        m = ev * rho * self.Vd60 * N
+        m = ev * rho * c.Vd60 * N
         return m, pe, pc, h1, h1 + dh / ei, h3, ev, ei, ps
 
-    def flow(self, Te, Tc, N, dTs):
+    def flow(self, Te, Tc, N, dTs, p: CycleParams | None = None):
         """The refrigerant mass flow of ``state`` alone (the same operations), kg/s."""
-        c = self.c
-        SH = c.superheat
+        c = self.params if p is None else p
+        SH = self.SH
         P, R = self.P, self.R
         Ts = Te - dTs
         i, f = self._lin1(Ts)
@@ -136,33 +214,39 @@ class BatchCycle:
         PR = np.where(PR < 1.0, 1.0, PR)
         ev = c.eta_v0 - c.k_v * (PR - 1.0) - c.c_L / N
         ev = np.where(ev < 0.05, 0.05, ev)
-        return ev * rho * self.Vd60 * N
+        return ev * rho * c.Vd60 * N
 
-    def _residual(self, Te, Tc, N, Tew, Tcw, dTs):
-        c = self.c
-        m, _, _, h1, h2, h3, _, _, _ = self.state(Te, Tc, N, dTs)
-        g = (m * self.inv_m0) ** c.n_r
+    def _residual(self, Te, Tc, N, Tew, Tcw, dTs, c: CycleParams):
+        m, _, _, h1, h2, h3, _, _, _ = self.state(Te, Tc, N, dTs, c)
+        g = (m * c.inv_m0) ** c.n_r
         return (c.UA_er0 * g * (Tew - Te) - m * (h1 - h3),
                 c.UA_cr0 * g * (Tc - Tcw) - m * (h2 - h3))
 
-    def solve(self, N, Tew, Tcw, Te, Tc, dTs):
+    def solve(self, N, Tew, Tcw, Te, Tc, dTs, members=None):
         """Newton solves for members with N > 0 (all given arrays are those members').
 
-        ``dTs`` is each member's warm-start suction drop (the previous solution's).
+        ``dTs`` is each member's warm-start suction drop (the previous solution's);
+        ``members``: their indices in the configuration list (default: all, in order).
         Returns (T_e, T_c, m_r, Q_e, Q_c, P_el, W, p_s, p_c, dTs, iterations).
         """
-        FD, c = _cycle._FD, self.c
+        FD = _cycle._FD
+        if members is None:
+            members = np.arange(len(N))
+        pm = self.params.take(members)
+        varying = bool(pm.varying)
         Te = np.where(Te > Tew, Tew - 0.5, Te)
         Tc = np.where(Tc < Tcw, Tcw + 0.5, Tc)
         dTs = dTs.copy()
         its = np.zeros(len(N), dtype=np.int64)
         act = np.arange(len(N))
+        full = True  # act is every member (no gather of the parameters needed)
         for it in range(1, _cycle._MAX_ITER + 1):
             if act.size == 0:
                 break
             n_, tew, tcw = N[act], Tew[act], Tcw[act]
             te, tc, ds = Te[act], Tc[act], dTs[act]
             its[act] = it
+            c = pm if (full or not varying) else pm.take(act)
             # the residual and its two finite-difference neighbours in one vectorised call
             na = act.size
             r1, r2 = self._residual(np.concatenate((te, te + FD, te)),
@@ -170,7 +254,7 @@ class BatchCycle:
                                     np.concatenate((n_, n_, n_)),
                                     np.concatenate((tew, tew, tew)),
                                     np.concatenate((tcw, tcw, tcw)),
-                                    np.concatenate((ds, ds, ds)))
+                                    np.concatenate((ds, ds, ds)), c.tile3())
             F1, a1, b1 = r1[:na], r1[na:2 * na], r1[2 * na:]
             F2, a2, b2 = r2[:na], r2[na:2 * na], r2[2 * na:]
             J11, J21 = (a1 - F1) / FD, (a2 - F2) / FD
@@ -193,7 +277,7 @@ class BatchCycle:
             tc_n = tc - dTc
             te_n = np.where(te_n > tew, tew, te_n)
             tc_n = np.where(tc_n < tcw, tcw, tc_n)
-            q = self.flow(te_n, tc_n, n_, ds) * self.inv_m0
+            q = self.flow(te_n, tc_n, n_, ds, c) * c.inv_m0
             d_new = c.dT_suc0 * q * q
             change = np.abs(d_new - ds)
             if all_ok:
@@ -204,14 +288,17 @@ class BatchCycle:
                 Tc[act] = np.where(ok, tc_n, tc)
                 dTs[act] = np.where(ok, d_new, ds)
                 done = ~ok | ((big < _cycle._TOL) & (change < _cycle._TOL_SUC))
-            act = act[~done]
+            if done.any():
+                act = act[~done]
+                full = False
         if act.size:
             for k in act:
                 _warn_not_converged(N[k], Tew[k], Tcw[k])
-        m, _, pc, h1, h2, h3, _, _, ps = self.state(Te, Tc, N, dTs)
+        c = pm
+        m, _, pc, h1, h2, h3, _, _, ps = self.state(Te, Tc, N, dTs, c)
         W = m * (h2 - h1)
-        x = W * self.inv_Pr
-        P_el = W + c.P_loss0 + c.P_loss_N * N * self.inv_Nmax + c.P_loss_cu * x * x
+        x = W * c.inv_Pr
+        P_el = W + c.P_loss0 + c.P_loss_N * N * c.inv_Nmax + c.P_loss_cu * x * x
         return Te, Tc, m, m * (h1 - h3), m * (h2 - h3), P_el, W, ps, pc, dTs, its
 
 
@@ -245,16 +332,12 @@ class BatchPlant:
         if not self.cfgs:
             raise ConfigError("a batch plant needs at least one member")
         c0 = self.cfgs[0]
-        for c in self.cfgs[1:]:
-            diff = [f for f in CYCLE_FIELDS if getattr(c, f) != getattr(c0, f)]
-            if diff:
-                raise ConfigError("batch plant members must share the refrigerant cycle and "
-                                  f"time steps; they differ in {', '.join(diff)}")
+        check_shared(self.cfgs)
         self.B = len(self.cfgs)
         self.mode = mode
         self.Ts = float(c0.Ts)
         self.n_sub = int(round(self.Ts / c0.dt_int))
-        self._cyc = BatchCycle(c0)
+        self._cyc = BatchCycle(self.cfgs)
         self._hA_cache: dict = {}
         self._arrays: dict = {}
         self._ft = None
@@ -538,7 +621,7 @@ class BatchPlant:
             s_pc += np.where(runs, 0.0, cyc.p_sat(T_cw))
             k = np.nonzero(runs)[0]
             if k.size:
-                out = cyc.solve(N[k], T_ew[k], T_cw[k], self.T_e[k], self.T_c[k], dTs[k])
+                out = cyc.solve(N[k], T_ew[k], T_cw[k], self.T_e[k], self.T_c[k], dTs[k], k)
                 (T_e[k], T_c[k], m_r[k], Q_e[k], Q_c[k], P_c[k], W_sh[k], p_s[k], p_c[k],
                  dTs[k]) = out[:10]
                 s_ps[k] += p_s[k]
@@ -675,4 +758,5 @@ def _dataset(cols: dict[str, np.ndarray], Ts: float, metadata: dict, units: dict
     return Dataset(time=time, channels=channels, units=out_units, Ts=Ts, metadata=metadata)
 
 
-__all__ = ["CYCLE_FIELDS", "INITIAL_KEYS", "BatchCycle", "BatchPlant"]
+__all__ = ["CYCLE_FIELDS", "INITIAL_KEYS", "SHARED_FIELDS", "BatchCycle", "BatchPlant",
+           "CycleParams", "check_shared"]
