@@ -310,42 +310,13 @@ def _warn_not_converged(N, Tew, Tcw) -> None:
                   "last iterate", SolverWarning, stacklevel=4)
 
 
-class BatchPlant:
-    """B high-fidelity plants stepped together; see the module docstring.
+class BatchMembers:
+    """What the batched plants share: per-member configuration arrays and the front end's
+    tables (``hifi.front_end`` vectorised). Subclasses set ``cfgs``, ``B``, ``T_amb``,
+    ``_arrays``, ``_ft``, ``_hA_cache`` and ``_fe_speed``."""
 
-    Parameters
-    ----------
-    configs : one ``PlantConfig`` per member (or one shared config with ``size``).
-    mode : "direct" or "nominal", for every member (as ``HifiPlant``).
-    size : number of members when ``configs`` is a single config.
-    """
-
-    name = "hifi"
-
-    def __init__(self, configs: Sequence[PlantConfig] | PlantConfig | None = None,
-                 mode: str = "direct", size: int | None = None):
-        if mode not in MODES:
-            raise ConfigError(f"plant mode {mode!r} unknown (choose 'direct' or 'nominal')")
-        if configs is None or isinstance(configs, PlantConfig):
-            configs = [configs or PlantConfig()] * int(size or 1)
-        self.cfgs = list(configs)
-        if not self.cfgs:
-            raise ConfigError("a batch plant needs at least one member")
-        c0 = self.cfgs[0]
-        check_shared(self.cfgs)
-        self.B = len(self.cfgs)
-        self.mode = mode
-        self.Ts = float(c0.Ts)
-        self.n_sub = int(round(self.Ts / c0.dt_int))
-        self._cyc = BatchCycle(self.cfgs)
-        self._hA_cache: dict = {}
-        self._arrays: dict = {}
-        self._ft = None
-        self._fe_speed = np.array([bool(c.front_end_speed) for c in self.cfgs], bool)
-        self._cabin_speed = np.array([bool(c.cabin_speed) for c in self.cfgs], bool)
-        self._aw = np.array([bool(c.anti_windup) for c in self.cfgs], bool)
-        self._a_N = np.array([math.exp(-c.dt_int / c.tau_N) for c in self.cfgs])
-        self.reset()
+    cfgs: list[PlantConfig]
+    T_amb: np.ndarray
 
     def _a(self, name: str) -> np.ndarray:
         """The members' values of configuration field ``name`` (cached; read-only)."""
@@ -354,48 +325,6 @@ class BatchPlant:
             a = self._arrays[name] = np.array([float(getattr(c, name)) for c in self.cfgs])
             a.setflags(write=False)
         return a
-
-    def reset(self, initial: Sequence[dict[str, float] | None] | None = None) -> dict:
-        """Reset every member (as ``HifiPlant.reset``); ``initial``: one dict (or None) each."""
-        from acid.plant.hifi import HifiPlant
-
-        initial = list(initial) if initial is not None else [None] * self.B
-        if len(initial) != self.B:
-            raise ConfigError(f"{len(initial)} initial states for {self.B} batch members")
-        # the single plant's own reset gives each member's start (validation included)
-        starts = []
-        for c, init in zip(self.cfgs, initial, strict=True):
-            p = HifiPlant(c, mode=self.mode)
-            p.reset(init)
-            starts.append(p)
-        g = lambda name: np.array([float(getattr(p, name)) for p in starts])  # noqa: E731
-        self.T_amb, self.w_amb = g("T_amb"), g("w_amb")
-        self.T_cab, self.T_int, self.T_shell = g("T_cab"), g("T_int"), g("T_shell")
-        self.T_int_slow, self.T_ew, self.T_cw = g("T_int_slow"), g("T_ew"), g("T_cw")
-        self.w_cab, self.N, self.T_e, self.T_c = g("w_cab"), g("N"), g("T_e"), g("T_c")
-        self.p_c, self.p_s, self.T_reset = g("p_c"), g("p_s"), g("T_reset")
-        self.cut_out = np.array([p.cut_out for p in starts], bool)
-        self.ac_demand = np.array([p.ac_demand for p in starts], bool)
-        self.comp_on = np.array([p._comp.on for p in starts], bool)
-        self.comp_integ = np.array([float(p._comp.integ) for p in starts])
-        self.bl_integ = np.array([float(p._blower.integ) for p in starts])
-        self.dTs = np.zeros(self.B)  # each member's suction-drop warm start
-        self.t = 0.0
-        return self.measure()
-
-    def measure(self) -> dict[str, np.ndarray]:
-        """Every member's states, keyed as ``HifiPlant.measure`` (arrays of shape (B,))."""
-        return {"T_cab": self.T_cab.copy(), "T_evap": self.T_ew.copy(),
-                "T_int": self.T_int.copy(), "T_shell": self.T_shell.copy(),
-                "T_amb": self.T_amb.copy(), "w_cab": self.w_cab.copy(),
-                "T_cw": self.T_cw.copy(), "T_int_slow": self.T_int_slow.copy(),
-                "N_comp_state": self.N.copy(), "comp_integrator": self.comp_integ.copy(),
-                "blower_integrator": self.bl_integ.copy(),
-                "T_evap_set_eff": self._a("T_ew_set") + self.T_reset,
-                "ac_state": self.comp_on.astype(float), "cut_out": self.cut_out.astype(float),
-                "ac_demand": self.ac_demand.astype(float), "T_e_last": self.T_e.copy(),
-                "T_c_last": self.T_c.copy(),
-                "p_dis_last": np.where(self.p_c == self.p_c, self.p_c, 0.0)}
 
     def _front_rows(self, idx: np.ndarray, v: np.ndarray, T_amb: np.ndarray):
         """``hifi.front_end`` for members ``idx`` at speeds ``v`` and ambients ``T_amb`` (K),
@@ -462,6 +391,86 @@ class BatchPlant:
                 h = self._hA_cache[key] = (c.hA_ext(key[1]), c)
             out[b] = h[0]
         return out
+
+
+class BatchPlant(BatchMembers):
+    """B high-fidelity plants stepped together; see the module docstring.
+
+    Parameters
+    ----------
+    configs : one ``PlantConfig`` per member (or one shared config with ``size``).
+    mode : "direct" or "nominal", for every member (as ``HifiPlant``).
+    size : number of members when ``configs`` is a single config.
+    """
+
+    name = "hifi"
+
+    def __init__(self, configs: Sequence[PlantConfig] | PlantConfig | None = None,
+                 mode: str = "direct", size: int | None = None):
+        if mode not in MODES:
+            raise ConfigError(f"plant mode {mode!r} unknown (choose 'direct' or 'nominal')")
+        if configs is None or isinstance(configs, PlantConfig):
+            configs = [configs or PlantConfig()] * int(size or 1)
+        self.cfgs = list(configs)
+        if not self.cfgs:
+            raise ConfigError("a batch plant needs at least one member")
+        c0 = self.cfgs[0]
+        check_shared(self.cfgs)
+        self.B = len(self.cfgs)
+        self.mode = mode
+        self.Ts = float(c0.Ts)
+        self.n_sub = int(round(self.Ts / c0.dt_int))
+        self._cyc = BatchCycle(self.cfgs)
+        self._hA_cache: dict = {}
+        self._arrays: dict = {}
+        self._ft = None
+        self._fe_speed = np.array([bool(c.front_end_speed) for c in self.cfgs], bool)
+        self._cabin_speed = np.array([bool(c.cabin_speed) for c in self.cfgs], bool)
+        self._aw = np.array([bool(c.anti_windup) for c in self.cfgs], bool)
+        self._a_N = np.array([math.exp(-c.dt_int / c.tau_N) for c in self.cfgs])
+        self.reset()
+
+    def reset(self, initial: Sequence[dict[str, float] | None] | None = None) -> dict:
+        """Reset every member (as ``HifiPlant.reset``); ``initial``: one dict (or None) each."""
+        from acid.plant.hifi import HifiPlant
+
+        initial = list(initial) if initial is not None else [None] * self.B
+        if len(initial) != self.B:
+            raise ConfigError(f"{len(initial)} initial states for {self.B} batch members")
+        # the single plant's own reset gives each member's start (validation included)
+        starts = []
+        for c, init in zip(self.cfgs, initial, strict=True):
+            p = HifiPlant(c, mode=self.mode)
+            p.reset(init)
+            starts.append(p)
+        g = lambda name: np.array([float(getattr(p, name)) for p in starts])  # noqa: E731
+        self.T_amb, self.w_amb = g("T_amb"), g("w_amb")
+        self.T_cab, self.T_int, self.T_shell = g("T_cab"), g("T_int"), g("T_shell")
+        self.T_int_slow, self.T_ew, self.T_cw = g("T_int_slow"), g("T_ew"), g("T_cw")
+        self.w_cab, self.N, self.T_e, self.T_c = g("w_cab"), g("N"), g("T_e"), g("T_c")
+        self.p_c, self.p_s, self.T_reset = g("p_c"), g("p_s"), g("T_reset")
+        self.cut_out = np.array([p.cut_out for p in starts], bool)
+        self.ac_demand = np.array([p.ac_demand for p in starts], bool)
+        self.comp_on = np.array([p._comp.on for p in starts], bool)
+        self.comp_integ = np.array([float(p._comp.integ) for p in starts])
+        self.bl_integ = np.array([float(p._blower.integ) for p in starts])
+        self.dTs = np.zeros(self.B)  # each member's suction-drop warm start
+        self.t = 0.0
+        return self.measure()
+
+    def measure(self) -> dict[str, np.ndarray]:
+        """Every member's states, keyed as ``HifiPlant.measure`` (arrays of shape (B,))."""
+        return {"T_cab": self.T_cab.copy(), "T_evap": self.T_ew.copy(),
+                "T_int": self.T_int.copy(), "T_shell": self.T_shell.copy(),
+                "T_amb": self.T_amb.copy(), "w_cab": self.w_cab.copy(),
+                "T_cw": self.T_cw.copy(), "T_int_slow": self.T_int_slow.copy(),
+                "N_comp_state": self.N.copy(), "comp_integrator": self.comp_integ.copy(),
+                "blower_integrator": self.bl_integ.copy(),
+                "T_evap_set_eff": self._a("T_ew_set") + self.T_reset,
+                "ac_state": self.comp_on.astype(float), "cut_out": self.cut_out.astype(float),
+                "ac_demand": self.ac_demand.astype(float), "T_e_last": self.T_e.copy(),
+                "T_c_last": self.T_c.copy(),
+                "p_dis_last": np.where(self.p_c == self.p_c, self.p_c, 0.0)}
 
     def step(self, W_bl, T_evap_set, v_veh=0.0, T_amb=None, T_cab_set=None,
              compressor_enabled=None) -> dict[str, np.ndarray]:
