@@ -54,6 +54,8 @@ SWITCH_C = 18.0
 AMBIENT_RANGE_C = (-30.0, 50.0)
 #: the two heating systems compared
 HEAT_PUMP, HEATER_ONLY = "heat pump", "heater only"
+#: the most tasks in one batched plant (a bigger group is split into chunks)
+BATCH_SIZE = 256
 
 
 @dataclass(frozen=True)
@@ -166,14 +168,10 @@ def check_grid(ambients_C: Sequence[float], cycles: Sequence[str], vehicles: Seq
         raise ConfigError(f"--refrigerant {refrigerant!r}: choose {' or '.join(REFRIGERANTS)}")
 
 
-def run_task(task: YearTask) -> YearPoint:
-    """Run one point (module docstring) and return its energies."""
-    from acid.plant.heating import HeatingPlant
+def _task_configs(task: YearTask):
+    """The plant configurations of a task: (HeatingConfig or None, PlantConfig, T_set K)."""
     from acid.plant.heating_config import HeatingConfig, winter_plant_config
-    from acid.plant.hifi import HifiPlant
-    from acid.plant.road_load import RoadLoad, cycle_traction
     from acid.plant.vehicles import vehicle_config
-    from acid.signals import drive_cycle
 
     T = task.T_amb_K
     base = vehicle_config(task.vehicle)
@@ -181,20 +179,22 @@ def run_task(task: YearTask) -> YearPoint:
         base = base.replace(refrigerant=task.refrigerant)
     if task.mode == "heating":
         hc = HeatingConfig(heat_pump=task.heat_pump)
-        plant = HeatingPlant(hc, winter_plant_config(T, base=base), mode="nominal")
-        T_set = hc.T_heat_set
-    else:
-        cfg = base.replace(T_amb=T, T_cab0=T, T_int0=T, T_shell0=T, T_ew0=T, T_cw0=T)
-        plant = HifiPlant(cfg, mode="nominal")
-        T_set = cfg.T_cab_set
-    Ts = plant.Ts
-    v, _ = drive_cycle(task.cycle, Ts=Ts, repeat=False)
-    plant.reset()
-    rows = [plant.step(0.0, 0.0, float(x)) if task.mode == "heating"
-            else plant.step(0.0, plant.cfg.T_ew_set, float(x)) for x in v]
+        return hc, winter_plant_config(T, base=base), hc.T_heat_set
+    cfg = base.replace(T_amb=T, T_cab0=T, T_int0=T, T_shell0=T, T_ew0=T, T_cw0=T)
+    return None, cfg, cfg.T_cab_set
+
+
+def _point(task: YearTask, cols: dict[str, np.ndarray], T_cab: np.ndarray, Ts: float,
+           T_set: float) -> YearPoint:
+    """The point of one run from its channels (one value per sample) and its cabin states at
+    the end of each sample (``T_cab``, K)."""
+    from acid.plant.road_load import RoadLoad, cycle_traction
+
+    n = len(T_cab)
 
     def kwh(channel: str) -> float:
-        return float(sum(r.get(channel, 0.0) for r in rows) * Ts / 3.6e6)
+        x = cols.get(channel)
+        return 0.0 if x is None else float(sum(x.tolist()) * Ts / 3.6e6)
 
     comp = kwh("P_comp")
     parts = {"E_ac_kWh": comp if task.mode == "cooling" else 0.0,
@@ -202,18 +202,117 @@ def run_task(task: YearTask) -> YearPoint:
              "E_heater_kWh": kwh("P_heater"), "E_blower_kWh": kwh("P_bl"),
              "E_fan_kWh": kwh("P_fan")}
     climate = sum(parts.values())
+    T = task.T_amb_K
     trac = cycle_traction(RoadLoad(), task.cycle, T)
     E_t, E_b = trac.battery_J / 3.6e6, trac.aux_J / 3.6e6
-    T_cab = np.array([r["T_cab"] for r in rows[1:]] + [plant.measure()["T_cab"]])
+    defrost = cols.get("defrosting")
     return YearPoint(
         T_amb_K=T, cycle=task.cycle, vehicle=task.vehicle, mode=task.mode,
         heating=(HEAT_PUMP if task.heat_pump else HEATER_ONLY) if task.mode == "heating"
         else "-",
-        distance_km=trac.distance_m / 1000.0, duration_s=len(rows) * Ts, **parts,
+        distance_km=trac.distance_m / 1000.0, duration_s=n * Ts, **parts,
         E_climate_kWh=climate, E_traction_kWh=E_t, E_base_kWh=E_b,
         share=climate / (E_t + E_b + climate),
-        defrost_s=float(sum(r.get("defrosting", 0.0) for r in rows) * Ts),
+        defrost_s=0.0 if defrost is None else float(sum(defrost.tolist()) * Ts),
         T_cab_end_K=float(T_cab[-1]), T_cab_mean_K=float(T_cab.mean()), T_set_K=float(T_set))
+
+
+def run_task(task: YearTask) -> YearPoint:
+    """Run one point (module docstring) on its own plant and return its energies: the
+    single-plant reference of ``run_batch``."""
+    from acid.plant.heating import HeatingPlant
+    from acid.plant.hifi import HifiPlant
+    from acid.signals import drive_cycle
+
+    hc, cfg, T_set = _task_configs(task)
+    plant = (HeatingPlant(hc, cfg, mode="nominal") if task.mode == "heating"
+             else HifiPlant(cfg, mode="nominal"))
+    Ts = plant.Ts
+    v, _ = drive_cycle(task.cycle, Ts=Ts, repeat=False)
+    plant.reset()
+    rows = [plant.step(0.0, 0.0, float(x)) if task.mode == "heating"
+            else plant.step(0.0, plant.cfg.T_ew_set, float(x)) for x in v]
+    cols = {name: np.array([r[name] for r in rows]) for name in rows[0]}
+    T_cab = np.array([r["T_cab"] for r in rows[1:]] + [plant.measure()["T_cab"]])
+    return _point(task, cols, T_cab, Ts, T_set)
+
+
+def batch_key(task: YearTask) -> tuple:
+    """Tasks with the same key run in one batched plant: the plant (mode) and what its members
+    must share (refrigerant tables, time steps)."""
+    from acid.plant.batch import SHARED_FIELDS
+
+    _, cfg, _ = _task_configs(task)
+    return (task.mode, *(getattr(cfg, f) for f in SHARED_FIELDS))
+
+
+def run_batch(tasks: Sequence[YearTask]) -> list[YearPoint]:
+    """Run tasks of one ``batch_key`` together: one ``BatchHeatingPlant`` (heating) or
+    ``BatchPlant`` (cooling) of every task, each over its own cycle (a member whose cycle has
+    ended holds its last speed, its samples stop at its own length). The points equal
+    ``run_task``'s to rounding (``tests/test_plant_year.py``)."""
+    from acid.plant.batch import BatchPlant
+    from acid.plant.batch.heating import BatchHeatingPlant
+    from acid.signals import drive_cycle
+
+    tasks = list(tasks)
+    modes = {t.mode for t in tasks}
+    if len(modes) != 1:
+        raise ConfigError(f"run_batch: tasks of one mode only, got {sorted(modes)}")
+    heating = modes == {"heating"}
+    confs = [_task_configs(t) for t in tasks]
+    cfgs = [c for _, c, _ in confs]
+    if heating:
+        plant = BatchHeatingPlant([h for h, _, _ in confs], cfgs, mode="nominal")
+    else:
+        plant = BatchPlant(cfgs, mode="nominal")
+    Ts, B = plant.Ts, len(tasks)
+    profiles = {c: np.asarray(drive_cycle(c, Ts=Ts, repeat=False)[0], float)
+                for c in {t.cycle for t in tasks}}
+    lens = np.array([len(profiles[t.cycle]) for t in tasks])
+    n = int(lens.max())
+    V = np.empty((n, B))
+    for b, t in enumerate(tasks):
+        x = profiles[t.cycle]
+        V[:len(x), b] = x
+        V[len(x):, b] = x[-1]
+    T_ew_set = np.array([c.T_ew_set for c in cfgs])
+    plant.reset()
+    cols: dict[str, np.ndarray] = {}
+    T_cab = np.empty((n + 1, B))
+    for k in range(n):
+        row = (plant.step(v_veh=V[k]) if heating
+               else plant.step(np.zeros(B), T_ew_set, V[k]))
+        if not cols:
+            cols = {name: np.empty((n, B)) for name in row}
+        for name, x in row.items():
+            cols[name][k] = x
+        T_cab[k] = row["T_cab"]
+    T_cab[n] = plant.measure()["T_cab"]
+    return [_point(t, {name: x[:lens[b], b] for name, x in cols.items()},
+                   T_cab[1:lens[b] + 1, b], Ts, confs[b][2])
+            for b, t in enumerate(tasks)]
+
+
+def plan_batches(tasks: Sequence[YearTask], jobs: int = 1, size: int = BATCH_SIZE
+                 ) -> list[tuple[YearTask, ...]]:
+    """The tasks in batches: grouped by ``batch_key`` (cycles mixed: a member that ends
+    early costs little next to the per-step cost of numpy), longest cycles first so a chunk
+    holds cycles of like length, chunks of at most ``size`` and at least ``jobs`` chunks of a
+    group big enough (every worker gets work)."""
+    from acid.signals import drive_cycle
+
+    groups: dict[tuple, list[YearTask]] = {}
+    for t in tasks:
+        groups.setdefault(batch_key(t), []).append(t)
+    length = {c: len(drive_cycle(c, repeat=False)[0]) for c in {t.cycle for t in tasks}}
+    out = []
+    for group in groups.values():
+        group.sort(key=lambda t: -length[t.cycle])  # stable: the plan's order within a cycle
+        k = max(1, min(int(jobs), len(group)), math.ceil(len(group) / size))
+        step = math.ceil(len(group) / k)
+        out += [tuple(group[i:i + step]) for i in range(0, len(group), step)]
+    return out
 
 
 @dataclass(frozen=True)
@@ -262,10 +361,14 @@ class YearResult:
 def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] = CYCLES,
                vehicles: Sequence[str] = VEHICLES, switch_C: float = SWITCH_C,
                refrigerant: str | None = None, jobs: int | None = 1, scheduler: str | None = None,
-               progress: Callable[[int, int, str], None] | None = None) -> YearResult:
+               progress: Callable[[int, int, str], None] | None = None,
+               batch: bool = True) -> YearResult:
     """Run the whole grid through ``acid.executor`` (``jobs`` 1: in this process; more: a
     Dask LocalCluster of that many workers) and return the points.
 
+    ``batch`` True: the runs of a plant go through batched plants (``run_batch`` on the
+    chunks of ``plan_batches``, one executor task each); False: one plant per run
+    (``run_task``), the reference the batched points equal to rounding.
     ``progress(done, total, label)`` is called as each run finishes."""
     from acid.executor import check_interrupt, open_executor
 
@@ -275,21 +378,27 @@ def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] =
     tasks = plan_tasks(ambients_C, cycles, vehicles, switch_C, refrigerant)
     done: dict[YearTask, YearPoint] = {}
     with open_executor(jobs, scheduler) as ex:
-        handles = {ex.submit(run_task, t): t for t in tasks}
+        if batch:
+            handles = {ex.submit(run_batch, chunk): chunk
+                       for chunk in plan_batches(tasks, jobs or 1)}
+        else:
+            handles = {ex.submit(run_task, t): (t,) for t in tasks}
         pending = list(handles)
         while pending:
             check_interrupt()
             ex.pump()
             for h in ex.wait_any(pending, timeout=0.2):
                 pending.remove(h)
-                task = handles[h]
-                done[task] = ex.result(h)
-                if progress is not None:
-                    progress(len(done), len(tasks), task.label)
+                chunk = handles[h]
+                points = ex.result(h)
+                for task, point in zip(chunk, points if batch else [points], strict=True):
+                    done[task] = point
+                    if progress is not None:
+                        progress(len(done), len(tasks), task.label)
     return YearResult(tuple(done[t] for t in tasks), ambients_C, cycles, vehicles,
                       float(switch_C), refrigerant)
 
 
-__all__ = ["AMBIENTS_C", "CYCLES", "HEATER_ONLY", "HEAT_PUMP", "SWITCH_C", "VEHICLES",
-           "YearPoint", "YearResult", "YearTask", "check_grid", "plan_tasks", "run_task",
-           "year_sweep"]
+__all__ = ["AMBIENTS_C", "BATCH_SIZE", "CYCLES", "HEATER_ONLY", "HEAT_PUMP", "SWITCH_C",
+           "VEHICLES", "YearPoint", "YearResult", "YearTask", "batch_key", "check_grid",
+           "plan_batches", "plan_tasks", "run_batch", "run_task", "year_sweep"]
