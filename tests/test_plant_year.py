@@ -71,3 +71,42 @@ def test_a_dask_cluster_gives_the_same_points_as_this_process(quick):
         pytest.skip("dask.distributed is not installed")
     on_dask = year_sweep((-10.0, 0.0, 25.0, 35.0), ("udds",), ("default",), jobs=2)
     assert on_dask.points == quick.points
+
+
+def test_batched_sweep_equals_one_plant_per_run():
+    """The batched plants (both vehicles, both cycles and both plants mixed in their batches,
+    a member ending first) give the points of one plant per run, to rounding."""
+    import dataclasses
+
+    from acid.plant.year import plan_batches, plan_tasks
+
+    grid = ((-25.0, 0.0, 30.0), ("nycc", "sc03"), ("default", "paper"))
+    chunks = plan_batches(plan_tasks(*grid, 18.0), batch_min=1)
+    assert sorted(len(c) for c in chunks) == [4, 16]  # one batch per plant
+    batched = year_sweep(*grid, jobs=1, batch_min=1)
+    single = year_sweep(*grid, jobs=1, batch_min=None)
+    assert len(batched.points) == len(single.points) == 20
+    for p, q in zip(batched.points, single.points, strict=True):
+        for f in dataclasses.fields(p):
+            x, y = getattr(p, f.name), getattr(q, f.name)
+            if isinstance(x, float):
+                assert abs(x - y) <= 1e-9 * max(1.0, abs(y)), (f.name, q)
+            else:
+                assert x == y
+
+
+def test_batches_are_split_for_the_workers_and_capped():
+    from acid.plant.year import plan_batches, plan_tasks
+
+    tasks = plan_tasks((-10.0, 0.0, 5.0, 25.0, 30.0), ("udds", "hwfet"), ("default",), 18.0)
+    one = plan_batches(tasks, jobs=1, batch_min=4)
+    two = plan_batches(tasks, jobs=2, batch_min=4)
+    capped = plan_batches(tasks, jobs=1, size=5, batch_min=4)
+    small = plan_batches(tasks, jobs=2, batch_min=13)  # one plant per run: split for 2 jobs
+    assert [len(c) for c in one] == [12, 4]
+    assert [len(c) for c in two] == [6, 6, 4]  # the cooling group is too small to split
+    assert max(len(c) for c in capped) <= 5 and len(capped) == 4
+    assert [len(c) for c in small] == [6, 6, 2, 2]
+    for plan in (one, two, capped, small):
+        assert sorted(map(id, (t for c in plan for t in c))) == sorted(map(id, tasks))
+        assert all(len({t.mode for t in c}) == 1 for c in plan)

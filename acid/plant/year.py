@@ -56,6 +56,10 @@ AMBIENT_RANGE_C = (-30.0, 50.0)
 HEAT_PUMP, HEATER_ONLY = "heat pump", "heater only"
 #: the most tasks in one batched plant (a bigger group is split into chunks)
 BATCH_SIZE = 256
+#: the fewest tasks run in one batched plant: below it numpy's per-call cost makes the batch
+#: slower than one plant per task (the heating batch breaks even at about 48 members, the
+#: cooling batch above 20; ``benchmarks/bench_plant_batch*.py``)
+BATCH_MIN = 64
 
 
 @dataclass(frozen=True)
@@ -246,16 +250,20 @@ def batch_key(task: YearTask) -> tuple:
     return (task.mode, *(getattr(cfg, f) for f in SHARED_FIELDS))
 
 
-def run_batch(tasks: Sequence[YearTask]) -> list[YearPoint]:
+def run_batch(tasks: Sequence[YearTask], batch_min: int | None = BATCH_MIN
+              ) -> list[YearPoint]:
     """Run tasks of one ``batch_key`` together: one ``BatchHeatingPlant`` (heating) or
     ``BatchPlant`` (cooling) of every task, each over its own cycle (a member whose cycle has
     ended holds its last speed, its samples stop at its own length). The points equal
-    ``run_task``'s to rounding (``tests/test_plant_year.py``)."""
+    ``run_task``'s to rounding (``tests/test_plant_year.py``). Fewer tasks than
+    ``batch_min`` (None: any number) run one plant each (``run_task``)."""
     from acid.plant.batch import BatchPlant
     from acid.plant.batch.heating import BatchHeatingPlant
     from acid.signals import drive_cycle
 
     tasks = list(tasks)
+    if batch_min is None or len(tasks) < batch_min:
+        return [run_task(t) for t in tasks]
     modes = {t.mode for t in tasks}
     if len(modes) != 1:
         raise ConfigError(f"run_batch: tasks of one mode only, got {sorted(modes)}")
@@ -294,12 +302,13 @@ def run_batch(tasks: Sequence[YearTask]) -> list[YearPoint]:
             for b, t in enumerate(tasks)]
 
 
-def plan_batches(tasks: Sequence[YearTask], jobs: int = 1, size: int = BATCH_SIZE
-                 ) -> list[tuple[YearTask, ...]]:
+def plan_batches(tasks: Sequence[YearTask], jobs: int = 1, size: int = BATCH_SIZE,
+                 batch_min: int | None = BATCH_MIN) -> list[tuple[YearTask, ...]]:
     """The tasks in batches: grouped by ``batch_key`` (cycles mixed: a member that ends
     early costs little next to the per-step cost of numpy), longest cycles first so a chunk
-    holds cycles of like length, chunks of at most ``size`` and at least ``jobs`` chunks of a
-    group big enough (every worker gets work)."""
+    holds cycles of like length, chunks of at most ``size``; a group is split further, up to
+    ``jobs`` chunks, while its chunks keep ``batch_min`` tasks (a group smaller than that runs
+    one plant per task anyway: ``jobs`` chunks)."""
     from acid.signals import drive_cycle
 
     groups: dict[tuple, list[YearTask]] = {}
@@ -309,7 +318,11 @@ def plan_batches(tasks: Sequence[YearTask], jobs: int = 1, size: int = BATCH_SIZ
     out = []
     for group in groups.values():
         group.sort(key=lambda t: -length[t.cycle])  # stable: the plan's order within a cycle
-        k = max(1, min(int(jobs), len(group)), math.ceil(len(group) / size))
+        n, jobs = len(group), max(1, int(jobs))
+        if batch_min is None or n < batch_min:
+            k = min(jobs, n)
+        else:
+            k = max(1, math.ceil(n / size), min(jobs, n // batch_min))
         step = math.ceil(len(group) / k)
         out += [tuple(group[i:i + step]) for i in range(0, len(group), step)]
     return out
@@ -362,13 +375,14 @@ def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] =
                vehicles: Sequence[str] = VEHICLES, switch_C: float = SWITCH_C,
                refrigerant: str | None = None, jobs: int | None = 1, scheduler: str | None = None,
                progress: Callable[[int, int, str], None] | None = None,
-               batch: bool = True) -> YearResult:
+               batch_min: int | None = BATCH_MIN) -> YearResult:
     """Run the whole grid through ``acid.executor`` (``jobs`` 1: in this process; more: a
     Dask LocalCluster of that many workers) and return the points.
 
-    ``batch`` True: the runs of a plant go through batched plants (``run_batch`` on the
-    chunks of ``plan_batches``, one executor task each); False: one plant per run
-    (``run_task``), the reference the batched points equal to rounding.
+    The runs go in chunks (``plan_batches``, one executor task each) through ``run_batch``:
+    a chunk of at least ``batch_min`` runs steps one batched plant, a smaller one one plant
+    per run (``run_task``, the reference the batched points equal to rounding); ``batch_min``
+    None: one plant per run everywhere.
     ``progress(done, total, label)`` is called as each run finishes."""
     from acid.executor import check_interrupt, open_executor
 
@@ -378,11 +392,8 @@ def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] =
     tasks = plan_tasks(ambients_C, cycles, vehicles, switch_C, refrigerant)
     done: dict[YearTask, YearPoint] = {}
     with open_executor(jobs, scheduler) as ex:
-        if batch:
-            handles = {ex.submit(run_batch, chunk): chunk
-                       for chunk in plan_batches(tasks, jobs or 1)}
-        else:
-            handles = {ex.submit(run_task, t): (t,) for t in tasks}
+        handles = {ex.submit(run_batch, chunk, batch_min): chunk
+                   for chunk in plan_batches(tasks, jobs or 1, batch_min=batch_min)}
         pending = list(handles)
         while pending:
             check_interrupt()
@@ -391,7 +402,7 @@ def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] =
                 pending.remove(h)
                 chunk = handles[h]
                 points = ex.result(h)
-                for task, point in zip(chunk, points if batch else [points], strict=True):
+                for task, point in zip(chunk, points, strict=True):
                     done[task] = point
                     if progress is not None:
                         progress(len(done), len(tasks), task.label)
@@ -399,6 +410,6 @@ def year_sweep(ambients_C: Sequence[float] = AMBIENTS_C, cycles: Sequence[str] =
                       float(switch_C), refrigerant)
 
 
-__all__ = ["AMBIENTS_C", "BATCH_SIZE", "CYCLES", "HEATER_ONLY", "HEAT_PUMP", "SWITCH_C",
-           "VEHICLES", "YearPoint", "YearResult", "YearTask", "batch_key", "check_grid",
+__all__ = ["AMBIENTS_C", "BATCH_MIN", "BATCH_SIZE", "CYCLES", "HEATER_ONLY", "HEAT_PUMP",
+           "SWITCH_C", "VEHICLES", "YearPoint", "YearResult", "YearTask", "batch_key", "check_grid",
            "plan_batches", "plan_tasks", "run_batch", "run_task", "year_sweep"]
