@@ -102,11 +102,11 @@ def test_batches_are_split_for_the_workers_and_capped():
     one = plan_batches(tasks, jobs=1, batch_min=4)
     two = plan_batches(tasks, jobs=2, batch_min=4)
     capped = plan_batches(tasks, jobs=1, size=5, batch_min=4)
-    small = plan_batches(tasks, jobs=2, batch_min=13)  # one plant per run: split for 2 jobs
+    small = plan_batches(tasks, jobs=2, batch_min=13)  # one plant per run: a chunk each
     assert [len(c) for c in one] == [12, 4]
     assert [len(c) for c in two] == [6, 6, 4]  # the cooling group is too small to split
     assert max(len(c) for c in capped) <= 5 and len(capped) == 4
-    assert [len(c) for c in small] == [6, 6, 2, 2]
+    assert [len(c) for c in small] == [1] * 16
     for plan in (one, two, capped, small):
         assert sorted(map(id, (t for c in plan for t in c))) == sorted(map(id, tasks))
         assert all(len({t.mode for t in c}) == 1 for c in plan)

@@ -257,13 +257,13 @@ def run_batch(tasks: Sequence[YearTask], batch_min: int | None = BATCH_MIN
     ended holds its last speed, its samples stop at its own length). The points equal
     ``run_task``'s to rounding (``tests/test_plant_year.py``). Fewer tasks than
     ``batch_min`` (None: any number) run one plant each (``run_task``)."""
+    tasks = list(tasks)
+    if batch_min is None or len(tasks) < batch_min:
+        return [run_task(t) for t in tasks]
     from acid.plant.batch import BatchPlant
     from acid.plant.batch.heating import BatchHeatingPlant
     from acid.signals import drive_cycle
 
-    tasks = list(tasks)
-    if batch_min is None or len(tasks) < batch_min:
-        return [run_task(t) for t in tasks]
     modes = {t.mode for t in tasks}
     if len(modes) != 1:
         raise ConfigError(f"run_batch: tasks of one mode only, got {sorted(modes)}")
@@ -307,8 +307,9 @@ def plan_batches(tasks: Sequence[YearTask], jobs: int = 1, size: int = BATCH_SIZ
     """The tasks in batches: grouped by ``batch_key`` (cycles mixed: a member that ends
     early costs little next to the per-step cost of numpy), longest cycles first so a chunk
     holds cycles of like length, chunks of at most ``size``; a group is split further, up to
-    ``jobs`` chunks, while its chunks keep ``batch_min`` tasks (a group smaller than that runs
-    one plant per task anyway: ``jobs`` chunks)."""
+    ``jobs`` chunks, while its chunks keep ``batch_min`` tasks. A group smaller than
+    ``batch_min`` (or every group, ``batch_min`` None) gives one chunk per task: one plant per
+    run, as the executor spreads them."""
     from acid.signals import drive_cycle
 
     groups: dict[tuple, list[YearTask]] = {}
@@ -320,10 +321,10 @@ def plan_batches(tasks: Sequence[YearTask], jobs: int = 1, size: int = BATCH_SIZ
         group.sort(key=lambda t: -length[t.cycle])  # stable: the plan's order within a cycle
         n, jobs = len(group), max(1, int(jobs))
         if batch_min is None or n < batch_min:
-            k = min(jobs, n)
-        else:
-            k = max(1, math.ceil(n / size), min(jobs, n // batch_min))
-        step = math.ceil(len(group) / k)
+            out += [(t,) for t in group]
+            continue
+        k = max(1, math.ceil(n / size), min(jobs, n // batch_min))
+        step = math.ceil(n / k)
         out += [tuple(group[i:i + step]) for i in range(0, len(group), step)]
     return out
 
