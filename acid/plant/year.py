@@ -27,6 +27,10 @@ air density, for both vehicles: they differ in their A/C calibration, not their 
 the **share of range the climate costs**, climate / (traction + base + climate) (the range
 with climate over the range without is one minus it). Cabin temperature at the end and
 mean, for the comfort each point bought. Temperatures in K inside, degC at the edges.
+
+A grid's runs of one plant (at least ``BATCH_MIN`` of them) are stepped together on a batched
+plant (``acid.plant.batch``: ``BatchHeatingPlant``, ``BatchPlant``), whose points equal one
+plant per run (``run_task``) to rounding; smaller groups run one plant per run.
 """
 
 from __future__ import annotations

@@ -20,7 +20,8 @@ checks 1e-9 K and a relative 1e-9 on powers. Energy balances are not accumulated
 
 Each numpy call costs a few microseconds whatever B is, so one member alone runs about 20x
 slower than ``HifiPlant``; per plant the batch runs 0.6x the single plant's speed at B = 16,
-5-6x at B = 256 and 10-12x at B = 1024 (``benchmarks/bench_plant_batch.py``).
+5-6x at B = 256 and 10-12x at B = 1024 (``benchmarks/bench_plant_batch.py``). The heating
+plant's batch is ``acid.plant.batch.heating.BatchHeatingPlant``.
 """
 
 from __future__ import annotations
