@@ -4,8 +4,9 @@
 ``Constant`` and ``RK4``; the built-in declarations ``paper`` (eqs. 1-5) and ``econ``; users'
 own files through :func:`load`. ``exp``, ``sqrt``, ``log``, ``sin``, ``cos``, ``fabs``,
 ``fmax``, ``fmin`` and ``if_else`` work on the symbols the equations receive (CasADi's);
-``smooth_max``, ``smooth_min``, ``smooth_sign``, ``smooth_sqrt``, ``smooth_step`` and ``soft_if_else``
-(``acid.expr``) are their differentiable stand-ins (a threshold written with them is fitted).
+``smooth_max``, ``smooth_min``, ``smooth_sign``, ``smooth_sqrt``, ``smooth_step`` and
+``soft_if_else`` (``acid.expr``) are their differentiable stand-ins (a threshold written with
+them is fitted).
 """
 
 from __future__ import annotations
