@@ -1,7 +1,7 @@
 """What a fit of a declared model returns: :class:`DeclaredFitResult` (the fitted table with
 its standard errors and intervals, per-equation reports, optima of a multi-start fit, notes and
 warnings, provenance) and its rows. Written by :mod:`acid.ident.fit` and :mod:`acid.ident.pem`;
-printing lives in the CLI."""
+``summary()`` is its text."""
 
 from __future__ import annotations
 
@@ -73,7 +73,8 @@ class FailedStart:
 
 @dataclass(frozen=True, repr=False)
 class DeclaredFitResult:
-    """What ``fit_model`` found (frozen; printing lives in the CLI)."""
+    """What ``fit_model`` found (frozen): ``print(fit)`` or ``fit.summary()`` for the table,
+    ``fit.to_frame()`` for pandas rows, ``fit.nmse`` to compare models on the same data."""
 
     model: str
     model_source: str
