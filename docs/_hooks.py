@@ -3,11 +3,9 @@
 
 from __future__ import annotations
 
-import re
-
 from mkdocs.structure.files import File
 
-_COMMANDS: list[tuple[str, str]] = []   # (command words, first help line)
+_COMMANDS: list[str] = []   # command words, e.g. "car fit"
 
 
 def _commands():
@@ -39,11 +37,9 @@ def _slug(words: tuple[str, ...]) -> str:
 
 def on_config(config):
     if not _COMMANDS:
-        for words, cmd in _commands():
-            first = (cmd.help or cmd.short_help or "").strip().splitlines()
-            _COMMANDS.append((" ".join(words), first[0] if first else ""))
+        _COMMANDS.extend(" ".join(words) for words, _ in _commands())
     pages = [{"Overview": "cli.md"}]
-    pages += [{f"acid {w}": f"cli/{_slug(tuple(w.split()))}.md"} for w, _ in _COMMANDS]
+    pages += [{f"acid {w}": f"cli/{_slug(tuple(w.split()))}.md"} for w in _COMMANDS]
     nav = []
     for entry in config["nav"] or []:
         if isinstance(entry, dict) and "Command line" in entry:
@@ -55,7 +51,7 @@ def on_config(config):
 
 
 def on_files(files, config):
-    for words, _ in _COMMANDS:
+    for words in _COMMANDS:
         key = tuple(words.split())
         text = _help(key)
         body = (f"# acid {words}\n\nThe command's own help (`acid {words} --help`), generated "
@@ -63,11 +59,3 @@ def on_files(files, config):
         files.append(File.generated(config, f"cli/{_slug(key)}.md", content=body))
     return files
 
-
-def command_table() -> str:
-    """A markdown table of every command with the first line of its help, linked."""
-    rows = ["| command | what |", "|---|---|"]
-    for words, first in _COMMANDS:
-        first = re.sub(r"\s+", " ", first).replace("|", "\\|")
-        rows.append(f"| [`acid {words}`](cli/{_slug(tuple(words.split()))}.md) | {first} |")
-    return "\n".join(rows)
