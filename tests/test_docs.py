@@ -36,6 +36,8 @@ def test_the_site_builds_strictly_and_every_example_executes(site):
     for page in pages:
         text = page.read_text()
         assert "Traceback (most recent call last)" not in text, page
+        internal = re.search(r"[Ii]ssue \d+|\b(COMPARE|PLANT|SPEC|ARCHITECTURE)\.md|notes/\w", text)
+        assert internal is None, f"{page}: cites {internal.group(0)!r}, which a user does not have"
     models = (site / "models" / "index.html").read_text()
     assert "two_tanks (fit-oe)" in models and "true 0.0012" in models
 
