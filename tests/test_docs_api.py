@@ -75,3 +75,27 @@ def test_a_millisecond_validation_prints_the_model_beside_the_yardsticks():
     frame = res.to_frame()
     assert set(frame.predictor) == {"model", "persistence", "arx", "subspace"}
     assert frame.time_s.max() == 0.3
+
+
+def test_the_printed_fit_table_keeps_its_columns_aligned():
+    """Units of different lengths ("kg", "N*s/m") no longer push the status column about."""
+    model = Model("mass", states=[State("v", "m/s")], inputs=[Signal("F", "N")],
+                  parameters=[Parameter("M", "kg", 2.0, 0.1, 10.0),
+                              Parameter("c", "N*s/m", 1.0, 0.0, 10.0)],
+                  Ts=0.1, ode=lambda s: {"v": (s.F - s.c * s.v) / s.M},
+                  integrator=RK4(substeps=2))
+    rng = np.random.default_rng(1)
+    n = 200
+    F = np.repeat(rng.uniform(-1, 1, n // 10), 10)
+    v = np.zeros(n)
+    for k in range(n - 1):
+        v[k + 1] = F[k] / 2.0 + (v[k] - F[k] / 2.0) * np.exp(-2.0 / 4.0 * 0.1)
+    data = acid.Dataset(time=np.arange(n) * 0.1, channels={"v": v + rng.normal(0, 1e-3, n),
+                                                             "F": F},
+                        units={"v": "m/s", "F": "N"}, Ts=0.1)
+    fit = acid.fit_model(model, data, method="oe")
+    rows = [line for line in fit.summary().splitlines()
+            if line.split()[:1] in (["name"], ["M"], ["c"])]
+    assert len(rows) == 3
+    assert len({line.index(word) for line, word in
+                zip(rows, ("status", "estimated", "estimated"), strict=True)}) == 1, rows

@@ -143,11 +143,12 @@ class DeclaredFitResult:
                  f"({self.data_source})"]
         width = max([len(e.name) + (4 if e.experiment is not None else 0)
                      for e in self.estimates] + [4])
-        lines.append(f"  {'name':<{width}} {'value':>12} {'stderr':>10}  unit  status")
+        uw = max([len(e.unit) for e in self.estimates] + [4])
+        lines.append(f"  {'name':<{width}} {'value':>12} {'stderr':>10}  {'unit':<{uw}}  status")
         for e in self.estimates:
             label = e.name if e.experiment is None else f"{e.name}@{e.experiment}"
-            lines.append(f"  {label:<{width}} {e.value:>12.5g} {e.stderr:>10.3g}  {e.unit}  "
-                         f"{e.status}")
+            lines.append(f"  {label:<{width}} {e.value:>12.5g} {e.stderr:>10.3g}  "
+                         f"{e.unit:<{uw}}  {e.status}")
         if rms:
             lines.append("  error RMS: " + ", ".join(f"{k} {v:.4g}" for k, v in rms.items()))
         if self.simulation_fit:
