@@ -166,6 +166,15 @@ def smooth_step(x, threshold, width):
     return 0.5 * (1.0 + ca.tanh((x - threshold) / width))
 
 
+def smooth_sign(x, width):
+    """A soft ``sign(x)``: tanh(x / width), -1 well below 0, +1 well above (+-0.76 at one
+    width); for Coulomb friction ``Fc * smooth_sign(v, width)``, whose exact ``sign(v)``
+    has no derivative at v = 0, where a positioning system spends its rests."""
+    import casadi as ca
+
+    return ca.tanh(x / width)
+
+
 def soft_if_else(x, threshold, above, below, width):
     """``if_else(x > threshold, above, below)`` blended over ``width``:
     below + (above - below) * smooth_step(x, threshold, width)."""

@@ -1,7 +1,7 @@
 """What a fit of a declared model returns: :class:`DeclaredFitResult` (the fitted table with
 its standard errors and intervals, per-equation reports, optima of a multi-start fit, notes and
 warnings, provenance) and its rows. Written by :mod:`acid.ident.fit` and :mod:`acid.ident.pem`;
-printing lives in the CLI."""
+``summary()`` is its text."""
 
 from __future__ import annotations
 
@@ -73,7 +73,8 @@ class FailedStart:
 
 @dataclass(frozen=True, repr=False)
 class DeclaredFitResult:
-    """What ``fit_model`` found (frozen; printing lives in the CLI)."""
+    """What ``fit_model`` found (frozen): ``print(fit)`` or ``fit.summary()`` for the table,
+    ``fit.to_frame()`` for pandas rows, ``fit.nmse`` to compare models on the same data."""
 
     model: str
     model_source: str
@@ -142,11 +143,12 @@ class DeclaredFitResult:
                  f"({self.data_source})"]
         width = max([len(e.name) + (4 if e.experiment is not None else 0)
                      for e in self.estimates] + [4])
-        lines.append(f"  {'name':<{width}} {'value':>12} {'stderr':>10}  unit  status")
+        uw = max([len(e.unit) for e in self.estimates] + [4])
+        lines.append(f"  {'name':<{width}} {'value':>12} {'stderr':>10}  {'unit':<{uw}}  status")
         for e in self.estimates:
             label = e.name if e.experiment is None else f"{e.name}@{e.experiment}"
-            lines.append(f"  {label:<{width}} {e.value:>12.5g} {e.stderr:>10.3g}  {e.unit}  "
-                         f"{e.status}")
+            lines.append(f"  {label:<{width}} {e.value:>12.5g} {e.stderr:>10.3g}  "
+                         f"{e.unit:<{uw}}  {e.status}")
         if rms:
             lines.append("  error RMS: " + ", ".join(f"{k} {v:.4g}" for k, v in rms.items()))
         if self.simulation_fit:

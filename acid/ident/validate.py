@@ -144,6 +144,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                    ) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
 
+    ``params``: a fit (``DeclaredFitResult``), any ``ParameterValues`` or None (the declared
+    values).
+
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
     and T_shell) instead of measured along the prediction. ``start_index``: these start
     samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
@@ -165,7 +168,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     if unknown:
         raise ConfigError(f"hold: {unknown[0]!r} is not a disturbance of model "
                           f"{model.name!r}")
-    params = declared_parameters(model) if params is None else params
+    params = declared_parameters(model) if params is None else as_values(params)
     if warm_start not in WARM_STARTS:
         raise ConfigError(f"warm_start must be one of {', '.join(WARM_STARTS)}, got "
                           f"{warm_start!r}")

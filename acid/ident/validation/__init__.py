@@ -99,9 +99,15 @@ class DeclaredValidation:
 
     def by_horizon_table(self) -> dict:
         """{"model" | yardstick: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}}} at
-        ``REPORT_TIMES_S`` and the horizon."""
-        return {"model": self.by_time,
-                **{k: y["by_time"] for k, y in self.yardsticks.items()}}
+        ``REPORT_TIMES_S`` and the horizon; at the scored steps (``by_horizon``) when the
+        horizon is shorter than every report time (a fast system sampled in ms)."""
+        if any(self.by_time.get(c) for c in self.channels):
+            return {"model": self.by_time,
+                    **{k: y["by_time"] for k, y in self.yardsticks.items()}}
+        # a horizon shorter than every report time: the scored steps instead
+        return {"model": _steps_as_times(self.by_horizon, self.channels, self.Ts),
+                **{k: _steps_as_times(y.get("by_horizon", []), self.channels, self.Ts)
+                   for k, y in self.yardsticks.items()}}
 
     def to_frame(self):
         """The errors by prediction time as a pandas DataFrame, a row per predictor (the
@@ -267,3 +273,17 @@ def _step_stats(e: np.ndarray) -> dict:
         p = np.nanpercentile(np.abs(np.where(ok, e, np.nan)), 90, axis=0)
     return {"rmse": r.tolist(), "p90_abs": p.tolist(),
             "n": n.astype(int).tolist()}
+
+
+def _steps_as_times(rows, channels, Ts) -> dict:
+    """``by_horizon`` rows ({"step", channel: {"rmse", "p90_abs", "n"}}) in the shape of
+    ``by_time``: {channel: {"<t>": {"rmse_K", "p90_K", "n"}}}, t = step * Ts in s."""
+    out: dict = {c: {} for c in channels}
+    for r in rows:
+        for c in channels:
+            if c in r:
+                out[c][f"{r['step'] * Ts:g}"] = {"rmse_K": r[c].get("rmse"),
+                                                  "p90_K": r[c].get("p90_abs"),
+                                                  "n": r[c].get("n")}
+    return out
+
