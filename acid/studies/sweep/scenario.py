@@ -134,13 +134,12 @@ def identify_params(plant_config: PlantConfig, settings: IdentifySettings,
 def warm_start(ctx: ScenarioContext, seconds: float) -> dict | None:
     """The common start: the plant after ``seconds`` of the paper NMPC on a constant bound
     at the set-point, at the cycle's mean speed, from the hot soak (None when 0)."""
-    from acid.control.nmpc import NMPC
     from acid.studies.mpc_check.scenarios import closed_loop
 
     n_w = int(round(seconds / ctx.Ts))
     if n_w <= 0:
         return None
-    mpc = NMPC(ctx.params, ctx.nmpc_config(COMMON_HORIZON))
+    mpc = ctx.nmpc(COMMON_HORIZON)
     plant = ctx.make_plant()
     closed_loop(plant, mpc, None, np.full(n_w + mpc.N + 1, ctx.conditions.T_set),
                 np.full(n_w, float(np.mean(ctx.v_step))), "warm-up", progress=ctx.tick)
