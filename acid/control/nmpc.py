@@ -663,7 +663,7 @@ class NMPC:
         self._w_prev = None
         self._lam_g_prev = None
         self._lam_x_prev = None
-        self._plan = None  # (N, 2) last successful plan
+        self._plan = None  # the last successful solution (MPCSolution: its plan)
         self._plan_age = 0
         self._committed = (np.array(u_initial, dtype=float) if u_initial is not None
                            else self.config.u_safe.copy())
@@ -973,7 +973,9 @@ class NMPC:
         pinned = cfg.first_move == "pinned"
         x = np.asarray(x, dtype=float).reshape(_NX)
         # T_int, T_shell over the first step (eq. 1's v), K
-        v = np.array([np.ravel(T_int)[0], np.ravel(T_shell)[0]], dtype=float)
+        v = np.array([T_int if isinstance(T_int, float) else np.ravel(T_int)[0],
+                      T_shell if isinstance(T_shell, float) else np.ravel(T_shell)[0]],
+                     dtype=float)
         sol, d, x_hat = None, np.zeros(_NX), x
         margin = (0.0, 0.0)
         x0, x1, v0, v1 = float(x[0]), float(x[1]), float(v[0]), float(v[1])
@@ -1006,7 +1008,7 @@ class NMPC:
             except (RuntimeError, ValueError, FloatingPointError) as exc:  # CasADi errors
                 status, ok = f"error: {str(exc).splitlines()[0][:120]}", False
         if ok:
-            self._plan, self._plan_age = sol.plan, 0
+            self._plan, self._plan_age = sol, 0   # its plan is read only on a fallback
             if pinned:
                 u, self._committed = self._committed.copy(), sol.plan[1].copy()
             else:
@@ -1035,7 +1037,7 @@ class NMPC:
         self._w_prev = self._lam_g_prev = self._lam_x_prev = None  # cold start next
         nxt = self._plan_age + 1 + (1 if pinned else 0)
         if self._plan is not None and nxt < self.N:
-            fallback_u = self._plan[nxt].copy()
+            fallback_u = self._plan.plan[nxt].copy()
             self._plan_age += 1
         else:
             fallback_u = self.config.u_safe.copy()
