@@ -411,9 +411,20 @@ def main(argv=None) -> dict:
               f"{out['ratio_acados_median']:.1f}x (median, target >= {TARGET_RATIO_ACADOS:g}x); "
               f"{out['acados_iterations_mean']:.2f} SQP iterations a step, "
               f"{out['acados_failed']} not converged")
+        within = {f"{t:g}": [int(np.sum(np.asarray(du_a) <= t)),
+                              int(np.sum(np.asarray(dobj_a) <= t))] for t in (1e-8, 1e-6)}
+        out["acados_states_within"] = within   # [first move, objective]
+        out["acados_rel_diff_quantiles"] = {
+            "first_move": [float(q) for q in np.quantile(du_a, [0.5, 0.9, 0.99])],
+            "objective": [float(q) for q in np.quantile(dobj_a, [0.5, 0.9, 0.99])]}
+        q = out["acados_rel_diff_quantiles"]
         print(f"  same optimum vs acados: first move max rel diff "
               f"{out['max_rel_diff_first_move_vs_acados']:.1e}, objective "
-              f"{out['max_rel_diff_objective_vs_acados']:.1e}")
+              f"{out['max_rel_diff_objective_vs_acados']:.1e}; states within 1e-8: first move "
+              f"{within['1e-08'][0]}, objective {within['1e-08'][1]} of {len(du_a)} (1e-6: "
+              f"{within['1e-06'][0]}, {within['1e-06'][1]}); median / p90 / p99 first move "
+              + " / ".join(f"{v:.1e}" for v in q["first_move"]) + ", objective "
+              + " / ".join(f"{v:.1e}" for v in q["objective"]))
     met = {"median": so["median"] <= TARGET_MEDIAN_MS and out["backend"] == "compiled",
            "ratio": out["ratio_median"] >= TARGET_RATIO, "optimum": same}
     out["targets_met"] = met
@@ -421,8 +432,11 @@ def main(argv=None) -> dict:
           f"target <= {TARGET_MEDIAN_MS} ms -> {'MET' if met['median'] else 'NOT MET'}; "
           f"{out['ratio_median']:.1f}x do-mpc, target >= {TARGET_RATIO:g}x -> "
           f"{'MET' if met['ratio'] else 'NOT MET'}; same optimum (<= "
-          f"{TARGET_SAME_OPTIMUM:g}) -> {'MET' if same else 'NOT MET'}; load {load:.1f} on "
-          f"{os.cpu_count()} cores")
+          f"{TARGET_SAME_OPTIMUM:g}) -> {'MET' if same else 'NOT MET'}"
+          + (f"; {out['ratio_acados_median']:.1f}x acados, target >= {TARGET_RATIO_ACADOS:g}x "
+             f"-> {'MET' if out['ratio_acados_median'] >= TARGET_RATIO_ACADOS else 'NOT MET'}"
+             if acados is not None else "")
+          + f"; load {load:.1f} on {os.cpu_count()} cores")
     if args.json:
         from acid._io import write_json
 

@@ -101,3 +101,34 @@ def test_a_fused_step_past_its_cap_is_abandoned_and_reloaded(fused, monkeypatch)
         warnings.simplefilter("error", SolverWarning)
         np.testing.assert_array_equal(capped.make_step(x, ub, C2K(30.0), C2K(33.0)),
                                       fused.make_step(x, ub, C2K(30.0), C2K(33.0)))
+
+
+def test_parameters_written_into_the_call_match_the_full_vector(fused):
+    """The step writes its parameters straight into the call's buffer and keeps the blocks
+    that did not change (the default lower bound, stage parameters): after any sequence of
+    previews, stage parameters, disturbances and a rejected input, the buffer is the
+    parameter vector the separate solver builds, and the moves are the same."""
+    from acid.errors import DataError
+
+    ref = NMPC(paper(), NMPCConfig(compiled=False))
+    fused.reset()
+    x = np.array([C2K(28.0), C2K(8.0)])
+    ub = np.full(fused.N + 1, C2K(25.0))
+    calls = [{}, {"T_cab_min": C2K(19.0)}, {}, {"T_amb": C2K(38.0)},
+             {"eta_cop": np.linspace(3.0, 3.6, fused.N + 1)}, {},
+             {"disturbance": [0.05, -0.02]}, {"T_cab_min": np.full(fused.N + 1, C2K(20.5))},
+             {"T_amb": float("nan")}, {}, {"disturbance": [0.0, 0.0]}, {}]
+    for kw in calls:
+        if kw.get("T_amb") is not None and not np.isfinite(kw["T_amb"]):
+            with pytest.raises(DataError, match="T_amb"):
+                fused.solve(x, ub, C2K(30.0), C2K(33.0), **kw)
+            continue
+        a = fused.solve(x, ub, C2K(30.0), C2K(33.0), **kw)
+        b = ref.solve(x, ub, C2K(30.0), C2K(33.0), **kw)
+        assert np.array_equal(fused._step.inputs["p"], ref._pvec), kw
+        assert a.success and b.success
+        assert np.allclose(a.u, b.u, rtol=1e-7, atol=1e-9), kw
+        assert a.objective == pytest.approx(b.objective, rel=1e-8)
+        x = np.array([a.T_cab[1], a.T_evap[1]])
+    with pytest.raises(DataError, match="disturbance"):
+        fused.solve(x, ub, C2K(30.0), C2K(33.0), disturbance=[0.1, 0.2, 0.3])

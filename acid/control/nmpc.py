@@ -545,6 +545,9 @@ class NMPC:
         self._Q_default = np.column_stack((np.full(N + 1, cfg.T_amb), eta,
                                            np.full(N + 1, self.params.c_p)))
         self._eta_default.setflags(write=False)
+        self._eta_ok = bool(eta.min() > 0 and np.isfinite(eta.max()))
+        self._lb_default = np.full(N + 1, float(cfg.T_cab_min))
+        self._lb_default.setflags(write=False)
         self._Q_default.setflags(write=False)
         # the SQP's whole step (guess, solve, convergence check, plan and trajectory) as
         # one generated C call when it compiles; the separate solver is then CasADi's (it
@@ -612,6 +615,7 @@ class NMPC:
         except CodegenError:   # the separate calls (NLPSolver notices why)
             self._step = None
         self._lbx_in = None   # the lbx the step's input buffer holds (None: unknown)
+        self._views_of = self._views = None   # see _step_views
 
     def _fallback_solver(self) -> NLPSolver | None:
         """The solver of ``config.fallback_solver`` (None when there is none), built at its
@@ -659,7 +663,7 @@ class NMPC:
         self._w_prev = None
         self._lam_g_prev = None
         self._lam_x_prev = None
-        self._plan = None  # (N, 2) last successful plan
+        self._plan = None  # the last successful solution (MPCSolution: its plan)
         self._plan_age = 0
         self._committed = (np.array(u_initial, dtype=float) if u_initial is not None
                            else self.config.u_safe.copy())
@@ -729,15 +733,14 @@ class NMPC:
         cfg, N = self.config, self.N
         x = np.asarray(x, dtype=float).reshape(_NX)
         ub = self._preview(T_cab_max, N + 1, "T_cab_max")
-        lb = self._preview(cfg.T_cab_min if T_cab_min is None else T_cab_min, N + 1,
-                           "T_cab_min")
+        lb = (self._lb_default if T_cab_min is None
+              else self._preview(T_cab_min, N + 1, "T_cab_min"))
         Ti = self._preview(T_int, N, "T_int")
         Tsh = self._preview(T_shell, N, "T_shell")
         amb = cfg.T_amb if T_amb is None else float(T_amb)
         eta = (self._eta_default if eta_cop is None
                else self._preview(eta_cop, N + 1, "eta_cop"))
         d = np.zeros(_NX) if disturbance is None else np.asarray(disturbance, float)
-        self._check_inputs(x, ub, lb, Ti, Tsh, amb, eta, d)
         lbx, ubx = self._lbx0, self._ubx0
         if cfg.first_move == "pinned":
             lbx, ubx = lbx.copy(), ubx.copy()
@@ -746,17 +749,24 @@ class NMPC:
             u0 = np.clip(np.asarray(u_prev, dtype=float), cfg.u_min, cfg.u_max)
             lbx[self._iu[0]] = self._u_nlp(u0)
             ubx[self._iu[0]] = self._u_nlp(u0)
-        D = np.empty((N, 2))   # [T_int, T_shell] per stage
-        D[:, 0], D[:, 1] = Ti, Tsh
-        Q = (self._Q_default if T_amb is None and eta_cop is None else
-             np.column_stack((np.full(N + 1, amb), eta, np.full(N + 1, self.params.c_p))))
-        pv = self._ocp.parameters(self._pvec, x0=x, dist=d, d=D, q=Q, bounds={
-            ("T_cab", "hi"): ub[1:], ("T_cab", "lo"): lb[1:]})
+        default_q = T_amb is None and eta_cop is None
+        views = self._step_views() if self._step is not None else None
+        if views is not None:   # the parameters written straight into the call's buffer
+            pv, D, Q = self._fill_step(views, x, ub, lb, Ti, Tsh, amb, eta, d, default_q)
+        else:
+            self._check_inputs(x, ub, lb, Ti, Tsh, amb, eta, d)
+            D = np.empty((N, 2))   # [T_int, T_shell] per stage
+            D[:, 0], D[:, 1] = Ti, Tsh
+            Q = self._stage_q(default_q, amb, eta)
+            pv = self._ocp.parameters(self._pvec, x0=x, dist=d, d=D, q=Q, bounds={
+                ("T_cab", "hi"): ub[1:], ("T_cab", "lo"): lb[1:]})
         w0 = lam_x0 = lam_g0 = None
         if self._step is not None:   # one C call: guess, solve, check, plan, trajectory
             sol, res = self._solve_step(x, pv, lbx, ubx, u_prev, d)
             if sol is not None:
                 return sol
+            if views is not None:   # the rare path below reads them as arrays
+                pv, D, Q = pv.copy(), views["d"].copy(), views["q"].copy()
         else:
             w0 = self._initial_guess(x, D, Q, u_prev, d)
             if self._lam_g_prev is not None:
@@ -786,6 +796,75 @@ class NMPC:
         return self._solution(res.x, x, D, Q, ub, lb, d, res.status, res.success,
                               res.iterations, res.solve_time_s)
 
+    def _stage_q(self, default: bool, amb: float, eta: np.ndarray) -> np.ndarray:
+        """(N+1, 3) stage parameters [T_amb, eta_cop, c_p] (the shared read-only default
+        when neither T_amb nor eta_cop is given)."""
+        if default:
+            return self._Q_default
+        return np.column_stack((np.full(self.N + 1, amb), eta,
+                                np.full(self.N + 1, self.params.c_p)))
+
+    def _step_views(self) -> dict | None:
+        """Views of the one call's parameter buffer by block (``x0``, ``d``, ``q``,
+        ``T_cab_hi``, ...; the buffer holds the constant blocks from the first use on),
+        rebuilt when the buffer is new (a reload after a timeout); None when a block is
+        not contiguous in the parameter vector (the parameters are then filled as a whole,
+        as for the separate solver)."""
+        buf = self._step.inputs["p"]
+        if self._views_of is buf:
+            return self._views
+        self._views_of, self._views = buf, None
+        views = {}
+        for name, idx in self._ocp._ip.items():
+            flat = idx.ravel()
+            a = int(flat[0]) if flat.size else 0
+            if not np.array_equal(flat, np.arange(a, a + flat.size)):
+                return None
+            views[name] = buf[a:a + flat.size].reshape(idx.shape)
+        if not {"x0", "dist", "d", "q", "T_cab_hi", "T_cab_lo"} <= views.keys():
+            return None
+        ip = self._ocp._ip
+        # the temperatures _check_inputs checks, as positions in the buffer: x, T_int and
+        # T_shell (d), the cabin bounds, T_amb (the stage parameters' first column)
+        self._temps_at = np.concatenate([ip["x0"].ravel(), ip["d"].ravel(),
+                                         ip["T_cab_hi"].ravel(), ip["T_cab_lo"].ravel(),
+                                         ip["q"][:, 0].ravel()])
+        buf[:] = self._pvec
+        self._q_in = self._lb_in = None   # what the buffer's blocks hold (None: unknown)
+        self._views = views
+        return views
+
+    def _fill_step(self, views: dict, x, ub, lb, Ti, Tsh, amb, eta, d,
+                   default_q: bool) -> tuple:
+        """Write a step's parameters into the one call's buffer, then check them (as
+        :meth:`_check_inputs`: one test on the buffer's temperatures, the named error when it
+        fails). Returns (the buffer, the ``d`` and ``q`` blocks)."""
+        if d.shape != (_NX,):
+            self._check_inputs(x, ub, lb, Ti, Tsh, amb, eta, d)   # raises with the name
+        views["x0"][0] = x
+        views["dist"][0] = d
+        D = views["d"]
+        D[:, 0], D[:, 1] = Ti, Tsh
+        views["T_cab_hi"][:, 0] = ub[1:]
+        if lb is not self._lb_in:   # the default lower bound is written once
+            views["T_cab_lo"][:, 0] = lb[1:]
+        self._lb_in = None
+        if default_q:
+            if self._q_in is not self._Q_default:
+                views["q"][:] = self._Q_default
+        else:
+            views["q"][:] = self._stage_q(False, amb, eta)
+        self._q_in = None
+        buf = self._views_of
+        temps = buf[self._temps_at]
+        lo, hi = T_PLAUSIBLE_K
+        if not (lo <= temps.min() and temps.max() <= hi and math.isfinite(d[0])
+                and math.isfinite(d[1]) and eta is self._eta_default and self._eta_ok):
+            self._check_inputs(x, ub, lb, Ti, Tsh, amb, eta, d)   # raises with the name
+        self._lb_in = lb if lb is self._lb_default else None
+        self._q_in = self._Q_default if default_q else None
+        return buf, D, views["q"]
+
     def _solve_step(self, x, pv, lbx, ubx, u_prev, d) -> tuple[MPCSolution | None, NLPResult]:
         """One call of the fused step (:attr:`_step`): (the solution, None) when it
         converged, else (None, the failed result for the fallback solver)."""
@@ -796,7 +875,8 @@ class NMPC:
         if warm and self._w_prev is not inp["w_prev"]:   # found by the fallback solver
             st.load(self._w_prev, self._lam_x_prev, self._lam_g_prev)
         inp["x0"][:] = x   # the paper NLP's states are not scaled
-        inp["p"][:] = pv
+        if pv is not inp["p"]:
+            inp["p"][:] = pv
         if lbx is not self._lbx_in:   # the bounds change only with a pinned first move
             inp["lbx"][:] = lbx
             inp["ubx"][:] = ubx
@@ -893,7 +973,9 @@ class NMPC:
         pinned = cfg.first_move == "pinned"
         x = np.asarray(x, dtype=float).reshape(_NX)
         # T_int, T_shell over the first step (eq. 1's v), K
-        v = np.array([np.ravel(T_int)[0], np.ravel(T_shell)[0]], dtype=float)
+        v = np.array([T_int if isinstance(T_int, float) else np.ravel(T_int)[0],
+                      T_shell if isinstance(T_shell, float) else np.ravel(T_shell)[0]],
+                     dtype=float)
         sol, d, x_hat = None, np.zeros(_NX), x
         margin = (0.0, 0.0)
         x0, x1, v0, v1 = float(x[0]), float(x[1]), float(v[0]), float(v[1])
@@ -907,11 +989,12 @@ class NMPC:
             if self.estimator is not None:
                 u_v = self._applied if self._applied is not None else (None, None)
                 x_hat, d = self.estimator.update(x, *u_v)
-            ub, lb = T_cab_max, cfg.T_cab_min if T_cab_min is None else T_cab_min
+            ub, lb = T_cab_max, T_cab_min   # None: the config's lower bound
             if self.backoff is not None:
                 if self._predicted is not None:
                     self.backoff.update(self._predicted, x[0])
                 margin = (self.backoff.upper, self.backoff.lower)
+                lb = cfg.T_cab_min if lb is None else lb
                 ub, lb = np.asarray(ub, float) - margin[0], np.asarray(lb, float) + margin[1]
             try:
                 sol = self.solve(x_hat, ub, T_int, T_shell,
@@ -925,7 +1008,7 @@ class NMPC:
             except (RuntimeError, ValueError, FloatingPointError) as exc:  # CasADi errors
                 status, ok = f"error: {str(exc).splitlines()[0][:120]}", False
         if ok:
-            self._plan, self._plan_age = sol.plan, 0
+            self._plan, self._plan_age = sol, 0   # its plan is read only on a fallback
             if pinned:
                 u, self._committed = self._committed.copy(), sol.plan[1].copy()
             else:
@@ -954,7 +1037,7 @@ class NMPC:
         self._w_prev = self._lam_g_prev = self._lam_x_prev = None  # cold start next
         nxt = self._plan_age + 1 + (1 if pinned else 0)
         if self._plan is not None and nxt < self.N:
-            fallback_u = self._plan[nxt].copy()
+            fallback_u = self._plan.plan[nxt].copy()
             self._plan_age += 1
         else:
             fallback_u = self.config.u_safe.copy()

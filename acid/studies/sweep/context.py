@@ -8,13 +8,16 @@ profile. Temperatures are kelvin inside; speeds m/s; times s.
 
 from __future__ import annotations
 
+import json
+import threading
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from acid.control.nmpc import NMPC, NMPCConfig
-from acid.models.params import ModelParams
+from acid.models.params import ModelParams, as_params
 from acid.plant.config import PlantConfig
 from acid.studies.mpc_check.scenarios import ClosedLoopRun, closed_loop
 from acid.studies.sweep.conditions import Conditions
@@ -28,6 +31,32 @@ STATE_KEYS = ("T_cab", "T_evap", "T_int", "T_shell", "T_cw", "w_cab")
 
 #: samples of speed preview kept beyond the end of the run (horizons up to this long)
 PREVIEW_SAMPLES = 64
+
+
+#: paper NMPCs built in this thread, by (parameters, options), the most recent last; at most
+#: BUILT_KEEP (each holds a compiled solver's memory slot)
+_BUILT = threading.local()
+BUILT_KEEP = 4
+
+
+def built_nmpc(params, config: NMPCConfig) -> NMPC:
+    """The paper NMPC of ``params`` and ``config``, built once per thread and handed out
+    again for the same values (a build generates and hashes its C: about 40 ms of CPU, 15 % of
+    a short scenario). A scenario's warm-up, controllers and tails share one build, so do a
+    worker's scenarios of one climate. Every closed loop resets the controller it is given
+    (:func:`closed_loop`), so a reused one starts as a new one: the same moves."""
+    cache = getattr(_BUILT, "nmpc", None)
+    if cache is None:
+        cache = _BUILT.nmpc = OrderedDict()
+    key = (json.dumps(as_params(params).to_json_dict(), sort_keys=True, default=repr),
+           json.dumps(config.to_json_dict(), sort_keys=True, default=repr))
+    mpc = cache.pop(key, None)
+    if mpc is None:
+        mpc = NMPC(params, config)
+    cache[key] = mpc
+    while len(cache) > BUILT_KEEP:
+        cache.popitem(last=False)
+    return mpc
 
 
 def plant_state(plant) -> dict:
@@ -117,6 +146,10 @@ class ScenarioContext:
         return NMPCConfig(N=int(horizon), T_amb=self.conditions.T_amb,
                           T_cab_min=self.conditions.T_low, **options)
 
+    def nmpc(self, horizon: int = 6, **options) -> NMPC:
+        """The paper NMPC of :meth:`nmpc_config` (built once per thread: :func:`built_nmpc`)."""
+        return built_nmpc(self.params, self.nmpc_config(horizon, **options))
+
     def constant_bound(self, value_K: float, horizon: int) -> np.ndarray:
         """A constant upper bound over the run and one horizon beyond it, K."""
         return np.full(self.n + int(horizon) + 1, float(value_K))
@@ -132,7 +165,7 @@ class ScenarioContext:
         return ControllerRun(run, plant_state(plant))
 
 
-__all__ = ["ScenarioContext", "ControllerRun", "STATE_KEYS", "plant_state"]
+__all__ = ["ScenarioContext", "ControllerRun", "STATE_KEYS", "plant_state", "built_nmpc"]
 
 
 def tail_energy_J(ctx: ScenarioContext, end_state: dict, seconds: float) -> float:
@@ -141,7 +174,7 @@ def tail_energy_J(ctx: ScenarioContext, end_state: dict, seconds: float) -> floa
     n_t = int(round(seconds / ctx.Ts))
     if n_t <= 0:
         return float("nan")
-    mpc = NMPC(ctx.params, ctx.nmpc_config(COMMON_HORIZON))
+    mpc = ctx.nmpc(COMMON_HORIZON)
     r = ctx.simulate(mpc, np.full(n_t + mpc.N + 1, ctx.conditions.T_set), "tail",
                      start=end_state, v_step=np.full(n_t, float(np.mean(ctx.v_step))))
     return r.run.energy_J()

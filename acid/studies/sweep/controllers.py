@@ -229,10 +229,9 @@ class PaperNMPC:
         self.config = config
 
     def run(self, ctx: ScenarioContext) -> ControllerRun:
-        from acid.control.nmpc import NMPC
 
         c = self.config
-        mpc = NMPC(ctx.params, ctx.nmpc_config(c.horizon, solver=c.solver))
+        mpc = ctx.nmpc(c.horizon, solver=c.solver)
         cond = ctx.conditions
         b0 = cond.T_set if c.bound == "setpoint" else cond.T_high
         if not c.match:
@@ -291,10 +290,9 @@ class ICMController:
 
     def run(self, ctx: ScenarioContext) -> ControllerRun:
         from acid.control.icm import ICMConfig, icm_upper_bound
-        from acid.control.nmpc import NMPC
 
         c, cond = self.config, ctx.conditions
-        mpc = NMPC(ctx.params, ctx.nmpc_config(c.horizon, solver=c.solver))
+        mpc = ctx.nmpc(c.horizon, solver=c.solver)
         icm = ICMConfig(T_low=cond.T_low, T_high=cond.T_high, v_slow=c.v_slow,
                         v_fast=c.v_fast, fall_rate=c.fall_rate, rise_rate=c.rise_rate)
         m = ctx.n + mpc.N + 1

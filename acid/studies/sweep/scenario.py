@@ -134,13 +134,12 @@ def identify_params(plant_config: PlantConfig, settings: IdentifySettings,
 def warm_start(ctx: ScenarioContext, seconds: float) -> dict | None:
     """The common start: the plant after ``seconds`` of the paper NMPC on a constant bound
     at the set-point, at the cycle's mean speed, from the hot soak (None when 0)."""
-    from acid.control.nmpc import NMPC
     from acid.studies.mpc_check.scenarios import closed_loop
 
     n_w = int(round(seconds / ctx.Ts))
     if n_w <= 0:
         return None
-    mpc = NMPC(ctx.params, ctx.nmpc_config(COMMON_HORIZON))
+    mpc = ctx.nmpc(COMMON_HORIZON)
     plant = ctx.make_plant()
     closed_loop(plant, mpc, None, np.full(n_w + mpc.N + 1, ctx.conditions.T_set),
                 np.full(n_w, float(np.mean(ctx.v_step))), "warm-up", progress=ctx.tick)
@@ -184,7 +183,8 @@ def run_scenario(task: ScenarioTask, params: ModelParams | None = None,
                  tick=None) -> dict:
     """Run one scenario (worker side); see the module docstring. Returns its record:
     ``{"key", "index", "status" ("ok" | "error"), "error", "rows", "tracebacks",
-    "elapsed_s", "worker", "acid_version", "params"}``.
+    "elapsed_s", "cpu_s", "worker", "acid_version", "params"}`` (``cpu_s``: the CPU time of
+    the process while it ran, s).
 
     Solver fallbacks are counted in the rows (``fallbacks``), not printed as warnings.
     """
@@ -198,7 +198,7 @@ def run_scenario(task: ScenarioTask, params: ModelParams | None = None,
 
 
 def _run_scenario(task: ScenarioTask, params: ModelParams | None, tick) -> dict:
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     s = task.scenario
     params = params if params is not None else task.params
     base = {"scenario_key": task.key, "scenario": task.index, "label": s.label,
@@ -267,7 +267,7 @@ def _run_scenario(task: ScenarioTask, params: ModelParams | None, tick) -> dict:
     return {"key": task.key, "index": task.index, "label": s.label,
             "status": "error" if errors else "ok", "error": first,
             "rows": list(rows.values()), "tracebacks": tracebacks, "elapsed_s": elapsed,
-            "worker": worker, "acid_version": __version__,
+            "cpu_s": time.process_time() - c0, "worker": worker, "acid_version": __version__,
             "params": params.to_json_dict() if task.params_kind == "identify" and params
             else {"name": getattr(params, "name", None)}}
 
