@@ -1,0 +1,70 @@
+"""acid.studies.pulldown.cases: the pull-down set (training and held-out cases apart), the
+engine's tuning rule on training runs, E matched to F's comfort, one pull-down run."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from acid.studies.pulldown import cases
+from acid.units import C2K
+
+
+def _run(fam, knob, E, d, name="c"):
+    return cases.CaseRun(name, fam, knob, E, E, d, d, 100.0, C2K(24.0))
+
+
+def test_the_set_keeps_training_and_held_out_apart_and_in_the_declared_ranges():
+    train = {tuple(t) for t in cases.TRAINING}
+    held = {tuple(t) for t in cases.HELD_OUT}
+    assert not train & held and len(held) >= 6      # the engine resolves from 5 pairs
+    for _cycle, amb, soak, sun in train | held:
+        assert 35.0 <= soak <= 45.0 and 28.0 <= amb <= 38.0 and 600.0 <= sun <= 1000.0
+        assert soak > amb                            # a hot soak: a pull-down
+    names = {cases.case_name(cases.case(*h)) for h in held}
+    assert len(names) == len(held)                   # paired by name: no two alike
+    sc = cases.case("sc03", 35.0, 45.0, 1000.0)
+    assert sc.start()["T_cab"] == C2K(45.0) and sc.G_solar == 1000.0
+
+
+def test_tuning_is_the_engines_rule_on_the_training_fronts():
+    # two training cases; own's mean discomfort 8 K min is the level
+    runs = [_run("own", math.nan, 100.0, 7.0), _run("own", math.nan, 100.0, 9.0)]
+    for c, E, d in ((C2K(5.0), 99.0, 6.0), (C2K(7.0), 97.0, 10.0), (C2K(10.0), 95.0, 14.0)):
+        runs += [_run("F", c, E, d), _run("F", c, E, d)]
+    for w, E, d in ((30.0, 90.0, 12.0), (300.0, 96.0, 6.0), (3000.0, 98.0, 5.0)):
+        runs += [_run("E", w, E, d), _run("E", w, E, d)]
+    t = cases.tune_on(runs)
+    assert t.level_Kmin == 8.0
+    # F: 5 degC meets 8 K min, 7 degC is cheaper and does not: halfway in discomfort
+    assert t.coil_K == pytest.approx(C2K(6.0))
+    # E: 300 meets it, 30 is cheaper: a third of the way from 300 to 30
+    assert t.weight == pytest.approx(300.0 - 270.0 / 3.0)
+    # E's training discomfort there (8) equals F's (8): the second weight the higher one?
+    # no: not less comfortable, so a third of it
+    assert t.match_weight == pytest.approx(t.weight / cases.MATCH_FACTOR)
+
+
+def test_e_matched_to_f_interpolates_and_refuses_far_extrapolation():
+    a, b = _run("E", 300.0, 100.0, 10.0), _run("E", 900.0, 110.0, 6.0)
+    assert cases.matched(a, b, 8.0) == pytest.approx(105.0)
+    assert cases.matched(a, b, 2.0, limit=1.0) == pytest.approx(120.0)   # one span out
+    assert math.isnan(cases.matched(a, b, 1.0, limit=1.0))
+    assert math.isnan(cases.matched(a, _run("E", 900.0, 110.0, 10.001), 8.0))
+
+
+def test_a_pull_down_run_of_f_at_the_configured_coil_is_the_plants_own_loops():
+    sc = cases.case("sc03", 35.0, 45.0, 1000.0)
+    own = cases.run_case(sc, "own")
+    coil = sc.plant_config().T_ew_set
+    f = cases.run_case(sc, "F", coil)
+    assert f.energy_J == pytest.approx(own.energy_J, rel=1e-9)
+    # from 45 degC: minutes above the band, then 25 degC reached; the continuation charged
+    assert 60.0 < own.time_to_reach_s < 600.0 and own.above_Kmin > 5.0
+    assert own.charged_J > own.energy_J
+    warmer = cases.run_case(cases.case("sc03", 35.0, 40.0, 1000.0), "F", C2K(7.0))
+    hotter = cases.run_case(sc, "F", C2K(7.0))
+    assert hotter.energy_J > warmer.energy_J and hotter.above_Kmin > warmer.above_Kmin
+    with pytest.raises(Exception, match="unknown pull-down family"):
+        cases.run_case(sc, "X")
