@@ -134,9 +134,9 @@ def _judge_set(params, quick: bool, seed: int) -> dict:
     for name, v in res["verdicts"].items():
         say(f"{name}: " + (v.summary() if v is not None else "no case matched"))
     if res["unmatched"]:
-        say("E not matched to F's comfort on: " + ", ".join(res["unmatched"]))
+        say("E not matched to F's mean cabin on: " + ", ".join(res["unmatched"]))
     return {"tuning": dataclasses.asdict(t),
-            "held_out": [{k: (dataclasses.asdict(v) if k in ("own", "F", "E", "E_more") else v)
+            "held_out": [{k: (dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v)
                           for k, v in r.items()} for r in res["held_out"]],
             "training": [dataclasses.asdict(r) for r in res["training"]],
             "verdicts": {k: (v.to_dict() if v is not None else None)

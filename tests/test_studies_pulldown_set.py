@@ -41,17 +41,18 @@ def test_tuning_is_the_engines_rule_on_the_training_fronts():
     assert t.coil_K == pytest.approx(C2K(6.0))
     # E: 300 meets it, 30 is cheaper: a third of the way from 300 to 30
     assert t.weight == pytest.approx(300.0 - 270.0 / 3.0)
-    # E's training discomfort there (8) equals F's (8): the second weight the higher one?
-    # no: not less comfortable, so a third of it
-    assert t.match_weight == pytest.approx(t.weight / cases.MATCH_FACTOR)
 
 
-def test_e_matched_to_f_interpolates_and_refuses_far_extrapolation():
-    a, b = _run("E", 300.0, 100.0, 10.0), _run("E", 900.0, 110.0, 6.0)
-    assert cases.matched(a, b, 8.0) == pytest.approx(105.0)
-    assert cases.matched(a, b, 2.0, limit=1.0) == pytest.approx(120.0)   # one span out
-    assert math.isnan(cases.matched(a, b, 1.0, limit=1.0))
-    assert math.isnan(cases.matched(a, _run("E", 900.0, 110.0, 10.001), 8.0))
+def test_e_is_matched_to_the_baselines_mean_cabin_by_the_engines_rule():
+    def run(E, T_C):
+        return cases.CaseRun("c", "E", 300.0, math.nan, E, 5.0, 5.0, 100.0, C2K(T_C))
+
+    at, low = run(100.0, 24.4), run(104.0, 24.0)
+    m = cases.matched(at, low, run(0.0, 24.1))
+    assert m.charged_J == pytest.approx(103.0) and m.mean_T_cab == C2K(24.1)
+    assert cases.matched(at, low, run(0.0, 24.75)) is not None   # inside one span out
+    assert cases.matched(at, low, run(0.0, 25.0)) is None        # 1.5 spans out: refused
+    assert cases.matched(at, run(104.0, 24.395), run(0.0, 24.1)) is None   # no slope
 
 
 def test_a_pull_down_run_of_f_at_the_configured_coil_is_the_plants_own_loops():

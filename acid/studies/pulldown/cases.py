@@ -10,14 +10,17 @@ nothing of the held-out cases is used before judging.
 
 Tuning, the engine's rule (:func:`acid.studies.compare.tune`): every family's knobs are run
 on the training pull-downs; the comfort level is the plant's own loops' mean training
-discomfort (K min outside 23-25 degC); the fixed coil's set-point (family F) and E's comfort
-weight are each :func:`acid.studies.compare.tune_knob` on their training fronts at that level.
+discomfort (K min outside 23-25 degC); the fixed coil's set-point (family F: the engine's coils
+and the plant's configured 3 degC, which alone reaches the own loops' comfort on a pull-down)
+and E's comfort weight are each :func:`acid.studies.compare.tune_knob` on their training
+fronts at that level.
 
 Judging: on each held-out pull-down the plant's own loops, F at its tuned coil and E at its
-tuned weight and at a second weight, three times or a third of it (whichever moves E's
-training discomfort toward F's); E at F's comfort on that case is E's energy interpolated
-linearly in discomfort between its two weights to F's discomfort (extrapolated at most one
-span, the engine's ``MATCH_EXTRAPOLATE``; beyond, the case is not matched). The energy of a
+tuned weight, and E again with its cabin target ``MATCH_SHIFT_K`` lower; E at F's (and at the
+own loops') mean cabin temperature is :func:`acid.studies.compare.match_to_mean` between the
+two (the engine's equal-comfort rule; beyond its extrapolation limit the case is not
+matched): on a pull-down E's discomfort saturates with its weight (full power either way), so
+the mean cabin, not the weight, is what moves its comfort. The energy of a
 pull-down is charged with the state it leaves: the pass's compressor and blower energy plus
 the engine's common continuation from its end state (:func:`acid.studies.compare.tail_J`,
 40 min at the cycle's mean speed under the plant's own loops; the same for every controller
@@ -50,9 +53,6 @@ HELD_OUT = (("udds", 32.0, 38.0, 700.0), ("udds", 36.0, 45.0, 950.0),
 #: ``--quick``: two training and two held-out cases (too few to resolve: a smoke run)
 QUICK_TRAINING = TRAINING[1:2] + TRAINING[3:4]
 QUICK_HELD_OUT = HELD_OUT[3:4] + HELD_OUT[6:7]
-#: E's held-out second weight: the tuned one times or divided by this (E at F's comfort
-#: between them)
-MATCH_FACTOR = 3.0
 
 
 def case(cycle: str, T_amb_C: float, soak_C: float, G_solar: float):
@@ -83,6 +83,8 @@ class CaseRun:
     time_to_reach_s: float
     mean_T_cab: float
     envelope: dict = field(default_factory=dict)
+    #: not measured here (the engine's matching interpolates it)
+    rh_mean: float = math.nan
 
 
 def run_case(sc, family: str, knob: float = math.nan, params=None, horizon_s: float = 60.0,
@@ -146,14 +148,13 @@ def run_case(sc, family: str, knob: float = math.nan, params=None, horizon_s: fl
 @dataclass(frozen=True)
 class SetTuning:
     """What the training pull-downs decided: the comfort level (K min, the own loops' mean),
-    the fronts ``{family: [(knob, mean charged J, mean K min)]}``, F's coil (K), E's weight
-    and E's second weight on held-out cases (toward F's training discomfort)."""
+    the fronts ``{family: [(knob, mean charged J, mean K min)]}``, F's coil (K) and E's
+    weight."""
 
     level_Kmin: float
     fronts: dict
     coil_K: float
     weight: float
-    match_weight: float = math.nan
 
 
 def tune_on(runs: Sequence[CaseRun]) -> SetTuning:
@@ -178,28 +179,23 @@ def tune_on(runs: Sequence[CaseRun]) -> SetTuning:
     def tuned(fam):
         return tune_knob([FrontPoint(fam, k, e, d, math.nan) for k, e, d in fronts[fam]], level)
 
-    def at(fam, k):   # the front's mean discomfort at knob k (linear between knobs)
-        pts = sorted((q[0], q[2]) for q in fronts[fam])
-        return float(np.interp(k, [q[0] for q in pts], [q[1] for q in pts]))
-
-    coil, w = float(tuned("F")), float(tuned("E"))
-    more = at("E", w) > at("F", coil)   # E less comfortable than F: a higher weight
-    return SetTuning(float(level), fronts, coil, w,
-                     w * MATCH_FACTOR if more else w / MATCH_FACTOR)
+    return SetTuning(float(level), fronts, float(tuned("F")), float(tuned("E")))
 
 
-def matched(e_at, e_more, target_Kmin: float, limit: float = 1.0) -> float:
-    """E's charged energy interpolated linearly in discomfort between its tuned run
-    ``e_at`` and its run at the second weight ``e_more`` to ``target_Kmin``; NaN when the two
-    discomforts are under 0.01 K min apart or the target lies more than ``limit`` spans
-    outside them."""
-    span = e_more.discomfort_Kmin - e_at.discomfort_Kmin
-    if abs(span) < 0.01:
-        return math.nan
-    f = (target_Kmin - e_at.discomfort_Kmin) / span
-    if not -limit <= f <= 1.0 + limit:
-        return math.nan
-    return float(e_at.charged_J + f * (e_more.charged_J - e_at.charged_J))
+def matched(e_at: CaseRun, e_lowered: CaseRun, to: CaseRun) -> CaseRun | None:
+    """E at ``to``'s mean cabin temperature: the engine's
+    :func:`acid.studies.compare.match_to_mean` between E at its target and at the lowered
+    one, on the charged energy; None when not matched."""
+    import dataclasses
+
+    from acid.studies.compare import match_to_mean
+
+    def charged(r):
+        return dataclasses.replace(r, energy_J=r.charged_J)
+
+    m = match_to_mean(charged(e_at), charged(e_lowered), to.mean_T_cab)
+    return None if m is None else dataclasses.replace(m, charged_J=m.energy_J,
+                                                      energy_J=math.nan)
 
 
 def run_set(params, training=TRAINING, held_out=HELD_OUT, coils: Sequence[float] | None = None,
@@ -208,11 +204,14 @@ def run_set(params, training=TRAINING, held_out=HELD_OUT, coils: Sequence[float]
     """Tune on ``training``, judge on ``held_out`` (tuples as :data:`TRAINING`): the
     training runs, the tuning, the held-out runs per case and the verdicts E vs F, E at F's
     comfort vs F, E vs own and F vs own."""
-    from acid.studies.compare import MATCH_EXTRAPOLATE, families, verdict
+    import dataclasses
+
+    from acid.studies.compare import MATCH_SHIFT_K, RunSettings, families, verdict
 
     say = progress or (lambda _m: None)
     fams = {f.key: f for f in families()}
-    coils = tuple(coils or fams["F"].knobs)
+    own_coil = float(case(*training[0]).plant_config().T_ew_set)
+    coils = tuple(coils or sorted({own_coil, *fams["F"].knobs}))
     weights = tuple(weights or fams["E"].knobs)
     train = []
     for spec in training:
@@ -225,46 +224,43 @@ def run_set(params, training=TRAINING, held_out=HELD_OUT, coils: Sequence[float]
                 f"{r.charged_J / 1e6:.3f} MJ, {r.discomfort_Kmin:.1f} K min")
     tuning = tune_on(train)
     say(f"tuned on {len(training)} pull-downs: level {tuning.level_Kmin:.2f} K min, F coil "
-        f"{K2C(tuning.coil_K):.2f} degC, E weight {tuning.weight:.1f} (second "
-        f"{tuning.match_weight:.1f})")
+        f"{K2C(tuning.coil_K):.2f} degC, E weight {tuning.weight:.1f}")
+    base = RunSettings(max_passes=1)
+    lowered = dataclasses.replace(base, T_set=base.T_set - MATCH_SHIFT_K)
     held = []
     for spec in held_out:
         sc = case(*spec)
         row = {"case": case_name(sc), "own": run_case(sc, "own", math.nan, params, horizon_s),
                "F": run_case(sc, "F", tuning.coil_K, params, horizon_s),
                "E": run_case(sc, "E", tuning.weight, params, horizon_s),
-               "E_more": run_case(sc, "E", tuning.match_weight, params, horizon_s)}
-        row["E_matched_J"] = matched(row["E"], row["E_more"], row["F"].discomfort_Kmin,
-                                     MATCH_EXTRAPOLATE)
+               "E_lowered": run_case(sc, "E", tuning.weight, params, horizon_s,
+                                     settings=lowered)}
+        row["E at F's T_cab"] = matched(row["E"], row["E_lowered"], row["F"])
+        row["E at own's T_cab"] = matched(row["E"], row["E_lowered"], row["own"])
         held.append(row)
         say(f"held-out {row['case']}: E {row['E'].charged_J / 1e6:.3f} MJ "
             f"({row['E'].discomfort_Kmin:.1f} K min), F {row['F'].charged_J / 1e6:.3f} MJ "
             f"({row['F'].discomfort_Kmin:.1f}), own {row['own'].charged_J / 1e6:.3f} MJ "
-            f"({row['own'].discomfort_Kmin:.1f}); E at F's comfort "
-            f"{row['E_matched_J'] / 1e6:.3f} MJ; {row['E'].envelope.get('line', '')}")
+            f"({row['own'].discomfort_Kmin:.1f}); {row['E'].envelope.get('line', '')}")
 
-    def judge(c, b, rows, ec, eb):
-        names = [r["case"] for r in rows]
-        gap_d = float(np.mean([r[c].discomfort_Kmin - r[b].discomfort_Kmin for r in rows])) \
-            if c in rows[0] else 0.0
-        gap_T = float(np.mean([r[c].mean_T_cab - r[b].mean_T_cab for r in rows])) \
-            if c in rows[0] else 0.0
-        return verdict(c, b, names, ec, eb, seed=seed, discomfort_gap_Kmin=gap_d,
-                       T_cab_gap_K=gap_T)
+    def judge(c, b, rows, energy="charged_J"):
+        rows = [r for r in rows if r.get(c) is not None]
+        if not rows:
+            return None
+        return verdict(c, b, [r["case"] for r in rows],
+                       [getattr(r[c], energy) for r in rows],
+                       [getattr(r[b], energy) for r in rows], seed=seed,
+                       discomfort_gap_Kmin=float(np.mean([r[c].discomfort_Kmin
+                                                          - r[b].discomfort_Kmin
+                                                          for r in rows])),
+                       T_cab_gap_K=float(np.mean([r[c].mean_T_cab - r[b].mean_T_cab
+                                                  for r in rows])))
 
-    def charged(rows, fam):
-        return [r[fam].charged_J for r in rows]
-
-    ok = [r for r in held if math.isfinite(r["E_matched_J"])]
-    verdicts = {
-        "E vs F": judge("E", "F", held, charged(held, "E"), charged(held, "F")),
-        "E at F's comfort vs F": verdict("E at F's comfort", "F", [r["case"] for r in ok],
-                                         [r["E_matched_J"] for r in ok], charged(ok, "F"),
-                                         seed=seed) if ok else None,
-        "E vs F, pass only": judge("E", "F", held, [r["E"].energy_J for r in held],
-                                   [r["F"].energy_J for r in held]),
-        "E vs own": judge("E", "own", held, charged(held, "E"), charged(held, "own")),
-        "F vs own": judge("F", "own", held, charged(held, "F"), charged(held, "own")),
-    }
+    verdicts = {"E vs F": judge("E", "F", held),
+                "E at F's T_cab vs F": judge("E at F's T_cab", "F", held),
+                "E vs F, pass only": judge("E", "F", held, "energy_J"),
+                "E vs own": judge("E", "own", held),
+                "E at own's T_cab vs own": judge("E at own's T_cab", "own", held),
+                "F vs own": judge("F", "own", held)}
     return {"training": train, "tuning": tuning, "held_out": held, "verdicts": verdicts,
-            "unmatched": [r["case"] for r in held if not math.isfinite(r["E_matched_J"])]}
+            "unmatched": [r["case"] for r in held if r["E at F's T_cab"] is None]}
