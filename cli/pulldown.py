@@ -135,10 +135,19 @@ def _judge_set(params, quick: bool, seed: int) -> dict:
         say(f"{name}: " + (v.summary() if v is not None else "no case matched"))
     if res["unmatched"]:
         say("E not matched to F's mean cabin on: " + ", ".join(res["unmatched"]))
-    return {"tuning": dataclasses.asdict(t),
-            "held_out": [{k: (dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v)
-                          for k, v in r.items()} for r in res["held_out"]],
-            "training": [dataclasses.asdict(r) for r in res["training"]],
-            "verdicts": {k: (v.to_dict() if v is not None else None)
-                         for k, v in res["verdicts"].items()},
-            "unmatched": res["unmatched"]}
+    return set_summary(res)
+
+
+def set_summary(res: dict) -> dict:
+    """The set's result (:func:`acid.studies.pulldown.cases.run_set`) as strict JSON
+    values (NaN and infinity as null)."""
+    from acid._io import json_safe
+
+    return json_safe({
+        "tuning": dataclasses.asdict(res["tuning"]),
+        "held_out": [{k: (dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v)
+                      for k, v in r.items()} for r in res["held_out"]],
+        "training": [dataclasses.asdict(r) for r in res["training"]],
+        "verdicts": {k: (v.to_dict() if v is not None else None)
+                     for k, v in res["verdicts"].items()},
+        "unmatched": res["unmatched"]})

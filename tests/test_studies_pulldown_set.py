@@ -69,3 +69,25 @@ def test_a_pull_down_run_of_f_at_the_configured_coil_is_the_plants_own_loops():
     assert hotter.energy_J > warmer.energy_J and hotter.above_Kmin > warmer.above_Kmin
     with pytest.raises(Exception, match="unknown pull-down family"):
         cases.run_case(sc, "X")
+
+
+def test_the_sets_json_is_strict_with_nan_knobs_unreached_comfort_and_unmatched_cases():
+    import json
+
+    from acid.studies.compare import verdict
+    from acid_cli.pulldown import set_summary
+
+    own = _run("own", math.nan, 100.0, 5.0)
+    e = cases.CaseRun("c", "E", 300.0, 90.0, 95.0, 5.0, 5.0, math.inf, C2K(24.3))
+    held = [{"case": "c", "own": own, "F": own, "E": e, "E_lowered": e,
+             "E at F's T_cab": None}]
+    res = {"tuning": cases.tune_on([own, _run("F", C2K(5.0), 1.0, 1.0),
+                                    _run("E", 30.0, 1.0, 1.0)]),
+           "held_out": held, "training": [own, e],
+           "verdicts": {"E vs F": verdict("E", "F", ["c"], [95.0], [100.0]),
+                        "E at F's T_cab vs F": None}, "unmatched": ["c"]}
+    s = set_summary(res)
+    text = json.dumps(s, allow_nan=False)                 # no NaN, no Infinity
+    assert s["held_out"][0]["own"]["knob"] is None
+    assert s["held_out"][0]["E"]["time_to_reach_s"] is None
+    assert s["verdicts"]["E vs F"]["words"] == "not resolved" and "unmatched" in text
