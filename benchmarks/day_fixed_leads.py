@@ -5,12 +5,14 @@ script runs the day on the plant once per fixed lead, 0 to 40 min in 1-min steps
 own controller (the production controller switched on ``lead`` minutes before the departure
 while plugged) and picks the best lead by its own rule: the cheapest mean cost among the
 leads whose mean K.min outside the band in the first 10 min of a plugged departure is at
-most 1 K.min. It then compares that lead and its cost with what the study tuned
-(``day_study``'s coarse scan refined to the minute). The timer passes when its cost is at
-most the scan's best (within 1e-9 USD) and it meets the same comfort target.
+most 1 K.min. It then compares that lead and its cost with what the study's tuning makes of
+the same days (``day_study``'s rule: its coarse scan ``LEADS_MIN``, refined to the minute by
+``fine_leads``, chosen by ``tune_timer``, on ``Timer`` runs of the same days). The timer
+passes when its cost is at most the scan's best (within 1e-9 USD) and it meets the same
+comfort target.
 
-Uses the day's plant and accounting (``run_day``), nothing of the study's tuning:
-    python benchmarks/day_fixed_leads.py --days 6 --season summer winter
+Uses the day's plant and accounting (``run_day``); the scan's controller and rule are its own:
+    python benchmarks/day_fixed_leads.py --days 3 --season summer winter
 """
 
 from __future__ import annotations
@@ -63,10 +65,19 @@ def main() -> None:
                        float(np.mean([o.E_battery_kWh for o in outs])))
         ok = {L: v for L, v in scan.items() if v[1] <= D.COMFORT_TARGET_KMIN}
         best = min(ok, key=lambda L: (ok[L][0], L)) if ok else None
-        study = D.day_study((s,), n_train=a.days, n_test=1, seed=a.seed,
-                            forecast_errors_min=(0.0,), planners=())
-        tuned = study.tuned_lead_min[s]
-        t_cost, t_K = study.scan[s][f"{tuned:g}"]
+        # the study's tuning on Timer runs of the same days (coarse, then to the minute)
+        timer = {}
+
+        def timer_runs(leads, days=days, timer=timer):
+            for L in leads:
+                if L not in timer:
+                    timer[L] = [D.run_day(d, D.Timer(float(L))) for d in days]
+
+        timer_runs(D.LEADS_MIN)
+        timer_runs(D.fine_leads(timer, D.LEADS_MIN))
+        tuned = D.tune_timer(dict(sorted(timer.items())))
+        t_cost, t_K = float(np.mean([o.cost_USD for o in timer[tuned]])), \
+            D.plugged_Kmin(timer[tuned])
         passed = best is not None and t_K <= D.COMFORT_TARGET_KMIN \
             and t_cost <= ok[best][0] + 1e-9
         out[s] = {"scan": {str(L): v for L, v in scan.items()}, "best_fixed_lead_min": best,
