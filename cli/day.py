@@ -48,6 +48,10 @@ def day(
     out: Path = typer.Option(Path("reports/day"), "--out",
                              help="Folder for the JSON and the figure of a day."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
+    soc_start: float = typer.Option(
+        90.0, "--soc-start", help="Battery state of charge when each day starts, percent of "
+                                  "the usable energy (no charging between the trips: a low "
+                                  "start makes a range-limited day, the energy lacked shown)."),
 ) -> None:
     """Run a car's day (04:00 to the evening trip: parked and plugged at home, a morning trip,
     parked at work, an evening trip) on acid's plants, with the sun and ambient of the hour
@@ -71,6 +75,7 @@ def day(
     require_range(days, "--days", 1, 1000, integer=True)
     require_range(jobs, "--jobs", 1, 256, integer=True)
     require_range(seed, "--seed", 0, 2**63 - 1, integer=True)
+    require_range(soc_start, "--soc-start", 1.0, 100.0, "%")
     check_paths(outputs={"--json": json_path}, folders={"--out": (out, OUTPUTS)})
     n_test = 4 if quick else days
     n_train = 3 if quick else max(2, days // 2)
@@ -82,11 +87,12 @@ def day(
     with claim(out, "acid day"), progress_bar("day study", total=total) as update:
         result = study.day_study(seasons, n_train=n_train, n_test=n_test, seed=seed,
                                  leads_min=leads, planners=planners, jobs=jobs,
-                                 progress=update)
+                                 progress=update, soc_start=soc_start / 100.0)
         traces, labels = {}, {}
         for s in seasons:
             # the figure's day: the first held-out day plugged before both trips
-            pool = study.make_days(s, 20, seed, 0.0, first_index=1000)
+            pool = study.make_days(s, 20, seed, 0.0, first_index=1000,
+                                   soc_start=soc_start / 100.0)
             d = next((x for x in pool if all(t.plugged for t in x.trips)), pool[0])
             ctrls = [study.NoPreconditioning(), study.Timer(result.tuned_lead_min[s])]
             if "planner" in planners:
@@ -125,12 +131,14 @@ def day(
                              f"{m('cost_USD'):.2f}", f"{m('range_lost_km'):.1f}",
                              f"{m('Kmin_window'):.2f}", f"{m('Kmin_plugged'):.2f}",
                              f"{m('time_to_comfort_s') / 60:.1f}",
-                             f"{m('fog_margin_min_K'):.1f}" if s == "winter" else "-"])
+                             f"{m('fog_margin_min_K'):.1f}" if s == "winter" else "-",
+                             f"{m('charger_limited_kWh'):.2f}", f"{m('short_kWh'):.2f}"])
         print_table(f"{s}: means over {n_test} held-out days (two trips a day)",
                     ["_controller", "forecast error, min", "battery kWh", "climate kWh",
                      "pre-cond. grid kWh", "total grid kWh", "cost USD", "range lost km",
                      "K.min first 10 min", "of it from a plug", "time to comfort min",
-                     "lowest fog margin K"], rows)
+                     "lowest fog margin K", "above the charger kWh",
+                     "short of range kWh"], rows)
         comp = []
         for c in result.comparisons:
             if c["season"] != s:

@@ -36,6 +36,10 @@ def pulldown(
     soak: float = typer.Option(40.0, "--soak", help="Soak of the closed loop, degC."),
     cycle: str = typer.Option("udds", "--cycle", help="Drive cycle of the closed loop."),
     quick: bool = typer.Option(False, "--quick", help="Short records (smoke runs)."),
+    over_set: bool = typer.Option(
+        False, "--set", help="Also judge E against the best fixed coil and the plant's own "
+                             "loops over a set of pull-downs (soaks 35-45 degC): knobs tuned "
+                             "on training pull-downs, paired intervals on held-out ones."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
     """Identify the econ model on today's record and on it plus soak-and-pull-down segments,
@@ -91,6 +95,7 @@ def pulldown(
         for q in pts:
             say(f"E ({key} model) at {q['F']}'s comfort ({q['discomfort_Kmin']:.1f} K min): "
                 f"{q['E_J'] / 1e6:.3f} MJ vs {q['F_J'] / 1e6:.3f} MJ ({q['saving_pct']:+.2f} %)")
+    judged = _judge_set(models.new, quick, seed) if over_set else None
     write_summary(json_path, {
         "command": "pulldown", "acid_version": __version__,
         "settings": dataclasses.asdict(settings),
@@ -100,4 +105,49 @@ def pulldown(
         "equal_comfort": loop["equal_comfort"],
         "closed_loop": [{"model": r["model"], "saving_pct": r["saving_pct"],
                          "E": dataclasses.asdict(r["E"]), "F": dataclasses.asdict(r["F"])}
-                        for r in loop["rows"]]})
+                        for r in loop["rows"]],
+        **({"set": judged} if judged is not None else {})})
+
+
+def _judge_set(params, quick: bool, seed: int) -> dict:
+    """The set's tuning, held-out table and verdicts (printed), as JSON."""
+    from acid.studies.pulldown import cases
+
+    say("pull-down set: tuning on the training pull-downs, judging on the held-out ones")
+    res = cases.run_set(params, *((cases.QUICK_TRAINING, cases.QUICK_HELD_OUT) if quick
+                                  else (cases.TRAINING, cases.HELD_OUT)),
+                        seed=seed, progress=say)
+    t = res["tuning"]
+    say(f"tuned on training: comfort level {t.level_Kmin:.2f} K min (the plant's own loops), "
+        f"F coil {t.coil_K - 273.15:.2f} degC, E weight {t.weight:.1f}")
+    rows = []
+    for r in res["held_out"]:
+        for fam in ("own", "F", "E"):
+            x = r[fam]
+            rows.append([r["case"] if fam == "own" else "", fam, f"{x.energy_J / 1e6:.3f}",
+                         f"{x.charged_J / 1e6:.3f}", f"{x.discomfort_Kmin:.1f}",
+                         _min(x.time_to_reach_s), f"{x.mean_T_cab - 273.15:.2f}",
+                         x.envelope.get("line", "").split(";")[0] if fam == "E" else ""])
+    print_table("Held-out pull-downs (charged: the pass + the common continuation)",
+                ["case", "controller", "pass MJ", "charged MJ", "K min out",
+                 "min to 25 degC", "mean T_cab degC", "envelope"], rows)
+    for name, v in res["verdicts"].items():
+        say(f"{name}: " + (v.summary() if v is not None else "no case matched"))
+    if res["unmatched"]:
+        say("E not matched to F's mean cabin on: " + ", ".join(res["unmatched"]))
+    return set_summary(res)
+
+
+def set_summary(res: dict) -> dict:
+    """The set's result (:func:`acid.studies.pulldown.cases.run_set`) as strict JSON
+    values (NaN and infinity as null)."""
+    from acid._io import json_safe
+
+    return json_safe({
+        "tuning": dataclasses.asdict(res["tuning"]),
+        "held_out": [{k: (dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v)
+                      for k, v in r.items()} for r in res["held_out"]],
+        "training": [dataclasses.asdict(r) for r in res["training"]],
+        "verdicts": {k: (v.to_dict() if v is not None else None)
+                     for k, v in res["verdicts"].items()},
+        "unmatched": res["unmatched"]})

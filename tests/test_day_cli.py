@@ -16,7 +16,7 @@ def test_help_names_the_options():
     r = runner.invoke(app, ["day", "--help"])
     assert r.exit_code == 0
     for opt in ("--season", "--days", "--seed", "--jobs", "--quick", "--out", "--json",
-                "--planner"):
+                "--planner", "--soc-start"):
         assert opt in r.output
 
 
@@ -30,6 +30,13 @@ def test_an_unknown_planner_is_one_line_exit_2(tmp_path):
     r = runner.invoke(app, ["day", "--planner", "oracle", "--out", str(tmp_path / "o")])
     assert r.exit_code == 2
     assert "--planner" in r.output and "Traceback" not in r.output
+
+
+def test_a_state_of_charge_outside_1_to_100_percent_is_one_line_exit_2(tmp_path):
+    for bad in ("0", "101", "nan"):
+        r = runner.invoke(app, ["day", "--soc-start", bad, "--out", str(tmp_path / "o")])
+        assert r.exit_code == 2, bad
+        assert "--soc-start" in r.output and "Traceback" not in r.output
 
 
 @pytest.mark.slow

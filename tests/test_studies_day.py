@@ -117,6 +117,27 @@ def test_the_charger_caps_what_the_grid_supplies(winter):
                                               - timer.trips[1].E_pre_battery_kWh, rel=1e-9)
 
 
+def test_a_range_limited_day_is_driven_with_preconditioning_and_not_without(winter):
+    # the battery at a start between what the day takes without and with pre-conditioning
+    # (no charging between trips): without, the car is short of range; with, it arrives
+    import dataclasses
+
+    d, none, timer = winter
+    assert none.short_kWh == 0.0 and timer.short_kWh == 0.0        # the usual 90 % start
+    assert timer.charger_limited_kWh > 0.0           # the charger's power binds in winter
+    assert timer.charger_limited_kWh == pytest.approx(sum(t.E_pre_battery_kWh
+                                                          for t in timer.trips))
+    soc = 0.5 * (none.E_battery_kWh + timer.E_battery_kWh) / Battery().usable_kWh
+    low = dataclasses.replace(d, soc_start=soc)
+    n, t = D.run_day(low, D.NoPreconditioning()), D.run_day(low, D.Timer(20.0))
+    assert n.short_kWh > 0.0
+    assert n.short_kWh == pytest.approx(n.E_battery_kWh - soc * Battery().usable_kWh)
+    assert t.short_kWh == 0.0 and "short of range" in n.summary()
+    assert n.soc_end == 0.0 and t.soc_end > 0.0
+    with pytest.raises(ConfigError, match="soc-start"):
+        D.make_days("winter", 1, 0, soc_start=0.0)
+
+
 def test_winter_fog_margin_is_reported_and_summer_has_none(summer, winter):
     assert math.isnan(summer[1].fog_margin_min_K)
     assert winter[2].fog_margin_min_K > winter[1].fog_margin_min_K

@@ -57,4 +57,4 @@ def test_cli_pulldown_refuses_a_soak_below_the_ambient(tmp_path):
     result = CliRunner().invoke(app, ["pulldown", "--t-amb", "35", "--soak", "30"])
     assert_one_line_error(result, "--soak")
     ok = CliRunner().invoke(app, ["pulldown", "--help"])
-    assert ok.exit_code == 0 and "envelope" in ok.output
+    assert ok.exit_code == 0 and "envelope" in ok.output and "--set" in ok.output

@@ -185,13 +185,16 @@ class Trip:
 
 @dataclass(frozen=True)
 class DaySpec:
-    """One day: season, the shift of the daily maximum (K), clouds (0-1), the trips."""
+    """One day: season, the shift of the daily maximum (K), clouds (0-1), the trips, the
+    battery's state of charge when the day starts (0-1 of the usable energy; no charging
+    between the trips, so a low start makes a range-limited day)."""
 
     season: str
     index: int
     dT_max: float
     clouds: float
     trips: tuple[Trip, ...]
+    soc_start: float = SOC_START
 
     @property
     def label(self) -> str:
@@ -199,13 +202,15 @@ class DaySpec:
 
 
 def make_days(season: str, n: int, seed: int, forecast_sd_min: float = 0.0,
-              first_index: int = 0) -> list[DaySpec]:
+              first_index: int = 0, soc_start: float = SOC_START) -> list[DaySpec]:
     """``n`` days of a season from ``numpy.random.default_rng([seed, index])``: the daily
     maximum shifted by N(0, T_max_sd), clouds U(0.7, 1) in summer and U(0.3, 1) in winter
     (assumptions), departures at the trips' mean hour + N(0, spread) in whole minutes, the
     work plug with probability ``P_WORK_PLUG``, and a forecast of each departure off by
     N(0, ``forecast_sd_min``) minutes, rounded to whole minutes (drawn from a stream of its
-    own so the days are the same for every forecast error)."""
+    own so the days are the same for every forecast error); the battery at ``soc_start``."""
+    if not 0.0 < soc_start <= 1.0:
+        raise ConfigError(f"--soc-start: a state of charge in (0, 1], got {soc_start:g}")
     clim = load_climate(season)
     days = []
     for i in range(first_index, first_index + n):
@@ -219,7 +224,7 @@ def make_days(season: str, n: int, seed: int, forecast_sd_min: float = 0.0,
             dep = 60.0 * round(hour * 60.0 + rng.normal(0.0, spread))
             err = 60.0 * round(float(frng.normal(0.0, 1.0)) * forecast_sd_min)
             trips.append(Trip(dep, dep + err, cycles, True if k == 0 else work_plug))
-        days.append(DaySpec(season, i, dT, clouds, tuple(trips)))
+        days.append(DaySpec(season, i, dT, clouds, tuple(trips), float(soc_start)))
     return days
 
 
@@ -619,7 +624,11 @@ class DayOutcome:
     K.min outside the band over the first 10 minutes of the trips, summed; Kmin_plugged :
     the same over the trips that left a plug (where pre-conditioning can act); Kmin_drive : over
     the whole drives; time_to_comfort_s : summed over the trips; fog_margin_min_K : lowest
-    over the drives (winter)."""
+    over the drives (winter); short_kWh : the battery energy the trips needed beyond what
+    the battery held (0: the day was driven; above: range-limited, the car would not have
+    arrived; the battery is not charged between trips); charger_limited_kWh : the
+    pre-conditioning's energy above the charger's DC output, from the battery (the charger's
+    power bound)."""
 
     label: str
     season: str
@@ -639,9 +648,12 @@ class DayOutcome:
     Kmin_drive: float
     time_to_comfort_s: float
     fog_margin_min_K: float
+    short_kWh: float = 0.0
+    charger_limited_kWh: float = 0.0
 
     def summary(self) -> str:
-        return (f"{self.label} {self.controller}: battery {self.E_battery_kWh:.2f} kWh "
+        short = f", {self.short_kWh:.2f} kWh short of range" if self.short_kWh > 0 else ""
+        return (f"{self.label} {self.controller}{short}: battery {self.E_battery_kWh:.2f} kWh "
                 f"(climate {self.E_climate_battery_kWh:.2f}), grid {self.E_grid_kWh:.2f} kWh "
                 f"(pre-conditioning {self.E_pre_grid_kWh:.2f}), {self.cost_USD:.2f} USD, "
                 f"range lost {self.range_lost_km:.1f} km, {self.Kmin_window:.1f} K.min in "
@@ -702,7 +714,7 @@ def run_day(day: DaySpec, controller, tariff: Tariff | None = None,
 
     tariff = tariff or load_tariff()
     charger = charger or Charger()
-    battery = battery or Battery(soc=SOC_START)
+    battery = battery or Battery(soc=day.soc_start)
     clim = load_climate(day.season)
     road = RoadLoad()
     car = _Car(clim, day, DAY_START_S)
@@ -733,6 +745,8 @@ def run_day(day: DaySpec, controller, tariff: Tariff | None = None,
             T_cab_depart_K=float(drive[0]["T_cab"]), fog_margin_min_K=fog))
     E_batt = sum(o.E_pre_battery_kWh + o.E_climate_kWh + o.E_traction_kWh + o.E_base_kWh
                  for o in outs)
+    # the battery through the trips (no charging between them): what it lacked
+    short = max(0.0, E_batt - battery.energy_kWh)
     E_cl = sum(o.E_pre_battery_kWh + o.E_climate_kWh for o in outs)
     E_pre = sum(o.E_pre_grid_kWh for o in outs)
     E_rech = charger.grid_J(E_batt * J_PER_KWH) / J_PER_KWH
@@ -751,7 +765,9 @@ def run_day(day: DaySpec, controller, tariff: Tariff | None = None,
         Kmin_drive=sum(o.Kmin_drive for o in outs),
         time_to_comfort_s=sum(o.time_to_comfort_s for o in outs),
         fog_margin_min_K=(min(o.fog_margin_min_K for o in outs) if day.season == "winter"
-                          else math.nan))
+                          else math.nan),
+        short_kWh=float(short),
+        charger_limited_kWh=float(sum(o.E_pre_battery_kWh for o in outs)))
 
 
 # ----------------------------------------------------------------------------- tuning, intervals
@@ -827,6 +843,8 @@ class DayStudy:
     planners: tuple[str, ...] = ()
     #: per season, the declared-model planner's comfort margin tuned on the training days, K
     margin_K: dict = field(default_factory=dict)
+    #: the battery's state of charge at each day's start
+    soc_start: float = SOC_START
 
     def summary(self) -> str:
         lines = []
@@ -855,6 +873,7 @@ class DayStudy:
                 "comparisons": _json_safe(list(self.comparisons)),
                 "planners": list(self.planners), "planner_margin_K": self.margin_K,
                 "parked_cabin_fit": {k: v.to_dict() for k, v in self.fits.items()},
+                "soc_start": self.soc_start,
                 "outcomes": [o.to_dict() for o in self.outcomes]}
 
     def mean_of(self, season: str, controller: str, sd: float, key: str) -> float:
@@ -890,7 +909,8 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
               seed: int = 0, forecast_errors_min: Sequence[float] = FORECAST_ERRORS_MIN,
               leads_min: Sequence[float] = LEADS_MIN, planners: Sequence[str] = PLANNERS,
               jobs: int | None = 1,
-              progress: Callable[[int, int, str], None] | None = None) -> DayStudy:
+              progress: Callable[[int, int, str], None] | None = None,
+              soc_start: float = SOC_START) -> DayStudy:
     """Tune the timer over ``leads_min`` on ``n_train`` days per season (departures known),
     then to the minute below the coarse optimum (:func:`fine_leads`); identify the parked
     cabin on the same days' parked records under the timer at ``FIT_LEAD_MIN``
@@ -899,7 +919,8 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
     searched on the plant, leads up to the longest of ``leads_min``; both with a margin of
     the forecast's standard deviation) on ``n_test`` other days for each forecast error;
     paired intervals of each against none and of each planner against the timer.
-    Training days are indices 0.., held-out days 1000..: no day is both."""
+    Training days are indices 0.., held-out days 1000..: no day is both. Every day starts
+    with the battery at ``soc_start`` (a low one: range-limited days, ``short_kWh``)."""
     from acid.executor import check_interrupt, open_executor
     from acid.studies.dayplan import identify
 
@@ -939,7 +960,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
     tuned, scan, outcomes, comps, fits, margin = {}, {}, [], [], {}, {}
     with open_executor(jobs) as ex:
         for s in seasons:
-            train = make_days(s, n_train, seed, 0.0, first_index=0)
+            train = make_days(s, n_train, seed, 0.0, first_index=0, soc_start=soc_start)
             res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in leads])
             by_lead = {L: [res[(d, "timer", L, leads, 0.0)] for d in train] for L in leads}
             # to the minute: every whole minute between the coarse optimum and the coarse
@@ -970,11 +991,13 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                     f"{m:g}": (float(np.mean([o.cost_USD for o in v])), plugged_Kmin(v))
                     for m, v in by_m.items()}
             tasks = []
-            base_days = make_days(s, n_test, seed, 0.0, first_index=1000)
+            base_days = make_days(s, n_test, seed, 0.0, first_index=1000,
+                                  soc_start=soc_start)
             tasks += [(d, "none", 0.0, leads, 0.0) for d in base_days]
             test = {}
             for e in errs:
-                test[e] = make_days(s, n_test, seed, e, first_index=1000)
+                test[e] = make_days(s, n_test, seed, e, first_index=1000,
+                                    soc_start=soc_start)
                 tasks += [(d, "timer", tuned[s], leads, e) for d in test[e]]
                 tasks += [_planner_task(d, p, leads, e, fit, margin.get(s))
                           for p in planners for d in test[e]]
@@ -997,7 +1020,7 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
                         comps.append({"season": s, "controller": name, "baseline": bname,
                                       "forecast_sd_min": e, "quantity": words, **v})
     return DayStudy(seasons, n_train, n_test, seed, errs, leads, tuned, scan,
-                    tuple(outcomes), tuple(comps), fits, planners, margin)
+                    tuple(outcomes), tuple(comps), fits, planners, margin, float(soc_start))
 
 
 def day_trace(day: DaySpec, controller) -> dict[str, np.ndarray]:
