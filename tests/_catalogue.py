@@ -1104,10 +1104,13 @@ REAL_I3 = Path(os.environ.get("ACID_REAL_DATA", "/work/shared/real-data")) / "bm
 
 
 def _logs(w: Path) -> None:
-    """``{w}/logs``: a link to the real i3 summer logs (the case is skipped without them)."""
+    """``{w}/logs``: a copy of the real i3 summer logs (the case is skipped without them).
+    A copy, never a link: a case that writes into the logs must not reach the originals."""
     if not REAL_I3.is_dir():
         raise unittest.SkipTest(f"{REAL_I3} absent")
-    (w / "logs").symlink_to(REAL_I3)
+    (w / "logs").mkdir()
+    for f in REAL_I3.glob("*.csv*"):
+        shutil.copyfile(f, w / "logs" / f.name)
 
 
 CAR = "{w}/logs"
@@ -1154,11 +1157,12 @@ R4 = [
     Case("car-fit-map-garbage", "files", ("car", "fit", CAR, "--map", "{w}/afile", "--out", "{w}/ca.json"), ("afile",), _logs),
     Case("car-fit-out-inside-logs", "collision", ("car", "fit", CAR, "--out", CAR + "/TripA01.csv.gz"), ("--out", "TripA01.csv.gz"), _logs),
     Case("car-fit-out-is-params", "collision", ("car", "fit", CAR, "--params", P, "--out", P), ("--out", "p.json"), _logs),
+    Case("heating-check-json-inside-logs", "collision", ("heating-check", "--logs", CAR, "--json", CAR + "/TripA01.csv.gz"), ("--json", "--logs"), _logs),
     # compare --identify-records
-    Case("compare-identify-records-nan", "options", ("compare", "--identify-records", "nan", "--json", "{w}/c.json"), ("--identify-records", "nan")),
+    Case("compare-identify-records-nan", "options", ("compare", "--identify-records", "nan", "--json", "{w}/c.json"), ("--identify-records",)),
     Case("compare-identify-records-negative", "options", ("compare", "--identify-records", "-1", "--json", "{w}/c.json"), ("--identify-records", "-1")),
     Case("compare-identify-records-empty", "options", ("compare", "--identify-records", "", "--json", "{w}/c.json"), ("--identify-records",)),
-    Case("compare-identify-records-repeated", "options", ("compare", "--identify-records", "1,1", "--json", "{w}/c.json"), ("--identify-records", "1")),
+    Case("compare-identify-records-repeated", "options", ("compare", "--identify-records", "1,1", "--json", "{w}/c.json"), ("--identify-records",)),
     Case("compare-identify-records-huge-list", "sizes", ("compare", "--identify-records", ",".join(str(i) for i in range(5000)), "--json", "{w}/c.json"), ("--identify-records",)),
     Case("compare-identify-records-1e30", "options", ("compare", "--identify-records", "1000000000000000000000000000000", "--json", "{w}/c.json"), ("--identify-records",)),
     # pulldown and excite --design pulldown
