@@ -63,7 +63,7 @@ class AcidCommand(FlagsTakeNoValue, TyperCommand):
         if not ctx.resilient_parsing:
             for p in self.params:
                 if p.opts and ctx.get_parameter_source(p.name) == ParameterSource.COMMANDLINE:
-                    why = work_limit_error(self.name, p.opts[0], ctx.params.get(p.name))
+                    why = work_limit_error(_path(ctx), p.opts[0], ctx.params.get(p.name))
                     if why is not None:
                         raise UsageError(why, ctx=ctx)
         return rest
@@ -72,8 +72,17 @@ class AcidCommand(FlagsTakeNoValue, TyperCommand):
         params = super().get_params(ctx)
         for p in params:   # the work limits of WORK_LIMITS, stated in --help
             if p.opts and getattr(p, "help", None):
-                p.help = limit_help(self.name, p.opts[0], p.help)
+                p.help = limit_help(_path(ctx), p.opts[0], p.help)
         return params
+
+
+def _path(ctx) -> str:
+    """The command's name below ``acid``: "fit", "car select" (the key of the work limits)."""
+    names = []
+    while ctx is not None and ctx.parent is not None:
+        names.append(ctx.info_name or "")
+        ctx = ctx.parent
+    return " ".join(reversed(names))
 
 
 class AcidTyper(typer.Typer):
