@@ -165,6 +165,21 @@ LIST_LIMITS: dict[tuple[str, str], tuple[int, str]] = {
 }
 
 
+#: Options that contradict each other when both are given on the command line:
+#: command -> pairs. Refused while parsing, naming both.
+EXCLUSIVE: dict[str, tuple[tuple[str, str], ...]] = {
+    "day": (("--planner", "--no-planner"),),
+}
+
+
+def exclusive_error(command: str, given: set[str]) -> str | None:
+    """The complaint about two contradicting options both in ``given``, or None."""
+    for a, b in EXCLUSIVE.get(command, ()):
+        if a in given and b in given:
+            return f"{a} and {b} are both given: give one of them"
+    return None
+
+
 def _count(value) -> int:
     if isinstance(value, str):
         return len([s for s in value.split(",") if s.strip()])
