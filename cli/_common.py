@@ -236,7 +236,8 @@ def _same(a: Path, b: Path) -> bool:
 def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
                 outputs: Mapping[str, PathLike | None] | None = None,
                 folders: Mapping[str, tuple[PathLike | None, Iterable[str]]] | None = None,
-                read_folders: Mapping[str, PathLike | None] | None = None) -> None:
+                read_folders: Mapping[str, PathLike | None] | None = None,
+                records: Iterable[str] = ()) -> None:
     """Check a command's files before any work; one line naming the option on a problem.
 
     Parameters
@@ -248,6 +249,8 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
     folders : {label: (folder, names)} folders the command writes the files ``names`` into.
     read_folders : {label: folder} folders whose files the command reads (a folder of logs):
         no output may lie inside one (it would replace a log, or be read as one next time).
+    records : labels of ``inputs`` each read as an experiment of its own: no two may be the
+        same file (the same data twice would count twice).
 
     No output may be an input (the same file by any path: links, ``..``, symlinks), and no
     two outputs may be the same file. Labels are the option or argument names the user typed
@@ -263,6 +266,13 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
             raise DataError(f"{label} {p}: file not found")
         if p.is_dir():
             raise DataError(f"{label} {p}: is a folder, expected a file")
+
+    recs = [(k, p) for k, p in ins if k in set(records)]
+    for i, (label, p) in enumerate(recs):
+        for other, q in recs[:i]:
+            if _same(p, q):
+                raise DataError(f"{label} {p}: is the same file as {other}; each record is "
+                                "an experiment of its own, give it once")
 
     written: list[tuple[str, Path]] = list(outs)
     for label, d, names in dirs:

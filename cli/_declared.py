@@ -58,8 +58,26 @@ def parse_fix(items: list[str] | None) -> dict[str, float]:
             v = math.nan
         if not sep or not name.strip() or not math.isfinite(v):
             raise ConfigError(f"--fix {item!r}: expected NAME=VALUE with a finite number")
+        _once(out, name.strip(), "--fix", item)
         out[name.strip()] = v
     return out
+
+
+def _once(seen, name: str, option: str, item: str) -> None:
+    if name in seen:
+        raise ConfigError(f"{option} {item!r}: {name!r} is given twice; give each parameter "
+                          "once")
+
+
+def check_named(model, option: str, names) -> None:
+    """Each of ``names`` (given with ``option``) is a parameter of ``model``: else one line
+    naming the option (rather than the model file's own complaint)."""
+    known = set(model.parameter_names)
+    for name in names:
+        if name not in known:
+            listed = ", ".join(model.parameter_names)
+            raise ConfigError(f"{option} {name!r}: not a parameter of model {model.name!r} "
+                              f"(parameters: {listed[:300]}{'...' if len(listed) > 300 else ''})")
 
 
 def parse_prior(items: list[str] | None) -> dict[str, tuple[float, float]]:
@@ -75,6 +93,7 @@ def parse_prior(items: list[str] | None) -> dict[str, tuple[float, float]]:
                                                  and sd > 0):
             raise ConfigError(f"--prior {item!r}: expected NAME=MEAN,SD with finite numbers "
                               "in the parameter's unit and SD > 0")
+        _once(out, name.strip(), "--prior", item)
         out[name.strip()] = (mean, sd)
     return out
 
@@ -137,6 +156,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     model = load(model_file)
     fixes = parse_fix(fix)
     priors = parse_prior(prior)
+    for option, names in (("--fix", fixes), ("--prior", priors), ("--free", free or ())):
+        check_named(model, option, names)
     if priors:
         model = model.with_priors(priors)
     start, ref = None, None
@@ -508,6 +529,7 @@ def cross_validate_declared(data: Path, model_file: str, json_path: Path | None,
         require_range(folds, "--cv-folds", 2, 100_000)
     model = load(model_file)
     priors = parse_prior(prior)
+    check_named(model, "--prior", priors)
     if priors:
         model = model.with_priors(priors)
     ds = Dataset.from_hdf5(data, min_samples=2)

@@ -172,11 +172,21 @@ EXCLUSIVE: dict[str, tuple[tuple[str, str], ...]] = {
 }
 
 
+#: Options that mean something only beside another: command -> (option, needed option).
+REQUIRES: dict[str, tuple[tuple[str, str], ...]] = {
+    "validate": (("--error-model-data", "--error-model"),),
+}
+
+
 def exclusive_error(command: str, given: set[str]) -> str | None:
-    """The complaint about two contradicting options both in ``given``, or None."""
+    """The complaint about two contradicting options both in ``given``, or an option given
+    without the one it needs (it would be silently ignored), or None."""
     for a, b in EXCLUSIVE.get(command, ()):
         if a in given and b in given:
             return f"{a} and {b} are both given: give one of them"
+    for a, b in REQUIRES.get(command, ()):
+        if a in given and b not in given:
+            return f"{a} applies only with {b}; without it {a} would be ignored"
     return None
 
 

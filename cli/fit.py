@@ -129,7 +129,8 @@ def fit(
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
                         "--model": model_file_input(model),
                         **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
-                outputs={"--out": out, "--json": json_path})
+                outputs={"--out": out, "--json": json_path},
+                records=["DATA", *(f"--add-record {i + 1}" for i in range(len(add_record or [])))])
     method = method or "auto"
     require_range(estimation_fraction, "--estimation-fraction", 0.0, 1.0, lo_open=True)
     require(loss in LOSSES, "--loss", f"must be one of {', '.join(LOSSES)}, got {loss!r}")

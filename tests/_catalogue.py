@@ -1186,26 +1186,25 @@ R4 = [
     Case("day-days-nan", "options", ("day", "--days", "nan", "--out", "{w}/dd"), ("--days",)),
     Case("day-planner-unknown", "options", ("day", "--planner", "oracle", "--out", "{w}/dd"), ("--planner", "oracle")),
     Case("day-planner-and-no-planner", "options", ("day", "--planner", "model", "--no-planner", "--out", "{w}/dd"), ("--planner", "--no-planner")),
-    Case("day-season-twice", "options", ("day", "--season", "summer", "--season", "summer", "--out", "{w}/dd"), ("--season",)),
     Case("day-jobs-1e9", "sizes", ("day", "--jobs", "1000000000", "--out", "{w}/dd"), ("--jobs",)),
     # validate --error-model
-    Case("validate-error-model-unknown", "options", (*V, "--error-model", "magic"), ("--error-model", "magic")),
-    Case("validate-error-model-without-data", "options", (*V, "--error-model", "arx"), ("--error-model-data",)),
-    Case("validate-error-model-data-missing", "files", (*V, "--error-model", "arx", "--error-model-data", "{w}/none.h5"), ("none.h5",)),
-    Case("validate-error-model-data-not-hdf5", "files", (*V, "--error-model", "arx", "--error-model-data", "{w}/afile"), ("afile",)),
-    Case("validate-error-model-data-is-data", "options", (*V, "--error-model", "arx", "--error-model-data", D), ("--error-model-data", "d.h5")),
-    Case("validate-error-model-data-without-model", "options", (*V, "--error-model-data", D), ("--error-model",)),
+    Case("validate-error-model-unknown", "options", (*V, "--model", "paper", "--error-model", "magic"), ("--error-model", "magic")),
+    Case("validate-error-model-without-data", "options", (*V, "--model", "paper", "--error-model", "arx"), ("--error-model-data",)),
+    Case("validate-error-model-data-missing", "files", (*V, "--model", "paper", "--error-model", "arx", "--error-model-data", "{w}/none.h5"), ("none.h5",)),
+    Case("validate-error-model-data-not-hdf5", "files", (*V, "--model", "paper", "--error-model", "arx", "--error-model-data", "{w}/afile"), ("afile",)),
+    Case("validate-error-model-data-is-data", "options", (*V, "--model", "paper", "--error-model", "arx", "--error-model-data", D), ("--error-model-data", "d.h5")),
+    Case("validate-error-model-data-without-model", "options", (*V, "--error-model-data", D), ("--error-model-data", "--error-model")),
     # fit --prior / --fit-starts
-    Case("fit-prior-sd-negative", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "UA_cab=100,-1"), ("--prior", "UA_cab")),
-    Case("fit-prior-sd-zero", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "UA_cab=100,0"), ("--prior", "UA_cab")),
-    Case("fit-prior-mean-nan", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "UA_cab=nan,1"), ("--prior", "UA_cab")),
-    Case("fit-prior-mean-inf", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "UA_cab=inf,1"), ("--prior", "UA_cab")),
-    Case("fit-prior-sd-1e300", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "UA_cab=100,1e300"), ("--prior", "UA_cab")),
+    Case("fit-prior-sd-negative", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100,-1"), ("--prior", "C_cab")),
+    Case("fit-prior-sd-zero", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100,0"), ("--prior", "C_cab")),
+    Case("fit-prior-mean-nan", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=nan,1"), ("--prior", "C_cab")),
+    Case("fit-prior-mean-inf", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=inf,1"), ("--prior", "C_cab")),
+    Case("fit-prior-sd-1e300", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100,1e300"), ("--prior", "C_cab")),
     Case("fit-prior-unknown-parameter", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "warp=1,1"), ("--prior", "warp")),
-    Case("fit-prior-no-sd", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "UA_cab=100"), ("--prior",)),
+    Case("fit-prior-no-sd", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100"), ("--prior",)),
     Case("fit-prior-garbage", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "=,"), ("--prior",)),
-    Case("fit-prior-twice-same-name", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "UA_cab=100,1", "--prior", "UA_cab=50,1"), ("--prior", "UA_cab")),
-    Case("fit-prior-on-paper-model", "options", ("fit", D, "--out", "{w}/q.json", "--prior", "a=1,1"), ("--prior",)),
+    Case("fit-prior-twice-same-name", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100,1", "--prior", "C_cab=50,1"), ("--prior", "C_cab")),
+    Case("fit-prior-on-paper-model", "options", ("fit", D, "--out", "{w}/q.json", "--prior", "gamma1=nan,1"), ("--prior", "gamma1")),
     Case("fit-fit-starts-negative", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--fit-starts", "-1"), ("--fit-starts",)),
     Case("fit-fit-starts-1e9", "sizes", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--fit-starts", "1000000000"), ("--fit-starts",)),
     Case("fit-fit-starts-nan", "options", ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--fit-starts", "nan"), ("--fit-starts",)),
@@ -1348,4 +1347,5 @@ def main(argv: list[str]) -> int:
 if __name__ == "__main__":
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     raise SystemExit(main(sys.argv[1:]))
+
 
