@@ -276,6 +276,12 @@ def car_select(
     require(seed >= 0, "--seed", "must be >= 0")
     names = _names(candidates) or list(CANDIDATES[season])
     require(len(names) >= 2, "--candidates", "needs at least 2 structures")
+    from acid.models.loader import BUILT_IN
+
+    for name in names:   # a built-in name or a .py file (whose own errors name the file)
+        require(name in BUILT_IN or name.endswith(".py"), "--candidates",
+                f"{name!r} is neither a built-in structure ({', '.join(BUILT_IN)}) nor a "
+                ".py file declaring one")
     _folder(logs)
     check_paths(inputs={"--map": map_path}, outputs={"--out": out, "--json": json_path},
                 read_folders={"LOGS": logs})
