@@ -271,8 +271,9 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
     for i, (label, p) in enumerate(recs):
         for other, q in recs[:i]:
             if _same(p, q):
-                raise DataError(f"{label} {p}: is the same file as {other}; each record is "
-                                "an experiment of its own, give it once")
+                raise DataError(f"{label} {p}: is the same file as {other}; each is read "
+                                "as data of its own (the same file twice would count twice, "
+                                "or held-out data would be fitted on)")
 
     written: list[tuple[str, Path]] = list(outs)
     for label, d, names in dirs:

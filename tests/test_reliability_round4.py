@@ -86,6 +86,21 @@ def test_no_output_inside_a_folder_the_command_reads(tmp_path):
     assert (logs / "TripA01.csv.gz").read_bytes() == b"log"
 
 
+def test_the_same_file_given_as_two_records_is_refused(tmp_path):
+    from acid.errors import DataError
+
+    d = tmp_path / "d.h5"
+    d.write_bytes(b"x")
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(DataError, match=r"--add-record 1 .*same file as DATA"):
+        check_paths(inputs={"DATA": d, "--add-record 1": tmp_path / "sub" / ".." / "d.h5"},
+                    records=["DATA", "--add-record 1"])
+    other = tmp_path / "e.h5"
+    other.write_bytes(b"x")
+    check_paths(inputs={"DATA": d, "--add-record 1": other}, records=["DATA", "--add-record 1"])
+    check_paths(inputs={"DATA": d, "--params": d})   # not records: another check's business
+
+
 @pytest.mark.parametrize("command,pair", [(c, p) for c, ps in EXCLUSIVE.items() for p in ps])
 def test_contradicting_options_are_refused_while_parsing(tmp_path, command, pair):
     a, b = pair
