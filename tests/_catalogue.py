@@ -1601,6 +1601,12 @@ R4 = [
         ("--prior", "C_cab"),
     ),
     Case(
+        "fit-prior-mean-outside-bounds",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=1e9,10"),
+        ("--prior", "C_cab", "bounds"),
+    ),
+    Case(
         "fit-prior-unknown-parameter",
         "options",
         ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "warp=1,1"),
