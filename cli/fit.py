@@ -129,8 +129,7 @@ def fit(
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
                         "--model": model_file_input(model),
                         **{f"--add-record {i + 1}": p for i, p in enumerate(add_record or [])}},
-                outputs={"--out": out, "--json": json_path},
-                records=["DATA", *(f"--add-record {i + 1}" for i in range(len(add_record or [])))])
+                outputs={"--out": out, "--json": json_path})
     method = method or "auto"
     require_range(estimation_fraction, "--estimation-fraction", 0.0, 1.0, lo_open=True)
     require(loss in LOSSES, "--loss", f"must be one of {', '.join(LOSSES)}, got {loss!r}")
@@ -158,6 +157,9 @@ def fit(
     if declared:
         require(method in METHODS, "--method",
                 f"must be one of {', '.join(METHODS)}, got {method!r}")
+        records = {"DATA": data, **{f"--add-record {i + 1}": p
+                                    for i, p in enumerate(add_record or [])}}
+        check_paths(inputs=records, records=list(records))   # each fitted as its own record
         return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
                             prior=prior,
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,
