@@ -312,6 +312,9 @@ def main(argv: list[str]) -> int:
         key = verdict if verdict != "accepted" else ("NONSENSE-accepted" if p.nonsense
                                                      else "accepted")
         counts[key] += 1
+        if sum(counts.values()) % 50 == 0:   # a running count (a long scan on a busy machine)
+            print(f"... {sum(counts.values())} probes: "
+                  + ", ".join(f"{k} {v}" for k, v in counts.most_common()), flush=True)
         if key != "clean":
             print(f"{key:18s} {took:5.1f}s {p.id}: {out.splitlines()[0] if out else ''}"[:220],
                   flush=True)
