@@ -349,8 +349,11 @@ class DaskExecutor(Executor):
             try:
                 self.client = Client(address, timeout="10s")
             except (OSError, TimeoutError, ValueError, TypeError) as exc:
-                raise AcidError(f"--scheduler {address}: cannot connect "
-                                f"({str(exc).splitlines()[0]})") from None
+                raise ConfigError(f"--scheduler {address}: cannot connect "
+                                  f"({str(exc).splitlines()[0]})") from None
+            except MemoryError:   # a service that is not a Dask scheduler answered
+                raise ConfigError(f"--scheduler {address}: what answers there is not a Dask "
+                                  "scheduler (its reply is not Dask's protocol)") from None
             self._check_versions()
         else:
             n = int(workers or usable_cores())

@@ -103,6 +103,7 @@ def claim(folder: str | os.PathLike, command: str) -> Iterator[Path]:
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise AcidError(f"{folder}: output folder is a file")
+    created = not folder.exists()   # made by this run: removed again if it stays empty
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -134,6 +135,17 @@ def claim(folder: str | os.PathLike, command: str) -> Iterator[Path]:
             del _held[key]
     finally:
         fh.close()  # releases the lock
+        if created:
+            _remove_if_only_the_lock(folder)
+
+
+def _remove_if_only_the_lock(folder: Path) -> None:
+    """A folder this run created and that holds nothing but its lock (the run failed or was
+    stopped before writing anything) goes again: nothing is left behind."""
+    with contextlib.suppress(OSError):
+        if [p.name for p in folder.iterdir()] == [LOCK_NAME]:
+            (folder / LOCK_NAME).unlink()
+            folder.rmdir()
 
 
 __all__ = ["claim", "clean_stale", "FolderBusyError"]

@@ -235,8 +235,9 @@ def _same(a: Path, b: Path) -> bool:
 
 def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
                 outputs: Mapping[str, PathLike | None] | None = None,
-                folders: Mapping[str, tuple[PathLike | None, Iterable[str]]] | None = None
-                ) -> None:
+                folders: Mapping[str, tuple[PathLike | None, Iterable[str]]] | None = None,
+                read_folders: Mapping[str, PathLike | None] | None = None,
+                records: Iterable[str] = ()) -> None:
     """Check a command's files before any work; one line naming the option on a problem.
 
     Parameters
@@ -246,6 +247,10 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
     outputs : {label: path} files the command writes: none may be a folder, sit under a file,
         or lie in a folder this process cannot write.
     folders : {label: (folder, names)} folders the command writes the files ``names`` into.
+    read_folders : {label: folder} folders whose files the command reads (a folder of logs):
+        no output may lie inside one (it would replace a log, or be read as one next time).
+    records : labels of ``inputs`` each read as an experiment of its own: no two may be the
+        same file (the same data twice would count twice).
 
     No output may be an input (the same file by any path: links, ``..``, symlinks), and no
     two outputs may be the same file. Labels are the option or argument names the user typed
@@ -261,6 +266,14 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
             raise DataError(f"{label} {p}: file not found")
         if p.is_dir():
             raise DataError(f"{label} {p}: is a folder, expected a file")
+
+    recs = [(k, p) for k, p in ins if k in set(records)]
+    for i, (label, p) in enumerate(recs):
+        for other, q in recs[:i]:
+            if _same(p, q):
+                raise DataError(f"{label} {p}: is the same file as {other}; each is read "
+                                "as data of its own (the same file twice would count twice, "
+                                "or held-out data would be fitted on)")
 
     written: list[tuple[str, Path]] = list(outs)
     for label, d, names in dirs:
@@ -279,6 +292,10 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
             check_writable_file(p)
         except OutputError as exc:
             raise OutputError(f"{label} {exc}") from None
+        for in_label, d in (read_folders or {}).items():
+            if d is not None and _inside(p, Path(d)):
+                raise OutputError(f"{label} {p}: is inside the folder {in_label} ({d}) the "
+                                  "command reads; write elsewhere")
         for in_label, q in ins:
             if _same(p, q):
                 raise OutputError(f"{label} {p}: is also the input {in_label} ({q}); refusing "
@@ -289,6 +306,14 @@ def check_paths(*, inputs: Mapping[str, PathLike | None] | None = None,
                 by = "twice" if other == label else f"also by {other} ({q})"
                 raise OutputError(f"{label} {p}: would be written {by}; give each output "
                                   "its own path")
+
+
+def _inside(p: Path, folder: Path) -> bool:
+    """Whether ``p`` (resolved: links, ``..``) lies anywhere below ``folder``."""
+    try:
+        return p.resolve().is_relative_to(folder.resolve())
+    except (OSError, RuntimeError):
+        return False
 
 
 def _bundled(p: Path) -> bool:

@@ -58,8 +58,44 @@ def parse_fix(items: list[str] | None) -> dict[str, float]:
             v = math.nan
         if not sep or not name.strip() or not math.isfinite(v):
             raise ConfigError(f"--fix {item!r}: expected NAME=VALUE with a finite number")
+        _once(out, name.strip(), "--fix", item)
         out[name.strip()] = v
     return out
+
+
+def _once(seen, name: str, option: str, item: str) -> None:
+    if name in seen:
+        raise ConfigError(f"{option} {item!r}: {name!r} is given twice; give each parameter "
+                          "once")
+
+
+#: Largest prior standard deviation, in the parameter's unit (its square must stay finite).
+MAX_PRIOR_SD = 1e100
+
+
+def check_priors(model, priors: dict[str, tuple[float, float]]) -> None:
+    """Each ``--prior`` names a parameter of ``model``, its mean lies within the parameter's
+    declared bounds and its SD is at most ``MAX_PRIOR_SD``: else one line naming it."""
+    check_named(model, "--prior", priors)
+    for name, (mean, sd) in priors.items():
+        p = model.parameter(name)
+        if not p.min <= mean <= p.max:
+            raise ConfigError(f"--prior {name}={mean:g},{sd:g}: the mean lies outside "
+                              f"{name}'s declared bounds [{p.min:g}, {p.max:g}]")
+        if sd > MAX_PRIOR_SD:
+            raise ConfigError(f"--prior {name}={mean:g},{sd:g}: SD above {MAX_PRIOR_SD:g} (no "
+                              "prior at all: leave --prior out)")
+
+
+def check_named(model, option: str, names) -> None:
+    """Each of ``names`` (given with ``option``) is a parameter of ``model``: else one line
+    naming the option (rather than the model file's own complaint)."""
+    known = set(model.parameter_names)
+    for name in names:
+        if name not in known:
+            listed = ", ".join(model.parameter_names)
+            raise ConfigError(f"{option} {name!r}: not a parameter of model {model.name!r} "
+                              f"(parameters: {listed[:300]}{'...' if len(listed) > 300 else ''})")
 
 
 def parse_prior(items: list[str] | None) -> dict[str, tuple[float, float]]:
@@ -75,6 +111,7 @@ def parse_prior(items: list[str] | None) -> dict[str, tuple[float, float]]:
                                                  and sd > 0):
             raise ConfigError(f"--prior {item!r}: expected NAME=MEAN,SD with finite numbers "
                               "in the parameter's unit and SD > 0")
+        _once(out, name.strip(), "--prior", item)
         out[name.strip()] = (mean, sd)
     return out
 
@@ -137,6 +174,9 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     model = load(model_file)
     fixes = parse_fix(fix)
     priors = parse_prior(prior)
+    for option, names in (("--fix", fixes), ("--free", free or ())):
+        check_named(model, option, names)
+    check_priors(model, priors)
     if priors:
         model = model.with_priors(priors)
     start, ref = None, None
@@ -508,6 +548,7 @@ def cross_validate_declared(data: Path, model_file: str, json_path: Path | None,
         require_range(folds, "--cv-folds", 2, 100_000)
     model = load(model_file)
     priors = parse_prior(prior)
+    check_priors(model, priors)
     if priors:
         model = model.with_priors(priors)
     ds = Dataset.from_hdf5(data, min_samples=2)

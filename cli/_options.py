@@ -103,7 +103,8 @@ def repeated_options(args: Iterable[str], params) -> str | None:
 
 
 #: Every option that sizes the work (a duration, a horizon, a count of runs, starts or
-#: workers): (command, option) -> (least, most, unit). A value given on the command line
+#: workers): (command, option) -> (least, most, unit); a sub-command is named with its group
+#: ("car select"). A value given on the command line
 #: outside it (or not finite) is refused while parsing, in one line naming the option, before
 #: any work; ``--help`` states the range. The commands' own checks stay (same or tighter).
 SECONDS_WEEK = 7 * 86400.0
@@ -114,6 +115,16 @@ WORK_LIMITS: dict[tuple[str, str], tuple[float, float, str]] = {
     ("cav-study", "--warmup"): (0.0, SECONDS_WEEK, "s"),
     ("cav-study", "--tail"): (0.0, SECONDS_WEEK, "s"),
     ("cav-study", "--jobs"): (1, 256, "processes"),
+    ("car control", "--horizon"): (2, 720, "steps"),   # 5 s steps
+    ("car select", "--rule-time"): (1.0, SECONDS_WEEK, "s"),
+    ("car select", "--warmup"): (0.0, SECONDS_WEEK, "s"),
+    ("car select", "--horizon"): (1, 1_000_000, "steps"),
+    ("car select", "--starts"): (1, 100_000, "starts"),
+    ("car select", "--folds"): (2, 10_000, "folds"),
+    ("car select", "--resamples"): (10, 1_000_000, "resamples"),
+    ("car select", "--max-evals"): (1, 100_000, "evaluations"),
+    ("car select", "--oe-window"): (5, 100_000, "samples"),
+    ("car validate", "--folds"): (2, 10_000, "folds"),
     ("compare", "--identify-duration"): (3600.0, SECONDS_WEEK, "s"),
     ("compare", "--jobs"): (1, 256, "processes"),
     ("day", "--days"): (1, 1000, "days"),
@@ -143,6 +154,48 @@ WORK_LIMITS: dict[tuple[str, str], tuple[float, float, str]] = {
 }
 
 
+#: Options that size the work by how many things they list (comma-separated in one value, or
+#: the option repeated): (command, option) -> (most, what). More is refused while parsing.
+LIST_LIMITS: dict[tuple[str, str], tuple[int, str]] = {
+    ("compare", "--identify-records"): (100, "records"),
+    ("fit", "--add-record"): (100, "records"),
+    ("car select", "--candidates"): (20, "structures"),
+    ("car select", "--trips"): (1000, "trips"),
+    ("car fit", "--held-out"): (1000, "trips"),
+}
+
+
+#: Options that contradict each other when both are given on the command line:
+#: command -> pairs. Refused while parsing, naming both.
+EXCLUSIVE: dict[str, tuple[tuple[str, str], ...]] = {
+    "day": (("--planner", "--no-planner"),),
+}
+
+
+#: Options that mean something only beside another: command -> (option, needed option).
+REQUIRES: dict[str, tuple[tuple[str, str], ...]] = {
+    "validate": (("--error-model-data", "--error-model"),),
+}
+
+
+def exclusive_error(command: str, given: set[str]) -> str | None:
+    """The complaint about two contradicting options both in ``given``, or an option given
+    without the one it needs (it would be silently ignored), or None."""
+    for a, b in EXCLUSIVE.get(command, ()):
+        if a in given and b in given:
+            return f"{a} and {b} are both given: give one of them"
+    for a, b in REQUIRES.get(command, ()):
+        if a in given and b not in given:
+            return f"{a} applies only with {b}; without it {a} would be ignored"
+    return None
+
+
+def _count(value) -> int:
+    if isinstance(value, str):
+        return len([s for s in value.split(",") if s.strip()])
+    return len(value)
+
+
 def _span(lo: float, hi: float, unit: str) -> str:
     return f"{lo:g} to {hi:g}{' ' + unit if unit else ''}"
 
@@ -150,17 +203,23 @@ def _span(lo: float, hi: float, unit: str) -> str:
 def limit_help(command: str, flag: str, text: str | None) -> str | None:
     """``text`` (an option's help) with its work limit stated, when it has one."""
     limit = WORK_LIMITS.get((command, flag))
-    if limit is None or text is None or "(limit:" in text:
+    items = LIST_LIMITS.get((command, flag))
+    if (limit is None and items is None) or text is None or "(limit:" in text:
         return text
     text = text.rstrip()
     stop = "." if text.endswith(".") else ""
-    return f"{text.rstrip('.')} (limit: {_span(*limit)}){stop}"
+    span = _span(*limit) if limit is not None else f"at most {items[0]} {items[1]}"
+    return f"{text.rstrip('.')} (limit: {span}){stop}"
 
 
 def work_limit_error(command: str, flag: str, value) -> str | None:
     """Why ``value`` of ``flag`` is outside the command's work limit, or None."""
     import math
 
+    items = LIST_LIMITS.get((command, flag))
+    if items is not None and isinstance(value, (str, list, tuple)) and _count(value) > items[0]:
+        return (f"{flag}: {_count(value)} {items[1]} given, at most {items[0]} (each one is a "
+                "run of its own)")
     limit = WORK_LIMITS.get((command, flag))
     if limit is None or value is None or isinstance(value, bool):
         return None

@@ -88,7 +88,7 @@ def car_fit(
     from acid.studies.car.run import cabin_values, fit_car
 
     _folder(logs)
-    check_paths(inputs={"--map": map_path, "--params": params},
+    check_paths(inputs={"--map": map_path, "--params": params}, read_folders={"LOGS": logs},
                 outputs={"--out": out, "--json": json_path})
     cab = cabin_values(_read(params))
     trips = _trips(logs, map_path)
@@ -133,7 +133,7 @@ def car_validate(
     from acid.studies.car.run import cabin_values
 
     _folder(logs)
-    check_paths(inputs={"--map": map_path, "--params": params},
+    check_paths(inputs={"--map": map_path, "--params": params}, read_folders={"LOGS": logs},
                 outputs={"--json": json_path})
     require(seed >= 0, "--seed", "must be >= 0")
     trips = _trips(logs, map_path)
@@ -176,7 +176,7 @@ def car_control(
     from acid.studies.car.run import control_trip
 
     _folder(logs)
-    check_paths(inputs={"--map": map_path, "--params": params},
+    check_paths(inputs={"--map": map_path, "--params": params}, read_folders={"LOGS": logs},
                 outputs={"--json": json_path})
     require(horizon >= 2, "--horizon", "must be >= 2 samples")
     values = _read(params)
@@ -276,8 +276,15 @@ def car_select(
     require(seed >= 0, "--seed", "must be >= 0")
     names = _names(candidates) or list(CANDIDATES[season])
     require(len(names) >= 2, "--candidates", "needs at least 2 structures")
+    from acid.models.loader import BUILT_IN
+
+    for name in names:   # a built-in name or a .py file (whose own errors name the file)
+        require(name in BUILT_IN or name.endswith(".py"), "--candidates",
+                f"{name!r} is neither a built-in structure ({', '.join(BUILT_IN)}) nor a "
+                ".py file declaring one")
     _folder(logs)
-    check_paths(inputs={"--map": map_path}, outputs={"--out": out, "--json": json_path})
+    check_paths(inputs={"--map": map_path}, outputs={"--out": out, "--json": json_path},
+                read_folders={"LOGS": logs})
     from acid.data import ChannelMap
     from acid.examples import resolve
     from acid.studies.car.run import load_trips

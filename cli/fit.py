@@ -157,6 +157,9 @@ def fit(
     if declared:
         require(method in METHODS, "--method",
                 f"must be one of {', '.join(METHODS)}, got {method!r}")
+        records = {"DATA": data, **{f"--add-record {i + 1}": p
+                                    for i, p in enumerate(add_record or [])}}
+        check_paths(inputs=records, records=list(records))   # each fitted as its own record
         return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
                             prior=prior,
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,

@@ -38,7 +38,7 @@ def heating_check(
     from acid.errors import DataError
     from acid.studies.credentials.heating import heating_check as run_check
 
-    check_paths(outputs={"--json": json_path})
+    check_paths(outputs={"--json": json_path}, read_folders={"--logs": logs})
     if logs is not None:
         if not logs.is_dir():
             raise DataError(f"--logs {logs}: not a folder of winter trips")

@@ -22,6 +22,7 @@ from acid import __version__  # noqa: E402
 from acid_cli._common import ClickException, error_line  # noqa: E402
 from acid_cli._options import (  # noqa: E402
     canonical_args,
+    exclusive_error,
     limit_help,
     repeated_options,
     work_limit_error,
@@ -61,9 +62,15 @@ class AcidCommand(FlagsTakeNoValue, TyperCommand):
             raise UsageError(twice, ctx=ctx)
         rest = super().parse_args(ctx, args)
         if not ctx.resilient_parsing:
+            given = {o for p in self.params if p.opts
+                     and ctx.get_parameter_source(p.name) == ParameterSource.COMMANDLINE
+                     for o in _spelled(p, ctx.params.get(p.name))}
+            clash = exclusive_error(_path(ctx), given)
+            if clash is not None:
+                raise UsageError(clash, ctx=ctx)
             for p in self.params:
                 if p.opts and ctx.get_parameter_source(p.name) == ParameterSource.COMMANDLINE:
-                    why = work_limit_error(self.name, p.opts[0], ctx.params.get(p.name))
+                    why = work_limit_error(_path(ctx), p.opts[0], ctx.params.get(p.name))
                     if why is not None:
                         raise UsageError(why, ctx=ctx)
         return rest
@@ -72,8 +79,24 @@ class AcidCommand(FlagsTakeNoValue, TyperCommand):
         params = super().get_params(ctx)
         for p in params:   # the work limits of WORK_LIMITS, stated in --help
             if p.opts and getattr(p, "help", None):
-                p.help = limit_help(self.name, p.opts[0], p.help)
+                p.help = limit_help(_path(ctx), p.opts[0], p.help)
         return params
+
+
+def _spelled(p, value) -> tuple[str, ...]:
+    """How option ``p`` was given: its first name, or a flag's negation when off."""
+    if getattr(p, "is_flag", False) and p.secondary_opts and value is False:
+        return (p.secondary_opts[0],)
+    return (p.opts[0],)
+
+
+def _path(ctx) -> str:
+    """The command's name below ``acid``: "fit", "car select" (the key of the work limits)."""
+    names = []
+    while ctx is not None and ctx.parent is not None:
+        names.append(ctx.info_name or "")
+        ctx = ctx.parent
+    return " ".join(reversed(names))
 
 
 class AcidTyper(typer.Typer):

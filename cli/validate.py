@@ -198,7 +198,8 @@ def _with_error_model(data, model, params, kind, est, *, hold_all, **opts) -> No
     require(kind == "arx", "--error-model", f"must be 'arx', got {kind!r}")
     require(model is not None, "--error-model", "needs --model (the declared model)")
     require(est is not None, "--error-model", "needs --error-model-data (estimation data)")
-    check_paths(inputs={"--error-model-data": est})
+    check_paths(inputs={"DATA": data, "--error-model-data": est},
+                records=["DATA", "--error-model-data"])   # DATA is held out: not the same file
     m = load(model)
     a, b = Dataset.from_hdf5(est), Dataset.from_hdf5(data)
     both = Dataset.concatenate([a, b])

@@ -24,6 +24,7 @@ import math
 import os
 import shutil
 import sys
+import unittest
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -1095,6 +1096,647 @@ CASES: list[Case] = [
 ]
 
 
+# ------------------------------------------------------------------------- round 4
+# the newest commands and options (the car study on the real i3 logs, compare, pulldown,
+# excite --design pulldown, day, validate --error-model, fit --prior/--fit-starts/--add-record,
+# reproduce --scheduler) and model files that print, start processes or fork
+REAL_I3 = Path(os.environ.get("ACID_REAL_DATA", "/work/shared/real-data")) / "bmw-i3"
+
+
+def _logs(w: Path) -> None:
+    """``{w}/logs``: a copy of the real i3 summer logs (the case is skipped without them).
+    A copy, never a link: a case that writes into the logs must not reach the originals."""
+    if not REAL_I3.is_dir():
+        raise unittest.SkipTest(f"{REAL_I3} absent")
+    (w / "logs").mkdir()
+    for f in REAL_I3.glob("*.csv*"):
+        shutil.copyfile(f, w / "logs" / f.name)
+
+
+CAR = "{w}/logs"
+_OK_MODEL = _ONE_STATE.format(step="s.T_cab + s.a * (s.W_bl - 0.1)", state="", extra="")
+R4 = [
+    # the car study's options on the real logs
+    Case(
+        "car-select-folds-nan",
+        "options",
+        ("car", "select", CAR, "--folds", "nan"),
+        ("--folds",),
+        _logs,
+    ),
+    Case(
+        "car-select-folds-zero",
+        "options",
+        ("car", "select", CAR, "--folds", "0"),
+        ("--folds",),
+        _logs,
+    ),
+    Case(
+        "car-select-folds-1e9",
+        "sizes",
+        ("car", "select", CAR, "--folds", "1000000000"),
+        ("--folds",),
+        _logs,
+    ),
+    Case(
+        "car-select-rule-time-nan",
+        "options",
+        ("car", "select", CAR, "--rule-time", "nan"),
+        ("--rule-time",),
+        _logs,
+    ),
+    Case(
+        "car-select-rule-time-negative",
+        "options",
+        ("car", "select", CAR, "--rule-time", "-5"),
+        ("--rule-time",),
+        _logs,
+    ),
+    Case(
+        "car-select-rule-time-inf",
+        "options",
+        ("car", "select", CAR, "--rule-time", "inf"),
+        ("--rule-time",),
+        _logs,
+    ),
+    Case(
+        "car-select-warmup-nan",
+        "options",
+        ("car", "select", CAR, "--warmup", "nan"),
+        ("--warmup",),
+        _logs,
+    ),
+    Case(
+        "car-select-warmup-1e12",
+        "sizes",
+        ("car", "select", CAR, "--warmup", "1e12"),
+        ("--warmup",),
+        _logs,
+    ),
+    Case(
+        "car-select-starts-negative",
+        "options",
+        ("car", "select", CAR, "--starts", "-1"),
+        ("--starts",),
+        _logs,
+    ),
+    Case(
+        "car-select-horizon-1e9",
+        "sizes",
+        ("car", "select", CAR, "--horizon", "1000000000"),
+        ("--horizon",),
+        _logs,
+    ),
+    Case(
+        "car-select-resamples-negative",
+        "options",
+        ("car", "select", CAR, "--resamples", "-1"),
+        ("--resamples",),
+        _logs,
+    ),
+    Case(
+        "car-select-seed-negative",
+        "options",
+        ("car", "select", CAR, "--seed", "-1"),
+        ("--seed",),
+        _logs,
+    ),
+    Case(
+        "car-select-max-evals-zero",
+        "options",
+        ("car", "select", CAR, "--max-evals", "0"),
+        ("--max-evals",),
+        _logs,
+    ),
+    Case(
+        "car-select-oe-window-zero",
+        "options",
+        ("car", "select", CAR, "--oe-window", "0"),
+        ("--oe-window",),
+        _logs,
+    ),
+    Case(
+        "car-select-season-unknown",
+        "options",
+        ("car", "select", CAR, "--season", "spring"),
+        ("--season", "spring"),
+        _logs,
+    ),
+    Case(
+        "car-select-method-unknown",
+        "options",
+        ("car", "select", CAR, "--method", "magic"),
+        ("--method", "magic"),
+        _logs,
+    ),
+    Case(
+        "car-select-warm-start-unknown",
+        "options",
+        ("car", "select", CAR, "--warm-start", "psychic"),
+        ("--warm-start", "psychic"),
+        _logs,
+    ),
+    Case(
+        "car-select-candidate-unknown",
+        "options",
+        ("car", "select", CAR, "--candidates", "car_cabin,nope"),
+        ("--candidates", "nope"),
+        _logs,
+    ),
+    Case(
+        "car-select-candidate-file-raises",
+        "params",
+        ("car", "select", CAR, "--candidates", "car_cabin,{w}/m.py"),
+        ("m.py", "ZeroDivisionError"),
+        _both(_logs, _write("m.py", "1/0\n")),
+    ),
+    Case(
+        "car-select-trips-unknown",
+        "options",
+        ("car", "select", CAR, "--trips", "TripZ99"),
+        ("TripZ99",),
+        _logs,
+    ),
+    Case(
+        "car-select-folds-twice",
+        "options",
+        ("car", "select", CAR, "--folds", "2", "--folds", "3"),
+        ("--folds", "given twice"),
+        _logs,
+    ),
+    Case(
+        "car-select-json-is-a-folder",
+        "output",
+        ("car", "select", CAR, "--json", "{w}/adir"),
+        ("--json", "adir"),
+        _logs,
+    ),
+    Case(
+        "car-select-out-under-a-file",
+        "output",
+        ("car", "select", CAR, "--out", "{w}/afile/p.json"),
+        ("--out", "afile"),
+        _logs,
+    ),
+    Case(
+        "car-validate-folds-negative",
+        "options",
+        ("car", "validate", CAR, "--folds", "-1"),
+        ("--folds",),
+        _logs,
+    ),
+    Case(
+        "car-validate-folds-1e9",
+        "sizes",
+        ("car", "validate", CAR, "--folds", "1000000000"),
+        ("--folds",),
+        _logs,
+    ),
+    Case(
+        "car-validate-seed-negative",
+        "options",
+        ("car", "validate", CAR, "--seed", "-1"),
+        ("--seed",),
+        _logs,
+    ),
+    Case(
+        "car-validate-params-missing",
+        "files",
+        ("car", "validate", CAR, "--params", "{w}/none.json"),
+        ("none.json",),
+        _logs,
+    ),
+    Case(
+        "car-validate-params-not-json",
+        "files",
+        ("car", "validate", CAR, "--params", "{w}/afile"),
+        ("afile",),
+        _logs,
+    ),
+    Case(
+        "car-control-horizon-zero",
+        "options",
+        ("car", "control", CAR, "--trip", "TripA01", "--horizon", "0"),
+        ("--horizon",),
+        _logs,
+    ),
+    Case(
+        "car-control-horizon-1e9",
+        "sizes",
+        ("car", "control", CAR, "--trip", "TripA01", "--horizon", "1000000000"),
+        ("--horizon",),
+        _logs,
+    ),
+    Case(
+        "car-control-horizon-negative",
+        "options",
+        ("car", "control", CAR, "--trip", "TripA01", "--horizon", "-3"),
+        ("--horizon",),
+        _logs,
+    ),
+    Case(
+        "car-control-params-is-data",
+        "files",
+        ("car", "control", CAR, "--trip", "TripA01", "--params", D),
+        ("d.h5",),
+        _logs,
+    ),
+    Case(
+        "car-fit-held-out-unknown",
+        "options",
+        ("car", "fit", CAR, "--held-out", "TripZ99", "--out", "{w}/ca.json"),
+        ("TripZ99",),
+        _logs,
+    ),
+    Case(
+        "car-fit-logs-is-a-file",
+        "files",
+        ("car", "fit", "{w}/afile", "--out", "{w}/ca.json"),
+        ("afile",),
+    ),
+    Case(
+        "car-fit-logs-empty-folder",
+        "files",
+        ("car", "fit", "{w}/adir", "--out", "{w}/ca.json"),
+        ("adir",),
+    ),
+    Case(
+        "car-fit-logs-missing",
+        "files",
+        ("car", "fit", "{w}/nope", "--out", "{w}/ca.json"),
+        ("nope",),
+    ),
+    Case(
+        "car-fit-map-missing",
+        "files",
+        ("car", "fit", CAR, "--map", "{w}/none.toml", "--out", "{w}/ca.json"),
+        ("none.toml",),
+        _logs,
+    ),
+    Case(
+        "car-fit-map-garbage",
+        "files",
+        ("car", "fit", CAR, "--map", "{w}/afile", "--out", "{w}/ca.json"),
+        ("afile",),
+        _logs,
+    ),
+    Case(
+        "car-fit-out-inside-logs",
+        "collision",
+        ("car", "fit", CAR, "--out", CAR + "/TripA01.csv.gz"),
+        ("--out", "TripA01.csv.gz"),
+        _logs,
+    ),
+    Case(
+        "car-fit-out-is-params",
+        "collision",
+        ("car", "fit", CAR, "--params", P, "--out", P),
+        ("--out", "p.json"),
+        _logs,
+    ),
+    Case(
+        "heating-check-json-inside-logs",
+        "collision",
+        ("heating-check", "--logs", CAR, "--json", CAR + "/TripA01.csv.gz"),
+        ("--json", "--logs"),
+        _logs,
+    ),
+    # compare --identify-records
+    Case(
+        "compare-identify-records-nan",
+        "options",
+        ("compare", "--identify-records", "nan", "--json", "{w}/c.json"),
+        ("--identify-records",),
+    ),
+    Case(
+        "compare-identify-records-negative",
+        "options",
+        ("compare", "--identify-records", "-1", "--json", "{w}/c.json"),
+        ("--identify-records", "-1"),
+    ),
+    Case(
+        "compare-identify-records-empty",
+        "options",
+        ("compare", "--identify-records", "", "--json", "{w}/c.json"),
+        ("--identify-records",),
+    ),
+    Case(
+        "compare-identify-records-repeated",
+        "options",
+        ("compare", "--identify-records", "1,1", "--json", "{w}/c.json"),
+        ("--identify-records",),
+    ),
+    Case(
+        "compare-identify-records-huge-list",
+        "sizes",
+        (
+            "compare",
+            "--identify-records",
+            ",".join(str(i) for i in range(5000)),
+            "--json",
+            "{w}/c.json",
+        ),
+        ("--identify-records",),
+    ),
+    Case(
+        "compare-identify-records-1e30",
+        "options",
+        (
+            "compare",
+            "--identify-records",
+            "1000000000000000000000000000000",
+            "--json",
+            "{w}/c.json",
+        ),
+        ("--identify-records",),
+    ),
+    # pulldown and excite --design pulldown
+    Case("pulldown-t-amb-nan", "options", ("pulldown", "--t-amb", "nan"), ("--t-amb",)),
+    Case("pulldown-t-amb-below-zero-K", "options", ("pulldown", "--t-amb", "-300"), ("--t-amb",)),
+    Case("pulldown-soak-inf", "options", ("pulldown", "--soak", "inf"), ("--soak",)),
+    Case("pulldown-soak-1e300", "options", ("pulldown", "--soak", "1e300"), ("--soak",)),
+    Case("pulldown-seed-negative", "options", ("pulldown", "--seed", "-1"), ("--seed",)),
+    Case(
+        "pulldown-json-is-a-folder",
+        "output",
+        ("pulldown", "--quick", "--json", "{w}/adir"),
+        ("--json", "adir"),
+    ),
+    Case(
+        "pulldown-json-under-a-file",
+        "output",
+        ("pulldown", "--quick", "--json", "{w}/afile/x.json"),
+        ("--json", "afile"),
+    ),
+    Case(
+        "excite-pulldown-soak-range-reversed",
+        "options",
+        ("excite", "--design", "pulldown", "--soak-range", "55", "30", "--out", "{w}/x.h5"),
+        ("--soak-range",),
+    ),
+    Case(
+        "excite-pulldown-soak-range-nan",
+        "options",
+        ("excite", "--design", "pulldown", "--soak-range", "nan", "55", "--out", "{w}/x.h5"),
+        ("--soak-range",),
+    ),
+    Case(
+        "excite-pulldown-soak-range-below-zero-K",
+        "options",
+        ("excite", "--design", "pulldown", "--soak-range", "-300", "55", "--out", "{w}/x.h5"),
+        ("--soak-range",),
+    ),
+    Case(
+        "excite-pulldown-segment-zero",
+        "options",
+        ("excite", "--design", "pulldown", "--segment-duration", "0", "--out", "{w}/x.h5"),
+        ("--segment-duration",),
+    ),
+    Case(
+        "excite-pulldown-segment-nan",
+        "options",
+        ("excite", "--design", "pulldown", "--segment-duration", "nan", "--out", "{w}/x.h5"),
+        ("--segment-duration",),
+    ),
+    Case(
+        "excite-pulldown-segment-1e12",
+        "sizes",
+        ("excite", "--design", "pulldown", "--segment-duration", "1e12", "--out", "{w}/x.h5"),
+        ("--segment-duration",),
+    ),
+    Case(
+        "excite-design-unknown",
+        "options",
+        ("excite", "--design", "zigzag", "--out", "{w}/x.h5"),
+        ("--design", "zigzag"),
+    ),
+    Case(
+        "excite-soak-range-without-pulldown",
+        "options",
+        ("excite", "--soak-range", "30", "55", "--out", "{w}/x.h5"),
+        ("--soak-range",),
+    ),
+    # day
+    Case("day-days-zero", "options", ("day", "--days", "0", "--out", "{w}/dd"), ("--days",)),
+    Case("day-days-nan", "options", ("day", "--days", "nan", "--out", "{w}/dd"), ("--days",)),
+    Case(
+        "day-planner-unknown",
+        "options",
+        ("day", "--planner", "oracle", "--out", "{w}/dd"),
+        ("--planner", "oracle"),
+    ),
+    Case(
+        "day-planner-and-no-planner",
+        "options",
+        ("day", "--planner", "model", "--no-planner", "--out", "{w}/dd"),
+        ("--planner", "--no-planner"),
+    ),
+    Case("day-jobs-1e9", "sizes", ("day", "--jobs", "1000000000", "--out", "{w}/dd"), ("--jobs",)),
+    # validate --error-model
+    Case(
+        "validate-error-model-unknown",
+        "options",
+        (*V, "--model", "paper", "--error-model", "magic"),
+        ("--error-model", "magic"),
+    ),
+    Case(
+        "validate-error-model-without-data",
+        "options",
+        (*V, "--model", "paper", "--error-model", "arx"),
+        ("--error-model-data",),
+    ),
+    Case(
+        "validate-error-model-data-missing",
+        "files",
+        (*V, "--model", "paper", "--error-model", "arx", "--error-model-data", "{w}/none.h5"),
+        ("none.h5",),
+    ),
+    Case(
+        "validate-error-model-data-not-hdf5",
+        "files",
+        (*V, "--model", "paper", "--error-model", "arx", "--error-model-data", "{w}/afile"),
+        ("afile",),
+    ),
+    Case(
+        "validate-error-model-data-is-data",
+        "options",
+        (*V, "--model", "paper", "--error-model", "arx", "--error-model-data", D),
+        ("--error-model-data", "d.h5"),
+    ),
+    Case(
+        "validate-error-model-data-without-model",
+        "options",
+        (*V, "--error-model-data", D),
+        ("--error-model-data", "--error-model"),
+    ),
+    # fit --prior / --fit-starts
+    Case(
+        "fit-prior-sd-negative",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100,-1"),
+        ("--prior", "C_cab"),
+    ),
+    Case(
+        "fit-prior-sd-zero",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100,0"),
+        ("--prior", "C_cab"),
+    ),
+    Case(
+        "fit-prior-mean-nan",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=nan,1"),
+        ("--prior", "C_cab"),
+    ),
+    Case(
+        "fit-prior-mean-inf",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=inf,1"),
+        ("--prior", "C_cab"),
+    ),
+    Case(
+        "fit-prior-sd-1e300",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100,1e300"),
+        ("--prior", "C_cab"),
+    ),
+    Case(
+        "fit-prior-mean-outside-bounds",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=1e9,10"),
+        ("--prior", "C_cab", "bounds"),
+    ),
+    Case(
+        "fit-prior-unknown-parameter",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "warp=1,1"),
+        ("--prior", "warp"),
+    ),
+    Case(
+        "fit-prior-no-sd",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "C_cab=100"),
+        ("--prior",),
+    ),
+    Case(
+        "fit-prior-garbage",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--prior", "=,"),
+        ("--prior",),
+    ),
+    Case(
+        "fit-prior-twice-same-name",
+        "options",
+        (
+            "fit",
+            D,
+            "--out",
+            "{w}/q.json",
+            "--model",
+            "econ",
+            "--prior",
+            "C_cab=100,1",
+            "--prior",
+            "C_cab=50,1",
+        ),
+        ("--prior", "C_cab"),
+    ),
+    Case(
+        "fit-prior-on-paper-model",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--prior", "gamma1=nan,1"),
+        ("--prior", "gamma1"),
+    ),
+    Case(
+        "fit-fit-starts-negative",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--fit-starts", "-1"),
+        ("--fit-starts",),
+    ),
+    Case(
+        "fit-fit-starts-1e9",
+        "sizes",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--fit-starts", "1000000000"),
+        ("--fit-starts",),
+    ),
+    Case(
+        "fit-fit-starts-nan",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--model", "econ", "--fit-starts", "nan"),
+        ("--fit-starts",),
+    ),
+    Case(
+        "fit-add-record-missing",
+        "files",
+        ("fit", D, "--out", "{w}/q.json", "--add-record", "{w}/none.h5"),
+        ("none.h5",),
+    ),
+    Case(
+        "fit-add-record-is-data",
+        "options",
+        ("fit", D, "--out", "{w}/q.json", "--add-record", D),
+        ("--add-record", "d.h5"),
+    ),
+    Case(
+        "fit-add-record-is-out",
+        "collision",
+        ("fit", D, "--out", "{w}/q.h5", "--add-record", "{w}/q.h5"),
+        ("--add-record", "q.h5"),
+    ),
+    # reproduce --scheduler
+    Case(
+        "reproduce-scheduler-garbage",
+        "options",
+        ("reproduce", "--quick", "--out", "{w}/r", "--scheduler", "not a url"),
+        ("--scheduler",),
+    ),
+    Case(
+        "reproduce-scheduler-refused",
+        "options",
+        ("reproduce", "--quick", "--out", "{w}/r", "--scheduler", "tcp://127.0.0.1:9"),
+        ("--scheduler",),
+    ),
+    Case(
+        "reproduce-scheduler-empty",
+        "options",
+        ("reproduce", "--quick", "--out", "{w}/r", "--scheduler", ""),
+        ("--scheduler",),
+    ),
+    Case(
+        "reproduce-scheduler-unroutable",
+        "options",
+        ("reproduce", "--quick", "--out", "{w}/r", "--scheduler", "tcp://10.255.255.1:8786"),
+        ("--scheduler",),
+    ),
+    # model files: prints megabytes, starts a process, loops
+    Case(
+        "fit-model-file-prints-megabytes",
+        "params",
+        ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"),
+        ("m.py", "prints"),
+        _write("m.py", "print('x' * 5_000_000)\n" + _OK_MODEL),
+    ),
+    Case(
+        "fit-model-file-starts-a-process",
+        "params",
+        ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"),
+        ("m.py", "process"),
+        _write("m.py", "import subprocess\nsubprocess.Popen(['sleep', '300'])\n" + _OK_MODEL),
+    ),
+    Case(
+        "fit-model-file-forks",
+        "params",
+        ("fit", D, "--out", "{w}/q.json", "--model", "{w}/m.py"),
+        ("m.py", "process"),
+        _write(
+            "m.py",
+            "import os, time\nif os.fork() == 0:\n    time.sleep(300)\n    os._exit(0)\n"
+            + _OK_MODEL,
+        ),
+    ),
+]
+CASES += R4
+
 # ------------------------------------------------------------------------- running
 def snapshot(w: Path) -> dict[str, str]:
     """{relative path: sha256 or '<dir>'} of everything in the workspace."""
@@ -1219,3 +1861,5 @@ def main(argv: list[str]) -> int:
 if __name__ == "__main__":
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     raise SystemExit(main(sys.argv[1:]))
+
+

@@ -51,6 +51,11 @@ BASE: dict[str, tuple[str, ...]] = {
     "heating-check": ("heating-check",),
     "export-fmu": ("export-fmu", "--out", "{w}/p.fmu"),
     "pulldown": ("pulldown", "--quick"),
+    # the car study on a copy of the real i3 logs (skipped without them)
+    "car fit": ("car", "fit", "{w}/logs", "--out", "{w}/ca.json"),
+    "car select": ("car", "select", "{w}/logs"),
+    "car validate": ("car", "validate", "{w}/logs"),
+    "car control": ("car", "control", "{w}/logs", "--trip", "TripA01"),
 }
 TEMPERATURE = ("--t-amb", "--t-low", "--t-high", "--switch-over")
 RANGES = {"--t-amb-range": ("35", "20"), "--speed-range": ("80", "10")}
@@ -81,15 +86,28 @@ def _numeric(annotation) -> type | None:
     return None
 
 
-def numeric_options() -> list[tuple[str, str, str, type, int]]:
-    """(command, parameter name, flag, float|int, nargs) of every numeric option."""
+def _commands(group=None, prefix: str = "") -> list[tuple[str, object]]:
+    """(name, click command) of every command, sub-commands of a group too ("car select")."""
     import typer
 
     from acid_cli.main import app
 
-    root = typer.main.get_command(app)
+    group = group if group is not None else typer.main.get_command(app)
     out = []
-    for name, cmd in sorted(root.commands.items()):
+    for name, cmd in sorted(group.commands.items()):
+        if hasattr(cmd, "commands"):
+            out.extend(_commands(cmd, f"{prefix}{name} "))
+        else:
+            out.append((f"{prefix}{name}", cmd))
+    return out
+
+
+def numeric_options() -> list[tuple[str, str, str, type, int]]:
+    """(command, parameter name, flag, float|int, nargs) of every numeric option."""
+
+
+    out = []
+    for name, cmd in _commands():
         for p in getattr(cmd, "params", ()):
             desc = getattr(p, "type_descriptor", None)
             kind = _numeric(getattr(desc, "annotation", None))
@@ -104,7 +122,7 @@ def numeric_options() -> list[tuple[str, str, str, type, int]]:
 def probes() -> list[Probe]:
     out = []
     for command, _name, flag, _kind, nargs in numeric_options():
-        base = BASE.get(command, (command, "--out", "{w}/o"))
+        base = BASE.get(command, (*command.split(), "--out", "{w}/o"))
         values = [(v, True) for v in NONSENSE] + [(v, False) for v in PLAUSIBLE]
         if flag in TEMPERATURE:
             values.append((BELOW_ZERO_K, True))
@@ -169,7 +187,7 @@ def file_probes() -> list[Probe]:
                              tuple(a.replace("{f}", f) for a in args),
                              names=(Path(f).name,), group=f"file{k}"))
     for command, _name, flag, _kind, _n in numeric_options():
-        base = BASE.get(command, (command, "--out", "{w}/o"))
+        base = BASE.get(command, (*command.split(), "--out", "{w}/o"))
         has_json = any(o == "--json" for o in _flags(command))
         for target, culprit in OUT_SLOTS:
             opt = "--json" if has_json else "--out"
@@ -182,11 +200,7 @@ def file_probes() -> list[Probe]:
 
 
 def _flags(command: str) -> list[str]:
-    import typer
-
-    from acid_cli.main import app
-
-    cmd = typer.main.get_command(app).commands[command]
+    cmd = dict(_commands())[command]
     return [o for p in getattr(cmd, "params", ()) for o in p.opts]
 
 
@@ -241,6 +255,12 @@ def run_probe(p: Probe, template: Path, w: Path, seconds: float) -> tuple[str, s
     shutil.copytree(template, w, symlinks=True)
     (w / "s.toml").write_text("[grid]\nambient_C = [30.0]\n")
     make_bad_files(w)
+    if any("{w}/logs" in a for a in p.args):
+        from _catalogue import REAL_I3, _logs
+
+        if not REAL_I3.is_dir():
+            return "skipped", f"{REAL_I3} absent", 0.0
+        _logs(w)
     before = snapshot(w)
     here = os.getcwd()
     os.chdir(w)
@@ -292,6 +312,9 @@ def main(argv: list[str]) -> int:
         key = verdict if verdict != "accepted" else ("NONSENSE-accepted" if p.nonsense
                                                      else "accepted")
         counts[key] += 1
+        if sum(counts.values()) % 50 == 0:   # a running count (a long scan on a busy machine)
+            print(f"... {sum(counts.values())} probes: "
+                  + ", ".join(f"{k} {v}" for k, v in counts.most_common()), flush=True)
         if key != "clean":
             print(f"{key:18s} {took:5.1f}s {p.id}: {out.splitlines()[0] if out else ''}"[:220],
                   flush=True)

@@ -39,9 +39,33 @@ def _numeric(annotation) -> type | None:
     return None
 
 
+def _commands(group=ROOT, prefix: str = "") -> dict[str, object]:
+    """{"fit": command, "car select": command, ...}: every command, a group's too."""
+    out = {}
+    for name, cmd in sorted(group.commands.items()):
+        if hasattr(cmd, "commands"):
+            out.update(_commands(cmd, f"{prefix}{name} "))
+        else:
+            out[f"{prefix}{name}"] = cmd
+    return out
+
+
+COMMANDS = _commands()
+
+
+def _make_context(command: str, args: list[str]):
+    """The context of ``acid COMMAND ARGS`` (a sub-command inside its group's context)."""
+    words = command.split()
+    parent = ROOT.make_context("acid", [words[0]], resilient_parsing=True)
+    for word in words[:-1]:
+        parent = parent.command.commands[word].make_context(word, [words[-1]], parent=parent,
+                                                            resilient_parsing=True)
+    return COMMANDS[command].make_context(words[-1], args, parent=parent)
+
+
 def _numeric_options():
     out = []
-    for name, cmd in sorted(ROOT.commands.items()):
+    for name, cmd in COMMANDS.items():
         for p in cmd.params:
             desc = getattr(p, "type_descriptor", None)
             kind = _numeric(getattr(desc, "annotation", None))
@@ -66,6 +90,7 @@ VALUES = st.one_of(
 def test_the_app_has_numeric_options():
     assert len(OPTIONS) > 30, OPTIONS   # generated from the app, so it follows new options
     assert ("year-sweep", "switch_over", "--switch-over", float) in OPTIONS
+    assert ("car select", "rule_time", "--rule-time", float) in OPTIONS   # sub-commands too
 
 
 @settings(max_examples=600, deadline=None,
@@ -73,11 +98,11 @@ def test_the_app_has_numeric_options():
 @given(option=st.sampled_from(OPTIONS), value=VALUES)
 def test_numeric_options_parse_or_name_the_option(option, value):
     command, name, flag, _kind = option
-    cmd = ROOT.commands[command]
-    parent = ROOT.make_context("acid", [command], resilient_parsing=True)
+    cmd = COMMANDS[command]
+    required = [a for q in cmd.params if q.required and q.name != name
+                for a in (["x"] if q.param_type_name == "argument" else [q.opts[0], "x"])]
     try:
-        ctx = cmd.make_context(command, [f"{flag}={value}"], parent=parent)
-        ctx.close()
+        _make_context(command, [*required, f"{flag}={value}"]).close()
     except ClickException as exc:
         assert exc.exit_code == 2, (command, flag, value, exc.format_message())
         msg = exc.format_message()
@@ -137,14 +162,15 @@ def test_an_option_given_twice_keeps_one_value_or_is_refused(option, first, seco
     """An option that keeps one value, given twice with different values, is one usage
     error naming it (never the last value silently); a repeatable one parses."""
     command, name, flag, _kind = option
-    cmd = ROOT.commands[command]
+    cmd = COMMANDS[command]
     param = next(p for p in cmd.params if p.name == name)
     n = max(1, param.nargs)
     one = [f"{flag}={first}"] if inline and n == 1 else [flag, *[first] * n]
-    args = [*one, flag, *[second] * n]
-    parent = ROOT.make_context("acid", [command], resilient_parsing=True)
+    required = [a for q in cmd.params if q.required and q.name != name
+                for a in (["x"] if q.param_type_name == "argument" else [q.opts[0], "x"])]
+    args = [*required, *one, flag, *[second] * n]
     try:
-        cmd.make_context(command, args, parent=parent).close()
+        _make_context(command, args).close()
     except ClickException as exc:
         msg = exc.format_message()
         assert exc.exit_code == 2 and "\n" not in msg.strip(), msg
@@ -221,3 +247,75 @@ def test_declared_noises_bounds_and_equations_load_or_fail_in_one_line(
                 assert math.isfinite(v) and 0.0 <= v <= 1e6, (what, v)
                 assert what != "sensor" or v > 0.0, v
     assert math.isfinite(factor), factor   # NaN/inf in the step at every point: refused
+
+
+# ------------------------------------- text options of the newer commands (parsed by acid)
+NUMBER_TEXT = st.one_of(HOSTILE_TEXT, st.floats(allow_nan=True, allow_infinity=True).map(repr),
+                        st.integers(min_value=-(10 ** 20), max_value=10 ** 20).map(str))
+NAME_TEXT = st.one_of(st.sampled_from(["C_cab", "gamma1", "", " ", "=", "a=b", "x,y"]),
+                      st.text(max_size=8))
+
+
+@settings(max_examples=120, deadline=None)
+@given(items=st.lists(st.tuples(NAME_TEXT, st.sampled_from(["=", "", "=="]),
+                                st.lists(NUMBER_TEXT, min_size=0, max_size=3)), max_size=4),
+       which=st.sampled_from(["--prior", "--fix"]))
+def test_prior_and_fix_values_parse_sound_or_name_the_option(items, which):
+    """``--prior NAME=MEAN,SD`` and ``--fix NAME=VALUE`` from generated text: a dict of
+    finite numbers (SD > 0, each name once) or one line naming the option."""
+    from acid.errors import ConfigError
+    from acid_cli._declared import parse_fix, parse_prior
+
+    texts = [f"{name}{sep}{','.join(nums)}" for name, sep, nums in items]
+    try:
+        got = (parse_prior if which == "--prior" else parse_fix)(texts)
+    except ConfigError as exc:
+        assert str(exc).startswith(which) and "\n" not in str(exc), str(exc)
+        return
+    assert len(got) == len(texts)   # no name silently given twice
+    for value in got.values():
+        numbers = value if isinstance(value, tuple) else (value,)
+        assert all(math.isfinite(v) for v in numbers), got
+        assert which == "--fix" or numbers[1] > 0, got
+
+
+@settings(max_examples=200, deadline=None)
+@given(address=st.one_of(
+    st.sampled_from(["tcp://127.0.0.1:8786", "tcp://h:0", "tcp://h:65536", "http://h:1",
+                     "h:-1", "", " ", "tcp://", "://x", "tcp://h:99999999999999999999"]),
+    st.text(max_size=30),
+    st.builds(lambda s, h, p: f"{s}{h}:{p}", st.sampled_from(["", "tcp://", "tls://", "x://"]),
+              st.text(min_size=0, max_size=10), st.integers(-5, 10 ** 6))))
+def test_scheduler_addresses_read_or_name_the_option(address):
+    """``--scheduler`` text: an address of a known scheme with a port in 1..65535, or one
+    line naming ``--scheduler`` (checked before any connection is tried)."""
+    from acid.errors import ConfigError
+    from acid.executor import check_scheduler_address
+
+    try:
+        assert check_scheduler_address(address) == address
+    except ConfigError as exc:
+        assert str(exc).startswith("--scheduler") and "\n" not in str(exc), str(exc)
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(seeds=st.lists(NUMBER_TEXT, max_size=6).map(",".join) | st.text(max_size=12)
+       | st.integers(0, 300).map(lambda n: ",".join(map(str, range(n)))))
+def test_compare_identify_records_is_one_line_before_any_work(tmp_path_factory, seeds):
+    """``acid compare --identify-records`` from generated text, with ``--json`` under a file:
+    one usage line (naming --identify-records, or --json once the seeds read well), before
+    any work, never a traceback."""
+    import time
+
+    from typer.testing import CliRunner
+
+    w = tmp_path_factory.mktemp("c")
+    (w / "afile").write_text("x")
+    t0 = time.monotonic()
+    res = CliRunner().invoke(app, ["compare", "--identify-records", seeds,
+                                   "--json", str(w / "afile" / "c.json")])
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert res.exit_code == 2 and len(lines) == 1, res.output
+    assert "--identify-records" in lines[0] or "--json" in lines[0], lines[0]
+    assert time.monotonic() - t0 < 20.0

@@ -7,7 +7,9 @@ Loading a file is guarded: it is first loaded (imported and traced) in a forked 
 process, so a file that ends the process (``os._exit``, a crash), never finishes (an endless
 loop, a huge trace: bound ``ACID_MODEL_TIMEOUT``, default 60 s) or declares more than
 ``ACID_MODEL_MAX_STATES`` states (default 400) or ``ACID_MODEL_MAX_PARAMETERS`` parameters
-(default 5000) is one ``DeclarationError`` naming the file and the cause; then acid loads it
+(default 5000), prints more than ``MAX_OUTPUT_BYTES`` (1 MiB) or leaves a process running
+(it started one with ``subprocess`` or ``os.fork``) is one ``DeclarationError`` naming the
+file and the cause (the child's process group is killed in every case); then acid loads it
 itself (with other threads running too: the child only loads the file, and the timeout
 bounds a child that waits on a lock another thread held). Where ``fork`` is missing, only
 the in-process checks apply.
@@ -43,6 +45,8 @@ LOAD_TIMEOUT_S = 60.0
 #: Size bounds of a declaration loaded from a file; env ACID_MODEL_MAX_STATES / _PARAMETERS.
 MAX_STATES = 400
 MAX_PARAMETERS = 5000
+#: What a model file may print (stdout and stderr together) while it loads, bytes.
+MAX_OUTPUT_BYTES = 1 << 20
 
 
 def _bound(env: str, default: float) -> float:
@@ -285,22 +289,23 @@ def _check_in_child(path: Path) -> None:
         status = 3
         try:
             os.close(read)
+            os.setpgid(0, 0)   # its own group: what the file starts is killed with it
             signal.signal(signal.SIGINT, signal.SIG_DFL)
             if "faulthandler" in sys.modules:   # no crash report from the child
                 sys.modules["faulthandler"].disable()
-            null = os.open(os.devnull, os.O_RDWR)
-            for fd in (0, 1, 2):
-                os.dup2(null, fd)
-            sys.stdout = sys.stderr = open(os.devnull, "w")  # noqa: SIM115 - a capture too
+            out = _bounded_output()
             try:
                 with _sizes_bounded(path):
                     _load_file(path)
-                report = "ok"
+                report = _after_load(path, out)
             except DeclarationError as exc:
                 report = "error " + str(exc)
             except BaseException as exc:  # noqa: BLE001 - reported to the parent
                 report = f"error {path.name}: {type(exc).__name__}: {exc} (while acid loads it)"
-            os.write(write, report.encode("utf-8", "replace")[:60000])
+            if report != "ok":   # the failure may be the output bound's (EFBIG)
+                report = _after_load(path, out, report)
+            # the report ends with NUL: a process the file forked may hold the pipe open
+            os.write(write, report.encode("utf-8", "replace")[:60000] + b"\0")
             status = 0
         finally:
             os._exit(status)
@@ -318,13 +323,15 @@ def _check_in_child(path: Path) -> None:
             ready, _, _ = select.select([read], [], [], min(left, 1.0))
             if ready:
                 chunk = os.read(read, 65536)
-                if not chunk:
-                    break
                 report += chunk
+                if not chunk or chunk.endswith(b"\0"):
+                    break
     finally:
         os.close(read)
         _, status = _reap(pid)
-    text = report.decode("utf-8", "replace")
+        with contextlib.suppress(OSError):   # what the file started (its process group)
+            os.killpg(pid, signal.SIGKILL)
+    text = report.rstrip(b"\0").decode("utf-8", "replace")
     if text.startswith("error "):
         raise DeclarationError(text[6:].splitlines()[0])
     if text != "ok":
@@ -334,6 +341,63 @@ def _check_in_child(path: Path) -> None:
             cause = f"ends the process (os._exit({os.WEXITSTATUS(status)}))"
         raise DeclarationError(f"{path.name}: the model file {cause} while acid loads it; "
                                "a model file only declares")
+
+
+def _bounded_output() -> int:
+    """In the child: stdin from /dev/null, stdout and stderr into one unlinked temporary
+    file of at most ``MAX_OUTPUT_BYTES`` (+1: a write beyond fails, not the disk); its fd."""
+    import resource
+    import tempfile
+
+    null = os.open(os.devnull, os.O_RDWR)
+    os.dup2(null, 0)
+    fd, name = tempfile.mkstemp(prefix="acid-model-output-")
+    os.unlink(name)
+    for k in (1, 2):
+        os.dup2(fd, k)
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)   # a write past the bound fails (EFBIG)
+    with contextlib.suppress(ValueError, OSError):
+        resource.setrlimit(resource.RLIMIT_FSIZE, (MAX_OUTPUT_BYTES + 1, MAX_OUTPUT_BYTES + 1))
+    sys.stdout = os.fdopen(os.dup(fd), "w", buffering=1)
+    sys.stderr = os.fdopen(os.dup(fd), "w", buffering=1)
+    return fd
+
+
+def _after_load(path: Path, out: int, report: str = "ok") -> str:
+    """In the child, the file loaded (``report``): "error ..." if it printed more than the
+    bound or left a process running (a model file only declares), else ``report``."""
+    with contextlib.suppress(OSError, ValueError):
+        sys.stdout.flush()
+        sys.stderr.flush()
+    size = os.fstat(out).st_size
+    if size > MAX_OUTPUT_BYTES:
+        return (f"error {path.name}: the model file prints more than {MAX_OUTPUT_BYTES >> 20} MiB "
+                "while acid loads it; a model file only declares")
+    started = _group_members()
+    if started:
+        return (f"error {path.name}: the model file starts a process ({started[0]}) while "
+                "acid loads it; a model file only declares")
+    return report
+
+
+def _group_members() -> list[str]:
+    """In the child: the other live processes of its process group ("pid command")."""
+    me, found = os.getpid(), []
+    proc = Path("/proc")
+    if proc.is_dir():
+        for d in proc.iterdir():
+            if not d.name.isdigit() or int(d.name) == me:
+                continue
+            with contextlib.suppress(OSError, ValueError, IndexError):
+                stat = (d / "stat").read_text()
+                fields = stat[stat.rindex(")") + 2:].split()
+                if int(fields[2]) == me and fields[0] != "Z":
+                    found.append(f"pid {d.name}: {stat[stat.index('(') + 1:stat.rindex(')')]}")
+        return found
+    with contextlib.suppress(ChildProcessError):   # no /proc: its own live children
+        if os.waitpid(-1, os.WNOHANG) == (0, 0):
+            found.append("a child process")
+    return found
 
 
 def _reap(pid: int) -> tuple[int, int]:

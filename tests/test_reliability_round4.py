@@ -1,0 +1,201 @@
+"""Reliability, round 4: a model file that prints megabytes, starts a process or forks is one
+line naming the file and leaves no process; no output lies inside a folder of logs the
+command reads; contradicting options are refused while parsing; and no child process
+outlives sweeps, reproduces and studies stopped by SIGINT or SIGTERM (psutil)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+from _procs import wait_for
+from typer.testing import CliRunner
+
+from acid.errors import OutputError
+from acid.models.declaration import DeclarationError
+from acid.models.loader import load
+from acid_cli._common import check_paths
+from acid_cli._options import EXCLUSIVE
+from acid_cli.main import app
+
+GOOD = (Path(__file__).resolve().parents[1] / "acid" / "models" / "examples"
+        / "cabin3.py").read_text()
+
+
+def _file(tmp_path: Path, head: str) -> Path:
+    path = tmp_path / "m.py"
+    path.write_text(head + "\n" + GOOD)
+    return path
+
+
+def _marked(mark: str) -> list[psutil.Process]:
+    """Live processes carrying ``mark`` in their command line."""
+    out = []
+    for p in psutil.process_iter():
+        try:
+            if mark in " ".join(p.cmdline()) and p.status() != psutil.STATUS_ZOMBIE:
+                out.append(p)
+        except psutil.Error:
+            pass
+    return out
+
+
+@pytest.mark.parametrize("head", [
+    "import subprocess; subprocess.Popen(['sleep', '{mark}'])",
+    "import os, time\nif os.fork() == 0:\n    time.sleep({mark})\n    os._exit(0)",
+], ids=["popen", "fork"])
+def test_a_model_file_that_starts_a_process_is_refused_and_nothing_is_left(tmp_path, head,
+                                                                           monkeypatch):
+    monkeypatch.setenv("ACID_MODEL_TIMEOUT", "20")   # a stalled load would show as 20 s
+    mark = f"{3000 + os.getpid() % 997}.{time.monotonic_ns() % 10**6}"
+    path = _file(tmp_path, head.format(mark=mark))
+    t0 = time.monotonic()
+    with pytest.raises(DeclarationError, match=r"m\.py: the model file starts a process"):
+        load(path)
+    assert time.monotonic() - t0 < 15.0
+    if "sleep" in head:
+        assert wait_for(lambda: not _marked(mark), 5.0), _marked(mark)
+
+
+def test_a_model_file_printing_megabytes_is_refused_in_one_line(tmp_path, capfd):
+    path = _file(tmp_path, "print('x' * 3_000_000)")
+    with pytest.raises(DeclarationError, match=r"m\.py: the model file prints more than 1 MiB"):
+        load(path)
+    out, err = capfd.readouterr()
+    assert len(out) + len(err) < 10_000
+
+
+def test_a_model_file_printing_a_line_still_loads(tmp_path):
+    assert load(_file(tmp_path, "print('declaring the cabin')")).nx == 3
+
+
+def test_no_output_inside_a_folder_the_command_reads(tmp_path):
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    (logs / "TripA01.csv.gz").write_bytes(b"log")
+    for out in (logs / "TripA01.csv.gz", logs / "new.json", tmp_path / "x" / ".." / "logs" / "a"):
+        with pytest.raises(OutputError, match=r"--out .*inside the folder LOGS"):
+            check_paths(outputs={"--out": out}, read_folders={"LOGS": logs})
+    check_paths(outputs={"--out": tmp_path / "p.json"}, read_folders={"LOGS": logs})
+    assert (logs / "TripA01.csv.gz").read_bytes() == b"log"
+
+
+def test_the_same_file_given_as_two_records_is_refused(tmp_path):
+    from acid.errors import DataError
+
+    d = tmp_path / "d.h5"
+    d.write_bytes(b"x")
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(DataError, match=r"--add-record 1 .*same file as DATA"):
+        check_paths(inputs={"DATA": d, "--add-record 1": tmp_path / "sub" / ".." / "d.h5"},
+                    records=["DATA", "--add-record 1"])
+    other = tmp_path / "e.h5"
+    other.write_bytes(b"x")
+    check_paths(inputs={"DATA": d, "--add-record 1": other}, records=["DATA", "--add-record 1"])
+    check_paths(inputs={"DATA": d, "--params": d})   # not records: another check's business
+
+
+@pytest.mark.parametrize("command,pair", [(c, p) for c, ps in EXCLUSIVE.items() for p in ps])
+def test_contradicting_options_are_refused_while_parsing(tmp_path, command, pair):
+    a, b = pair
+    values = {"--planner": ["model"]}
+    args = [*command.split(), a, *values.get(a, []), b, *values.get(b, []),
+            "--out", str(tmp_path / "o")]
+    t0 = time.monotonic()
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and a in lines[0] and b in lines[0], res.output
+    assert time.monotonic() - t0 < 5.0 and not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------- processes left by stopped commands
+TESTS = Path(__file__).resolve().parent
+SPEC = ('title = "procs"\nplugins = ["_sweep_plugin"]\n'
+        '[defaults]\ncycle = 12.0\nduration_s = 60.0\nwarmup_s = 30.0\ntail_s = 0.0\n'
+        '[grid]\nambient_C = [30.0, 35.0]\n[controllers.nmpc]\n[controllers.fragile]\n'
+        'above_C = 40.0\n')
+
+
+def _group(pgid: int) -> list[str]:
+    out = []
+    for p in psutil.process_iter():
+        try:
+            if os.getpgid(p.pid) == pgid and p.status() != psutil.STATUS_ZOMBIE:
+                out.append(" ".join(p.cmdline())[:100])
+        except (psutil.Error, ProcessLookupError, PermissionError):
+            pass
+    return out
+
+
+def _children() -> set[int]:
+    out = set()
+    for c in psutil.Process().children(recursive=True):
+        try:
+            if c.status() != psutil.STATUS_ZOMBIE and "resource_tracker" not in \
+                    " ".join(c.cmdline()):
+                out.add(c.pid)
+        except psutil.Error:
+            pass
+    return out
+
+
+@pytest.mark.slow
+def test_stopped_sweeps_reproduces_and_studies_leave_no_process(tmp_path):
+    """Several multi-worker runs, each stopped by SIGINT or SIGTERM sent to the command's
+    process alone (``kill PID``) or to its group (Ctrl-C) once its workers run: each exits
+    130/143, and afterwards neither its process group nor this test has a process left."""
+    spec = tmp_path / "procs.toml"
+    spec.write_text(SPEC)
+    runs = [(("sweep", str(spec), "--out", str(tmp_path / "s1"), "--jobs", "2", "--no-figures"),
+             signal.SIGTERM, "pid"),
+            (("reproduce", "--quick", "--out", str(tmp_path / "r1"), "--jobs", "2"),
+             signal.SIGTERM, "pid"),
+            (("sweep", str(spec), "--out", str(tmp_path / "s2"), "--jobs", "2", "--no-figures"),
+             signal.SIGINT, "group"),
+            (("year-sweep", "--quick", "--out", str(tmp_path / "y"), "--jobs", "2"),
+             signal.SIGINT, "pid")]
+    before = _children()
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(TESTS), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    exe = os.path.join(os.path.dirname(sys.executable), "acid")
+    stopped = 0
+    for args, sig, target in runs:
+        p = subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                             text=True, start_new_session=True, env=env,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+
+        def workers(p=p):
+            if p.poll() is not None:
+                return True
+            k = 0
+            try:
+                kids = psutil.Process(p.pid).children(recursive=True)
+            except psutil.Error:
+                return True
+            for c in kids:   # a child may end (or be a zombie) between listing and reading
+                try:
+                    k += "resource_tracker" not in " ".join(c.cmdline())
+                except psutil.Error:
+                    pass
+            return k >= 2
+
+        wait_for(workers, 120.0)
+        if p.poll() is None:
+            time.sleep(0.5)
+            (os.kill if target == "pid" else os.killpg)(p.pid, sig)
+            stopped += 1
+        text, _ = p.communicate(timeout=180)
+        assert p.returncode in (128 + sig, 0), text   # 0: it ended before the signal
+        assert "Traceback" not in text, text
+        assert wait_for(lambda p=p: not _group(p.pid), 15.0), (args[0], _group(p.pid))
+        assert not any(f.name.endswith(".part") for f in tmp_path.rglob(".*")), args[0]
+    assert wait_for(lambda: _children() <= before, 15.0), _children() - before
+    if stopped < 2:
+        pytest.skip("the runs ended before the signals (machine too fast or too busy)")
