@@ -30,7 +30,7 @@ from acid.ident.validate import REPORT_TIMES_S
 
 #: The candidate structures of each season, smallest last (names of built-in declarations).
 CANDIDATES = {"summer": ("car_cabin", "car_cabin2", "car_cabin1"),
-              "winter": ("heating", "car_heat2")}
+              "winter": ("heating", "car_heat3", "car_heat2")}
 
 RULE = ("the fewest free parameters whose pooled RMSE at {t:g} s lies inside the 95 % "
         "interval of the best candidate's RMSE there")
