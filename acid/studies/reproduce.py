@@ -560,24 +560,24 @@ def engine_stages(opts: ReproduceOptions) -> list[Stage]:
                  *(s.name for s in plans)))]
 
 
-#: CPU seconds of each stage in a cold full run (measured; only their ratios matter: they
-#: order the work, the longest remaining chain first, see ``acid.pipeline.chain_costs``)
+#: CPU seconds of each stage in a cold full run (measured, 2 workers; only their ratios
+#: matter: they order the work, the longest remaining chain first, see
+#: ``acid.pipeline.chain_costs``)
 STAGE_COST_S = {
-    "sweep": 9.0, "excite": 7.0, "fit": 1.0, "validate": 4.0, "mpc": 12.0, "econ": 13.0,
-    "cav_udds": 236.0, "cav_sc03": 130.0, "cav": 30.0, "plant_check": 10.0, "heating": 6.0,
-    "engine_train_udds_30C": 84.0, "engine_train_sc03_30C": 78.0,
-    "engine_train_hwfet_30C": 170.0, "engine_train_us06_38C": 71.0,
-    "engine_train_stopgo_38C": 20.0, "engine_held_udds_38C": 67.0,
-    "engine_held_sc03_38C": 58.0, "engine_held_hwfet_38C": 49.0,
-    "engine_held_us06_30C": 170.0, "engine_held_stopgo_30C": 136.0,
-    "plan_udds": 18.0, "plan_sc03": 10.0, "engine": 1.0,
+    "sweep": 1.8, "excite": 1.1, "fit": 0.8, "validate": 3.6, "mpc": 5.9, "econ": 8.7,
+    "cav_udds": 44.7, "cav_sc03": 30.3, "cav": 4.4, "plant_check": 6.5, "heating": 4.0,
+    "engine_train_udds_30C": 22.8, "engine_train_sc03_30C": 16.1,
+    "engine_train_hwfet_30C": 81.4, "engine_train_us06_38C": 18.7,
+    "engine_train_stopgo_38C": 19.2, "engine_held_udds_38C": 11.2, "engine_held_sc03_38C": 10.7,
+    "engine_held_hwfet_38C": 11.6, "engine_held_us06_30C": 45.8, "engine_held_stopgo_30C": 20.0,
+    "plan_udds": 13.5, "plan_sc03": 9.2, "engine": 0.3,
 }
 
 
 def build_stages(opts: ReproduceOptions) -> list[Stage]:
     """The stage graph of the reproduction (the cav study's cycles are independent tasks),
     each stage with its measured cost (:data:`STAGE_COST_S`: the order of the work)."""
-    return [dataclasses.replace(s, cost=STAGE_COST_S.get(s.name, 60.0))
+    return [dataclasses.replace(s, cost=STAGE_COST_S.get(s.name, 10.0))
             for s in _stages(opts)]
 
 
