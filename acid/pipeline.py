@@ -350,8 +350,9 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
             workdir = root / "stages" / s.name
             rec, why = (None, "") if force else _check_record(workdir, keys[s.name])
             if rec is not None:
+                cpu = rec.get("cpu_seconds")   # absent in older records, None for NaN
                 finish(s, rec["summary"], float(rec.get("seconds", 0.0)), True,
-                       float(rec.get("cpu_seconds", math.nan)))
+                       math.nan if cpu is None else float(cpu))
                 continue
             if why and notice is not None:
                 notice(f"stage {s.name}: the cached record in {workdir} was not reused ({why}: "

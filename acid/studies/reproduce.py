@@ -642,7 +642,8 @@ def summary_dict(outcomes: dict[str, StageOutcome], verdicts: list[ClaimVerdict]
         "mode": run_mode(opts),
         "options": dataclasses.asdict(opts),
         "elapsed_s": elapsed_s,
-        "stages": {k: {"title": o.title, "seconds": o.seconds, "cpu_seconds": o.cpu_seconds,
+        "stages": {k: {"title": o.title, "seconds": o.seconds,
+                       "cpu_seconds": None if math.isnan(o.cpu_seconds) else o.cpu_seconds,
                        "cached": o.cached, "key": o.key, "summary": o.summary}
                    for k, o in outcomes.items()},
         "claims": summary_claims(verdicts),
