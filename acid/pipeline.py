@@ -359,8 +359,10 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
                        "tampered or damaged); recomputing it")
             queued.append(s)
         # one stage per free worker, the longest remaining chain first (the scheduler's own
-        # queue would start them in submission order)
-        queued.sort(key=lambda q: -rank[q.name])
+        # queue would start them in submission order); one worker: the order of ``stages``
+        # (no order shortens a serial run)
+        if slots > 1:
+            queued.sort(key=lambda q: -rank[q.name])
         while queued and len(running) < slots:
             s = queued.pop(0)
             inputs = {d: outcomes[d].workdir for d in s.depends}

@@ -57,3 +57,9 @@ def test_longest_chain_first_and_no_more_in_flight_than_workers(tmp_path):
     again = run_pipeline(_graph(), tmp_path, executor=_TwoSlots())
     assert all(o.cached for o in again.values())
     assert again["tail"].cpu_seconds == out["tail"].cpu_seconds   # read back from the record
+
+
+def test_one_worker_keeps_the_declared_order(tmp_path):
+    started: list[str] = []
+    run_pipeline(_graph(), tmp_path, on_start=started.append)
+    assert started == ["head", "lone_long", "lone_short", "tail"]
