@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import shutil
 import tempfile
@@ -54,6 +55,9 @@ class Stage:
     func: Callable[[Path, dict[str, Path], dict, ProgressFn], dict]
     config: dict = field(default_factory=dict)
     depends: tuple[str, ...] = ()
+    #: estimated CPU seconds of a cold run: orders the work only (never part of the cache
+    #: key); the stage on the longest remaining chain of estimates starts first
+    cost: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -67,6 +71,9 @@ class StageOutcome:
     seconds: float
     cached: bool
     key: str
+    #: CPU seconds of the process that ran the stage and of the programs it ran (NaN when
+    #: not recorded)
+    cpu_seconds: float = math.nan
 
 
 def source_fingerprint() -> str:
@@ -134,11 +141,13 @@ def _check_record(workdir: Path, key: str) -> tuple[dict | None, str]:
     return d, ""
 
 
-def _seal(stage: Stage, key: str, tmp: Path, summary: dict, seconds: float) -> None:
+def _seal(stage: Stage, key: str, tmp: Path, summary: dict, seconds: float,
+          cpu_seconds: float = math.nan) -> None:
     """Write the record of a stage's finished folder ``tmp`` and move it into place."""
     final = tmp.parent / stage.name
     files = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*") if p.is_file())
     record = {"stage": stage.name, "key": key, "summary": summary, "seconds": seconds,
+              "cpu_seconds": cpu_seconds,
               "files": files, "file_sha256": {f: file_sha256(tmp / f) for f in files},
               "acid_version": __version__}
     record = json_safe(record)  # as write_json writes it, so that the hash reads back
@@ -156,6 +165,13 @@ def _seal(stage: Stage, key: str, tmp: Path, summary: dict, seconds: float) -> N
         os.replace(tmp, final)
 
 
+def _cpu_now() -> float:
+    """CPU seconds of this process and of the child processes it has waited for (the C
+    compiler of a generated solver runs as one)."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
 def _stage_tmp(root: Path, stage: Stage) -> Path:
     final = root / "stages" / stage.name
     final.parent.mkdir(parents=True, exist_ok=True)
@@ -171,19 +187,19 @@ def _progress(stage: Stage, report: ProgressReporter) -> ProgressFn:
 
 
 def _run_stage(stage: Stage, root: Path, inputs: dict[str, Path], key: str,
-               report: ProgressReporter) -> tuple[dict, float]:
+               report: ProgressReporter) -> tuple[dict, float, float]:
     """Run one stage into a temporary folder, then move it into place (task side, on a
     worker that sees ``root``: this process, or a local cluster)."""
     tmp = _stage_tmp(root, stage)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu_now()
     try:
         summary = stage.func(tmp, inputs, stage.config, _progress(stage, report))
-        seconds = time.perf_counter() - t0
-        _seal(stage, key, tmp, summary, seconds)
+        seconds, cpu = time.perf_counter() - t0, _cpu_now() - c0
+        _seal(stage, key, tmp, summary, seconds, cpu)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return summary, seconds
+    return summary, seconds, cpu
 
 
 def folder_files(folder: Path) -> dict[str, bytes]:
@@ -203,7 +219,7 @@ def _scratch_dir() -> str | None:
 
 
 def _run_stage_detached(stage: Stage, inputs: dict[str, dict[str, bytes]],
-                        report: ProgressReporter) -> tuple[dict, float, dict[str, bytes]]:
+                        report: ProgressReporter) -> tuple[dict, float, float, dict[str, bytes]]:
     """Run one stage on a worker that does not see the output folder (task side): its
     inputs' files arrive with the task and are written into a scratch folder of the worker,
     the stage runs there, and its files go back to the client with the summary."""
@@ -217,16 +233,16 @@ def _run_stage_detached(stage: Stage, inputs: dict[str, dict[str, bytes]],
                 (paths[dep] / rel).write_bytes(data)
         work = base / "work"
         work.mkdir()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), _cpu_now()
         summary = stage.func(work, paths, stage.config, _progress(stage, report))
-        seconds = time.perf_counter() - t0
-        return summary, seconds, folder_files(work)
+        seconds, cpu = time.perf_counter() - t0, _cpu_now() - c0
+        return summary, seconds, cpu, folder_files(work)
     finally:
         shutil.rmtree(base, ignore_errors=True)
 
 
 def _install(stage: Stage, root: Path, key: str, summary: dict, seconds: float,
-             files: dict[str, bytes]) -> None:
+             cpu_seconds: float, files: dict[str, bytes]) -> None:
     """Write what a detached stage sent back into its folder under ``root`` (client side)."""
     tmp = _stage_tmp(root, stage)
     try:
@@ -237,10 +253,34 @@ def _install(stage: Stage, root: Path, key: str, summary: dict, seconds: float,
                                 f"folder ({rel!r})")
             target.parent.mkdir(parents=True, exist_ok=True)
             target.write_bytes(data)
-        _seal(stage, key, tmp, summary, seconds)
+        _seal(stage, key, tmp, summary, seconds, cpu_seconds)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def chain_costs(stages: list[Stage]) -> dict[str, float]:
+    """Each stage's cost plus the costliest chain of stages that wait for it (its "bottom
+    level"): the order in which ready stages start (largest first), so that the long chains
+    and the long tasks never run last while the other workers idle."""
+    after: dict[str, list[str]] = {s.name: [] for s in stages}
+    for s in stages:
+        for d in s.depends:
+            after[d].append(s.name)
+    by_name = {s.name: s for s in stages}
+    out: dict[str, float] = {}
+
+    def level(name: str, seen: tuple = ()) -> float:
+        if name not in out:
+            if name in seen:
+                raise AcidError("pipeline has a dependency cycle: " + ", ".join(seen))
+            out[name] = float(by_name[name].cost) + max(
+                (level(a, (*seen, name)) for a in after[name]), default=0.0)
+        return out[name]
+
+    for s in stages:
+        level(s.name)
+    return out
 
 
 def run_pipeline(stages: list[Stage], root: Path, jobs: int = 1,
@@ -291,14 +331,18 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
     report = ex.reporter(on_progress or (lambda name, done, total: None), "stages")
     detached = ex.kind == "cluster"  # an existing cluster: no shared disk assumed
 
-    def finish(stage: Stage, summary: dict, seconds: float, cached: bool) -> None:
+    def finish(stage: Stage, summary: dict, seconds: float, cached: bool,
+               cpu: float = math.nan) -> None:
         out = StageOutcome(stage.name, stage.title, root / "stages" / stage.name, summary,
-                           seconds, cached, keys[stage.name])
+                           seconds, cached, keys[stage.name], cpu)
         outcomes[stage.name] = out
         if on_done:
             on_done(out)
 
-    while pending or running:
+    rank = chain_costs(stages)
+    queued: list[Stage] = []   # ready, not cached, waiting for a free worker
+    slots = max(1, int(getattr(ex, "workers", 1)))
+    while pending or running or queued:
         ready = [s for s in pending if all(d in outcomes for d in s.depends)]
         for s in ready:
             pending.remove(s)
@@ -306,11 +350,21 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
             workdir = root / "stages" / s.name
             rec, why = (None, "") if force else _check_record(workdir, keys[s.name])
             if rec is not None:
-                finish(s, rec["summary"], float(rec.get("seconds", 0.0)), True)
+                cpu = rec.get("cpu_seconds")   # absent in older records, None for NaN
+                finish(s, rec["summary"], float(rec.get("seconds", 0.0)), True,
+                       math.nan if cpu is None else float(cpu))
                 continue
             if why and notice is not None:
                 notice(f"stage {s.name}: the cached record in {workdir} was not reused ({why}: "
                        "tampered or damaged); recomputing it")
+            queued.append(s)
+        # one stage per free worker, the longest remaining chain first (the scheduler's own
+        # queue would start them in submission order); one worker: the order of ``stages``
+        # (no order shortens a serial run)
+        if slots > 1:
+            queued.sort(key=lambda q: -rank[q.name])
+        while queued and len(running) < slots:
+            s = queued.pop(0)
             inputs = {d: outcomes[d].workdir for d in s.depends}
             if on_start:
                 on_start(s.name)
@@ -329,9 +383,9 @@ def _run(stages, root, ex: Executor, on_start, on_progress, on_done, force, noti
         for fut in done:
             s = running.pop(fut)
             if detached:
-                summary, seconds, files = ex.result(fut)
-                _install(s, root, keys[s.name], summary, seconds, files)
+                summary, seconds, cpu, files = ex.result(fut)
+                _install(s, root, keys[s.name], summary, seconds, cpu, files)
             else:
-                summary, seconds = ex.result(fut)
-            finish(s, summary, seconds, False)
+                summary, seconds, cpu = ex.result(fut)
+            finish(s, summary, seconds, False, cpu)
     return outcomes

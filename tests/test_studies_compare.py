@@ -216,3 +216,20 @@ def test_the_engine_pieces_in_any_order_give_the_same_verdicts():
     again = cmp.assemble(sset, fams, S, tuning, held, [cmp.periodic_run(*t) for t in held],
                          min_scenarios=2, n_boot=200)
     assert again.verdicts == direct.verdicts
+
+
+def test_a_repeated_tail_is_taken_from_the_cache_and_equals_a_fresh_one():
+    """Every family's run from a scenario's common start prices the same start state: the
+    second call is a cache hit, and its energy equals the continuation run afresh."""
+    sc, st = _sc(30.0), dataclasses.replace(S, tail_s=120.0)
+    start = cmp.periodic_run(sc, "F", C2K(8.0), settings=S).end
+    cmp._tail_J.cache_clear()
+    first = cmp.tail_J(sc, start, "pi", st)
+    again = cmp.tail_J(sc, dict(reversed(list(start.items()))), "pi", st)
+    assert cmp._tail_J.cache_info().hits == 1
+    fresh = cmp._tail_J.__wrapped__(sc, tuple(sorted(start.items())), "pi", st.T_set, st.tail_s)
+    assert first == again == fresh
+    other = cmp.tail_J(sc, {**start, "T_cab": start["T_cab"] + 1.0}, "pi", st)
+    assert other != first                     # another state is no hit
+    with pytest.raises(cmp.ConfigError):
+        cmp.tail_J(sc, start, "nonsense", st)

@@ -38,6 +38,7 @@ Protocol (kelvin inside, degC at the edges):
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -360,24 +361,30 @@ def tail_J(sc: Scenario, state: dict, charge: str, settings: RunSettings) -> flo
     """Energy of the common continuation from ``state`` (J): ``settings.tail_s`` at the
     cycle's mean speed and ambient under ``charge`` (:data:`CHARGES`). The same state costs
     the same under one convention, so ``E + tail(end) - tail(start)`` charges a pass the
-    state it leaves behind."""
+    state it leaves behind. (Deterministic: a repeated call, as every family's run from a
+    scenario's common start makes, is answered from a small cache of this process.)"""
+    if charge not in CHARGES:
+        raise ConfigError(f"unknown charge convention {charge!r}")
+    return _tail_J(sc, tuple(sorted(state.items())), charge, float(settings.T_set),
+                   float(settings.tail_s))
+
+
+@functools.lru_cache(maxsize=64)
+def _tail_J(sc: Scenario, state: tuple, charge: str, T_set: float, tail_s: float) -> float:
     from acid.control.pi_baselines import PlantPI
     from acid.plant.hifi import HifiPlant, physical_state
     from acid.psychro import P_ATM
 
-    if charge not in CHARGES:
-        raise ConfigError(f"unknown charge convention {charge!r}")
     cfg, drive = sc.plant_config(), sc.drive()
     v, T_amb = float(np.mean(drive.v)), float(np.mean(drive.T_amb))
     plant = HifiPlant(cfg, mode="nominal" if charge == "own" else "direct")
-    plant.reset(physical_state(state))  # the tail's loops start from their own memory
-    ctrl = None if charge == "own" else PlantPI(cfg, drive.Ts, settings.T_set,
-                                                float(cfg.T_ew_set),
+    plant.reset(physical_state(dict(state)))  # the tail's loops start from their own memory
+    ctrl = None if charge == "own" else PlantPI(cfg, drive.Ts, T_set, float(cfg.T_ew_set),
                                                 float(getattr(cfg, "p_atm", P_ATM)))
     E = 0.0
-    for k in range(int(round(settings.tail_s / drive.Ts))):
+    for k in range(int(round(tail_s / drive.Ts))):
         if ctrl is None:
-            row = plant.step(0.0, 0.0, v, T_amb=T_amb, T_cab_set=settings.T_set)
+            row = plant.step(0.0, 0.0, v, T_amb=T_amb, T_cab_set=T_set)
         else:
             u = ctrl.make_step(plant.measure(), k)
             row = plant.step(float(u[0]), float(u[1]), v, T_amb=T_amb)
