@@ -25,7 +25,15 @@ def start(*args: str) -> subprocess.Popen:
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
-def wait_for(condition, timeout: float = 120.0) -> bool:
+#: how long a test waits for a command's progress (a stage started, a scenario finished) by
+#: default: a wait ends as soon as its condition holds, so this only bounds a run that never
+#: gets there. Generous on purpose: at load 20 on 2 cores ``acid reproduce --quick`` reaches
+#: its NMPC stage after several minutes, and a 120 s wait failed a test that had done nothing
+#: wrong.
+PROGRESS_TIMEOUT_S = 900.0
+
+
+def wait_for(condition, timeout: float = PROGRESS_TIMEOUT_S) -> bool:
     """Poll ``condition()`` every 50 ms until it is true (True) or ``timeout`` s (False)."""
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout:

@@ -71,7 +71,10 @@ def _left(pgid: int, timeout: float = 15.0) -> list[str]:
 
 def _wait_for_workers(p: subprocess.Popen, n: int = 2, timeout: float = 120.0) -> int:
     """Wait until the command has at least ``n`` worker processes (Python children beside
-    multiprocessing's resource tracker); the most seen."""
+    multiprocessing's resource tracker) or has ended; the most seen. In the full suite (beside
+    the reproduce fixture) the reproduce test's workers were not seen within 120 s twice, and
+    with a 900 s bound not before its run ended (172 s at load 3): a longer wait only buys a
+    whole reproduce run before the same skip."""
     seen = [0]
 
     def workers():
