@@ -1,4 +1,4 @@
-"""``acid heating-check``: the heating plant's credentials (issue 25), each beside a reference."""
+"""``acid heating-check``: the heating plant's credentials, each beside a reference."""
 
 from __future__ import annotations
 

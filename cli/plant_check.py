@@ -1,4 +1,4 @@
-"""``acid plant-check``: the plant's credentials (issue 9), each beside a published reference."""
+"""``acid plant-check``: the plant's credentials, each beside a published reference."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``acid year-sweep``: the whole year (issue 25): A/C, heat-pump and heater energy and the
+"""``acid year-sweep``: the whole year: A/C, heat-pump and heater energy and the
 share of range they cost, from -10 to 40 degC, over drive cycles, for the shipped vehicles."""
 
 from __future__ import annotations

@@ -50,7 +50,7 @@ from acid.paper import MODEL, PAPER_CITATION, STUDIES, TABLE_I, TABLE_II
 #: where Table I is judged (``acid.plant.vehicles``)
 _VEHICLE_NOTE = ("on the paper vehicle (the Table I calibration, example:"
                  "table_i_20cc.toml); acid's default vehicle beside it in the report")
-#: the mechanism of Table I, as measured (issue 21): stated once, here
+#: the mechanism of Table I, as measured: stated once, here
 TABLE_I_MECHANISM = (
     "Table I's level and flatness together need a capacity-limited compressor: the paper "
     "vehicle's runs at N_max for most of the 600 s, so its energy is its maximum power and "

@@ -701,7 +701,7 @@ class PlantCredential(JsonDataclass):
 @stage_result("plant_check")
 @dataclass(frozen=True)
 class PlantCheckStage(StageResult):
-    """``acid plant-check``: the high-fidelity plant's credentials (issue 9)."""
+    """``acid plant-check``: the high-fidelity plant's credentials."""
 
     passed: bool
     checks: tuple[PlantCredential, ...]
@@ -726,7 +726,7 @@ class PlantCheckStage(StageResult):
 
 @dataclass(frozen=True)
 class YearShare(JsonDataclass):
-    """One point of the whole-year sweep (issue 25): the climate's energy over one pass of
+    """One point of the whole-year sweep: the climate's energy over one pass of
     ``cycle`` from a soak at ``T_amb_C`` and the share of range it costs (0-1)."""
 
     T_amb_C: float
@@ -742,7 +742,7 @@ class YearShare(JsonDataclass):
 @stage_result("heating")
 @dataclass(frozen=True)
 class HeatingStage(StageResult):
-    """Winter (issue 25): the heating plant's credentials that need no logs
+    """Winter: the heating plant's credentials that need no logs
     (``acid heating-check`` without ``--logs``) and the whole-year sweep at a few ambients
     (``acid year-sweep``). acid's own checks, not the paper's claims."""
 

@@ -1,4 +1,4 @@
-"""Economic NMPC of the real car's A/C on the identified model ``car_ac`` (issue 20, item 5).
+"""Economic NMPC of the real car's A/C on the identified model ``car_ac``.
 
 The car's control input is the air temperature after the evaporator ``T_evap`` (the i3's
 A/C controller holds it; the logs show it between 5 degC, its floor while the compressor

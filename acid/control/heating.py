@@ -1,4 +1,4 @@
-"""The heating controllers (issue 25, deliverable 3): an economic NMPC, the simple rule and the
+"""The heating controllers: an economic NMPC, the simple rule and the
 heat-pump servo they share, on the heating plant; their comparison at equal comfort is
 :mod:`acid.studies.heating_control`.
 

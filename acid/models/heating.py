@@ -1,4 +1,4 @@
-"""Cabin heating from what a car records: ``--model heating`` (issue 25).
+"""Cabin heating from what a car records: ``--model heating``.
 
 The BMW i3 winter trips log the high-voltage coolant heater's electric power, the coolant at
 the heater's inlet and outlet, the air at the outlets (supply air), the cabin air (one sensor), the

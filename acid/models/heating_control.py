@@ -1,4 +1,4 @@
-"""The control-oriented heating model: ``heating_control`` (issue 25, deliverable 3).
+"""The control-oriented heating model: ``heating_control``.
 
 What the heating controller predicts with, declared once (the NMPC of
 ``acid.control.heating`` builds its optimal-control problem from it). Unlike ``heating``

@@ -1,6 +1,6 @@
 """Configuration of the high-fidelity plant: every parameter with its unit and its source.
 
-``PlantConfig()`` is the frozen default (second generation, issue 9). Every field's
+``PlantConfig()`` is the frozen default (second generation). Every field's
 ``source`` names a reference key of ``datasets/plant/SOURCES.md`` (full bibliographic detail
 there), the paper ([Wang2018]), or says *assumption* with its reason; the few *calibrated*
 ones (UA_ca0) stay inside a stated range. The calibration targets E(0) of the paper's Table I

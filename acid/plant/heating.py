@@ -1,4 +1,4 @@
-"""The heating plant (issue 25): coolant heater, heat pump with frost and defrost, windscreen
+"""The heating plant: coolant heater, heat pump with frost and defrost, windscreen
 fogging and a production heating controller, on the cooling plant's cabin.
 
 Air path (blower flow W, recirculated fraction r):

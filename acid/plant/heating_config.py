@@ -1,4 +1,4 @@
-"""Configuration of the heating plant (issue 25): every parameter with its unit and its source.
+"""Configuration of the heating plant: every parameter with its unit and its source.
 
 ``HeatingConfig()`` holds what winter adds to the cooling plant's ``PlantConfig``: the
 high-voltage coolant heater with its coolant loop and heater core (as in the logged BMW i3),

@@ -1,4 +1,4 @@
-"""``acid excite --plant heating``: identification data from the heating plant (issue 25).
+"""``acid excite --plant heating``: identification data from the heating plant.
 
 The declared model ``heating`` (``acid/models/heating.py``) reads what the logged BMW i3
 records: the heater's electric power, the coolant, the supply and cabin air, the ambient and

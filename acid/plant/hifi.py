@@ -1,6 +1,6 @@
 """The high-fidelity A/C + cabin plant: acid's open stand-in for NREL's CoolSim (PLANT.md).
 
-Second generation (issue 9). Quasi-static refrigerant cycle (``acid.plant.cycle``: compressor
+Second generation. Quasi-static refrigerant cycle (``acid.plant.cycle``: compressor
 map in speed and pressure ratio, inverter + motor losses, refrigerant-side UA ~ m_r^0.8,
 suction-line drop) + dynamic thermal masses, integrated at a fixed internal step ``dt_int``
 (default 0.5 s) inside each 5 s sample:

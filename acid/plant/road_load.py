@@ -1,4 +1,4 @@
-"""Road load and traction energy of an i3-class electric car over a drive cycle (issue 25).
+"""Road load and traction energy of an i3-class electric car over a drive cycle.
 
 acid's plants model the climate system, not the car's motion; the whole-year study
 (``acid.plant.year``) needs the traction energy of each drive cycle to say what share of the

@@ -1,4 +1,4 @@
-"""The whole year (issue 25): climate energy and the share of range it costs, from -10 to
+"""The whole year: climate energy and the share of range it costs, from -10 to
 40 degC, over drive cycles, for the shipped vehicles, with and without the heat pump.
 
 Each point is one pass of a drive cycle (``acid.signals``, at the plant's 5 s sample) from a

@@ -348,5 +348,5 @@ def _plant_check(r: PlantCheckStage) -> ReportSection:
         rows=rows)
 
 
-# the heating section (issue 25) registers itself on import (acid/report/heating.py)
+# the heating section registers itself on import (acid/report/heating.py)
 from acid.report import heating as _heating  # noqa: E402, F401

@@ -1,4 +1,4 @@
-"""The real car's A/C under economic NMPC (issue 20, item 5): the study.
+"""The real car's A/C under economic NMPC: the study.
 
 Three steps, each returning a result object (no printing):
 

@@ -66,7 +66,7 @@ its SQP compiles in 10 CPU-s at -O2 (it runs every step: ``hot``) against 32 at 
 ``solver="fatrop"`` (the previous default) or ``"ipopt"``
 solve the same NLP. The NLP is built once through
 :func:`_make_solver`, which hands it to
-:class:`acid.control.codegen.solver.NLPSolver` (issue 13): generated C compiled at first use and
+:class:`acid.control.codegen.solver.NLPSolver`: generated C compiled at first use and
 cached per user when a C compiler works (``compiled="auto"``; CasADi otherwise, the same algorithm),
 with a wall-clock cap per solve only when ``max_solve_s`` asks for one. The identified
 parameters are NLP *parameters* (the declaration's vector,

@@ -72,7 +72,7 @@ SOAK_OFFSETS_K = {"T_cab": 0.0, "T_int": 13.0, "T_int_slow": 0.0, "T_shell": -3.
 NA = "not available on this plant"
 
 #: what the search behind the paper vehicle (``datasets/plant/table_i_20cc.toml``) did and
-#: did not establish (issue 21)
+#: did not establish
 SEARCH_NOTE = ("The paper vehicle (--plant-config paper, example:table_i_20cc.toml) meets "
                "every published test here (Table I, the GT-R service chart, JAF 2016); it "
                "came from about 1,000 parameter sets (960 random, then a local search) "

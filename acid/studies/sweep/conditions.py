@@ -11,7 +11,7 @@ Mapping onto the current ``PlantConfig``
 * ambient -> ``T_amb``; humidity -> ``RH_amb`` (fraction); refrigerant -> ``refrigerant``;
   set-point -> ``T_cab_set`` (the nominal controller's target).
 * solar irradiance ``G``: a plant configuration with an irradiance field (``G_solar``,
-  W/m2; the plant of issue 9) takes it as is; the current one has two absorbed solar gains
+  W/m2; the second-generation plant) takes it as is; the current one has two absorbed solar gains
   whose default corresponds to ``G_REF = 800 W/m2`` (``Q_solar_shell``: "1.5 m^2 roof x
   800 W/m^2 x 0.6 + sides"), scaled by ``G / G_REF``.
 * the hot soak the plant starts from follows the climate: the evaporator and condenser
