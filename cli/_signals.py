@@ -100,6 +100,7 @@ class InterruptGuard:
         self._count = 0
         self._saved: dict[int, object] = {}
         self._pid = os.getpid()
+        self._hook = None
 
     @property
     def exit_code(self) -> int:
@@ -123,7 +124,16 @@ class InterruptGuard:
                     self._saved[sig] = signal.signal(sig, self._handler)
                 except (ValueError, OSError):
                     pass
+            # a signal landing in a callback Python cannot raise from (a weakref or __del__
+            # during shutdown) is "ignored" with a traceback: keep the note, drop the trace
+            self._hook = sys.unraisablehook
+            sys.unraisablehook = self._unraisable
         return self
+
+    def _unraisable(self, unraisable) -> None:
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            return
+        (self._hook or sys.__unraisablehook__)(unraisable)
 
     @property
     def installed(self) -> bool:
@@ -139,3 +149,6 @@ class InterruptGuard:
             except (ValueError, OSError):
                 pass
         self._saved.clear()
+        if self._hook is not None:
+            sys.unraisablehook = self._hook
+            self._hook = None
