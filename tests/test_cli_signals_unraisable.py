@@ -3,7 +3,7 @@ command runs: no "Exception ignored" traceback is reported; other unraisable err
 are, and the hook is restored when the command ends."""
 import sys
 
-from cli._signals import InterruptGuard
+from acid_cli._signals import InterruptGuard
 
 
 class _Raises:
