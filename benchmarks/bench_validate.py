@@ -45,7 +45,7 @@ def warm_start_times(starts: list[int], params: str | None) -> list[dict]:
 
             res = validate_model(model, ds, values, starts=n, horizon=300, warmup=60,
                                  hold=("T_amb",), start_range=(lo, len(ds)),
-                                 warm_start=how, progress=progress)
+                                 warm_start=how, progress=progress, yardsticks=False)
             at = next(i for i, m in enumerate(marks) if m[0].startswith("latent states"))
             rows.append({"starts": int(res.starts.size), "warm_start": how,
                          "cpu_s": marks[at][1] - marks[at - 1][1],

@@ -366,7 +366,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
         base = len(set(est.experiment.tolist()))
         ds = Dataset.concatenate([est, ds])
         lo, hi, estimation = n_est + lo, n_est + hi, (0, n_est)
-    if ps.per_experiment and record:
+    if ps.per_experiment and record is not None:
         # this record's own per-experiment values: the fit numbered the experiments of its
         # records in turn; DATA's k-th experiment is the fit's offset + k, here base + k
         ids = own if est is None else range(base, base + len(own))
@@ -394,6 +394,7 @@ def validate_declared(data: Path, model_file: str, params: str, json_path: Path 
                 warnings.simplefilter("ignore")  # the same windows: warned about below
                 other = validate_model(other_model, ds, beside, **{
                     **kw, "start_index": res.starts, "non_overlapping": False,
+                    "yardsticks": False,
                     "hold": tuple(d.name for d in other_model.disturbances)
                     if hold_all else ()})
             step(f"beside: {beside.label} validated on the same starts")
@@ -600,16 +601,23 @@ def _fit_records(ps, data_sha: str) -> Dataset | None:
     """The records the parameters were fitted on (their provenance), when they are not the
     validation data and are all here: the yardsticks' estimation data."""
     records = [Path(r) for r in ps.provenance.get("records") or []]
-    if not records or not all(r.is_file() for r in records) \
-            or ps.provenance.get("data_sha256") == data_sha:
-        return None
-    records = [r for r in records if file_sha256(r) != data_sha]   # never DATA itself
-    if not records:
+    if not records or not all(r.is_file() for r in records):
         return None
     frac = ps.provenance.get("estimation_fraction")
+    split = isinstance(frac, (int, float)) and 0.0 < float(frac) < 1.0
+    if not split:
+        # fitted on whole records: never DATA itself (its validation is in-sample anyway)
+        if ps.provenance.get("data_sha256") == data_sha:
+            return None
+        records = [r for r in records if file_sha256(r) != data_sha]
+        if not records:
+            return None
+    # fitted on the first F of each record: the yardsticks on exactly those samples, DATA's
+    # own estimation part included (its held-out part is what is scored)
     parts = [Dataset.from_hdf5(r, min_samples=2) for r in records]
-    if isinstance(frac, (int, float)) and 0.0 < float(frac) < 1.0:
+    if split:
         parts = [p.split(float(frac))[0] for p in parts]     # their estimation part only
     est = parts[0] if len(parts) == 1 else Dataset.concatenate(parts)
-    est.source = ", ".join(map(str, records))
+    est.source = ", ".join(map(str, records)) + (f" (the first {100 * float(frac):g} % of "
+                                                 "each)" if split else "")
     return est

@@ -94,7 +94,7 @@ def test_validation_to_the_trips_end_scores_only_reached_horizons_and_yardsticks
     # the yardsticks fitted on the estimation trips, placed before the validation trip
     both, n_est = Dataset.concatenate([est, val]), len(est)
     res = validate_model(m, both, ps, starts=10, horizon=300, warmup=30, to_end=True,
-                         yardsticks=True, estimation=(0, n_est),
+                         yardsticks=True, estimation=(0, n_est), hold=(),
                          start_range=(n_est, len(both)))
     assert (res.starts >= n_est + 30).all()
     e = res.errors["T_cab"]

@@ -57,6 +57,7 @@ def test_each_record_is_validated_with_its_own_values_on_its_held_out_part(
     recs, params = two_record_fit
     text, d = _validate(recs[k], params, tmp_path, capsys)
     assert "their mean is used" not in text
+    assert f"this record's own values (record {k + 1} of the fit)" in text
     assert d["channels"]["T_cab"]["max_abs"] < 0.05       # the mean (1000 W) is far off
     # only the part after the fit's estimation half is scored
     assert d["held_out_fraction_source"] == "params provenance"
@@ -69,14 +70,14 @@ def test_each_record_is_validated_with_its_own_values_on_its_held_out_part(
 def test_the_yardsticks_are_fitted_on_the_estimation_part_only(two_record_fit, tmp_path,
                                                              capsys):
     recs, params = two_record_fit
-    # record 2: fitted on record 1's estimation half (placed before it), never on itself
-    text, d = _validate(recs[1], params, tmp_path, capsys)
-    assert d["settings"]["yardsticks_fitted_on"] == [0, N // 2]
-    assert "yardsticks fitted on the parameters' records" in text
-    # record 1: on its own estimation half
-    text, d = _validate(recs[0], params, tmp_path, capsys)
-    assert d["settings"]["yardsticks_fitted_on"] == [0, N // 2]
-    assert "(the estimation part)" in text
+    # each record: the yardsticks fitted on the first half of both records (what the
+    # parameters were fitted on, placed before DATA), never on a held-out half
+    for k in (1, 0):
+        text, d = _validate(recs[k], params, tmp_path, capsys)
+        assert d["settings"]["yardsticks_fitted_on"] == [0, N]
+        assert "the first 50 % of each" in text and "(the estimation part)" in text
+        lo, hi = d["settings"]["sample_range"]
+        assert (lo, hi) == (N + N // 2, 2 * N)        # DATA's held-out half, after them
 
 
 def test_an_in_sample_request_is_marked(two_record_fit, tmp_path, capsys):

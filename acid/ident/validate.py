@@ -33,6 +33,7 @@ from acid.errors import ConfigError, DataError
 from acid.ident.data import ModelData
 from acid.ident.oe import simulate_windows
 from acid.ident.validation import DeclaredValidation
+from acid.ident.yardsticks import estimation_ranges
 from acid.metrics import fit_percent, max_abs_error, rmse
 from acid.models.declaration import Model
 from acid.models.loader import BUILT_IN, load
@@ -135,10 +136,11 @@ def held_out_start(n: int, fraction: float | None) -> int:
 def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: int = 60,
                    placement: str = "even", seed: int = 0,
-                   horizons: tuple[int, ...] | None = None, hold: tuple[str, ...] = (),
+                   horizons: tuple[int, ...] | None = None,
+                   hold: tuple[str, ...] | None = None,
                    start_index=None, non_overlapping: bool = False,
-                   start_range: tuple[int, int] | None = None, yardsticks: bool = False,
-                   estimation: tuple[int, int] | None = None,
+                   start_range=None, yardsticks: bool = True,
+                   estimation=None,
                    to_end: bool = False, warm_start: str = "fit",
                    progress: Callable[[int, int, str], None] | None = None
                    ) -> DeclaredValidation:
@@ -147,14 +149,24 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     ``params``: a fit (``DeclaredFitResult``), any ``ParameterValues`` or None (the declared
     values).
 
+    The defaults are ``acid validate``'s: every disturbance held, the yardsticks on.
+
     ``hold``: disturbances held at their value at the start (the paper's protocol for T_int
-    and T_shell) instead of measured along the prediction. ``start_index``: these start
-    samples instead of ``starts`` placed by ``placement`` (e.g. another study's windows).
+    and T_shell) instead of measured along the prediction; None (the default, as ``acid
+    validate --exogenous hold``) holds every disturbance, ``()`` measures them all
+    (``--exogenous measured``). ``start_index``: these start samples instead of ``starts``
+    placed by ``placement`` (e.g. another study's windows).
     ``non_overlapping``: starts at least ``horizon + 1`` samples apart.
     ``start_range`` (lo, hi): every window inside samples lo .. hi - 1 (e.g. the held-out
-    part). ``yardsticks``: persistence, ARX and subspace (``acid.ident.yardsticks``) on the same
-    windows, given the same inputs and held disturbances, fitted on ``estimation`` (lo, hi)
-    samples (default: the whole record, in-sample). ``to_end``: a start may lie less than
+    part), or a list of such ranges (the second half of each record). ``yardsticks``
+    (default True, as the CLI): persistence, ARX and subspace (``acid.ident.yardsticks``) on
+    the same windows, given the same inputs and held disturbances, fitted on
+    ``estimation``. ``estimation``: the samples the parameters were fitted on, as (lo, hi),
+    a list of (lo, hi) ranges of ``ds`` (the first half of each record), or the estimation
+    ``Dataset`` itself (what was given to ``fit_model``): the yardsticks are fitted on
+    exactly those samples, and with a ``Dataset`` every window that would score a sample of
+    it (in-sample) is left out, with a note. Default: the whole record, in-sample, with a
+    note. ``to_end``: a start may lie less than
     ``horizon`` samples before its experiment's end (at least ``horizon // 25`` steps, 60 s
     of 300 x 5 s); its prediction stops there, and the errors per prediction time count only
     the starts that reach it (short trips). Censored samples (a ``<channel>_censored`` mask)
@@ -164,6 +176,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     finished; it reads nothing back, so every number is the same with or without it.
     """
     model = load(model)
+    if hold is None:
+        hold = tuple(d.name for d in model.disturbances)
     unknown = [h for h in hold if h not in [d.name for d in model.disturbances]]
     if unknown:
         raise ConfigError(f"hold: {unknown[0]!r} is not a disturbance of model "
@@ -185,10 +199,31 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     latent = [i for i, s in enumerate(model.states) if not s.measured]
     need_warm = warmup if latent else 0
     step = _Steps(progress, 3 + bool(latent and need_warm > 0) + bool(yardsticks))
-    lo_r, hi_r = start_range or (0, len(data))
+    ranges = [(0, len(data))] if start_range is None else \
+        estimation_ranges(start_range, len(data))
+    lo_r, hi_r = ranges[0][0], ranges[-1][1]
     reach = max(1, horizon // 25) if to_end else horizon
-    cand = np.concatenate([np.arange(max(a, lo_r) + need_warm, min(b, hi_r) - reach)
-                           for a, b in data.segments] + [np.zeros(0, int)]).astype(int)
+    cand = np.concatenate([np.arange(max(a, lo) + need_warm, min(b, hi) - reach)
+                           for a, b in data.segments for lo, hi in ranges]
+                          + [np.zeros(0, int)]).astype(int)
+    est_data, notes_pre = None, []
+    if isinstance(estimation, Dataset):
+        est_data = ModelData.of(model, estimation, min_samples=2)
+        fitted = _rows_in(data, est_data)
+        if fitted.any() and start_index is None:
+            # a window scoring a sample the parameters were fitted on is in-sample: left out
+            ends = np.array([b for _, b in data.segments])
+            stop = np.minimum(cand + horizon, ends[np.searchsorted(ends, cand, side="right")]
+                              - 1)
+            seen = np.concatenate([[0], np.cumsum(fitted)])
+            keep = seen[stop + 1] - seen[cand] == 0     # the start's own sample too
+            if not keep.all():
+                notes_pre.append(f"{int(fitted.sum())} of {len(data)} samples are the estimation "
+                             f"data's: {int((~keep).sum())} of {cand.size} candidate starts "
+                             "whose windows score them were left out (in-sample)")
+            cand = cand[keep]
+    elif estimation is not None:
+        estimation = estimation_ranges(estimation, len(data))
     if cand.size == 0:
         raise DataError(f"{ds.source}: record too short: no experiment is longer than "
                         f"warmup + horizon "
@@ -219,7 +254,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                           f"{MAX_PREDICTION_SAMPLES:.0e}: lower --starts or --horizon")
     step(f"{k0.size} starts placed")
     gaps = np.diff(np.sort(k0))
-    notes = [f"window design: {k0.size} starts, spacing "
+    notes = [*notes_pre, f"window design: {k0.size} starts, spacing "
              + (f"{np.median(gaps) * model.Ts:g} s (median, min {gaps.min() * model.Ts:g} s)"
                 if gaps.size else "one start")
              + f", horizon {horizon * model.Ts:g} s, "
@@ -310,17 +345,21 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     ys = {}
     if yardsticks:
         ys = _yardsticks(model, data0, rows, k0, horizon, hold, steps,
-                         estimation or (0, len(data0)), inside)
+                         None if est_data is not None else estimation or [(0, len(data0))],
+                         inside, est_data)
         step(f"yardsticks predicted ({', '.join(ys) or 'none'})")
         if estimation is None:
             notes.append("yardsticks fitted on the whole record (in-sample: favoured)")
+        elif est_data is not None:
+            notes.append(f"yardsticks fitted on the estimation data ({len(est_data)} "
+                         "samples, not scored)")
     settings = {"params": params.label, "model": model.name,
                 "params_provenance": params.provenance, "hold": tuple(hold),
                 "sample_range": [int(lo_r), int(hi_r)], "placement": placement,
                 "seed": seed if placement == "random" else None,
                 "non_overlapping": bool(non_overlapping), "starts_requested": int(starts),
                 "data_source": ds.source, "data_samples": len(ds),
-                "yardsticks_fitted_on": list(estimation or (0, len(data0)))
+                "yardsticks_fitted_on": _fitted_on(estimation, est_data, len(data0))
                 if yardsticks else None}
     pick = [c for c, _ in rows]
     return DeclaredValidation(model=model.name, channels=tuple(channels), units=tuple(units),
@@ -414,8 +453,28 @@ def by_time(errors: dict, Ts: float, times_s=REPORT_TIMES_S) -> dict:
     return out
 
 
+def _rows_in(data: ModelData, other: ModelData) -> np.ndarray:
+    """(N,) bool: the samples of ``data`` whose every value (states, inputs, disturbances,
+    outputs) equals a sample of ``other`` (the same measurement: in-sample)."""
+    def rows(d):
+        a = np.ascontiguousarray(np.concatenate([d.x, d.u, d.d, d.y], axis=1))
+        return [r.tobytes() for r in a]
+    seen = set(rows(other))
+    return np.array([r in seen for r in rows(data)], dtype=bool)
+
+
+def _fitted_on(estimation, est_data, n: int):
+    """What the yardsticks were fitted on, for the settings: [lo, hi], a list of them, or
+    {"estimation_data": samples}."""
+    if est_data is not None:
+        return {"estimation_data_samples": len(est_data)}
+    ranges = estimation or [(0, n)]
+    return [int(v) for v in ranges[0]] if len(ranges) == 1 else \
+        [[int(lo), int(hi)] for lo, hi in ranges]
+
+
 def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, steps,
-                estimation, inside) -> dict:
+                estimation, inside, est_data: ModelData | None = None) -> dict:
     """Persistence, ARX and subspace (``acid.ident.yardsticks``) on the model's windows: the same
     inputs and disturbances (held as the model has them), predicting the measured channels
     that are recorded throughout; RMSE and p90 |e| overall and at ``steps``."""
@@ -434,8 +493,18 @@ def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, ste
     # windows that stop at their experiment's end (to_end) read past the record's last
     # sample: it is repeated there, and those steps are not scored
     pad = np.arange(len(data) + horizon + 1).clip(max=len(data) - 1)
-    for name, pred in evaluate(y[pad], u[pad], data.experiment[pad], k0, horizon, held,
-                               estimation, input_names=names).items():
+    y, u, exp, k = y[pad], u[pad], data.experiment[pad], k0
+    if est_data is not None:
+        # the estimation data placed before the validated record, as experiments of its own
+        est_y = np.concatenate([est_data.x, est_data.y], axis=1)[:, [c for c, _ in use]]
+        if not np.all(np.isfinite(est_y)):
+            return {}
+        y = np.concatenate([est_y, y])
+        u = np.concatenate([np.concatenate([est_data.u, est_data.d], axis=1), u])
+        exp = np.concatenate([est_data.experiment, exp + est_data.experiment.max() + 1])
+        k, estimation = k0 + len(est_data), [(0, len(est_data))]
+    for name, pred in evaluate(y, u, exp, k, horizon, held, estimation,
+                               input_names=names).items():
         idx = np.minimum(k0[:, None] + np.arange(1, horizon + 1)[None, :], len(data) - 1)
         e = np.where(inside[:, 1:, None], pred.predicted[:, 1:, :] - obs[idx], np.nan)
         out[name] = {
@@ -446,11 +515,16 @@ def _yardsticks(model: Model, data: ModelData, rows, k0, horizon: int, hold, ste
                                               "p90_abs": _nan_p90(e[:, h - 1, j])}
                                           for j, (_, n) in enumerate(use)}} for h in steps],
             "by_time": by_time({n: e[..., j] for j, (_, n) in enumerate(use)}, model.Ts),
-            "rmse_by_step": {n: np.sqrt(np.nanmean(e[..., j] ** 2, axis=0))
-                             for j, (_, n) in enumerate(use)},
+            "rmse_by_step": {n: _rms_by_step(e[..., j]) for j, (_, n) in enumerate(use)},
             # (starts, horizon) errors on the model's windows (paired comparisons)
             "errors": {n: e[..., j] for j, (_, n) in enumerate(use)}}
     return out
+
+
+def _rms_by_step(e: np.ndarray) -> np.ndarray:
+    """(H,) RMS over the starts at each step, NaN where no start reaches it (to_end)."""
+    n = np.isfinite(e).sum(axis=0)
+    return np.where(n > 0, np.sqrt(np.nansum(e ** 2, axis=0) / np.maximum(n, 1)), np.nan)
 
 
 def _nan_rms(e: np.ndarray) -> float:

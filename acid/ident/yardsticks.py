@@ -48,6 +48,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acid.errors import ConfigError
+
 #: The yardsticks, in the order they are reported.
 YARDSTICKS = ("persistence", "arx", "subspace")
 #: ARX orders tried (na and nb each).
@@ -349,7 +351,7 @@ def fit_subspace(y: np.ndarray, u: np.ndarray, segment: tuple[int, int],
 
 # ----------------------------------------------------------------------- evaluate
 def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarray,
-             horizon: int, held: np.ndarray, estimation: tuple[int, int],
+             horizon: int, held: np.ndarray, estimation,
              names=YARDSTICKS, input_names: tuple[str, ...] | None = None
              ) -> dict[str, YardstickPrediction]:
     """The yardsticks' predictions over the windows ``k0 .. k0 + horizon``.
@@ -362,7 +364,8 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
     experiment : (N,) experiment id of each sample.
     k0 : (S,) start indices; horizon : H steps.
     held : (nu,) bool, inputs held at their value at ``k0`` over a window (as the model).
-    estimation : (lo, hi) samples the fitted yardsticks are fitted on.
+    estimation : (lo, hi) samples the fitted yardsticks are fitted on, or a list of such
+        ranges (e.g. the first half of each record).
     names : which yardsticks.
     input_names : names of the columns of ``u`` (for the settings).
 
@@ -381,12 +384,13 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
     fitted = [n for n in names if n in ("arx", "subspace")]
     if not fitted:
         return out
-    lo, hi = estimation
-    seg = _segments(experiment[lo:hi], lo)
+    ranges = estimation_ranges(estimation, y.shape[0])
+    seg = [s for lo, hi in ranges for s in _segments(experiment[lo:hi], lo)]
     seg = [(a, b) for a, b in seg if b - a >= MIN_ESTIMATION_SAMPLES]
     if not seg:
+        text = ", ".join(f"{lo}..{hi - 1}" for lo, hi in ranges)
         warnings.warn(f"yardsticks ARX and subspace left out: the estimation part (samples "
-                      f"{lo}..{hi - 1}) has no experiment of {MIN_ESTIMATION_SAMPLES} samples",
+                      f"{text}) has no experiment of {MIN_ESTIMATION_SAMPLES} samples",
                       UserWarning, stacklevel=2)
         return out
     est = np.concatenate([np.arange(a, b) for a, b in seg])
@@ -395,7 +399,8 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
     yz, uz = ys(y), us(u[:, keep])
     first = segment_first(experiment)
     used = [n for n, k in zip(input_names, keep, strict=True) if k]
-    common = {"estimation_samples": [int(lo), int(hi)],
+    common = {"estimation_samples": [int(v) for v in ranges[0]] if len(ranges) == 1
+              else [[int(lo), int(hi)] for lo, hi in ranges],
               "estimation_used": [[int(a), int(b)] for a, b in seg],
               "inputs": used,
               "held_inputs": [n for n, h, k in zip(input_names, held, keep, strict=True)
@@ -447,6 +452,23 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
                  "order_scores": scores,
                  "rule": f"{rule}; orders 1..{max(SUBSPACE_ORDERS)}"})
     return out
+
+
+def estimation_ranges(estimation, n: int) -> list[tuple[int, int]]:
+    """``estimation`` as a list of (lo, hi) sample ranges inside 0 .. n: one (lo, hi) pair
+    or a sequence of them (e.g. the first half of each record), sorted, empty ones dropped."""
+    pairs = [estimation] if len(estimation) == 2 and all(
+        np.ndim(v) == 0 for v in estimation) else list(estimation)
+    out = []
+    for p in pairs:
+        if len(p) != 2:
+            raise ConfigError(f"estimation: a range is (lo, hi), got {p!r}")
+        lo, hi = max(0, int(p[0])), min(n, int(p[1]))
+        if hi > lo:
+            out.append((lo, hi))
+    if not out:
+        raise ConfigError(f"estimation: no samples inside 0..{n - 1} in {estimation!r}")
+    return sorted(out)
 
 
 def _segments(experiment: np.ndarray, offset: int) -> list[tuple[int, int]]:

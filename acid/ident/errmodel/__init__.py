@@ -152,9 +152,9 @@ def validate_with_error_model(model, ds, params, *, n_estimation: int, channel: 
     from acid.ident.crossval import interval_tables
     from acid.ident.validate import validate_model
 
-    opts = dict(validate_options)
+    opts = {"hold": (), **validate_options}
     est = validate_model(model, ds, params, **{**opts, "starts": fit_starts},
-                         start_range=(0, n_estimation))
+                         start_range=(0, n_estimation), yardsticks=False)
     ch = channel or next((c for c, u in zip(est.channels, est.units, strict=True) if u == "K"),
                          est.channels[0])
     em = fit_residual_model(est, ch)
