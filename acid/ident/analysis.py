@@ -61,7 +61,7 @@ Z99 = 2.5758293035489004
 
 
 # ------------------------------------------------------------------------- results
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False, eq=False)
 class PredictionResult:
     """k-step-ahead predictions along a dataset.
 
@@ -135,15 +135,48 @@ class PredictionResult:
                              title or f"{self.label} prediction ({self.source})",
                              self.units)
 
+    def summary(self) -> str:
+        """One line per channel: fit % and RMSE over the predicted samples."""
+        lines = [f"{self.label} prediction of {self.model!r} on {self.source} "
+                 f"({int(self.valid.sum())} of {self.time.size} samples predicted)"]
+        lines += [f"  {c} [{u}]: fit {self.fit_percent[c]:.2f} %, RMSE {self.rmse[c]:.4g}"
+                  for c, u in zip(self.channels, self.units, strict=True)]
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"PredictionResult(\n{self.summary()}\n)"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, PredictionResult) and \
+            self.to_json_dict() == other.to_json_dict()
+
+    __hash__ = None
+
     def to_json_dict(self) -> dict:
+        """The scores and every sample (``time_s``, ``measured``, ``predicted``; NaN as null):
+        ``PredictionResult.from_json_dict`` reads it back."""
         return json_safe({"horizon": self.horizon, "Ts_s": self.Ts, "model": self.model,
                           "source": self.source, "fit_percent": self.fit_percent,
                           "rmse": self.rmse, "units": dict(zip(self.channels, self.units,
                                                                strict=True)),
-                          "samples": int(self.valid.sum())})
+                          "samples": int(self.valid.sum()), "channels": self.channels,
+                          "time_s": self.time, "measured": self.measured,
+                          "predicted": self.predicted})
+
+    @classmethod
+    def from_json_dict(cls, d: dict) -> PredictionResult:
+        """The result ``to_json_dict`` wrote (NaN restored)."""
+        chans = tuple(d["channels"])
+        shape = (-1, len(chans))
+        return cls(time=np.array(d["time_s"], dtype=float),
+                   measured=np.array(d["measured"], dtype=float).reshape(shape),
+                   predicted=np.array(d["predicted"], dtype=float).reshape(shape),
+                   horizon=d["horizon"], Ts=float(d["Ts_s"]), model=d["model"],
+                   source=d["source"], channels=chans,
+                   units=tuple(d["units"][c] for c in chans))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False, eq=False)
 class CompareResult:
     """Several models against one dataset (MATLAB ``compare``).
 
@@ -179,11 +212,39 @@ class CompareResult:
                              title or f"compare: {label} ({first.source})",
                              first.units)
 
+    def summary(self) -> str:
+        """Fit % per model (rows) and channel (columns)."""
+        first = next(iter(self.predictions.values()))
+        label = "simulation" if self.horizon is None else f"{self.horizon}-step prediction"
+        w = max(12, *(len(k) for k in self.predictions))
+        lines = [f"compare: {label} on {first.source}, fit % (100 is perfect)",
+                 f"  {'model':{w}s}" + "".join(f"{c:>12s}" for c in first.channels)]
+        lines += [f"  {k:{w}s}" + "".join(f"{v.get(c, math.nan):12.2f}" for c in first.channels)
+                  for k, v in self.fit_percent.items()]
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"CompareResult(\n{self.summary()}\n)"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, CompareResult) and \
+            self.to_json_dict() == other.to_json_dict()
+
+    __hash__ = None
+
     def to_json_dict(self) -> dict:
-        return json_safe({"horizon": self.horizon, "fit_percent": self.fit_percent})
+        """Fit % per model and each model's predictions (``from_json_dict`` reads it back)."""
+        return json_safe({"horizon": self.horizon, "fit_percent": self.fit_percent,
+                          "predictions": {k: p.to_json_dict()
+                                          for k, p in self.predictions.items()}})
+
+    @classmethod
+    def from_json_dict(cls, d: dict) -> CompareResult:
+        return cls({k: PredictionResult.from_json_dict(p) for k, p in d["predictions"].items()},
+                   d["horizon"])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False, eq=False)
 class ResidualResult:
     """Residual analysis (MATLAB ``resid``): whiteness and independence from the inputs.
 
@@ -338,8 +399,47 @@ class ResidualResult:
                               f"({self.prediction.model}, N = {self.n})")
         return fig
 
+    def summary(self) -> str:
+        """Per channel: white or not, the inputs it correlates with, what that means."""
+        lines = [f"resid: {self.prediction.label} prediction errors of "
+                 f"{self.prediction.model!r}, N = {self.n}, 99 % band +-{self.band99:.3f}"]
+        for c in self.channels:
+            dep = [u for u in self.inputs if not self.independent[u][c]]
+            lines.append(f"  {c}: {'white' if self.white[c] else 'not white'}, Ljung-Box p "
+                         f"{self.ljung_box[c]['p_value']:.2g}, correlated with "
+                         f"{', '.join(dep) or 'no input'}")
+            lines.append(f"    {self.interpretation[c]}")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"ResidualResult(\n{self.summary()}\n)"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, ResidualResult) and \
+            self.to_json_dict() == other.to_json_dict()
+
+    __hash__ = None
+
+    @classmethod
+    def from_json_dict(cls, d: dict) -> ResidualResult:
+        """The result ``to_json_dict`` wrote (with its predictions)."""
+        pr = PredictionResult.from_json_dict(d["prediction"])
+        arr = lambda k: np.array(d[k], dtype=float)   # noqa: E731
+        ni = len(d["inputs"])
+        return cls(pr, arr("lags").astype(int), arr("cross_lags").astype(int),
+                   arr("autocorrelation").reshape(-1, len(pr.channels)),
+                   arr("cross_correlation").reshape(-1, ni, len(pr.channels)),
+                   float(d["band99"]), int(d["n"]),
+                   {c: {k: (math.nan if v is None else v) for k, v in t.items()}
+                    for c, t in d["ljung_box"].items()},
+                   tuple(d["inputs"]), pr.channels, dict(d.get("settings") or {}))
+
     def to_json_dict(self) -> dict:
+        """The tests, their verdicts and the predictions they come from (``prediction``):
+        ``ResidualResult.from_json_dict`` reads it back."""
         return json_safe({"horizon": self.prediction.horizon, "n": self.n,
+                          "prediction": self.prediction.to_json_dict(),
+                          "inputs": self.inputs, "settings": self.settings,
                           "band99": self.band99, "white": self.white,
                           "independent": self.independent, "ljung_box": self.ljung_box,
                           "interpretation": self.interpretation,
