@@ -21,6 +21,8 @@ argument (kelvin, except the degC bounds of ``ExcitationSpec``); ``acid.degC(25)
 ``acid.kelvin(298.15)`` are unit-aware values accepted by either.
 """
 
+import sys
+import types
 from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
 
@@ -90,3 +92,18 @@ def __getattr__(name: str):
 
 def __dir__():
     return sorted(set(globals()) | set(_API))
+
+
+class _Package(types.ModuleType):
+    """``acid`` whose exported functions stay functions when a submodule of the same name
+    is imported (``import acid.excite`` would otherwise replace ``acid.excite()``, the
+    function, by the module ``acid.excite``: "'module' object is not callable")."""
+
+    def __setattr__(self, name, value):
+        if isinstance(value, types.ModuleType) and name in _API \
+                and value.__name__ == _API[name][0] and _API[name][1] != "":
+            return   # the submodule stays reachable as sys.modules["acid.<name>"]
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

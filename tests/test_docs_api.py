@@ -99,3 +99,15 @@ def test_the_printed_fit_table_keeps_its_columns_aligned():
     assert len(rows) == 3
     assert len({line.index(word) for line, word in
                 zip(rows, ("status", "estimated", "estimated"), strict=True)}) == 1, rows
+
+
+def test_an_exported_function_stays_callable_after_its_submodule_is_imported():
+    # the command line imports acid.excite (the module); the site's first example then
+    # calls acid.excite(...) in the same process
+    import subprocess
+    import sys
+
+    code = ("import acid, importlib; importlib.import_module('acid.excite'); "
+            "from acid.excite import excite; assert acid.excite is excite, acid.excite")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
