@@ -255,7 +255,9 @@ class HeatingPlant(Plant):
             from the heater core to the air, and the heater off with it; default True.
         T_amb : (keyword) ambient over this step, K.
 
-        Returns row k: the states at t_k (``measure()``) and means over the step: T_ain (supply
+        Returns
+        -------
+        Row k: the states at t_k (``measure()``) and means over the step: T_ain (supply
         air into the cabin), T_hp_out (after the inner condenser), T_sup_target, T_dew,
         fog_margin (glass minus dew point, K), fog (fraction of the step fogged), W_bl,
         recirc, f_def, N_comp, P_heater, P_comp, P_bl, P_fan, P_total (W), Q_heater (to the
