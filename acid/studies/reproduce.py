@@ -213,7 +213,7 @@ def stage_econ(workdir: Path, inputs: dict, config: dict, progress) -> dict:
         progress(2, 4)
         paper_fit = fitted(fit_model("paper", est, "oe"), provenance={"data_file": ds.source})
     econ.params.to_json(workdir / "econ_params.json", extra={"fit": econ.to_json_dict()})
-    kw = {"starts": config["starts"], "horizon": config["horizon"],
+    kw = {"starts": config["starts"], "horizon": config["horizon"], "yardsticks": False,
           "held_out_fraction": 1.0 - config["estimation_fraction"]}
     val_econ, val_paper = validate(ds, econ.params, **kw), validate(ds, paper_fit, **kw)
     progress(4, 4)
