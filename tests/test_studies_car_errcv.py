@@ -72,3 +72,12 @@ def test_the_residual_arx_repairs_a_missing_path_on_held_out_trips():
 def test_one_parameter_set_per_fold():
     with pytest.raises(DataError, match="2 folds"):
         _cv([dict(zip(SMALL.parameter_names, np.asarray(SMALL.values), strict=True))])
+
+
+def test_cli_refuses_an_unknown_error_model(tmp_path):
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    r = CliRunner().invoke(app, ["car", "select", str(tmp_path), "--error-model", "ann"])
+    assert r.exit_code == 2 and "--error-model" in r.output and "'arx'" in r.output
