@@ -328,7 +328,8 @@ def car_select(
             emcv = error_model_cv(ref, ds, [f["values"] for f in chosen.cv.folds],
                                   folds=folds, starts=starts, horizon=horizon,
                                   warmup=int(math.ceil(warmup / Ts)), warm_start=warm_start,
-                                  n_resamples=resamples, seed=seed, progress=update)
+                                  channel="T_cab", n_resamples=resamples, seed=seed,
+                                  progress=update)
         say(emcv.summary())
         doc["error_model"] = emcv.to_dict()
     if out is not None:
