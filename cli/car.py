@@ -240,6 +240,10 @@ def car_select(
     resamples: int = typer.Option(1000, "--resamples", help="Bootstrap resamples of the "
                                   "intervals."),
     seed: int = typer.Option(0, "--seed", help="Seed of the resampling."),
+    error_model: str | None = typer.Option(
+        None, "--error-model", help="'arx': also score the chosen structure plus an ARX "
+        "model of its residual (fitted on each fold's training trips) on the same folds, "
+        "against the structure alone and the yardsticks."),
     out: Path | None = typer.Option(None, "--out", help="Refit the chosen structure on every "
                                     "trip and write its parameter file here."),
     json_path: Path | None = JSON,
@@ -274,6 +278,8 @@ def car_select(
     require_range(warmup, "--warmup", 0.0, 7 * 86400.0, "s")
     require(rule_time > 0 and math.isfinite(rule_time), "--rule-time", "must be > 0 s")
     require(seed >= 0, "--seed", "must be >= 0")
+    require(error_model in (None, "arx"), "--error-model", f"must be 'arx', got "
+            f"{error_model!r}")
     names = _names(candidates) or list(CANDIDATES[season])
     require(len(names) >= 2, "--candidates", "needs at least 2 structures")
     from acid.models.loader import BUILT_IN
@@ -312,6 +318,20 @@ def car_select(
     say(sel.summary().split("\n", 2 + len(sel.candidates) + len(sel.yardsticks))[-1])
     doc = {"command": "car select", "season": season, "acid_version": __version__,
            "selection": sel.to_dict()}
+    if error_model is not None:
+        from acid.models import load as load_model
+        from acid.studies.car.errcv import error_model_cv
+
+        chosen = next(c for c in sel.candidates if c.name == sel.chosen)
+        ref = next(n for n in names if load_model(n).name == sel.chosen)
+        with progress_bar(f"car select: {sel.chosen} + residual ARX", folds) as update:
+            emcv = error_model_cv(ref, ds, [f["values"] for f in chosen.cv.folds],
+                                  folds=folds, starts=starts, horizon=horizon,
+                                  warmup=int(math.ceil(warmup / Ts)), warm_start=warm_start,
+                                  channel="T_cab", n_resamples=resamples, seed=seed,
+                                  progress=update)
+        say(emcv.summary())
+        doc["error_model"] = emcv.to_dict()
     if out is not None:
         from acid.models import load
 

@@ -146,3 +146,19 @@ def test_the_shipped_structures_load_as_their_candidates(name, season):
     for p, v in zip(m.parameters, ps.theta, strict=True):
         assert p.min <= v <= p.max, p.name
     assert ps.provenance.get("chosen") == m.name
+
+
+def test_the_cabin_air_is_scored_not_the_first_channel_in_kelvin(monkeypatch):
+    # the heating structures list the coolant first: the selection must score T_cab
+    import acid.ident.crossval as cv
+
+    seen = []
+
+    def fake(model, ds, **kw):
+        seen.append(kw.get("channel"))
+        raise DataError("stop")
+
+    monkeypatch.setattr(cv, "cross_validate", fake)
+    with pytest.raises(DataError, match="stop"):
+        sel.select_structure(_trips(3, 60), [TRUE, SMALL], fit_options={"method": "ls"})
+    assert seen == ["T_cab"]

@@ -163,14 +163,16 @@ def select_structure(ds: Dataset, candidates: Sequence, *, fit_options: dict | N
                      folds: int | None = 2, rule_time_s: float = 600.0, starts: int = 60,
                      horizon: int = 300, warmup: int = 60, exogenous: str = "measured",
                      to_end: bool = True, warm_start: str = "fit", n_resamples: int = 1000,
-                     seed: int = 0, fit: Callable | None = None,
+                     seed: int = 0, fit: Callable | None = None, channel: str | None = "T_cab",
                      progress: Callable[[int, int, str], None] | None = None
                      ) -> StructureSelection:
     """Cross-validate each of ``candidates`` (declared models or their names) on the trips
     (experiments) of ``ds`` over the same ``folds`` and choose one by :data:`RULE`.
     ``fit_options`` go to each fold's fit (``acid.ident.fit.fit_model``); the other
     arguments are :func:`acid.ident.crossval.cross_validate`'s. ``progress(done, total,
-    label)`` after each fold's fit and validation of each candidate."""
+    label)`` after each fold's fit and validation of each candidate. ``channel``: the
+    measured channel scored (the cabin air by default; None: the first one in kelvin, which
+    for the heating structures is the coolant)."""
     from acid.ident.crossval import cross_validate
     from acid.models import load
 
@@ -191,7 +193,8 @@ def select_structure(ds: Dataset, candidates: Sequence, *, fit_options: dict | N
         cv = cross_validate(m, ds, fit_options=fit_options, folds=folds, designs=("even",),
                             starts=starts, horizon=horizon, warmup=warmup,
                             exogenous=exogenous, to_end=to_end, warm_start=warm_start,
-                            n_resamples=n_resamples, seed=seed, fit=fit, progress=tick)
+                            channel=channel, n_resamples=n_resamples, seed=seed, fit=fit,
+                            progress=tick)
         runs.append((m, cv, time.perf_counter() - t0))
     return assemble(runs, rule_time_s)
 
