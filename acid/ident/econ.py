@@ -288,7 +288,8 @@ def identify_slow(ds, skip_s: float = econ.FIT_SKIP_S, covariance: str = "hac") 
               Stage(*econ.FIT_STAGES[2])]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fit = fit_stages(m, d, stages, covariance=covariance, skip_s=skip_s, fix=inner)
+        fit = fit_stages(econ2.traced_model, d, stages, covariance=covariance,
+                         skip_s=skip_s, fix=inner)
     values = np.asarray(fit.values, dtype=float)
     se = {e.name: e.stderr for e in fit.estimates}
     se.update(inner_se)

@@ -113,21 +113,41 @@ def slow_trace(T_int, experiment, C_is: float, hA_is: float, Ts: float = TS,
     return out
 
 
-model = Model(
-    "econ2",
-    states=[State(n, u) for n, u in zip(econ.STATES, econ.STATE_UNITS, strict=True)]
-    + [State("T_is", "K", measured=False, initial=lambda m: m.T_int,
-             description="slow interior node (latent): every interior mass at the measured "
-                         "interior at a record's start (soaked or settled)")],
-    inputs=list(econ.model.inputs), disturbances=list(econ.model.disturbances),
-    outputs=list(econ.model.outputs),
-    parameters=list(econ.model.parameters)
-    + [Parameter(n, u, v, lo, hi, prior=pr, description=m) for n, u, v, lo, hi, pr, m in SLOW],
-    constants=list(econ.model.constants), groups=dict(econ.model.groups),
-    checks=plausibility, Ts=TS, step=step,
-    description="acid's economic model with a slow interior node: cabin, interior (fast, "
-                "slow), shell, evaporator wall, humidity",
-)
+def _slow_start(m):
+    """A record's ``T_is`` where it carries the trace :func:`slow_trace` computed (from the
+    record's soaked or settled start), else the measured interior (all masses equal)."""
+    T_is = np.asarray(m.T_is, dtype=float)
+    return np.where(np.isfinite(T_is), T_is, m.T_int)
+
+
+def _declare(traced: bool) -> Model:
+    slow = State("T_is", "K", measured=traced, initial=None if traced else _slow_start,
+                 description="slow interior node: latent (its trace when a record carries "
+                             "one, slow_trace, else the measured interior)" if not traced else
+                             "slow interior node, read from the record's T_is channel (the "
+                             "trace slow_trace computed: not a sensor)")
+    return Model(
+        "econ2",
+        states=[State(n, u) for n, u in zip(econ.STATES, econ.STATE_UNITS, strict=True)]
+        + [slow],
+        inputs=list(econ.model.inputs), disturbances=list(econ.model.disturbances),
+        outputs=list(econ.model.outputs),
+        parameters=list(econ.model.parameters)
+        + [Parameter(n, u, v, lo, hi, prior=pr, description=m)
+           for n, u, v, lo, hi, pr, m in SLOW],
+        constants=list(econ.model.constants), groups=dict(econ.model.groups),
+        checks=plausibility, Ts=TS, step=step,
+        description="acid's economic model with a slow interior node: cabin, interior (fast, "
+                    "slow), shell, evaporator wall, humidity",
+    )
+
+
+#: The declaration (T_is latent).
+model = _declare(traced=False)
+#: The same equations with T_is read from a record's ``T_is`` channel (the trace
+#: :func:`slow_trace` computed from the measured interior): what the one-step stages and
+#: the validator use, since a latent state's channel is not read.
+traced_model = _declare(traced=True)
 
 
 class _ByName(dict):
