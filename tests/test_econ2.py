@@ -117,3 +117,29 @@ def test_cli_pulldown_refuses_an_unknown_econ_model():
 
     result = CliRunner().invoke(app, ["pulldown", "--econ-model", "econ3"])
     assert_one_line_error(result, "econ-model")
+
+
+def test_a_lowered_target_is_charged_the_common_continuation():
+    """The continuation after a pass is the plant's own loops at the default set-point for
+    every run: a run with a lowered target is not charged 40 min of a colder cabin."""
+    import dataclasses
+
+    from acid.plant.hifi import HifiPlant, physical_state
+    from acid.studies.cav_study import plant_state
+    from acid.studies.compare import MATCH_SHIFT_K, RunSettings, tail_J
+    from acid.studies.pulldown import cases
+
+    base = RunSettings(max_passes=1)
+    low = dataclasses.replace(base, T_set=base.T_set - MATCH_SHIFT_K)
+    sc = cases.case("sc03", 30.0, 36.0, 850.0)
+    run = cases.run_case(sc, "own", settings=low)
+    plant = HifiPlant(sc.plant_config(), mode="nominal")   # the same pass, replayed
+    plant.reset(sc.start())
+    drive, E = sc.drive(), 0.0
+    for k in range(drive.n):
+        row = plant.step(0.0, 0.0, float(drive.v[k]), T_amb=float(drive.T_amb[k]),
+                         T_cab_set=low.T_set)
+        E += (float(row["P_comp"]) + float(row["P_bl"])) * drive.Ts
+    assert abs(E - run.energy_J) < 1e-6 * E
+    tail = tail_J(sc, physical_state(plant_state(plant)), "own", base)
+    assert abs(run.charged_J - run.energy_J - tail) < 1e-6 * tail

@@ -141,7 +141,10 @@ def run_case(sc, family: str, knob: float = math.nan, params=None, horizon_s: fl
             E += (float(row["P_comp"]) + float(row["P_bl"])) * drive.Ts
             T.append(float(plant.measure()["T_cab"]))
     end = plant_state(plant)
-    charged = E + tail_J(sc, physical_state(end), "own", rs)
+    # the common continuation: the plant's own loops at the default set-point whatever this
+    # run's target (a run with a lowered target must not be charged 40 min of a colder cabin
+    # that its pass's mean cabin does not show)
+    charged = E + tail_J(sc, physical_state(end), "own", RunSettings(max_passes=1))
     T = np.asarray(T)
     out = np.maximum(0.0, np.maximum(T - rs.T_high, rs.T_low - T))
     hit = np.flatnonzero(T <= C2K(T_reach_C))
