@@ -40,6 +40,10 @@ def pulldown(
         False, "--set", help="Also judge E against the best fixed coil and the plant's own "
                              "loops over a set of pull-downs (soaks 35-45 degC): knobs tuned "
                              "on training pull-downs, paired intervals on held-out ones."),
+    econ_model: str = typer.Option(
+        "econ2", "--econ-model", help="E's model on the set: econ2 (a fast and a slow "
+                                      "interior node, the slow one carried from the soak) or "
+                                      "econ (one interior node)."),
     json_path: Path | None = typer.Option(None, "--json", help="Write a JSON summary here."),
 ) -> None:
     """Identify the econ model on today's record and on it plus soak-and-pull-down segments,
@@ -54,6 +58,9 @@ def pulldown(
     require_range(soak, "--soak", t_amb, 80.0, "degC")
     check_paths(outputs={"--json": json_path})
     from acid.errors import AcidError, ConfigError
+
+    if econ_model not in ("econ", "econ2"):
+        raise ConfigError(f"--econ-model must be econ or econ2, got {econ_model!r}")
     from acid.signals import drive_cycle
 
     try:   # an unknown cycle fails before minutes of excitation
@@ -69,8 +76,24 @@ def pulldown(
     envelopes = {k: Envelope.of(getattr(models, k)) for k in ("old", "new")}
     for k, env in envelopes.items():
         say(f"{k} model's envelope: {env.describe()}")
+    say("identifying the two-node econ model (econ2) on the new model's record")
+    from acid.studies.pulldown import slow as slow_study
+
+    fit2 = slow_study.identify_new2(models, settings.new_skip_s)
+    say(f"econ2 interior: C_int {fit2.params.C_int / 1e3:.1f} kJ/K, C_is {fit2.C_is / 1e3:.1f} "
+        f"kJ/K, hA_is {fit2.hA_is:.1f} W/K (time constant {fit2.tau_is_s / 60:.1f} min), "
+        f"simulated interior rms {fit2.interior['rms_T_int_K']:.3f} K")
     say("validating on the held-out pull-downs")
     val = study.validate_pair(models, held, settings)
+    val2 = slow_study.validate_models(models, fit2, held, settings)
+    times2 = list(val2["econ2"]["p90"])
+    rows2 = [[name, *(f"{val2[name]['bias'][t]:+.2f} / {val2[name]['p90'][t]:.2f}"
+                      for t in times2)] for name in ("econ", "econ2")]
+    rows2 += [[name, *(f"{p.get(t, math.nan):.2f}" for t in times2)]
+              for name, p in val2["yardsticks"].items()]
+    print_table("T_cab on held-out pull-downs, both models identified through pull-downs: "
+                "mean error / p90 |error|, K, per prediction time (s)",
+                ["predictor", *times2], rows2)
     times = list(val["new"]["model"])
     rows = [[f"{k} model", name, *(f"{val[k][name].get(t, math.nan):.2f}" for t in times)]
             for k in ("old", "new") for name in val[k]
@@ -95,12 +118,19 @@ def pulldown(
         for q in pts:
             say(f"E ({key} model) at {q['F']}'s comfort ({q['discomfort_Kmin']:.1f} K min): "
                 f"{q['E_J'] / 1e6:.3f} MJ vs {q['F_J'] / 1e6:.3f} MJ ({q['saving_pct']:+.2f} %)")
-    judged = _judge_set(models.new, quick, seed) if over_set else None
+    judged = None
+    if over_set:
+        judged = _judge_set(fit2.params, quick, seed, fit2) if econ_model == "econ2" \
+            else _judge_set(models.new, quick, seed)
     write_summary(json_path, {
         "command": "pulldown", "acid_version": __version__,
         "settings": dataclasses.asdict(settings),
         "envelopes": {k: e.to_dict() for k, e in envelopes.items()},
         "validation_T_cab_p90_K": val,
+        "econ2": {"values": dict(zip(_econ2_names(), fit2.values.tolist(), strict=True)),
+                  "stderr": fit2.stderr, "interior": fit2.interior,
+                  "validation_T_cab": val2},
+        "econ_model": econ_model,
         "front": [dataclasses.asdict(x) for x in loop["front"]],
         "equal_comfort": loop["equal_comfort"],
         "closed_loop": [{"model": r["model"], "saving_pct": r["saving_pct"],
@@ -109,14 +139,21 @@ def pulldown(
         **({"set": judged} if judged is not None else {})})
 
 
-def _judge_set(params, quick: bool, seed: int) -> dict:
-    """The set's tuning, held-out table and verdicts (printed), as JSON."""
+def _econ2_names():
+    from acid.models import econ2
+
+    return econ2.model.parameter_names
+
+
+def _judge_set(params, quick: bool, seed: int, slow=None) -> dict:
+    """The set's tuning, held-out table and verdicts (printed), as JSON; ``slow``: E on the
+    two-node model (``params`` its econ part)."""
     from acid.studies.pulldown import cases
 
     say("pull-down set: tuning on the training pull-downs, judging on the held-out ones")
     res = cases.run_set(params, *((cases.QUICK_TRAINING, cases.QUICK_HELD_OUT) if quick
                                   else (cases.TRAINING, cases.HELD_OUT)),
-                        seed=seed, progress=say)
+                        seed=seed, progress=say, slow=slow)
     t = res["tuning"]
     say(f"tuned on training: comfort level {t.level_Kmin:.2f} K min (the plant's own loops), "
         f"F coil {t.coil_K - 273.15:.2f} degC, E weight {t.weight:.1f}")
@@ -133,6 +170,13 @@ def _judge_set(params, quick: bool, seed: int) -> dict:
                  "min to 25 degC", "mean T_cab degC", "envelope"], rows)
     for name, v in res["verdicts"].items():
         say(f"{name}: " + (v.summary() if v is not None else "no case matched"))
+    solv = [r[k].solver for r in res["held_out"] for k in ("E", "E_lowered")]
+    solv += [r.solver for r in res["training"] if r.family == "E"]
+    if solv:
+        say(f"E's solver over {len(solv)} runs, {sum(x['steps'] for x in solv)} steps: "
+            f"{sum(x['fallback_solver'] for x in solv)} solved by the fallback solver after "
+            f"SQP failed, {sum(x['rescues'] for x in solv)} by the convex-QP rescue, "
+            f"{sum(x['failed'] for x in solv)} unsolved (last plan or safe input applied)")
     if res["unmatched"]:
         say("E not matched to F's mean cabin on: " + ", ".join(res["unmatched"]))
     return set_summary(res)

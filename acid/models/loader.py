@@ -35,6 +35,7 @@ from acid.models.declaration import DeclarationError, Model
 
 #: Built-in declarations: name -> module defining ``model``.
 BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
+            "econ2": "acid.models.econ2",
             "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin",
             "heating": "acid.models.heating", "car_ac": "acid.models.car_ac",
             "car_cabin2": "acid.models.car_cabin2", "car_cabin1": "acid.models.car_cabin1",

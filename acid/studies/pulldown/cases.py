@@ -85,13 +85,19 @@ class CaseRun:
     envelope: dict = field(default_factory=dict)
     #: not measured here (the engine's matching interpolates it)
     rh_mean: float = math.nan
+    #: E's solver: steps whose SQP failed and the fallback solver (IPOPT) solved
+    #: (``fallback_solver``), convex-QP rescues (``rescues``), steps where no solver
+    #: succeeded and the last plan or the safe input was applied (``failed``)
+    solver: dict = field(default_factory=dict)
 
 
 def run_case(sc, family: str, knob: float = math.nan, params=None, horizon_s: float = 60.0,
-             T_reach_C: float = 25.0, settings=None) -> CaseRun:
+             T_reach_C: float = 25.0, settings=None, slow=None) -> CaseRun:
     """One pass of ``sc``'s cycle from its soak: ``family`` "own" (the plant's own loops at
     its configured coil), "F" (the same loops at coil ``knob`` K, the engine's F) or "E" (the
-    engine's economic NMPC with speed preview on ``params``, comfort weight ``knob``)."""
+    engine's economic NMPC with speed preview on ``params``, comfort weight ``knob``; with
+    ``slow``, an :class:`acid.ident.econ.Econ2Fit`, on its econ part with the slow interior
+    carried from the soak, :class:`acid.studies.pulldown.slow.SlowInterior`)."""
     from acid.errors import ConfigError, ExtrapolationWarning
     from acid.plant.hifi import HifiPlant, physical_state
     from acid.studies.cav_study import plant_state
@@ -112,6 +118,10 @@ def run_case(sc, family: str, knob: float = math.nan, params=None, horizon_s: fl
             intervals=(drive.Ts,) * n, preview=True, T_cab_min=rs.T_low - 1.0,
             T_cab_max=rs.T_high + 1.0, comfort_weight=float(knob), compiled=False))
         ctrl = EconPreview(mpc, drive, rs.T_set)
+        if slow is not None:
+            from acid.studies.pulldown.slow import SlowInterior
+
+            ctrl = SlowInterior(ctrl, slow, drive.Ts)
     elif family != "own":
         raise ConfigError(f"unknown pull-down family {family!r} (own, F, E)")
     plant = HifiPlant(cfg, mode="direct" if ctrl is not None else "nominal")
@@ -131,18 +141,26 @@ def run_case(sc, family: str, knob: float = math.nan, params=None, horizon_s: fl
             E += (float(row["P_comp"]) + float(row["P_bl"])) * drive.Ts
             T.append(float(plant.measure()["T_cab"]))
     end = plant_state(plant)
-    charged = E + tail_J(sc, physical_state(end), "own", rs)
+    # the common continuation: the plant's own loops at the default set-point whatever this
+    # run's target (a run with a lowered target must not be charged 40 min of a colder cabin
+    # that its pass's mean cabin does not show)
+    charged = E + tail_J(sc, physical_state(end), "own", RunSettings(max_passes=1))
     T = np.asarray(T)
     out = np.maximum(0.0, np.maximum(T - rs.T_high, rs.T_low - T))
     hit = np.flatnonzero(T <= C2K(T_reach_C))
     env = mpc.envelope_steps.to_dict() if mpc is not None else {}
+    solver = {}
     if mpc is not None:
         env["line"] = mpc.envelope_steps.summary(mpc.envelope)
+        solver = {"fallback_solver": int(mpc.solver_fallbacks),
+                  "rescues": int(mpc.solver_rescues),
+                  "failed": int(np.sum(np.asarray(mpc.log.fallback, dtype=bool))),
+                  "steps": int(drive.n)}
     return CaseRun(case_name(sc), family, float(knob), float(E), float(charged),
                    float(out.sum() * drive.Ts / 60.0),
                    float(np.maximum(0.0, T - rs.T_high).sum() * drive.Ts / 60.0),
                    float((hit[0] + 1) * drive.Ts) if hit.size else math.inf,
-                   float(T.mean()), env)
+                   float(T.mean()), env, solver=solver)
 
 
 @dataclass(frozen=True)
@@ -200,7 +218,7 @@ def matched(e_at: CaseRun, e_lowered: CaseRun, to: CaseRun) -> CaseRun | None:
 
 def run_set(params, training=TRAINING, held_out=HELD_OUT, coils: Sequence[float] | None = None,
             weights: Sequence[float] | None = None, horizon_s: float = 60.0, seed: int = 0,
-            progress: Callable[[str], None] | None = None) -> dict:
+            progress: Callable[[str], None] | None = None, slow=None) -> dict:
     """Tune on ``training``, judge on ``held_out`` (tuples as :data:`TRAINING`): the
     training runs, the tuning, the held-out runs per case and the verdicts E vs F, E at F's
     comfort vs F, E vs own and F vs own."""
@@ -218,7 +236,7 @@ def run_set(params, training=TRAINING, held_out=HELD_OUT, coils: Sequence[float]
         sc = case(*spec)
         jobs = [("own", math.nan)] + [("F", c) for c in coils] + [("E", w) for w in weights]
         for fam, k in jobs:
-            train.append(run_case(sc, fam, k, params, horizon_s))
+            train.append(run_case(sc, fam, k, params, horizon_s, slow=slow))
             r = train[-1]
             say(f"training {r.case}: {fam} {'' if math.isnan(k) else f'{k:g}'} "
                 f"{r.charged_J / 1e6:.3f} MJ, {r.discomfort_Kmin:.1f} K min")
@@ -232,9 +250,9 @@ def run_set(params, training=TRAINING, held_out=HELD_OUT, coils: Sequence[float]
         sc = case(*spec)
         row = {"case": case_name(sc), "own": run_case(sc, "own", math.nan, params, horizon_s),
                "F": run_case(sc, "F", tuning.coil_K, params, horizon_s),
-               "E": run_case(sc, "E", tuning.weight, params, horizon_s),
+               "E": run_case(sc, "E", tuning.weight, params, horizon_s, slow=slow),
                "E_lowered": run_case(sc, "E", tuning.weight, params, horizon_s,
-                                     settings=lowered)}
+                                     settings=lowered, slow=slow)}
         row["E at F's T_cab"] = matched(row["E"], row["E_lowered"], row["F"])
         row["E at own's T_cab"] = matched(row["E"], row["E_lowered"], row["own"])
         held.append(row)
