@@ -395,7 +395,8 @@ def stage_engine_train(workdir: Path, inputs: dict, config: dict, progress) -> d
     runs = _runs_on(tasks, progress)
     _pickle(workdir / ENGINE_RUNS_FILE, [(t[1], t[2], r) for t, r in zip(tasks, runs,
                                                                          strict=True)])
-    return {"scenario": sc.name, "runs": len(runs)}
+    return {"scenario": sc.name, "runs": len(runs),
+            "period_two": sum(r.period == 2 for r in runs)}
 
 
 def _engine_tuning(inputs: dict, config: dict, sset, fams, settings):
@@ -424,7 +425,8 @@ def stage_engine_held(workdir: Path, inputs: dict, config: dict, progress) -> di
     runs = _runs_on(tasks, progress)
     _pickle(workdir / ENGINE_RUNS_FILE, [(len(t) == 7, r) for t, r in zip(tasks, runs,
                                                                           strict=True)])
-    return {"scenario": sc.name, "runs": len(runs)}
+    return {"scenario": sc.name, "runs": len(runs),
+            "period_two": sum(r.period == 2 for r in runs)}
 
 
 def plan_stage(cycle: str) -> str:
