@@ -235,9 +235,12 @@ def _cav_setup(inputs: dict, config: dict):
     params = ModelParams.from_json(inputs["fit"] / "params.json")
     econ = EconParams.from_json(inputs["econ"] / "econ_params.json")
     n = int(round(config["econ_horizon_s"] / params.Ts))
+    variants = config.get("plan_variants")
     cfg = StudyConfig(warmup_s=config["warmup_s"], tail_s=config["tail_s"],
                       econ=EconNMPCConfig(intervals=(params.Ts,) * n,
-                                          compiled="auto" if config["compiled"] else False))
+                                          compiled="auto" if config["compiled"] else False),
+                      tol_K=config.get("tol_K", StudyConfig.tol_K),
+                      plan_variants=None if variants is None else tuple(variants))
     return params, econ, cfg
 
 
@@ -345,7 +348,10 @@ def _engine_setup(inputs: dict, config: dict):
     if quick:   # a smoke run: E at one comfort weight (its front is a point)
         fams = tuple(dataclasses.replace(f, knobs=f.knobs[-1:]) if f.key == "E" else f
                      for f in fams)
-    return sset, fams, cmp.QUICK if quick else cmp.RunSettings(), econ
+    # a smoke run: --quick's tolerances, at most 12 passes (the short stop-and-go's slow
+    # interior mode does not settle in them: such runs are reported as not converged)
+    return sset, fams, dataclasses.replace(cmp.QUICK, max_passes=12) if quick \
+        else cmp.RunSettings(), econ
 
 
 def engine_scenarios(config: dict) -> tuple[list[str], list[str]]:
@@ -586,6 +592,9 @@ def build_stages(opts: ReproduceOptions) -> list[Stage]:
 def _stages(opts: ReproduceOptions) -> list[Stage]:
     cav = {"warmup_s": opts.cav_warmup_s, "tail_s": opts.cav_tail_s,
            "econ_horizon_s": opts.econ_horizon_s, "compiled": opts.econ_compiled}
+    if opts.cav_tol_K != ReproduceOptions.cav_tol_K or opts.cav_plan_variants is not None:
+        # (a smoke run's sizes; the study's keep their cache keys)
+        cav.update(tol_K=opts.cav_tol_K, plan_variants=opts.cav_plan_variants)
     return [
         Stage("sweep", "speed sweep (Table I on the paper vehicle, Fig. 3)", stage_sweep,
               {"duration_s": opts.sweep_duration_s, "vehicle": PAPER_VEHICLE,
