@@ -95,6 +95,10 @@ def test_summary_numbers_are_finite_and_physical(quick_run):
     assert 0 <= mpc["model"]["max_violation_K"] < 0.01
     cav = mpc["cav_paper"]
     assert 0 < cav["case1_energy_MJ"] < 1 and 0 < cav["case2_energy_MJ"] < 1
+    # a smoke run: the best known plan with one variant beside the cyclic plan (its spread)
+    cav = json.loads((out / "stages/cav/cav_study.json").read_text())
+    assert [set(c["controllers"]["plan"]["variants"]) for c in
+            cav["cycles"].values()] == [{"cyclic", "cyclic_corrected_model"}] * 2
     for cycle in st["cav"]["summary"]["cycles"].values():
         assert set(cycle["controllers"]) == {"A", "B", "D", "E", "P", "F", "plan"}
         assert all(0 < c["energy_MJ"] < 2 for c in cycle["controllers"].values())

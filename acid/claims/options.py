@@ -33,6 +33,10 @@ class ReproduceOptions:
     econ_duration_s: float = 6 * 3600.0
     econ_horizon_s: float = 120.0
     econ_compiled: bool = True
+    #: the cav study's mean-cabin match (K) and the best known plan's variants beside the
+    #: cyclic plan (None: all of them)
+    cav_tol_K: float = 0.005
+    cav_plan_variants: tuple[str, ...] | None = None
     #: the comparison engine at ``acid compare --quick``'s sizes (fewer knobs, a shorter
     #: stop-and-go cycle, looser periodic tolerances)
     engine_quick: bool = False
@@ -45,7 +49,9 @@ class ReproduceOptions:
         return cls(sweep_duration_s=300.0, excite_duration_s=2 * 3600.0, starts=12,
                    horizon=120, timing_repeats=1, cav_warmup_s=300.0,
                    cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0,
-                   econ_compiled=False, engine_quick=True,
+                   econ_compiled=False, cav_tol_K=0.02,
+                   cav_plan_variants=("cyclic_corrected_model",),
+                   engine_quick=True,
                    engine_cycles=("hwfet", "stopgo"))
 
 
@@ -55,7 +61,8 @@ def run_mode(opts: ReproduceOptions | dict) -> str:
     shortens (``acid.claims.registry.QUICK_RUN_JUDGES``)."""
     d = opts if isinstance(opts, dict) else dataclasses.asdict(opts)
     full = json.loads(json.dumps(dataclasses.asdict(ReproduceOptions())))
-    return "full" if json.loads(json.dumps(d)) == full else "quick"
+    # a size an older run did not record was the study's (its default)
+    return "full" if {**full, **json.loads(json.dumps(d))} == full else "quick"
 
 
 def is_quick(opts: ReproduceOptions | dict) -> bool:

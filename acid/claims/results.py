@@ -607,6 +607,9 @@ class EngineStage(StageResult):
     extrapolated: dict[str, tuple[str, ...]] = field(default_factory=dict)
     periodic_passes_max: int = 0
     all_converged: bool = True
+    #: held-out runs whose periodic steady state is a period-2 orbit (two alternating
+    #: passes, their mean the figure); the rest repeat every pass
+    period_two_runs: int = 0
     #: every verdict's saving (%) with its 95 % bootstrap interval, keyed
     #: :func:`engine_key` ("E_vs_F", "E_matched_vs_F", "F_vs_own", ...)
     savings: dict[str, Estimate] = field(default_factory=dict)
@@ -633,6 +636,7 @@ class EngineStage(StageResult):
                    extrapolated={k: tuple(sorted(v)) for k, v in out.items()},
                    periodic_passes_max=max((r.passes for r in result.held_out), default=0),
                    all_converged=all(r.converged for r in result.held_out),
+                   period_two_runs=sum(getattr(r, "period", 1) == 2 for r in result.held_out),
                    savings={engine_key(v.candidate, v.baseline): Estimate(
                        float(v.mean_pct), ci95_low=float(v.boot_lo),
                        ci95_high=float(v.boot_hi)) for v in result.verdicts},

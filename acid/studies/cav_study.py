@@ -151,6 +151,9 @@ class StudyConfig:
         enough (40 min) for the interior to converge, so a state's whole cost is charged.
     icm : rule of B.
     plan : compute the best known plan (its variants and their replays).
+    plan_variants : the variants of :data:`PLAN_VARIANTS` beside the cyclic plan, which is
+        always solved (None: all; a smoke run may give fewer: the plan's spread has fewer
+        members).
     baselines : run the PI baselines P and F.
     coil_reset : P's evaporator set-point rule.
     coil_tol_K : width of F's coil set-point search interval at which it stops, K.
@@ -186,6 +189,7 @@ class StudyConfig:
     tail_s: float = 2400.0
     icm: ICMConfig = field(default_factory=ICMConfig)
     plan: bool = True
+    plan_variants: tuple[str, ...] | None = None
     baselines: bool = True
     coil_reset: CoilReset = field(default_factory=CoilReset)
     coil_tol_K: float = 0.25
@@ -208,6 +212,9 @@ class StudyConfig:
                               "tuned to a common mean inside it")
         if self.warmup_s < 0 or self.tail_s < 0 or self.stopgo_s < 80.0:
             raise ConfigError("warm-up and tail must be >= 0 s, the stop-and-go >= 80 s")
+        if self.plan_variants is not None and set(self.plan_variants) - set(PLAN_VARIANTS):
+            raise ConfigError("unknown plan variants: " + ", ".join(
+                sorted(set(self.plan_variants) - set(PLAN_VARIANTS))))
         if not 0 < self.tol_K <= 0.05:
             raise ConfigError(f"tol_K must lie in (0, 0.05] K, got {self.tol_K}")
         if not 0.0 <= self.rh_band[0] < self.rh_band[1] <= 1.0:
@@ -949,6 +956,8 @@ class _CycleRunner:
                   "from_common_start": (econ, x_common, False, "steady")}
         if corrected is not None:
             others["cyclic_corrected_model"] = (corrected, None, True, None)
+        if self.config.plan_variants is not None:
+            others = {k: v for k, v in others.items() if k in self.config.plan_variants}
         for key, (model, x_start, spin_up, price) in others.items():
             try:   # an independent optimum that cannot be found is reported, not fatal
                 found[key] = self._plan_variant(

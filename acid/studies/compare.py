@@ -13,6 +13,13 @@ Protocol (kelvin inside, degC at the edges):
    plant's cabin, interior (fast and slow) and shell temperatures at the end of a pass differ
    from the previous pass's by less than ``tol_K`` (default 0.01 K); the energy (compressor +
    blower) of the last pass is the figure, so no end state needs charging. Passes are reported.
+   A controller with discrete decisions (E) can settle on a period-2 orbit instead: two
+   passes alternate (end states a few hundredths of a kelvin apart) and consecutive passes
+   never agree. The same rule applied to the two-pass map (pass k against pass k - 2, once
+   the period-1 test has failed and the cabin temperature toggles) detects it; its figures
+   (energy, discomfort, mean cabin temperature and humidity) are the mean over the orbit's
+   two passes, the cycle average of a period-2 steady state. :attr:`PeriodicRun.period`
+   says which was found (``RunSettings.max_period = 1``: the period-1 test alone).
 3. **Families with one knob each.** ``F``: fixed coil, run by the plant's own loops (the
    plant's nominal mode: blower PI and compressor PI at the plant's internal step) with the
    coil set-point as knob; ``Fs``: acid's sampled fixed-coil PI of ``acid cav-study``
@@ -205,6 +212,8 @@ class RunSettings:
     tol_w: float = 1e-5
     tol_E: float = 5e-4
     max_passes: int = 400
+    #: the longest orbit accepted as the periodic steady state, in passes (1 or 2)
+    max_period: int = 2
     econ_horizon_s: float = 60.0
     tail_s: float = 2400.0
     econ_ref_offset_K: float = 0.0
@@ -270,6 +279,9 @@ class PeriodicRun:
     extrapolated: tuple[str, ...] = ()
     single_own_J: float = math.nan
     single_pi_J: float = math.nan
+    #: the period of the steady state found, in passes: 1 (the pass repeats) or 2 (two
+    #: passes alternate; the figures are the two passes' mean, the cycle average)
+    period: int = 1
 
     def single_charged_J(self, charge: str) -> float:
         """The first pass from the common start with its state change charged: ``E +
@@ -322,9 +334,12 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
     plant.reset(physical_state(start) if start is not None else sc.start())
     prev = plant_state(plant)
     start_state = dict(prev)
-    first = E_prev = math.nan
+    first = math.nan
     first_end: dict = {}
     res, last = math.inf, {}
+    period = 1
+    # per pass: end state, energy and the pass's (discomfort K min, mean RH, mean T_cab)
+    ends, Es, stats, steps2 = [prev], [math.nan], [None], [{}]
     outside: list[str] = []
     for p in range(1, settings.max_passes + 1):
         E, T, rh = _pass(plant, ctrl, drive, settings.T_set)
@@ -333,28 +348,54 @@ def periodic_run(sc: Scenario, family: str, knob: float, settings: RunSettings =
         if p == 1:
             first, first_end = E, plant_state(plant)
         now = plant_state(plant)
-        steps = {"T": max(abs(now[k] - prev[k]) for k in PERIODIC_KEYS if k in now),
-                 "w": abs(now["w_cab"] - prev["w_cab"]) * settings.tol_K / settings.tol_w,
-                 "E": abs(E - E_prev) / abs(E) * settings.tol_K / settings.tol_E
-                 if p > 1 and E else math.inf}
-        # distance to the periodic state: a slow mode contracting by rho per pass leaves
-        # step * rho / (1 - rho) still to go (rho from the last two passes, the factor at
-        # most 20); a step no smaller than the last is the loops' cycling, not a slow mode
-        # (factor 1); each quantity scaled to the temperature tolerance
-        res = 0.0
-        for q, st in steps.items():
-            rho = st / last[q] if last.get(q, 0) > 0 else 0.95
-            res = max(res, st * (min(20.0, max(1.0, rho / (1.0 - rho))) if rho < 1 else 1.0))
-        prev, last, E_prev = now, steps, E
+        out = np.maximum(0.0, np.maximum(T - settings.T_high, settings.T_low - T))
+        ends.append(now)
+        Es.append(E)
+        stats.append((float(np.sum(out) * drive.Ts / 60.0), float(np.mean(rh)),
+                      float(np.mean(T))))
+        steps = _steps(now, prev, E, Es[-2], settings)
+        res = _residual(steps, last, settings)
+        prev, last = now, steps
         if p >= 3 and res < settings.tol_K:
             break
-    out = np.maximum(0.0, np.maximum(T - settings.T_high, settings.T_low - T))
+        # a period-2 orbit (module docstring, 2.): the same rule on the two-pass map
+        steps2.append(_steps(now, ends[-3], E, Es[-3], settings) if p >= 2 else {})
+        if settings.max_period >= 2 and p >= 5:
+            res2 = _residual(steps2[-1], steps2[-3], settings)
+            dT = [ends[i]["T_cab"] - ends[i - 1]["T_cab"] for i in (-1, -2)]
+            if res2 < settings.tol_K and dT[0] * dT[1] < 0.0:
+                res, period = res2, 2
+                break
+    n = period  # the figures: the last pass (period 1) or the orbit's two passes' mean
+    figures = [float(np.mean([s[j] for s in stats[-n:]])) for j in range(3)]
+    E = Es[-1] if n == 1 else float(np.mean(Es[-n:]))
     charged = {c: first + tail_J(sc, first_end, c, settings)
                - tail_J(sc, start_state, c, settings) for c in CHARGES} if charge else {}
-    return PeriodicRun(sc.name, family, float(knob), E, float(np.sum(out) * drive.Ts / 60.0),
-                       float(np.mean(rh)), float(np.mean(T)), p, bool(res < settings.tol_K),
-                       float(res), first, plant_state(plant), tuple(outside),
-                       charged.get("own", math.nan), charged.get("pi", math.nan))
+    return PeriodicRun(sc.name, family, float(knob), E, *figures, p,
+                       bool(res < settings.tol_K), float(res), first, plant_state(plant),
+                       tuple(outside), charged.get("own", math.nan),
+                       charged.get("pi", math.nan), period)
+
+
+def _steps(now: dict, before: dict, E: float, E_before: float, settings: RunSettings) -> dict:
+    """The change of the pass-end state from ``before`` (each quantity scaled to the
+    temperature tolerance; the energy's infinite without an earlier pass)."""
+    return {"T": max(abs(now[k] - before[k]) for k in PERIODIC_KEYS if k in now),
+            "w": abs(now["w_cab"] - before["w_cab"]) * settings.tol_K / settings.tol_w,
+            "E": abs(E - E_before) / abs(E) * settings.tol_K / settings.tol_E
+            if math.isfinite(E_before) and E else math.inf}
+
+
+def _residual(steps: dict, last: dict, settings: RunSettings) -> float:
+    """The distance still to go to the periodic state, from the last two steps of the map:
+    a slow mode contracting by rho per step leaves step * rho / (1 - rho) to go (rho from
+    the last two steps, the factor at most 20); a step no smaller than the last is the
+    loops' cycling, not a slow mode (factor 1)."""
+    res = 0.0
+    for q, st in steps.items():
+        rho = st / last[q] if last.get(q, 0) > 0 else 0.95
+        res = max(res, st * (min(20.0, max(1.0, rho / (1.0 - rho))) if rho < 1 else 1.0))
+    return res
 
 
 def tail_J(sc: Scenario, state: dict, charge: str, settings: RunSettings) -> float:
@@ -591,7 +632,7 @@ def _map(tasks, executor, progress):
             out[i] = _task(*t)
             if progress:
                 progress(f"{i + 1}/{len(tasks)} {t[0].name} {t[1]} knob {t[2]:.4g}: "
-                         f"{out[i].energy_J / 1e6:.3f} MJ, {out[i].passes} passes")
+                         f"{out[i].energy_J / 1e6:.3f} MJ, {out[i].passes} passes{_orbit(out[i])}")
         return out
     handles = {executor.submit(_task, *t): i for i, t in enumerate(tasks)}
     pending, done = set(handles), 0
@@ -603,8 +644,13 @@ def _map(tasks, executor, progress):
             done += 1
             if progress:
                 progress(f"{done}/{len(tasks)} {tasks[i][0].name} {tasks[i][1]}: "
-                         f"{out[i].energy_J / 1e6:.3f} MJ, {out[i].passes} passes")
+                         f"{out[i].energy_J / 1e6:.3f} MJ, {out[i].passes} passes{_orbit(out[i])}")
     return out
+
+
+def _orbit(r: PeriodicRun) -> str:
+    """How a run's periodic state is shown beside its passes."""
+    return ("" if r.converged else ", not converged") + (", period 2" if r.period == 2 else "")
 
 
 def tune_knob(points: Sequence[FrontPoint], level: float) -> float:
