@@ -77,7 +77,7 @@ def sweep(
     interrupted sweep resumes. Writes OUT/results.parquet, OUT/results.csv, two figures and
     OUT/summary.json.
     """
-    from acid.executor import check_scheduler_address
+    from acid.executor import check_scheduler_address, workers_skip_main
     from acid.outdir import claim
     from acid.studies.sweep import load_spec
     from acid.studies.sweep.runner import check_out_folder
@@ -114,6 +114,7 @@ def sweep(
                      "_plant"], rows)
         say("specification OK; nothing run (--dry-run)")
         return
+    workers_skip_main()  # the workers need acid, not this command-line interface
     with claim(out, "acid sweep"):  # before anything is printed: a busy folder is one line
         _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path, header)
 
