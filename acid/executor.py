@@ -218,6 +218,11 @@ class Executor(abc.ABC):
     def close(self, interrupted: bool = False) -> None:  # noqa: B027 - nothing to release by default
         """Release workers (an interrupted run does not wait for running tasks)."""
 
+    def close_soon(self) -> None:  # noqa: B027 - nothing to release by default
+        """Start releasing the workers in the background: every task's result is in and no
+        task will be submitted again. The caller goes on (writes its results) meanwhile;
+        :meth:`close` (which the ``with`` block calls in any case) waits for it to end."""
+
     def __enter__(self) -> Executor:
         return self
 
@@ -383,6 +388,7 @@ class DaskExecutor(Executor):
         except ImportError:
             raise AcidError("parallel runs need Dask: pip install 'acid[distributed]'") from None
         self.cluster = None
+        self._closer: threading.Thread | None = None
         self._pids: set[int] = set()
         if address:
             check_scheduler_address(address)
@@ -469,7 +475,25 @@ class DaskExecutor(Executor):
     def result(self, handle):
         return handle.result()
 
+    def close_soon(self) -> None:
+        if self.cluster is None or self._closer is not None:
+            return
+        self._closer = threading.Thread(target=self._close, name="acid-executor-close",
+                                        daemon=True)
+        self._closer.start()
+
     def close(self, interrupted: bool = False) -> None:
+        closer = self._closer
+        if closer is None:
+            self._close(interrupted)
+            return
+        if interrupted:  # the closing under way may wait for the workers: end them now
+            _silence_dask_logs()
+            self._kill_workers()
+        closer.join()
+        self._kill_workers()
+
+    def _close(self, interrupted: bool = False) -> None:
         with contextlib.suppress(Exception):
             for t in self._topics:
                 self.client.unsubscribe_topic(t)

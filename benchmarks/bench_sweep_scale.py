@@ -15,7 +15,8 @@ the slope between 8 and 64 scenarios, printed last, is the per-scenario part); t
 the scenarios' own CPU time (``cpu_s`` of their records) and the CPU time of the whole
 command's process tree (``getrusage`` of the reaped children); ``CPU speed-up`` = sum of
 the scenarios' CPU / wall (how many cores the scenarios kept busy: the speed-up without the
-other processes' load); ``left``: processes of the command's process group alive 10 s after
+other processes' load); whether every run's table equals the inline one but for its timing
+columns; ``left``: processes of the command's process group alive 10 s after
 it ended (psutil; must be 0). The load average is printed with each run: on a shared
 machine the wall-clock speed-up is bounded by the free cores, the CPU speed-up less so.
 
@@ -104,6 +105,18 @@ def run(cmd: list[str], out: Path) -> dict:
             "load": [load0, os.getloadavg()[0]]}
 
 
+#: columns that say where and how long a scenario ran (they differ from run to run)
+TIMING = ["solve_ms_median", "solve_ms_p95", "solve_ms_max", "scenario_elapsed_s", "worker"]
+
+
+def same_table(out: Path):
+    """The run's table without its timing columns, in scenario order."""
+    import pandas as pd
+
+    t = pd.read_parquet(out / "results.parquet").drop(columns=TIMING)
+    return t.sort_values(["scenario", "controller"]).reset_index(drop=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--counts", type=int, nargs="+", default=[8, 64], choices=[8, 64])
@@ -112,6 +125,7 @@ def main() -> None:
     args = ap.parse_args()
     acid = str(Path(sys.executable).with_name("acid"))
     results: dict = {"cores": len(os.sched_getaffinity(0)), "runs": {}}
+    tables: dict = {}
     with tempfile.TemporaryDirectory(prefix="acid-scale-") as tmp:
         root = Path(tmp)
         # untimed: the imports' files in the page cache
@@ -129,11 +143,19 @@ def main() -> None:
                             mode.split()[1], "--no-figures", "--force"])
                     r = run(cmd, out)
                     assert r["records"] == n, r
+                    tables.setdefault(n, []).append((mode, same_table(out)))
                     results["runs"].setdefault(str(n), {}).setdefault(mode, []).append(r)
                     print(f"{n:>3} scenarios {mode:<7} wall {r['wall_s']:7.2f} s  task CPU "
                           f"{r['task_cpu_s']:7.2f} s  tree CPU {r['tree_cpu_s']:7.2f} s  "
                           f"processes seen {r['most_children']:>2} left {r['left']}  load "
                           f"{r['load'][0]:.1f}-{r['load'][1]:.1f}", flush=True)
+    for n, found in tables.items():   # every run's table against the first (inline)
+        ref = found[0][1]
+        differ = sorted({f"{mode}: {c}" for mode, t in found[1:] for c in ref.columns
+                         if not ref[c].equals(t[c])})
+        results.setdefault("same_table", {})[str(n)] = not differ
+        print(f"{n:>3} scenarios: tables (but timings) of every run equal to inline: "
+              f"{'yes' if not differ else 'NO: ' + ', '.join(differ)}")
     print("\nbest of", args.repeat)
     summary = {}
     for n, modes in results["runs"].items():
