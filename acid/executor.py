@@ -306,6 +306,65 @@ def workers_skip_main() -> None:
         main.__spec__ = importlib.machinery.ModuleSpec("acid_cli.__main__", None)
 
 
+_server = {"started": False}
+
+
+def start_worker_server(preload: Iterable[str]) -> bool:
+    """Start now, once per process, the server that local-cluster workers are forked from,
+    with ``preload`` (module names) imported in it; True if it runs.
+
+    Without it each worker is a new interpreter that imports Dask and, at its first task,
+    acid and CasADi (about 0.7 CPU-s a worker, measured). The server imports them once, in
+    parallel with what this process still does before its cluster starts (reading the
+    specification, its own imports), and every worker is a fork of it, ready at once.
+    Afterwards every :class:`DaskExecutor` of this process starts its workers from it.
+    Nothing is started (False) where ``fork`` is not available or outside the main thread.
+
+    The server is multiprocessing's ``forkserver`` (one thread, so forking it is safe); it
+    ignores Ctrl-C (so do the workers: the parent decides) and ends when this process does.
+    Dask's environment for worker processes (one BLAS thread, the common hash seed) is set
+    before it starts, as Dask itself would before spawning a worker.
+    """
+    import multiprocessing
+
+    if _server["started"]:
+        return True
+    if ("forkserver" not in multiprocessing.get_all_start_methods()
+            or threading.current_thread() is not threading.main_thread()):
+        return False
+    try:
+        from multiprocessing import forkserver
+
+        import dask
+        import distributed  # noqa: F401  (its configuration defaults)
+    except ImportError:
+        return False
+    env = {str(k): str(v) for k, v in
+           (dask.config.get("distributed.nanny.pre-spawn-environ") or {}).items()}
+    if os.environ.get("PYTHONHASHSEED") in (None, "0"):
+        env["PYTHONHASHSEED"] = "6640"   # what Dask's nanny sets (the same on every worker)
+    os.environ.update(env)
+    multiprocessing.get_context("forkserver").set_forkserver_preload(
+        ["distributed", *preload])
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited by the server
+    try:
+        forkserver.ensure_running()
+    except OSError:
+        return False
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    _server["started"] = True
+    return True
+
+
+def _worker_server_pid() -> int | None:
+    if not _server["started"]:
+        return None
+    from multiprocessing import forkserver
+
+    return getattr(forkserver._forkserver, "_forkserver_pid", None)
+
+
 def _ignore_sigint_plugin():
     from distributed.diagnostics.plugin import WorkerPlugin
 
@@ -414,7 +473,10 @@ class DaskExecutor(Executor):
             before = {c.pid for c in multiprocessing.active_children()} | _os_children()
             clusters = set(SpecCluster._instances)
             try:
-                with dask.config.set(LOCAL_CLUSTER_CONFIG), warnings.catch_warnings():
+                method = "forkserver" if _server["started"] else "spawn"
+                with dask.config.set({**LOCAL_CLUSTER_CONFIG,
+                                      "distributed.worker.multiprocessing-method": method}), \
+                        warnings.catch_warnings():
                     # no dashboard: its port taken by another cluster is no news
                     warnings.filterwarnings("ignore", message="Port .* is already in use")
                     self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
@@ -530,7 +592,7 @@ class DaskExecutor(Executor):
         # starts already queued finish within a few scans; 10 s bounds a starved machine.
         quiet_since, deadline = time.monotonic(), time.monotonic() + 10.0
         while time.monotonic() - quiet_since < 0.5 and time.monotonic() < deadline:
-            stray = _os_children() - before - {_resource_tracker_pid()}
+            stray = _os_children() - before - {_resource_tracker_pid(), _worker_server_pid()}
             for pid in stray:
                 with contextlib.suppress(OSError):
                     os.kill(pid, signal.SIGKILL)
@@ -557,13 +619,14 @@ class DaskExecutor(Executor):
 
 
 def _os_children() -> set[int]:
-    """PIDs of this process's live children as the OS sees them (psutil, which Dask
-    requires); a killed child not yet reaped is not one."""
+    """PIDs of this process's live descendants as the OS sees them (psutil, which Dask
+    requires; workers forked by the worker server are its children); a killed child not yet
+    reaped is not one."""
     import psutil
 
     live = set()
     with contextlib.suppress(psutil.Error):
-        for child in psutil.Process().children():
+        for child in psutil.Process().children(recursive=True):
             with contextlib.suppress(psutil.Error):
                 if child.status() != psutil.STATUS_ZOMBIE:
                     live.add(child.pid)
@@ -620,4 +683,4 @@ def open_executor(workers: int | None = 1, scheduler: str | None = None,
 __all__ = ["Executor", "InlineExecutor", "DaskExecutor", "open_executor", "check_interrupt",
            "check_scheduler_address",
            "interrupt_guard", "ProgressReporter", "dask_available", "usable_cores",
-           "workers_skip_main", "LOCAL_CLUSTER_CONFIG"]
+           "workers_skip_main", "start_worker_server", "LOCAL_CLUSTER_CONFIG"]

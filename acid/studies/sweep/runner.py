@@ -19,7 +19,13 @@ from pathlib import Path
 from acid import __version__
 from acid._io import save_figure, write_json
 from acid.errors import AcidError, ConfigError
-from acid.executor import Executor, check_interrupt, dask_available, open_executor
+from acid.executor import (
+    Executor,
+    check_interrupt,
+    dask_available,
+    open_executor,
+    start_worker_server,
+)
 from acid.outdir import claim
 from acid.studies.sweep.results import (
     ResultStore,
@@ -137,6 +143,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
                 ex = executor
                 if ex is None:
                     dask_available()  # Dask's own imports first, alone
+                    if scheduler is None:
+                        start_worker_server(WORKER_MODULES)
                     with prefetched(AFTER_RUN_MODULES):  # while the workers start
                         ex = stack.enter_context(open_executor(workers, scheduler,
                                                                inline_when_single=False))
@@ -150,6 +158,10 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
                              len(tasks) - len(todo), failed, where, tampered, t0)
     return result
 
+
+#: what a worker needs to run a scenario: imported once, by the server the local cluster's
+#: workers are forked from (:func:`acid.executor.start_worker_server`)
+WORKER_MODULES = ("acid.studies.sweep.scenario",)
 
 #: what :func:`run_sweep` needs once the scenarios are done (the table, its Parquet file and
 #: the summary's paired tests); imported while a cluster's workers start, when this process
@@ -285,4 +297,5 @@ def finished_label(task, status: str) -> str:
     return where + {"ok": "", "lost": ": lost (its worker ended)"}.get(status, ": failed")
 
 
-__all__ = ["run_sweep", "SweepResult", "check_out_folder", "finished_label"]
+__all__ = ["run_sweep", "SweepResult", "check_out_folder", "finished_label",
+           "WORKER_MODULES"]
