@@ -218,6 +218,11 @@ class Executor(abc.ABC):
     def close(self, interrupted: bool = False) -> None:  # noqa: B027 - nothing to release by default
         """Release workers (an interrupted run does not wait for running tasks)."""
 
+    def close_soon(self) -> None:  # noqa: B027 - nothing to release by default
+        """Start releasing the workers in the background: every task's result is in and no
+        task will be submitted again. The caller goes on (writes its results) meanwhile;
+        :meth:`close` (which the ``with`` block calls in any case) waits for it to end."""
+
     def __enter__(self) -> Executor:
         return self
 
@@ -283,6 +288,83 @@ class InlineExecutor(Executor):
             _local_sinks.pop(t, None)
 
 
+def workers_skip_main() -> None:
+    """Worker processes started from now on do not run this process's ``__main__`` again.
+
+    A worker of a local cluster is a new interpreter (multiprocessing's ``spawn``), which
+    re-runs the parent's main script so that functions defined there can be found. For
+    ``acid``'s console script that means importing the whole command-line interface (Typer,
+    Rich, every command: about 1 CPU-s per worker, measured) for tasks that never use it.
+    Call this only from a main that defines nothing a task needs (the CLI): it names the main
+    module like ``python -m acid_cli`` would, which multiprocessing does not re-run.
+    """
+    import importlib.machinery
+    import sys
+
+    main = sys.modules.get("__main__")
+    if main is not None and getattr(main, "__spec__", None) is None:
+        main.__spec__ = importlib.machinery.ModuleSpec("acid_cli.__main__", None)
+
+
+_server = {"started": False}
+
+
+def start_worker_server(preload: Iterable[str]) -> bool:
+    """Start now, once per process, the server that local-cluster workers are forked from,
+    with ``preload`` (module names) imported in it; True if it runs.
+
+    Without it each worker is a new interpreter that imports Dask and, at its first task,
+    acid and CasADi (about 0.7 CPU-s a worker, measured). The server imports them once, in
+    parallel with what this process still does before its cluster starts (reading the
+    specification, its own imports), and every worker is a fork of it, ready at once.
+    Afterwards every :class:`DaskExecutor` of this process starts its workers from it.
+    Nothing is started (False) where ``fork`` is not available or outside the main thread.
+
+    The server is multiprocessing's ``forkserver`` (one thread, so forking it is safe); it
+    ignores Ctrl-C (so do the workers: the parent decides) and ends when this process does.
+    Dask's environment for worker processes (one BLAS thread, the common hash seed) is set
+    before it starts, as Dask itself would before spawning a worker.
+    """
+    import multiprocessing
+
+    if _server["started"]:
+        return True
+    if ("forkserver" not in multiprocessing.get_all_start_methods()
+            or threading.current_thread() is not threading.main_thread()):
+        return False
+    try:
+        from multiprocessing import forkserver
+
+        import dask
+        import distributed  # noqa: F401  (its configuration defaults)
+    except ImportError:
+        return False
+    env = {str(k): str(v) for k, v in
+           (dask.config.get("distributed.nanny.pre-spawn-environ") or {}).items()}
+    if os.environ.get("PYTHONHASHSEED") in (None, "0"):
+        env["PYTHONHASHSEED"] = "6640"   # what Dask's nanny sets (the same on every worker)
+    os.environ.update(env)
+    multiprocessing.get_context("forkserver").set_forkserver_preload(
+        ["distributed", *preload])
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited by the server
+    try:
+        forkserver.ensure_running()
+    except OSError:
+        return False
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    _server["started"] = True
+    return True
+
+
+def _worker_server_pid() -> int | None:
+    if not _server["started"]:
+        return None
+    from multiprocessing import forkserver
+
+    return getattr(forkserver._forkserver, "_forkserver_pid", None)
+
+
 def _ignore_sigint_plugin():
     from distributed.diagnostics.plugin import WorkerPlugin
 
@@ -302,6 +384,29 @@ def _worker_acid_version() -> str:
     from acid import __version__
 
     return __version__
+
+
+#: Dask settings of a local cluster. Tasks are whole closed loops (seconds each, one per
+#: worker at a time), so what Dask does in the background every few milliseconds is cost
+#: without use: on a machine with as many workers as cores it takes CPU from the tasks
+#: (measured, 2 idle workers: 0.03 CPU-s per second in the client and in each worker by
+#: default, 0.003-0.006 with these). Off: the statistical profiler (samples every worker's
+#: task thread every 10 ms and takes the GIL to do it), work stealing (tasks are queued on
+#: the scheduler and given to a worker only when it is free: nothing to steal), and, with
+#: ``memory_limit=0``, the memory monitor and spilling (a nanny polls its worker's memory
+#: every 100 ms). Slower: the event-loop ticks (20 ms) and the system monitor (0.5 s)
+#: only feed diagnostics.
+LOCAL_CLUSTER_CONFIG = {
+    "distributed.scheduler.allowed-failures": 1,
+    # one task per worker at a time, the rest queued on the scheduler: a long task is never
+    # parked behind another on a busy worker while one idles
+    "distributed.scheduler.worker-saturation": 1.0,
+    "distributed.scheduler.work-stealing": False,
+    "distributed.worker.daemon": False,
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+}
 
 
 _SCHEMES = ("tcp", "tls", "inproc", "ucx", "ws", "wss")
@@ -342,6 +447,7 @@ class DaskExecutor(Executor):
         except ImportError:
             raise AcidError("parallel runs need Dask: pip install 'acid[distributed]'") from None
         self.cluster = None
+        self._closer: threading.Thread | None = None
         self._pids: set[int] = set()
         if address:
             check_scheduler_address(address)
@@ -360,8 +466,6 @@ class DaskExecutor(Executor):
             if n < 1:
                 raise AcidError(f"workers must be at least 1, got {n}")
             self.kind = "local"
-            # one task per worker at a time, the rest queued on the scheduler: a long task is
-            # never parked behind another on a busy worker while one idles
             import multiprocessing
 
             from distributed.deploy.spec import SpecCluster
@@ -369,14 +473,16 @@ class DaskExecutor(Executor):
             before = {c.pid for c in multiprocessing.active_children()} | _os_children()
             clusters = set(SpecCluster._instances)
             try:
-                with dask.config.set({"distributed.scheduler.allowed-failures": 1,
-                                      "distributed.scheduler.worker-saturation": 1.0,
-                                      "distributed.worker.daemon": False}), \
+                method = "forkserver" if _server["started"] else "spawn"
+                with dask.config.set({**LOCAL_CLUSTER_CONFIG,
+                                      "distributed.worker.multiprocessing-method": method}), \
                         warnings.catch_warnings():
                     # no dashboard: its port taken by another cluster is no news
                     warnings.filterwarnings("ignore", message="Port .* is already in use")
                     self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
                                                 processes=True, dashboard_address=None,
+                                                scheduler_kwargs={"dashboard": False},
+                                                memory_limit=0,
                                                 silence_logs=logging.CRITICAL)
                     self.client = Client(self.cluster)
                 self.address = self.cluster.scheduler_address
@@ -431,7 +537,25 @@ class DaskExecutor(Executor):
     def result(self, handle):
         return handle.result()
 
+    def close_soon(self) -> None:
+        if self.cluster is None or self._closer is not None:
+            return
+        self._closer = threading.Thread(target=self._close, name="acid-executor-close",
+                                        daemon=True)
+        self._closer.start()
+
     def close(self, interrupted: bool = False) -> None:
+        closer = self._closer
+        if closer is None:
+            self._close(interrupted)
+            return
+        if interrupted:  # the closing under way may wait for the workers: end them now
+            _silence_dask_logs()
+            self._kill_workers()
+        closer.join()
+        self._kill_workers()
+
+    def _close(self, interrupted: bool = False) -> None:
         with contextlib.suppress(Exception):
             for t in self._topics:
                 self.client.unsubscribe_topic(t)
@@ -468,7 +592,7 @@ class DaskExecutor(Executor):
         # starts already queued finish within a few scans; 10 s bounds a starved machine.
         quiet_since, deadline = time.monotonic(), time.monotonic() + 10.0
         while time.monotonic() - quiet_since < 0.5 and time.monotonic() < deadline:
-            stray = _os_children() - before - {_resource_tracker_pid()}
+            stray = _os_children() - before - {_resource_tracker_pid(), _worker_server_pid()}
             for pid in stray:
                 with contextlib.suppress(OSError):
                     os.kill(pid, signal.SIGKILL)
@@ -495,13 +619,14 @@ class DaskExecutor(Executor):
 
 
 def _os_children() -> set[int]:
-    """PIDs of this process's live children as the OS sees them (psutil, which Dask
-    requires); a killed child not yet reaped is not one."""
+    """PIDs of this process's live descendants as the OS sees them (psutil, which Dask
+    requires; workers forked by the worker server are its children); a killed child not yet
+    reaped is not one."""
     import psutil
 
     live = set()
     with contextlib.suppress(psutil.Error):
-        for child in psutil.Process().children():
+        for child in psutil.Process().children(recursive=True):
             with contextlib.suppress(psutil.Error):
                 if child.status() != psutil.STATUS_ZOMBIE:
                     live.add(child.pid)
@@ -557,4 +682,5 @@ def open_executor(workers: int | None = 1, scheduler: str | None = None,
 
 __all__ = ["Executor", "InlineExecutor", "DaskExecutor", "open_executor", "check_interrupt",
            "check_scheduler_address",
-           "interrupt_guard", "ProgressReporter", "dask_available", "usable_cores"]
+           "interrupt_guard", "ProgressReporter", "dask_available", "usable_cores",
+           "workers_skip_main", "start_worker_server", "LOCAL_CLUSTER_CONFIG"]

@@ -13,11 +13,14 @@ Printed per scenario count: wall time of each; ``speed-up`` = jobs 1 / jobs 2; `
 = (jobs 1 - inline) / scenarios (s per scenario; it contains the fixed cluster start-up, so
 the slope between 8 and 64 scenarios, printed last, is the per-scenario part); the sum of
 the scenarios' own CPU time (``cpu_s`` of their records) and the CPU time of the whole
-command's process tree (``getrusage`` of the reaped children); ``CPU speed-up`` = sum of
-the scenarios' CPU / wall (how many cores the scenarios kept busy: the speed-up without the
-other processes' load); ``left``: processes of the command's process group alive 10 s after
-it ended (psutil; must be 0). The load average is printed with each run: on a shared
-machine the wall-clock speed-up is bounded by the free cores, the CPU speed-up less so.
+command's process tree (``getrusage`` of the command and what it reaped, plus the last
+look at each process it did not reap, such as workers forked by a fork server);
+``CPU speed-up`` = sum of the scenarios' CPU / wall (how many cores the scenarios kept
+busy: the speed-up without the other processes' load); whether every run's table equals
+the inline one but for its timing columns; ``left``: processes of the command's process
+group alive 10 s after it ended (psutil; must be 0). The load average is printed with each
+run: on a shared machine the wall-clock speed-up is bounded by the free cores, the CPU
+speed-up less so.
 
 Usage::
 
@@ -75,13 +78,25 @@ def run(cmd: list[str], out: Path) -> dict:
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                          start_new_session=True)
     most = 0
+    seen: dict[int, tuple[int, float]] = {}   # pid -> (parent pid, CPU s at the last look)
     while p.poll() is None:
         try:
-            most = max(most, len(psutil.Process(p.pid).children(recursive=True)))
-        except psutil.Error:
+            kids = psutil.Process(p.pid).children(recursive=True)
+            most = max(most, len(kids))
+            for k in kids:
+                with open(f"/proc/{k.pid}/stat") as f:   # psutil's cpu_times, one read
+                    fields = f.read().rsplit(")", 1)[1].split()
+                tick = os.sysconf("SC_CLK_TCK")
+                seen[k.pid] = (int(fields[1]), (int(fields[11]) + int(fields[12])) / tick)
+        except (psutil.Error, OSError, IndexError):
             pass
         time.sleep(0.2)
     wall = time.perf_counter() - t0
+    # the command's own CPU and its reaped children's come from getrusage below; processes
+    # it did not reap (workers forked by a fork server, services that outlive it) from
+    # their last look (up to 0.2 s of each missed)
+    alive = {q.pid for q in psutil.process_iter()}
+    unreaped = sum(c for pid, (ppid, c) in seen.items() if ppid != p.pid or pid in alive)
     text = p.stdout.read()
     if p.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed ({p.returncode}):\n{text[-2000:]}")
@@ -97,11 +112,23 @@ def run(cmd: list[str], out: Path) -> dict:
             pass
     records = [json.loads(f.read_text()) for f in (out / "scenarios").glob("*.json")]
     return {"wall_s": wall, "tree_cpu_s": (after.ru_utime + after.ru_stime)
-            - (before.ru_utime + before.ru_stime),
+            - (before.ru_utime + before.ru_stime) + unreaped,
             "task_cpu_s": sum(r.get("cpu_s") or 0.0 for r in records),
             "task_wall_s": sum(r.get("elapsed_s") or 0.0 for r in records),
             "records": len(records), "most_children": most, "left": len(left),
             "load": [load0, os.getloadavg()[0]]}
+
+
+#: columns that say where and how long a scenario ran (they differ from run to run)
+TIMING = ["solve_ms_median", "solve_ms_p95", "solve_ms_max", "scenario_elapsed_s", "worker"]
+
+
+def same_table(out: Path):
+    """The run's table without its timing columns, in scenario order."""
+    import pandas as pd
+
+    t = pd.read_parquet(out / "results.parquet").drop(columns=TIMING)
+    return t.sort_values(["scenario", "controller"]).reset_index(drop=True)
 
 
 def main() -> None:
@@ -112,6 +139,7 @@ def main() -> None:
     args = ap.parse_args()
     acid = str(Path(sys.executable).with_name("acid"))
     results: dict = {"cores": len(os.sched_getaffinity(0)), "runs": {}}
+    tables: dict = {}
     with tempfile.TemporaryDirectory(prefix="acid-scale-") as tmp:
         root = Path(tmp)
         # untimed: the imports' files in the page cache
@@ -129,11 +157,19 @@ def main() -> None:
                             mode.split()[1], "--no-figures", "--force"])
                     r = run(cmd, out)
                     assert r["records"] == n, r
+                    tables.setdefault(n, []).append((mode, same_table(out)))
                     results["runs"].setdefault(str(n), {}).setdefault(mode, []).append(r)
                     print(f"{n:>3} scenarios {mode:<7} wall {r['wall_s']:7.2f} s  task CPU "
                           f"{r['task_cpu_s']:7.2f} s  tree CPU {r['tree_cpu_s']:7.2f} s  "
                           f"processes seen {r['most_children']:>2} left {r['left']}  load "
                           f"{r['load'][0]:.1f}-{r['load'][1]:.1f}", flush=True)
+    for n, found in tables.items():   # every run's table against the first (inline)
+        ref = found[0][1]
+        differ = sorted({f"{mode}: {c}" for mode, t in found[1:] for c in ref.columns
+                         if not ref[c].equals(t[c])})
+        results.setdefault("same_table", {})[str(n)] = not differ
+        print(f"{n:>3} scenarios: tables (but timings) of every run equal to inline: "
+              f"{'yes' if not differ else 'NO: ' + ', '.join(differ)}")
     print("\nbest of", args.repeat)
     summary = {}
     for n, modes in results["runs"].items():

@@ -77,7 +77,7 @@ def sweep(
     interrupted sweep resumes. Writes OUT/results.parquet, OUT/results.csv, two figures and
     OUT/summary.json.
     """
-    from acid.executor import check_scheduler_address
+    from acid.executor import check_scheduler_address, start_worker_server, workers_skip_main
     from acid.outdir import claim
     from acid.studies.sweep import load_spec
     from acid.studies.sweep.runner import check_out_folder
@@ -114,6 +114,11 @@ def sweep(
                      "_plant"], rows)
         say("specification OK; nothing run (--dry-run)")
         return
+    workers_skip_main()  # the workers need acid, not this command-line interface
+    if scheduler is None:  # the workers' imports begin now, beside this process's own
+        from acid.studies.sweep.runner import WORKER_MODULES
+
+        start_worker_server(WORKER_MODULES)
     with claim(out, "acid sweep"):  # before anything is printed: a busy folder is one line
         _run(spec, out, workers, scheduler, force, retry_failed, figures, json_path, header)
 

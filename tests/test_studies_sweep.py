@@ -102,6 +102,16 @@ def test_worker_results_equal_an_in_process_run_bit_for_bit(dask_sweep, tmp_path
     dask = first.table[first.table["ambient_C"] == 32.0].reset_index(drop=True)
     for col in ("energy_MJ", "mean_T_cab_C", "max_T_cab_C", "tail_energy_MJ", "saving_pct"):
         assert np.array_equal(inline[col].to_numpy(), dask[col].to_numpy()), col
+    # every other column too, but where and how long it ran (and its index in its spec)
+    timing = {"solve_ms_median", "solve_ms_p95", "solve_ms_max", "scenario_elapsed_s",
+              "worker", "scenario", "scenario_key"}
+    assert list(inline.columns) == list(dask.columns)
+    def cells(col):  # a missing value reads None whatever the column's dtype
+        return [[None if pd.isna(v) else v for v in t[col].tolist()] for t in (inline, dask)]
+
+    for col in inline.columns.difference(sorted(timing)):
+        mine, theirs = cells(col)
+        assert mine == theirs, col
 
 
 def test_an_existing_cluster_is_used_by_its_scheduler_address(dask_sweep, tmp_path):

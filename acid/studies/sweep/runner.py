@@ -10,6 +10,7 @@ and ``summary.json``. An interrupted sweep keeps its finished records; the next 
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -18,7 +19,13 @@ from pathlib import Path
 from acid import __version__
 from acid._io import save_figure, write_json
 from acid.errors import AcidError, ConfigError
-from acid.executor import Executor, check_interrupt, open_executor
+from acid.executor import (
+    Executor,
+    check_interrupt,
+    dask_available,
+    open_executor,
+    start_worker_server,
+)
 from acid.outdir import claim
 from acid.studies.sweep.results import (
     ResultStore,
@@ -131,42 +138,87 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None,
             write_text(out / "spec.toml", spec.path.read_text())
         computed = failed = 0
         where = "nothing to run"
-        if todo:
-            if executor is not None:
-                computed, failed, where = _execute(spec, todo, store, executor, on_progress,
+        with contextlib.ExitStack() as stack:  # an executor opened here is closed at its end
+            if todo:
+                ex = executor
+                if ex is None:
+                    dask_available()  # Dask's own imports first, alone
+                    if scheduler is None:
+                        start_worker_server(WORKER_MODULES)
+                    with prefetched(AFTER_RUN_MODULES):  # while the workers start
+                        ex = stack.enter_context(open_executor(workers, scheduler,
+                                                               inline_when_single=False))
+                computed, failed, where = _execute(spec, todo, store, ex, on_progress,
                                                    on_start, len(tasks) - len(todo))
-            else:
-                with open_executor(workers, scheduler, inline_when_single=False) as ex:
-                    computed, failed, where = _execute(spec, todo, store, ex, on_progress,
-                                                       on_start, len(tasks) - len(todo))
-        elif on_start is not None:
-            on_start(0, len(tasks), where)
-        records = [store.load(t.key) for t in tasks]
-        table = results_table([r for r in records if r is not None])
-        files = write_table(table, out)
-        if figures:
-            from acid.report.sweep import energy_figure, saving_figure
+                if executor is None:
+                    ex.close_soon()  # the workers end while the table is written
+            elif on_start is not None:
+                on_start(0, len(tasks), where)
+            result = _finish(spec, out, tasks, store, figures, computed,
+                             len(tasks) - len(todo), failed, where, tampered, t0)
+    return result
 
-            files["saving_figure"] = save_figure(saving_figure(table, spec.baseline),
-                                                 out / "saving_vs_ambient.png")
-            files["energy_figure"] = save_figure(energy_figure(table),
-                                                 out / "energy_per_cycle.png")
-            roles = prediction_roles(table) if len(table) else None
-            if roles is not None:
-                from acid.report.sweep import prediction_figure
 
-                files["prediction_figure"] = save_figure(
-                    prediction_figure(table, **roles), out / "prediction.png")
-        if spec.path is not None and spec.path.is_file():
-            from acid._io import write_text
+#: what a worker needs to run a scenario: imported once, by the server the local cluster's
+#: workers are forked from (:func:`acid.executor.start_worker_server`)
+WORKER_MODULES = ("acid.studies.sweep.scenario",)
 
-            files["spec"] = write_text(out / "spec.toml", spec.path.read_text())
-        files["summary"] = out / "summary.json"
-        result = SweepResult(spec=spec, out=out, table=table, computed=computed,
-                             reused=len(tasks) - len(todo), failed=failed,
-                             elapsed_s=time.perf_counter() - t0, executor=where, files=files,
-                             tampered=tampered)
-        write_json(files["summary"], result.to_json_dict())
+#: what :func:`run_sweep` needs once the scenarios are done (the table, its Parquet file and
+#: the summary's paired tests); imported while a cluster's workers start, when this process
+#: has nothing else to do (about 1 CPU-s it would otherwise add after the last scenario)
+AFTER_RUN_MODULES = ("pandas", "pyarrow.parquet", "scipy.stats")
+
+
+@contextlib.contextmanager
+def prefetched(modules):
+    """Import ``modules`` in a background thread while the block runs (the block must not
+    import them itself); waits for the thread at the end. A module that fails to import is
+    left to its first real use, which reports it."""
+    import importlib
+    import threading
+
+    def load():
+        for name in modules:
+            with contextlib.suppress(Exception):
+                importlib.import_module(name)
+
+    thread = threading.Thread(target=load, name="acid-prefetch", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        thread.join()
+
+
+def _finish(spec, out, tasks, store, figures, computed, reused, failed, where,
+            tampered, t0):
+    """The table, figures and summary of a sweep whose scenarios are done."""
+    records = [store.load(t.key) for t in tasks]
+    table = results_table([r for r in records if r is not None])
+    files = write_table(table, out)
+    if figures:
+        from acid.report.sweep import energy_figure, saving_figure
+
+        files["saving_figure"] = save_figure(saving_figure(table, spec.baseline),
+                                             out / "saving_vs_ambient.png")
+        files["energy_figure"] = save_figure(energy_figure(table),
+                                             out / "energy_per_cycle.png")
+        roles = prediction_roles(table) if len(table) else None
+        if roles is not None:
+            from acid.report.sweep import prediction_figure
+
+            files["prediction_figure"] = save_figure(
+                prediction_figure(table, **roles), out / "prediction.png")
+    if spec.path is not None and spec.path.is_file():
+        from acid._io import write_text
+
+        files["spec"] = write_text(out / "spec.toml", spec.path.read_text())
+    files["summary"] = out / "summary.json"
+    result = SweepResult(spec=spec, out=out, table=table, computed=computed,
+                         reused=reused, failed=failed,
+                         elapsed_s=time.perf_counter() - t0, executor=where, files=files,
+                         tampered=tampered)
+    write_json(files["summary"], result.to_json_dict())
     return result
 
 
@@ -245,4 +297,5 @@ def finished_label(task, status: str) -> str:
     return where + {"ok": "", "lost": ": lost (its worker ended)"}.get(status, ": failed")
 
 
-__all__ = ["run_sweep", "SweepResult", "check_out_folder", "finished_label"]
+__all__ = ["run_sweep", "SweepResult", "check_out_folder", "finished_label",
+           "WORKER_MODULES"]
