@@ -220,3 +220,21 @@ def test_fisher_steps_reach_the_exact_newton_optimum_with_a_matching_curvature(r
         assert fi.value(name) == pytest.approx(ex.value(name), rel=1e-4), name
         se_f, se_x = (next(e.stderr for e in r.estimates if e.name == name) for r in (fi, ex))
         assert se_f == pytest.approx(se_x, rel=0.3), name
+
+
+def test_fit_starts_group_converged_pem_fits_into_basins_and_name_failed_ones(rng, tmp_path):
+    """``fit_starts`` with the prediction-error method: every start is a converged optimum
+    (grouped: loss, parameters, count) or a failed start with its reason; the best is
+    reported. With a budget too small to converge, every start is a failed one."""
+    m = _room(tmp_path)
+    ds, _ = _record(m, rng, 600, 400.0)
+    res = fit_model(m, ds, "pem", fit_starts=3, seed=1)
+    assert res.optima and sum(o.n_starts for o in res.optima) + len(res.failed_starts) == 3
+    best = res.optima[0]
+    assert res.output_error["loss"] == pytest.approx(best.loss, rel=1e-12)
+    assert set(best.values) == set(res.covariance_names)
+    assert any(n.startswith("multi-start: 3 starts") for n in res.notes)
+    capped = fit_model(m, ds, "pem", fit_starts=3, seed=1, max_nfev=3)
+    assert not capped.optima and len(capped.failed_starts) == 3
+    assert all(f.reason.startswith("not converged (") for f in capped.failed_starts)
+    assert any("none of the 3 starts converged" in w for w in capped.warnings)

@@ -15,6 +15,9 @@ import numpy as np
 #: parameter on a bound is pulled inwards: the likelihood is then flat to far below its
 #: statistical resolution (a change of 1 in -2 log L).
 DECREMENT_TOL = 1e-6
+#: Curvature below this fraction of the largest counts as this fraction in the decrement
+#: (a direction the data do not fix; the Fisher information is singular there).
+CURVATURE_FLOOR = 1e-12
 
 
 @dataclass
@@ -69,8 +72,12 @@ def newton(hess, cost: ca.Function, z: np.ndarray, zlo, zhi,
         dec, convex = 0.0, True
         if gf.size and np.all(np.isfinite(Hf)):
             w, V = np.linalg.eigh(Hf)
-            convex = bool(w.min() > 1e-12 * max(abs(w).max(), 1e-300))
-            dec = float(np.sum((V.T @ gf) ** 2 / w)) if convex else math.inf
+            floor = CURVATURE_FLOOR * max(abs(w).max(), 1e-300)
+            convex = bool(w.min() > -floor)
+            # directions of (almost) no curvature (a parameter the data do not fix) count
+            # with the curvature floored: finite, and small only if the gradient is too
+            dec = float(np.sum((V.T @ gf) ** 2 / np.maximum(w, floor))) if convex \
+                else math.inf
         elif gf.size:
             dec, convex = math.inf, False
         done = math.isfinite(f) and dec <= DECREMENT_TOL
