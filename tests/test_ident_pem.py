@@ -195,8 +195,7 @@ def test_converges_within_the_default_budget_and_says_how_it_knows(rng, tmp_path
     assert "not converged after 3 gradient evaluations (cap 3)" in \
         capped.output_error["status"]
     assert "projected gradient" in capped.output_error["status"]
-    assert ": budget spent (1 Fisher matrices) with the Newton decrement" in \
-        capped.output_error["status"]
+    assert "(cap 1): budget spent; Newton decrement" in capped.output_error["status"]
     assert "\n" not in capped.output_error["status"]
     assert capped.output_error["loss"] >= oe_["loss"] - 1e-6 * abs(oe_["loss"])
 

@@ -84,8 +84,7 @@ def newton(hess, cost: ca.Function, z: np.ndarray, zlo, zhi,
         if done or n_h >= max_hessians or not math.isfinite(f):
             why = ("" if done else "the loss is not finite (the filter diverged)"
                    if not math.isfinite(f) else
-                   f"budget spent ({max_hessians} {kind}) with the Newton decrement "
-                   f"{dec:.2g} above {DECREMENT_TOL:g}")
+                   "budget spent")
             return Newton(z, f, H, dec, pgrad, rel, n_h, bool(done), why, kind)
         # damped step on the free set: (H + lam D) dz = -g, D the curvature's scale
         D = np.abs(np.diag(Hf))
@@ -105,8 +104,7 @@ def newton(hess, cost: ca.Function, z: np.ndarray, zlo, zhi,
             lam = max(10 * lam, 1e-6)
         else:      # no decrease along any damping: the loss is flat at round-off here
             return Newton(z, f, H, dec, pgrad, rel, n_h, False,
-                          f"no damped Newton step lowers the loss (flat at round-off) with "
-                          f"the Newton decrement {dec:.2g} above {DECREMENT_TOL:g}", kind)
+                          "no damped Newton step lowers the loss (flat at round-off)", kind)
         lam = lam / 10 if lam > 1e-8 else 0.0
         rel = abs(fn - f) / max(abs(f), 1.0)
         z = zn
