@@ -48,7 +48,7 @@ def fit(
         100, "--max-evals",
         help="A declared model's output-error or prediction-error fit: at most this many "
              "evaluations of the loss (prediction error: as many gradients, then up to a "
-             "tenth as many exact Hessians for Newton steps); the report says "
+             "third as many Fisher-information matrices for Newton steps); the report says "
              "whether it converged first."),
     reference: str = typer.Option(
         "paper", "--reference",
