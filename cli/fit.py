@@ -48,7 +48,7 @@ def fit(
         100, "--max-evals",
         help="A declared model's output-error or prediction-error fit: at most this many "
              "evaluations of the loss (prediction error: as many gradients, then up to a "
-             "tenth as many exact Hessians for Newton steps); the report says "
+             "third as many Fisher-information matrices for Newton steps); the report says "
              "whether it converged first."),
     reference: str = typer.Option(
         "paper", "--reference",
@@ -101,9 +101,10 @@ def fit(
         None, "--free", help="NAME: estimate a parameter the declared model (a model "
                              "file, paper or econ) declares fixed (repeatable)."),
     fit_starts: int = typer.Option(
-        1, "--fit-starts", help="Output-error starts spread inside the declared bounds "
-                                "(a model file, or paper/econ through their declarations); "
-                                "the distinct optima are reported."),
+        1, "--fit-starts", help="Output-error (or, with --method pem, prediction-error) "
+                                "starts spread inside the declared bounds (a model file, or "
+                                "paper/econ through their declarations); the distinct optima "
+                                "are reported, failed starts with their reason."),
     seed: int = typer.Option(0, "--seed", help="Seed of the --fit-starts draws."),
     add_record: list[Path] | None = typer.Option(
         None, "--add-record", help="Another record fitted with DATA, as its own experiment "

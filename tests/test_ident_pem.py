@@ -176,9 +176,9 @@ def test_per_experiment_parameters_and_outputs_of_a_built_in_declaration(rng):
 
 
 def test_converges_within_the_default_budget_and_says_how_it_knows(rng, tmp_path):
-    """L-BFGS-B alone stops at its cap far from the optimum; the Newton steps with the exact
-    Hessian end where the Newton decrement is below its tolerance, and the status says
-    so with the numbers (decrement, projected gradient, evaluations, Hessians)."""
+    """L-BFGS-B alone stops at its cap far from the optimum; the Newton steps with the
+    Fisher information end where the Newton decrement is below its tolerance, and the status
+    says so with the numbers (decrement, projected gradient, evaluations, matrices)."""
     from acid.ident.ms.newton import DECREMENT_TOL
 
     m = _room(tmp_path)
@@ -188,11 +188,52 @@ def test_converges_within_the_default_budget_and_says_how_it_knows(rng, tmp_path
     assert oe_["converged"], oe_["status"]
     assert oe_["status"].startswith("converged: Newton decrement")
     dec = float(oe_["status"].split("Newton decrement ")[1].split(" ")[0])
-    assert dec <= DECREMENT_TOL and "exact Hessians" in oe_["status"]
+    assert dec <= DECREMENT_TOL and "Fisher matrices" in oe_["status"]
     # a tiny budget: not converged, and the status says how far (decrement, gradient)
     capped = fit_model(m, ds, "pem", max_nfev=3)
     assert not capped.output_error["converged"]
     assert "not converged after 3 gradient evaluations (cap 3)" in \
         capped.output_error["status"]
     assert "projected gradient" in capped.output_error["status"]
+    assert "(cap 1): budget spent; Newton decrement" in capped.output_error["status"]
+    assert "\n" not in capped.output_error["status"]
     assert capped.output_error["loss"] >= oe_["loss"] - 1e-6 * abs(oe_["loss"])
+
+
+def test_fisher_steps_reach_the_exact_newton_optimum_with_a_matching_curvature(rng,
+                                                                                tmp_path):
+    """The Newton phase on the Fisher information (first derivatives of the innovations and
+    their covariances) ends at the optimum the exact-Hessian Newton phase finds, to 1e-9 of
+    the loss, and at that optimum of a well-specified model the two curvatures (hence the
+    standard errors) agree."""
+    from acid.ident.pem import fit_pem
+
+    m = _room(tmp_path)
+    ds, _ = _record(m, rng, 600, 400.0)
+    fi = fit_pem(m, ds, curvature="fisher")
+    ex = fit_pem(m, ds, curvature="exact")
+    assert fi.output_error["converged"] and ex.output_error["converged"]
+    assert "exact Hessians" in ex.output_error["status"]
+    assert fi.output_error["loss"] == pytest.approx(ex.output_error["loss"], rel=1e-9)
+    for name in ("C", "UA", "sigma_y", "sigma_Q"):
+        assert fi.value(name) == pytest.approx(ex.value(name), rel=1e-4), name
+        se_f, se_x = (next(e.stderr for e in r.estimates if e.name == name) for r in (fi, ex))
+        assert se_f == pytest.approx(se_x, rel=0.3), name
+
+
+def test_fit_starts_group_converged_pem_fits_into_basins_and_name_failed_ones(rng, tmp_path):
+    """``fit_starts`` with the prediction-error method: every start is a converged optimum
+    (grouped: loss, parameters, count) or a failed start with its reason; the best is
+    reported. With a budget too small to converge, every start is a failed one."""
+    m = _room(tmp_path)
+    ds, _ = _record(m, rng, 600, 400.0)
+    res = fit_model(m, ds, "pem", fit_starts=3, seed=1)
+    assert res.optima and sum(o.n_starts for o in res.optima) + len(res.failed_starts) == 3
+    best = res.optima[0]
+    assert res.output_error["loss"] == pytest.approx(best.loss, rel=1e-12)
+    assert set(best.values) == set(res.covariance_names)
+    assert any(n.startswith("multi-start: 3 starts") for n in res.notes)
+    capped = fit_model(m, ds, "pem", fit_starts=3, seed=1, max_nfev=3)
+    assert not capped.optima and len(capped.failed_starts) == 3
+    assert all(f.reason.startswith("not converged (") for f in capped.failed_starts)
+    assert any("none of the 3 starts converged" in w for w in capped.warnings)

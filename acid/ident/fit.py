@@ -121,8 +121,12 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
     if method == "pem":
         from acid.ident.pem import fit_pem
 
-        return fit_pem(model, ds, fix=fix, max_nfev=max_nfev, t0=t0,
-                       progress=_labelled(progress, "prediction error"))
+        res = fit_pem(model, ds, fix=fix, max_nfev=max_nfev, t0=t0,
+                      progress=_labelled(progress, "prediction error"))
+        if int(fit_starts) > 1:
+            res = _pem_starts(model, ds, res, int(fit_starts), seed, fix, max_nfev, t0,
+                              progress)
+        return res
     data = ModelData.of(model, ds)
     E = data.n_experiments
     names = model.parameter_names
@@ -555,6 +559,56 @@ def _same_basin(loss, th, l0, t0, atol: float, rtol_loss: float = 1e-6,
     scale = np.maximum(np.abs(t0), 1e-9)
     return bool(abs(loss - l0) <= rtol_loss * abs(l0) + atol
                 and np.all(np.abs(th - t0) <= rtol_theta * scale))
+
+
+def _pem_starts(model: Model, ds: Dataset, first, n: int, seed: int, fix, max_nfev: int,
+                t0: float, progress) -> DeclaredFitResult:
+    """``fit_starts`` for the prediction-error method: ``n - 1`` more fits from starts drawn
+    inside the bounds of its free columns (the declared start first); the converged ones
+    grouped into optima (loss, parameters, count), the others failed starts with the
+    reason; the best converged fit is reported."""
+    from acid.ident.pem import columns_for, fit_pem
+
+    columns = columns_for(model, ModelData.of(model, ds), fix)
+    lo = np.array([model.parameters[c.index].min for c in columns])
+    hi = np.array([model.parameters[c.index].max for c in columns])
+
+    def theta(r):                   # the free columns' values, in the columns' order
+        return np.array([e.value for e in r.estimates if e.status != "fixed"])
+    runs, failed, best = [], [], None
+    rng = np.random.default_rng(seed)
+    for k, s0 in enumerate([None, *_starts(rng, n - 1, theta(first), lo, hi)]):
+        if s0 is None:
+            r = first
+        else:
+            start: dict = {}
+            for c, v in zip(columns, s0, strict=True):     # a per-trip column: its mean
+                start.setdefault(c.name, []).append(float(v))
+            r = fit_pem(_with_values(model, {k_: float(np.mean(v)) for k_, v in
+                                             start.items()}), ds, fix=fix,
+                        max_nfev=max_nfev, t0=t0,
+                        progress=_labelled(progress, f"prediction error, start {k + 1}/{n}"))
+        oe_ = r.output_error
+        th = theta(r)
+        if not (math.isfinite(oe_["loss"]) and np.all(np.isfinite(th))):
+            failed.append(FailedStart(k, float(oe_["loss"]), "non-finite loss or parameters",
+                                      dict(zip(r.covariance_names, th.tolist(), strict=True))))
+        elif not oe_["converged"]:
+            failed.append(FailedStart(k, float(oe_["loss"]), f"not converged ({oe_['status']})",
+                                      dict(zip(r.covariance_names, th.tolist(), strict=True))))
+        else:
+            runs.append((float(oe_["loss"]), th))
+            if best is None or oe_["loss"] < best.output_error["loss"]:
+                best = r
+    if best is None:
+        return dataclasses.replace(first, failed_starts=tuple(failed), warnings=(
+            *first.warnings, f"multi-start: none of the {n} starts converged; the first "
+            "start's result is reported"), elapsed_s=time.perf_counter() - t0)
+    optima = _distinct(runs, columns, lo, hi)
+    failed = _in_basins(failed, optima, columns)
+    return dataclasses.replace(best, optima=tuple(optima), failed_starts=tuple(failed),
+                               notes=(*best.notes, _basins_note(n, len(runs), optima, failed)),
+                               elapsed_s=time.perf_counter() - t0)
 
 
 def _in_basins(failed, optima, columns) -> list[FailedStart]:

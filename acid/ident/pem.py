@@ -15,9 +15,10 @@ Automatica 40 (2004) 225-237). The negative log-likelihood of the innovations,
 with ``e_k`` the measured channels minus their one-step prediction and ``S_k`` its
 covariance, is minimised over the free parameters (bounded): L-BFGS-B with its gradient
 from CasADi's reverse mode through the whole filter recursion, then Newton steps with the
-exact Hessian (CasADi, forward over reverse; nothing hand-derived) until the Newton
-decrement is below ``acid.ident.ms.newton.DECREMENT_TOL`` (or the budget ends, and the
-status says how far it was).
+likelihood's Fisher information (from the innovations' and their covariances' first
+derivatives, CasADi forward mode; nothing hand-derived; the exact Hessian, forward over
+reverse, on request) until the Newton decrement is below
+``acid.ident.ms.newton.DECREMENT_TOL`` (or the budget ends, and the status says why).
 
 What the filter needs the declaration says (``acid.models.State``): ``noise`` (the state's
 random increment per sample, a number or a parameter's name), ``spread`` (the standard
@@ -92,9 +93,9 @@ def ekf_step(model: Model, chan: tuple[int, ...]) -> ca.Function:
     """One filter sample: update with the measured channels ``chan`` of [x | y] (``o``: 1
     where observed), then predict one sample ahead.
 
-    ``(x, P, u, d, p, m, o) -> (x_next, P_next, cost, e, s2, x_filtered)``; ``cost`` is
-    this sample's ``log det S + e' S^-1 e`` (0 where nothing is observed), ``s2`` the
-    innovations' variances."""
+    ``(x, P, u, d, p, m, o) -> (x_next, P_next, cost, e, s2, x_filtered, S)``; ``cost``
+    is this sample's ``log det S + e' S^-1 e`` (0 where nothing is observed), ``s2`` the
+    innovations' variances, ``S`` their covariance (vectorised)."""
     nx, nc = model.nx, len(chan)
     x, u, d, p = (ca.SX.sym(n, k) for n, k in (("x", nx), ("u", model.nu),
                                                 ("d", model.nd), ("p", model.np)))
@@ -122,7 +123,7 @@ def ekf_step(model: Model, chan: tuple[int, ...]) -> ca.Function:
     Pn = A @ Pf @ A.T + ca.diag(q ** 2)
     Pn = 0.5 * (Pn + Pn.T)
     return ca.Function("ekf_step", [x, Pv, u, d, p, m, o],
-                       [xn, ca.vec(Pn), cost, e, ca.diag(S), xf])
+                       [xn, ca.vec(Pn), cost, e, ca.diag(S), xf, ca.vec(S)])
 
 
 @functools.lru_cache(maxsize=16)
@@ -177,6 +178,42 @@ def _measured(model: Model, data: ModelData) -> tuple[int, ...]:
 
 
 # ----------------------------------------------------------------------- the fit
+def _fisher(Z: ca.MX, J: ca.MX, J_prior: ca.MX, e: ca.MX, Sv: ca.MX, nc: int):
+    """``z -> (J, g, F)``: the loss, its exact gradient and the Fisher information of
+    ``J = -2 log L`` (Gauss-Newton for the innovations' likelihood),
+
+    .. math::
+
+        F_{ab} = \\sum_k 2\\,\\partial_a e_k^T S_k^{-1} \\partial_b e_k
+                 + \\mathrm{tr}(S_k^{-1} \\partial_a S_k S_k^{-1} \\partial_b S_k),
+
+    the expected Hessian of a Gaussian innovations' likelihood (Ljung 1999, section 9.2;
+    Kristensen et al. 2004, section 2.3), plus the exact (constant) Hessian of the priors
+    ``J_prior``. It needs only the first derivatives of the innovations ``e`` (nc, N) and
+    their covariances ``Sv`` (nc*nc, N) over the parameters: one forward sweep through the
+    filter per parameter direction (CasADi), where the exact Hessian takes a forward sweep
+    over the whole reverse one per direction. Positive semidefinite, so each Newton step
+    goes downhill; at the optimum of a well-specified model it equals the Hessian's
+    expectation, and ``2 F^-1`` is the parameters' asymptotic covariance."""
+    nz = Z.numel()
+    fn = ca.Function("pem_fisher", [Z], [J, ca.gradient(J, Z), e, Sv,
+                                         ca.jacobian(ca.vec(e), Z), ca.jacobian(ca.vec(Sv), Z),
+                                         ca.hessian(J_prior, Z)[0]])
+
+    def at(z):
+        f, g, ev, sv, je, js, hp = fn(z)
+        N = np.asarray(ev).shape[1]
+        S = np.asarray(sv).T.reshape(N, nc, nc).transpose(0, 2, 1)        # column-major
+        Je = np.asarray(je).reshape(N, nc, nz)
+        Js = np.asarray(js).reshape(N, nc, nc, nz).transpose(0, 2, 1, 3)
+        Si = np.linalg.inv(S)
+        F = 2.0 * np.einsum("kia,kij,kjb->ab", Je, Si, Je, optimize=True)
+        T = np.einsum("kij,kjla->kila", Si, Js, optimize=True)             # S^-1 dS_a
+        F += np.einsum("kila,klib->ab", T, T, optimize=True)
+        return float(f), np.asarray(g).ravel(), F + np.asarray(hp)
+    return at
+
+
 class _Cap(Exception):
     """The evaluation cap is reached."""
 
@@ -222,20 +259,33 @@ def _curvature_covariance(H: np.ndarray, z, zlo, zhi, rtol: float = 1e-8):
 
 
 #: ``max_nfev`` split: L-BFGS-B gets max_nfev // LBFGS_SHARE gradient evaluations, the Newton
-#: phase max_nfev // HESSIAN_SHARE exact Hessians. A third for L-BFGS-B was faster on the
-#: paper model (1 / 4 h: 3.2 / 12.9 CPU-s against 4.6 / 18.0 with all) but with a small
-#: budget (car_cabin, 4 real trips, 40 evaluations) it ended farther from the optimum and
-#: predicted held-out trips worse (p90 2.01 K at 300 s against persistence's 1.87); with all
-#: of them the Newton steps only lower the loss L-BFGS-B alone reached before.
+#: phase max_nfev // HESSIAN_SHARE curvature matrices (Fisher or exact). A third for
+#: L-BFGS-B was faster on the paper model (1 / 4 h: 3.2 / 12.9 CPU-s against 4.6 / 18.0
+#: with all) but with a small budget (car_cabin, 4 real trips, 40 evaluations) it ended
+#: farther from the optimum and predicted held-out trips worse (p90 2.01 K at 300 s against
+#: persistence's 1.87); with all of them the Newton steps only lower the loss L-BFGS-B alone
+#: reached before.
 LBFGS_SHARE = 1
 HESSIAN_SHARE = 10
+#: The same for Fisher matrices (the default curvature): cheaper than an exact Hessian (car_cabin,
+#: 13 summer trips: 2.0 against 4.4 CPU-s) but converging only linearly where the model
+#: misses part of the data, so more of them: with max_nfev // 10 car_cabin stopped at
+#: Newton decrement 0.026, with max_nfev // 4 at 3.9e-6 (the exact Hessian: 2.3e-7 after 8).
+FISHER_SHARE = 3
 
 
 def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.ndarray,
-          lo: np.ndarray, hi: np.ndarray, max_nfev: int = 100, progress=None) -> PEMResult:
+          lo: np.ndarray, hi: np.ndarray, max_nfev: int = 100, progress=None,
+          curvature: str = "fisher") -> PEMResult:
     """Minimise the innovations' negative log-likelihood over the free ``columns``
     (``acid.ident.linear.Column``; per-experiment ones by experiment) from ``theta0``,
-    within [lo, hi]; ``base`` (E, np) the values of everything else per experiment."""
+    within [lo, hi]; ``base`` (E, np) the values of everything else per experiment.
+    ``curvature``: what the second phase's Newton steps (and the covariance) use,
+    ``"fisher"`` (the likelihood's Fisher information from the innovations' first
+    derivatives, :func:`_fisher`) or ``"exact"`` (CasADi's exact Hessian: forward over
+    reverse through the whole filter, too slow on many long records)."""
+    if curvature not in ("fisher", "exact"):
+        raise ConfigError(f"curvature must be 'fisher' or 'exact', not {curvature!r}")
     chan = _measured(model, data)
     rec = _Records.of(model, data, chan, data.segments)
     n, L = rec.idx.shape
@@ -264,7 +314,7 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
         return ca.DM(v.reshape(n * L, v.shape[-1]).T)
     out = _run(model, chan, L, n)(ca.DM(rec.x0.T), ca.DM(rec.P0.T), flat(rec.u),
                                    flat(rec.d), Pm, flat(rec.m), flat(rec.o))
-    J = ca.sum2(out[2])
+    J = Jdata = ca.sum2(out[2])
     pri = [(c, *model.parameters[col.index].prior) for c, col in enumerate(columns)
            if model.parameters[col.index].prior is not None]
     if pri:   # declared priors: -2 log of each Gaussian prior (J is -2 log L + const)
@@ -275,9 +325,9 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
     count = {"n": 0}
     best = [math.inf, None]
     # the budget: max_nfev gradient evaluations for L-BFGS-B, then up to max_nfev / 10
-    # exact Hessians (each about 20 gradients' cost on the paper model)
+    # Fisher matrices (or exact Hessians; each ~2 gradients on the paper model)
     n_grad = max(1, int(max_nfev) // LBFGS_SHARE)
-    n_hess = max(1, int(max_nfev) // HESSIAN_SHARE)
+    n_hess = max(1, int(max_nfev) // (HESSIAN_SHARE if curvature == "exact" else FISHER_SHARE))
 
     def fun(z):
         if count["n"] >= n_grad:          # the cap holds inside a line search too
@@ -308,11 +358,15 @@ def solve(model: Model, data: ModelData, columns, base: np.ndarray, theta0: np.n
         z = res.x
     except _Cap:
         z = best[1] if best[1] is not None else z0
-    hess = ca.Function("pem_hess", [Z], [J, ca.gradient(J, Z), ca.hessian(J, Z)[0]])
+    if curvature == "exact":
+        hess = ca.Function("pem_hess", [Z], [J, ca.gradient(J, Z), ca.hessian(J, Z)[0]])
+    else:
+        hess = _fisher(Z, J, J - Jdata, out[3], out[6], len(chan))
     newton_ = newton(hess, ca.Function("pem_loss", [Z], [J]), z, zlo, zhi,
                      max_hessians=n_hess, report=None if progress is None else (
-                         lambda label: progress(count["n"], None, label)))
-    # the covariance from the exact Hessian at the end point (J is -2 log L + const)
+                         lambda label: progress(count["n"], None, label)),
+                     kind="exact Hessians" if curvature == "exact" else "Fisher matrices")
+    # the covariance from the curvature at the end point (J is -2 log L + const)
     z, loss, H = newton_.z, newton_.loss, newton_.H
     status, success = newton_.status(count["n"], n_grad, n_hess), newton_.converged
     cov, identified, cond = _curvature_covariance(H, z, zlo, zhi)
@@ -369,7 +423,7 @@ def filter_states(model: Model, data: ModelData, P: np.ndarray, k0: np.ndarray,
 
 
 def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
-            t0: float | None = None, progress=None):
+            t0: float | None = None, progress=None, curvature: str = "fisher"):
     """``fit_model(..., method="pem")``: the declared table fitted by the prediction-error
     method over each whole experiment; a ``DeclaredFitResult`` (standard errors from the
     likelihood's curvature, 95 % normal intervals)."""
@@ -388,7 +442,7 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
     for c in columns:
         base[:, c.index] = 0.0
     res = solve(model, data, columns, base, declared[[c.index for c in columns]], lo, hi,
-                max_nfev=max_nfev, progress=progress)
+                max_nfev=max_nfev, progress=progress, curvature=curvature)
     values = declared.copy()
     names = model.parameter_names
     per = {p.name: np.full(E, p.value) for p in model.parameters if p.per_experiment}
@@ -417,7 +471,9 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
     walks = [s.name for s in model.states if s.noise is not None]
     notes = [f"prediction-error method: an extended Kalman filter over {res.n_records} "
              "whole experiments, the innovations' negative log-likelihood minimised "
-             "(L-BFGS-B, then Newton steps with the exact Hessian; CasADi derivatives)"
+             "(L-BFGS-B, then Newton steps with the "
+             + ("exact Hessian" if curvature == "exact" else "Fisher information")
+             + "; CasADi derivatives)"
              + (f"; latent: {', '.join(latent)}" if latent else "")
              + (f"; states with process noise: {', '.join(walks)}" if walks else "")]
     if linear.prior_note(model, columns, res.theta):

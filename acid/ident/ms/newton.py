@@ -1,6 +1,6 @@
-"""Bounded Newton iterations with an exact Hessian (CasADi), converged by the Newton
-decrement: the prediction-error fit's last phase (:mod:`acid.ident.pem`), after L-BFGS-B
-has brought it near the optimum."""
+"""Bounded Newton iterations with a curvature matrix (the exact Hessian from CasADi, or the
+likelihood's Fisher information), converged by the Newton decrement: the prediction-error
+fit's last phase (:mod:`acid.ident.pem`), after L-BFGS-B has brought it near the optimum."""
 
 from __future__ import annotations
 
@@ -15,6 +15,9 @@ import numpy as np
 #: parameter on a bound is pulled inwards: the likelihood is then flat to far below its
 #: statistical resolution (a change of 1 in -2 log L).
 DECREMENT_TOL = 1e-6
+#: Curvature below this fraction of the largest counts as this fraction in the decrement
+#: (a direction the data do not fix; the Fisher information is singular there).
+CURVATURE_FLOOR = 1e-12
 
 
 @dataclass
@@ -29,25 +32,29 @@ class Newton:
     rel_change: float        # relative change of the loss at the last step
     hessians: int
     converged: bool
+    why: str = ""            # why it stopped short of converged ("" when converged)
+    kind: str = "exact Hessians"     # what the curvature evaluations were
 
     def status(self, nfev: int, cap: int, cap_hessians: int) -> str:
+        """One line: ``converged: ...`` or ``not converged after ...: <why>; ...``."""
         how = (f"Newton decrement {self.decrement:.2g} (converged below {DECREMENT_TOL:g}), "
                f"projected gradient {self.pgrad:.2g}, " + (
                    f"last relative loss change {self.rel_change:.2g}" if self.hessians > 1
                    else "no Newton step taken"))
-        lb = (f"{nfev} gradient evaluations (cap {cap}) and {self.hessians} exact Hessians "
+        lb = (f"{nfev} gradient evaluations (cap {cap}) and {self.hessians} {self.kind} "
               f"(cap {cap_hessians})")
         if self.converged:
             return f"converged: {how}; {lb}"
-        return f"not converged after {lb}: {how}"
+        return f"not converged after {lb}: {self.why or 'budget spent'}; {how}"
 
 
-def newton(hess: ca.Function, cost: ca.Function, z: np.ndarray, zlo, zhi,
-            max_hessians: int, report=None) -> Newton:
-    """Bounded Newton iterations from ``z``: ``hess(z) -> (J, g, H)`` exact, ``cost(z) ->
-    J`` for the trial steps. A parameter on a bound with the gradient pushing it out stays
-    there; the others take the Newton step, damped (Levenberg-Marquardt) until the loss
-    decreases, clipped into the bounds."""
+def newton(hess, cost: ca.Function, z: np.ndarray, zlo, zhi,
+            max_hessians: int, report=None, kind: str = "exact Hessians") -> Newton:
+    """Bounded Newton iterations from ``z``: ``hess(z) -> (J, g, H)`` (``H`` the exact
+    Hessian or a positive semidefinite stand-in such as the Fisher information; ``kind``
+    names it in the status), ``cost(z) -> J`` for the trial steps. A parameter on a bound
+    with the gradient pushing it out stays there; the others take the Newton step, damped
+    (Levenberg-Marquardt) until the loss decreases, clipped into the bounds."""
     z = np.asarray(z, float).copy()
 
     def at(v):
@@ -65,13 +72,20 @@ def newton(hess: ca.Function, cost: ca.Function, z: np.ndarray, zlo, zhi,
         dec, convex = 0.0, True
         if gf.size and np.all(np.isfinite(Hf)):
             w, V = np.linalg.eigh(Hf)
-            convex = bool(w.min() > 1e-12 * max(abs(w).max(), 1e-300))
-            dec = float(np.sum((V.T @ gf) ** 2 / w)) if convex else math.inf
+            floor = CURVATURE_FLOOR * max(abs(w).max(), 1e-300)
+            convex = bool(w.min() > -floor)
+            # directions of (almost) no curvature (a parameter the data do not fix) count
+            # with the curvature floored: finite, and small only if the gradient is too
+            dec = float(np.sum((V.T @ gf) ** 2 / np.maximum(w, floor))) if convex \
+                else math.inf
         elif gf.size:
             dec, convex = math.inf, False
         done = math.isfinite(f) and dec <= DECREMENT_TOL
         if done or n_h >= max_hessians or not math.isfinite(f):
-            return Newton(z, f, H, dec, pgrad, rel, n_h, bool(done))
+            why = ("" if done else "the loss is not finite (the filter diverged)"
+                   if not math.isfinite(f) else
+                   "budget spent")
+            return Newton(z, f, H, dec, pgrad, rel, n_h, bool(done), why, kind)
         # damped step on the free set: (H + lam D) dz = -g, D the curvature's scale
         D = np.abs(np.diag(Hf))
         D = np.maximum(D, 1e-12 * max(float(D.max()), 1.0))
@@ -89,7 +103,8 @@ def newton(hess: ca.Function, cost: ca.Function, z: np.ndarray, zlo, zhi,
                 break
             lam = max(10 * lam, 1e-6)
         else:      # no decrease along any damping: the loss is flat at round-off here
-            return Newton(z, f, H, dec, pgrad, rel, n_h, False)
+            return Newton(z, f, H, dec, pgrad, rel, n_h, False,
+                          "no damped Newton step lowers the loss (flat at round-off)", kind)
         lam = lam / 10 if lam > 1e-8 else 0.0
         rel = abs(fn - f) / max(abs(f), 1.0)
         z = zn
