@@ -132,14 +132,14 @@ def _stage_running(out: Path) -> bool:
 def test_acid_reproduce_interrupted_leaves_no_process(tmp_path):
     out = tmp_path / "paper"
     p = _start("reproduce", "--quick", "--out", str(out), "--jobs", "2")
-    # a stage running means the workers are up: interrupt then, never after a whole run (in
-    # the full suite the workers were sometimes not counted before the run ended)
-    wait_for(lambda: _stage_running(out) or p.poll() is not None, 120)
-    seen = _wait_for_workers(p, timeout=5.0)
-    if seen < 1:
+    # a stage running means the workers are up: interrupt then, never after a whole run. In
+    # the full suite (xdist) the workers' count below misses them even while two stages run
+    # at once (their folders show it); the group check after the interrupt holds either way
+    if not wait_for(lambda: _stage_running(out) or p.poll() is not None, 120):
         p.kill()
         p.communicate()
-        pytest.skip("no worker was seen while a stage ran (machine too busy)")
+        pytest.skip("no stage started within 120 s (machine too busy)")
+    _wait_for_workers(p, timeout=5.0)
     os.killpg(p.pid, signal.SIGINT)
     text, _ = p.communicate(timeout=120)
     assert p.returncode == 130, text
