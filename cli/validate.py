@@ -56,6 +56,8 @@ def validate(
     out: Path = typer.Option(
         Path("reports/validate"), "--out",
         help="Folder for the figures (fig5/fig6 PNG, fig6b with the yardsticks)."),
+    figures: bool = typer.Option(True, "--figures/--no-figures",
+                                 help="Write the PNG figures into --out."),
     allow_unstable: bool = typer.Option(
         False, "--allow-unstable",
         help="Validate parameters even if eqs. 1-3 are unstable or not in kelvin."),
@@ -142,7 +144,8 @@ def validate(
                 "econ models")
     check_paths(inputs={"DATA": data, "--model": model_file_input(model),
                         "--params": params_input(params), "--beside": params_input(beside)},
-                outputs={"--json": json_path}, folders={"--out": (out, FIGURES)})
+                outputs={"--json": json_path},
+                folders={"--out": (out, FIGURES)} if figures else {})
     _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
                    held_out_fraction)
     require_range(warmup, "--warmup", 0.0, MAX_WARMUP_S, "s")
@@ -185,7 +188,8 @@ def validate(
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
                       non_overlapping=non_overlapping, yardsticks=yardsticks,
                       to_end=to_end, warm_start=warm_start, values=ps, beside=other,
-                      figures=out, intervals=(designs, resamples) if intervals else None)
+                      figures=out if figures else None,
+                      intervals=(designs, resamples) if intervals else None)
 
 
 def _with_error_model(data, model, params, kind, est, *, hold_all, **opts) -> None:

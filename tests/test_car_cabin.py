@@ -180,7 +180,7 @@ def test_cli_fits_car_cabin_by_name_and_validates_to_the_trips_end_with_yardstic
     res = runner.invoke(app, ["validate", str(val), "--model", "car_cabin", "--params",
                               str(tmp_path / "p.json"), "--starts", "8", "--warmup", "150",
                               "--to-end", "--exogenous", "measured",
-                              "--json", str(tmp_path / "v.json")])
+                              "--json", str(tmp_path / "v.json"), "--no-figures"])
     assert res.exit_code == 0, res.output
     assert "persistence" in res.output and "yardstick" in res.output
     d = json.loads((tmp_path / "v.json").read_text())

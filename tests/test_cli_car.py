@@ -121,5 +121,6 @@ def test_validate_car_ac_reads_the_car_fit_file_and_names_it_for_a_cabin_file(lo
     r = runner.invoke(app, ["car", "fit", str(logs), "--params", str(cabin), "--out", str(out)])
     assert r.exit_code == 0, r.output
     r = runner.invoke(app, ["validate", str(h5), "--model", "car_ac", "--params", str(out),
-                            "--starts", "3", "--horizon", "12", "--out", str(tmp_path / "f")])
+                            "--starts", "3", "--horizon", "12", "--out", str(tmp_path / "f"),
+                            "--no-figures"])
     assert r.exit_code == 0, r.output

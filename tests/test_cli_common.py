@@ -75,7 +75,7 @@ def test_validating_on_the_fitted_record_warns_in_sample(data_file, tmp_path):
     params = tmp_path / "p.json"
     assert _acid("fit", data_file, "--out", params).exit_code == 0
     res = _acid("validate", data_file, "--params", params, "--starts", 5, "--horizon", 50,
-                "--out", tmp_path / "figs")
+                "--out", tmp_path / "figs", "--no-figures")
     assert res.exit_code == 0, res.output
     assert "warning:" in res.output and "in-sample" in res.output
 
@@ -85,7 +85,7 @@ def test_allow_unstable_lets_a_user_validate_unstable_parameters(data_file, tmp_
     g[3] = 2.0  # |gamma4 + gamma5| = 1.48: the evaporator wall diverges
     params = paper().replace(gamma=tuple(g)).to_json(tmp_path / "u.json")
     args = ["validate", data_file, "--params", params, "--starts", 3, "--horizon", 20,
-            "--out", tmp_path / "figs"]
+            "--out", tmp_path / "figs", "--no-figures"]
     assert_one_line_error(_acid(*args), "u.json", "gamma4 + gamma5")
     res = _acid(*args, "--allow-unstable")
     assert res.exit_code == 0, res.output

@@ -27,7 +27,7 @@ def test_validate_reads_warmup_in_seconds_and_says_the_rounding_once(tmp_path):
     data = tmp_path / "d.h5"
     excite(make_plant("hifi"), ExcitationSpec(duration=1200.0, seed=4)).to_hdf5(data)
     base = ["validate", str(data), "--model", "cabin3", "--starts", "3", "--horizon", "20",
-            "--no-yardsticks", "--out", str(tmp_path / "figs")]
+            "--no-yardsticks", "--out", str(tmp_path / "figs"), "--no-figures"]
     res = CliRunner().invoke(app, [*base, "--warmup", "302", "--json", str(tmp_path / "a.json")])
     assert res.exit_code == 0, res.output
     text = " ".join(res.output.split())

@@ -55,7 +55,7 @@ def test_fit_and_validate_a_users_model_file(record, tmp_path):
     vjson = tmp_path / "val.json"
     res = runner.invoke(app, ["validate", str(record), "--model", str(model), "--params",
                               str(out), "--starts", "5", "--horizon", "100", "--warmup", "150",
-                              "--json", str(vjson)])
+                              "--json", str(vjson), "--no-figures"])
     assert res.exit_code == 0, res.output
     assert "in-sample" in " ".join(res.output.split())
     v = json.loads(vjson.read_text())
@@ -145,7 +145,7 @@ def test_fit_starts_take_the_built_in_families_through_the_declared_fitter(recor
     vjson = tmp_path / "val.json"                    # validated through the declaration
     res = runner.invoke(app, ["validate", str(record), "--model", "paper", "--params",
                               str(out), "--starts", "3", "--horizon", "40", "--json",
-                              str(vjson), "--no-yardsticks"])
+                              str(vjson), "--no-yardsticks", "--no-figures"])
     assert res.exit_code == 0, res.output
     assert json.loads(vjson.read_text())["model"] == "paper"
     # without those options too: one parameter file, read by the declared validator and

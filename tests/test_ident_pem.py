@@ -135,7 +135,8 @@ def test_cli_fits_by_prediction_error_with_an_evaluation_cap_and_validates_with_
     assert not fit["output_error"]["converged"] and "did not converge" in res.output
     res = runner.invoke(app, ["validate", str(path), "--model", str(src), "--params",
                               str(tmp_path / "p.json"), "--starts", "4", "--warmup", "500",
-                              "--horizon", "50", "--warm-start", "ekf", "--no-yardsticks"])
+                              "--horizon", "50", "--warm-start", "ekf", "--no-yardsticks",
+                              "--no-figures"])
     assert res.exit_code == 0, res.output
     assert "extended Kalman filter" in res.output
     for args, opt in ((["fit", str(path), "--max-evals", "0"], "--max-evals"),

@@ -186,7 +186,13 @@ def test_stopped_sweeps_reproduces_and_studies_leave_no_process(tmp_path):
                     pass
             return k >= 2
 
-        wait_for(workers, 120.0)
+        # reproduce: a stage being computed (its temporary folder) means the cluster, which
+        # starts its workers first, is up; in full-suite runs its workers were sometimes not
+        # counted and the wait lasted its whole 120 s
+        out = Path(args[args.index("--out") + 1]) / "stages"
+        staged = args[0] == "reproduce"
+        wait_for(lambda w=workers, o=out, s=staged: w() or (s and o.is_dir()
+                                                             and any(o.glob(".*.tmp"))), 120.0)
         if p.poll() is None:
             time.sleep(0.5)
             (os.kill if target == "pid" else os.killpg)(p.pid, sig)

@@ -47,9 +47,11 @@ def test_params_provenance_selects_the_held_out_part(data_file, tmp_path):
     p.to_json(params)
     summary = tmp_path / "s.json"
     res = _invoke(data_file, "--params", params, "--starts", 10, "--horizon", 100,
-                  "--out", tmp_path / "o", "--json", summary)
+                  "--out", tmp_path / "o", "--json", summary, "--no-figures")
     assert res.exit_code == 0, res.output
+    assert not (tmp_path / "o").exists()     # --no-figures: no PNG, no folder
     d = json.loads(summary.read_text())
+    assert d["figures"] == {} and "figures written" not in res.output
     n = d["settings"]["data_samples"]
     assert d["settings"]["sample_range"] == [n // 2, n]
     assert min(d["starts"]) >= n // 2
@@ -91,7 +93,7 @@ def test_params_fitted_on_another_file_validate_the_whole_record(data_file, tmp_
         params)
     summary = tmp_path / "s.json"
     res = _invoke(data_file, "--params", params, "--starts", 10, "--horizon", 100,
-                  "--out", tmp_path / "o", "--json", summary)
+                  "--out", tmp_path / "o", "--json", summary, "--no-figures")
     assert res.exit_code == 0, res.output
     d = json.loads(summary.read_text())
     assert d["settings"]["sample_range"][0] == 0
@@ -156,7 +158,7 @@ def test_intervals_and_start_designs(data_file, tmp_path):
     summary = tmp_path / "s.json"
     res = _invoke(data_file, "--starts", 25, "--horizon", 40, "--intervals", "--resamples",
                   50, "--starts-design", "even,non-overlapping", "--out", tmp_path / "o",
-                  "--json", summary)
+                  "--json", summary, "--no-figures")
     assert res.exit_code == 0, res.output
     assert "two-level bootstrap" in res.output and "across start designs" in res.output
     d = json.loads(summary.read_text())
