@@ -29,7 +29,7 @@ pytest.importorskip("distributed")
 TESTS = Path(__file__).resolve().parent
 #: two short constant-speed scenarios (one raises with the fragile controller at 40 degC)
 SPEC = ('title = "procs"\nplugins = ["_sweep_plugin"]\n'
-        '[defaults]\ncycle = 12.0\nduration_s = 60.0\nwarmup_s = 30.0\ntail_s = 0.0\n'
+        '[defaults]\ncycle = 12.0\nduration_s = {duration}\nwarmup_s = 30.0\ntail_s = 0.0\n'
         '[grid]\nambient_C = [30.0, {hot}]\n[controllers.nmpc]\n[controllers.fragile]\n'
         'above_C = 40.0\n')
 
@@ -101,7 +101,9 @@ def _wait_for_workers(p: subprocess.Popen, n: int = 2, timeout: float = 120.0) -
 @pytest.mark.parametrize("how", ["success", "failure", "ctrl-c"])
 def test_acid_sweep_leaves_no_process(tmp_path, how):
     spec = tmp_path / "procs.toml"
-    spec.write_text(SPEC.format(hot=41.0 if how == "failure" else 35.0))
+    # a run long enough to be interrupted while it works (60 s scenarios end within 2 s)
+    spec.write_text(SPEC.format(hot=41.0 if how == "failure" else 35.0,
+                                duration=30000.0 if how == "ctrl-c" else 60.0))
     p = _start("sweep", str(spec), "--out", str(tmp_path / "out"), "--jobs", "2",
                "--no-figures")
     seen = _wait_for_workers(p)
