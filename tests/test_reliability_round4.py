@@ -117,8 +117,10 @@ def test_contradicting_options_are_refused_while_parsing(tmp_path, command, pair
 
 # ----------------------------------------------------- processes left by stopped commands
 TESTS = Path(__file__).resolve().parent
+#: long scenarios (30000 s) so that the signal lands while the sweep works: 60 s scenarios end
+#: within 2 s, and a signal during the interpreter's shutdown ends it by the signal itself
 SPEC = ('title = "procs"\nplugins = ["_sweep_plugin"]\n'
-        '[defaults]\ncycle = 12.0\nduration_s = 60.0\nwarmup_s = 30.0\ntail_s = 0.0\n'
+        '[defaults]\ncycle = 12.0\nduration_s = 30000.0\nwarmup_s = 30.0\ntail_s = 0.0\n'
         '[grid]\nambient_C = [30.0, 35.0]\n[controllers.nmpc]\n[controllers.fragile]\n'
         'above_C = 40.0\n')
 
