@@ -1,4 +1,4 @@
-"""The high-fidelity A/C + cabin plant: acid's open stand-in for NREL's CoolSim (PLANT.md).
+"""The high-fidelity A/C + cabin plant: acid's open stand-in for NREL's CoolSim.
 
 Second generation. Quasi-static refrigerant cycle (``acid.plant.cycle``: compressor
 map in speed and pressure ratio, inverter + motor losses, refrigerant-side UA ~ m_r^0.8,

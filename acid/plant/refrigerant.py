@@ -1,7 +1,7 @@
 """Refrigerant properties for the quasi-static cycle: CoolProp HEOS, tabulated once per fluid.
 
 The cycle (``acid.plant.cycle``) needs, as functions of the saturation temperatures T_e
-(evaporating) and T_c (condensing), with fixed superheat SH and subcooling SC (PLANT.md):
+(evaporating) and T_c (condensing), with fixed superheat SH and subcooling SC:
 
 * ``p_sat(T)``: saturation pressure, Pa;
 * suction state 1 at (p_sat(T_e), T_e + SH): density ``rho1``, enthalpy ``h1``, entropy ``s1``;

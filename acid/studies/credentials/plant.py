@@ -58,7 +58,7 @@ SERVICE_CHART_SOURCE = ("[NissanGTR] Nissan GT-R (R35) 2010 ESM, HAC 'Performanc
 JAF_SOAK_C, JAF_FRESH_10MIN_C, JAF_RECIRC_10MIN_C = 55.0, 29.5, 27.5
 JAF_TOL_K = 3.0
 
-#: PLANT.md ("what real cars show"): at 43 degC ambient with 1000 W/m^2 of sun, breath-level
+#: What real cars show: at 43 degC ambient with 1000 W/m^2 of sun, breath-level
 #: air reaches 25-30 degC after 20-30 min: acid's design target for the time from a 60 degC
 #: soak to 25 degC (a reviewer's typical value, not a citation).
 HOT_AMBIENT_C, HOT_SUN_W_M2, HOT_SOAK_C = 43.0, 1000.0, 60.0
