@@ -60,7 +60,7 @@ def heating_check(
     rows = [[r.group, r.name, format_value(r.value), r.unit, r.reference, verdict_text(r), r.note]
             for r in result.rows]
     print_table("acid heating-check", ["_", "_check", "value", "_unit", "_reference",
-                                       "verdict_text", "_note"], rows)
+                                       "_verdict", "_note"], rows)
     summary = result.to_json_dict()
     summary.update(acid_version=__version__, logs=str(logs) if logs is not None else None)
     write_summary(json_path, summary)

@@ -97,7 +97,7 @@ def plant_check(
                               else "default" if config is None else str(config))
     say(identity_line(identity))
     print_table(f"acid plant-check: {result.plant}",
-                ["_", "_check", "value", "_unit", "_reference", "verdict_text"], rows)
+                ["_", "_check", "value", "_unit", "_reference", "_verdict"], rows)
     from acid.studies.credentials.plant import SEARCH_NOTE
 
     say(SEARCH_NOTE)

@@ -204,8 +204,8 @@ def check_balance() -> list[CheckRow]:
     p = HeatingPlant(HeatingConfig(), winter_plant_config(C2K(0.0)))
     for _ in range(240):
         p.step(0.0, 0.0, 10.0)
-    return [CheckRow(f"balance: {k} (20 min warm-up at 0 degC)", 100.0 * b["relative"],
-                     "< 0.1 %", "%", b["relative"] < 1e-3, "j")
+    return [CheckRow(f"balance: {k.replace('_', ' ')} (20 min warm-up at 0 degC)",
+                     100.0 * b["relative"], "< 0.1 %", "%", b["relative"] < 1e-3, "j")
             for k, b in p.balance().items()]
 
 

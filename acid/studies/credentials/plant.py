@@ -263,9 +263,10 @@ def check_balance(plant0: Plant) -> list[CheckRow]:
                                                           "balance", None)
     names = ("evaporator_wall", "condenser_wall", "cabin", "water")
     if not callable(balance):
-        return [CheckRow(f"balance: {k}", None, "< 0.1 %", "%", None, "b", NA) for k in names]
+        return [CheckRow(f"balance: {k.replace('_', ' ')}", None, "< 0.1 %", "%", None, "b", NA)
+                for k in names]
     b = balance()
-    return [CheckRow(f"balance: {k} (600 s at 0 m/s)", 100.0 * b[k]["relative"],
+    return [CheckRow(f"balance: {k.replace('_', ' ')} (600 s at 0 m/s)", 100.0 * b[k]["relative"],
                      "< 0.1 % of the integrated flows", "%", b[k]["relative"] < 1e-3, "b")
             for k in names]
 
@@ -497,8 +498,8 @@ def check_pulldown(plant: Plant) -> tuple[list[CheckRow], dict]:
                          "ambient (30 degC, 850 W/m^2 assumed) and the car"))
     name = (f"pull-down: {HOT_SOAK_C:g} degC soak at {HOT_AMBIENT_C:g} degC, "
             f"{HOT_SUN_W_M2:g} W/m2, to 25 degC")
-    ref = (f"{HOT_PULLDOWN_MIN[0]:g}-{HOT_PULLDOWN_MIN[1]:g} min: acid's design target "
-           "(a design target), not a published test")
+    ref = (f"{HOT_PULLDOWN_MIN[0]:g}-{HOT_PULLDOWN_MIN[1]:g} min: acid's design target, "
+           "not a published test")
     if data["hot43"] is None:
         rows.append(CheckRow(name, None, ref, "min", None, "e",
                              NA + " (ambient and sun cannot be set)", info=True))
