@@ -30,8 +30,8 @@ The fitted ``k_cop`` (0.15-0.17/K) is steeper than the refrigerant cycle alone (
 logged (blower level of "Automatic", fresh-air share, latent load).
 
 The power rows are fitted by least squares on the 13 estimation trips, the cabin rows
-by the prediction-error method (:func:`acid.studies.car_study.fit_power` and
-``notes/i20-real-logs.md``, "Deliverable 5", for the held-out numbers); the declared values
+by the prediction-error method (:func:`acid.studies.car_study.fit_power`; the README's car
+section has the held-out numbers); the declared values
 of the power rows are those of that fit, the cabin rows keep ``car_cabin``'s starting
 values (a parameter file from ``acid fit --model car_cabin --method pem`` gives them).
 

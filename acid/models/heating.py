@@ -38,7 +38,7 @@ the coolant is warm (cold-air prevention, as the heating plant's production cont
 ``T_coldair``), so ``G_hc`` rises from ``G_lo`` to ``G_hi`` as the coolant goes from ``T_c0``
 to ``T_c0 + dT_w``. (Held constant, the fit could not serve both the warm-up and the hold:
 the coolant fitted at -2 %; a latent blower followed by a filter, or a blower following the
-cabin error, predicted worse: notes/i25-winter.md.) ``Q_occ`` (occupants and sun, not
+cabin error, predicted worse.) ``Q_occ`` (occupants and sun, not
 logged) is a per-trip parameter; a trip the fit never saw gets the mean over the fitted trips.
 
 Ranges: the cabin ones are ``car_cabin``'s (``acid/models/SOURCES.md``: Fayazbakhsh2013,

@@ -54,7 +54,7 @@ Fairness
   size of what is judged: F's blower PI starts at its minimum flow, lets the cabin rise
   0.3 K in the first minute and holds it 0.1 K under the mean afterwards; it ends colder,
   and the paper NMPC's continuation (a 3-4 degC coil) credits that stored cold at a dearer
-  price than F paid for it (notes/i21-energy.md).
+  price than F paid for it.
 
 Reported per controller: energy (compressor + blower, ``sum(P) Ts``), tail-corrected energy,
 mean and max T_cab, comfort violation, PMV (:mod:`acid.comfort`), humidity and the RH-band
@@ -145,7 +145,7 @@ class StudyConfig:
         heavy interior, e.g. a slow node of 25 min, must settle or it dominates the cycle).
     tol_K : mean-T_cab match of A, D, E, P, F and the plans' replays to B, K (0.005 K: a
         0.02 K offset is worth about 0.1 % of the energy, the size of the differences judged
-        between E and F; measured in notes/i21-energy.md).
+        between E and F).
     max_iter : iterations of each mean-T_cab tuning.
     tail_s : common continuation measuring the cost of a state, s (0: no correction); long
         enough (40 min) for the interior to converge, so a state's whole cost is charged.
@@ -159,8 +159,7 @@ class StudyConfig:
     coil_tol_K : width of F's coil set-point search interval at which it stops, K.
     coil_max : the warmest coil set-point of D, E, the plan and F's search, K (one range for
         all, 3 degC to this; default paper Table II's 10 degC: with 12 degC the corrected
-        econ model ran D's and E's coils past the cycle's best fixed coil, measured in
-        notes/i21-energy.md).
+        econ model ran D's and E's coils past the cycle's best fixed coil).
     econ_modifier : correct the econ model's coil economics for D, E and one plan variant
         from steady holds of the plant (:mod:`acid.control.econ.modifier`) before they run.
     modifier_hold_s : length of each of those holds, s (None: as long as the warm-up, at
@@ -172,7 +171,7 @@ class StudyConfig:
         and lets the cabin float where cooling is dear (at a standstill) against cooling
         where it is cheap (at speed), as the best known plan does. 0: the band's upper edge
         is tuned (the previous formulation; it rode the edge at every instant and lost 0.18
-        points to F on SC03). 30 W/K^2: measured in notes/i21-energy.md.
+        points to F on SC03). 30 W/K^2: measured, not tuned per cycle.
     stopgo_s : length of the stop-and-go scenario (80 s periods), s.
     comfort : PMV assumptions.
     """
@@ -414,8 +413,7 @@ class EconPreview:
     E's preview reaches past the cycle's end into what the plant does next: the common
     continuation (the tails) at the cycle's mean speed. Holding the cycle's last value there
     instead (most cycles end at a standstill) showed E a stop that never comes, and E stored
-    or borrowed heat for it in its last two minutes, which the tail then charged or credited
-    (notes/i21-energy.md).
+    or borrowed heat for it in its last two minutes, which the tail then charged or credited.
     """
 
     def __init__(self, mpc: EconNMPC, scenario: Scenario, setting: float):

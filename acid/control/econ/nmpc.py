@@ -55,8 +55,8 @@ iterations, generated C too), from the same guess and multipliers, and only then
 with zero multipliers. The failures are not NaNs: the exact Hessian is indefinite, so the
 QPs are nonconvex and qrqp cycles on a bound or the steps jump between bounds; measured on
 a UDDS replay on an identified model (274 states), 28 of 274 solves went to IPOPT before
-the rescue, none after (8 rescued), every first move within 7.1e-6 of IPOPT's at 1e-10
-(``notes/i22-solver.md``). Measured (``benchmarks/bench_econ_nmpc.py``, the same replay,
+the rescue, none after (8 rescued), every first move within 7.1e-6 of IPOPT's at 1e-10.
+Measured (``benchmarks/bench_econ_nmpc.py``, the same replay,
 quiet 2-core machine): median step 1.77 ms as generated C against IPOPT's 32 ms;
 compiled and CasADi moves identical; moves within 1e-6 of IPOPT's at 1e-10
 (``tests/test_control_econ_nmpc.py``). ``stage_functions=True`` (default) builds the NLP from one
