@@ -46,6 +46,9 @@ def test_the_site_builds_strictly_and_every_example_executes(site):
         assert internal is None, f"{page}: cites {internal.group(0)!r}, which a user does not have"
     models = (site / "models" / "index.html").read_text()
     assert "two_tanks (fit-oe)" in models and "true 0.0012" in models
+    # the pages that reuse the tanks' fit run it silently: its printout is on one page only
+    shown = [p.parent.name for p in pages if "(true 0.0012)" in p.read_text()]
+    assert shown == ["models"], shown
 
 
 def test_every_command_has_its_own_page_with_its_help(site):
