@@ -6,6 +6,7 @@ and every public name has its anchor in the API reference."""
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import re
 import subprocess
@@ -67,6 +68,7 @@ def test_every_command_has_its_own_page_with_its_help(site):
         assert f"$ acid {line} --help" in page, line
         assert re.search(rf"Usage: acid {re.escape(line)} \[OPTIONS\]", page), line
         assert f'href="{slug}/"' in overview, line
+        assert f"cli/{slug}/" in _search_locations(site), line      # the site's search
 
 
 def test_the_benchmark_page_shows_the_published_values_beside_acids(site):
@@ -94,6 +96,17 @@ def test_every_public_name_has_its_anchor_in_the_reference(site):
             if (inspect.isclass(obj) or inspect.isfunction(obj)) \
                     and not obj.__module__.startswith("casadi"):
                 assert f'id="{obj.__module__}.{obj.__qualname__}"' in page, f"{mod}.{name}"
+                assert f"reference/#{obj.__module__}.{obj.__qualname__}" in \
+                    _search_locations(site), f"{mod}.{name} not in the search index"
+
+
+@functools.lru_cache(maxsize=4)
+def _search_locations(site: Path) -> frozenset[str]:
+    """Every location the site's search box finds (mkdocs' search index)."""
+    import json
+
+    index = json.loads((site / "search" / "search_index.json").read_text())
+    return frozenset(d["location"] for d in index["docs"])
 
 
 def _text(page: Path) -> str:
