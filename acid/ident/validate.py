@@ -2,7 +2,7 @@
 
 From each start instant k the model predicts ``horizon`` samples open loop with the measured
 inputs and disturbances. The state at k: measured states as measured; latent ones
-estimated from the ``warmup`` samples before k (the whole state at k - warmup fitted to the
+estimated from the ``warmup`` seconds before k (the whole state at k - warmup fitted to the
 measured channels of that stretch with the parameters held, then simulated to k), or their
 declared ``initial`` rule when ``warmup`` is 0. Errors are reported per measured channel,
 overall and at chosen horizons (RMSE, p90 of |e|), with ``acid.metrics``.
@@ -52,6 +52,8 @@ MAX_PREDICTION_SAMPLES = 5_000_000
 WARM_STARTS = ("fit", "ekf", "ekf-trip")
 #: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
 REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
+#: ``warmup``'s default, s (as ``acid validate --warmup``: 60 samples of the paper's 5 s).
+DEFAULT_WARMUP_S = 300.0
 #: Below this standard deviation a measured window counts as constant: fit % undefined.
 CONSTANT_TRUTH_STD = 1e-9
 
@@ -133,8 +135,23 @@ def held_out_start(n: int, fraction: float | None) -> int:
     return int(round(n * (1.0 - f)))
 
 
+def samples_of(value_s: float, Ts: float, name: str) -> int:
+    """A time ``value_s`` (s) as whole samples of ``Ts`` (s); a one-line ``ConfigError``
+    naming ``name`` when it is not a whole number of samples (the CLI rounds up and says
+    so; the API takes exactly what it is given)."""
+    v = float(value_s)
+    if not math.isfinite(v) or v < 0:
+        raise ConfigError(f"{name} must be a duration >= 0 s, got {value_s!r}")
+    n = int(round(v / Ts))
+    if not math.isclose(n * Ts, v, rel_tol=1e-9, abs_tol=1e-9 * Ts):
+        lo = math.floor(v / Ts)
+        raise ConfigError(f"{name} {v:g} s is not a whole number of samples of {Ts:g} s "
+                          f"(e.g. {lo * Ts:g} s or {(lo + 1) * Ts:g} s)")
+    return n
+
+
 def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | None = None, *,
-                   starts: int = 60, horizon: int = 300, warmup: int = 60,
+                   starts: int = 60, horizon: int = 300, warmup: float = DEFAULT_WARMUP_S,
                    placement: str = "even", seed: int = 0,
                    horizons: tuple[int, ...] | None = None,
                    hold: tuple[str, ...] | None = None,
@@ -145,6 +162,11 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                    progress: Callable[[int, int, str], None] | None = None
                    ) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
+
+    Units as ``acid validate``'s options: ``horizon`` (and ``horizons``, ``start_index``,
+    ``start_range``, ``estimation`` ranges) in samples of the data, ``warmup`` in seconds
+    (a whole number of samples of the data's Ts, else a one-line ``ConfigError``; default
+    300 s).
 
     ``params``: a fit (``DeclaredFitResult``), any ``ParameterValues`` or None (the declared
     values).
@@ -192,10 +214,11 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     if non_overlapping and placement != "even":
         raise ConfigError(f"--non-overlapping places the starts evenly: it cannot be "
                           f"combined with --placement {placement}")
-    for name, v, lo in (("starts", starts, 1), ("horizon", horizon, 1), ("warmup", warmup, 0)):
+    for name, v, lo in (("starts", starts, 1), ("horizon", horizon, 1)):
         if int(v) < lo:
             raise ConfigError(f"{name} must be at least {lo}, got {v}")
     data = ModelData.of(model, ds, min_samples=2)
+    warmup = samples_of(warmup, ds.Ts, "warmup")
     latent = [i for i, s in enumerate(model.states) if not s.measured]
     need_warm = warmup if latent else 0
     step = _Steps(progress, 3 + bool(latent and need_warm > 0) + bool(yardsticks))
