@@ -322,7 +322,7 @@ def _optima_rows(optima, show: int = 3) -> list[list[str]]:
 
 
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
-                      starts: int, horizon: int, warmup: int, placement: str, seed: int,
+                      starts: int, horizon: int, warmup: float, placement: str, seed: int,
                       held_out_fraction: float | None, hold_all: bool = False,
                       non_overlapping: bool = False, yardsticks: bool = True,
                       to_end: bool = False, warm_start: str = "fit", values=None,
@@ -536,7 +536,7 @@ def _say_robust(ivs) -> None:
 
 
 def cross_validate_declared(data: Path, model_file: str, json_path: Path | None, *,
-                            starts: int, horizon: int, warmup: int, seed: int, designs,
+                            starts: int, horizon: int, warmup: float, seed: int, designs,
                             folds: int | None, hold_all: bool, to_end: bool,
                             warm_start: str, resamples: int, method: str,
                             max_evals: int, prior: list[str] | None = None) -> None:

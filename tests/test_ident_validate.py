@@ -158,7 +158,7 @@ def test_progress_names_each_step_and_changes_no_number(rng, warm_start):
     without it (latent states warm-started, disturbances held, yardsticks)."""
     m = load("cabin3")
     ds = _cabin3_record(m.values, rng, n=400)
-    kw = {"starts": 40, "horizon": 60, "warmup": 20, "hold": ("T_amb",), "yardsticks": True,
+    kw = {"starts": 40, "horizon": 60, "warmup": 100.0, "hold": ("T_amb",), "yardsticks": True,
           "warm_start": warm_start}
     seen = []
     with warnings.catch_warnings():
