@@ -86,3 +86,11 @@ def test_a_warmup_that_is_not_whole_samples_is_a_one_line_error(record):
         acid.validate_model(m, ds, starts=2, horizon=10, warmup=301.0, yardsticks=False)
     with pytest.raises(AcidError, match="warmup must be a duration >= 0 s"):
         acid.validate_model(m, ds, starts=2, horizon=10, warmup=-2.0, yardsticks=False)
+
+
+def test_predict_compare_resid_take_the_warmup_in_seconds_too(record):
+    _, _, m, ds = record
+    pr = acid.predict(ds, None, 1, model=m, warmup=300.0)      # 150 samples of 2 s
+    assert np.flatnonzero(np.isfinite(pr.predicted[:, 0]))[0] == 150 + 1
+    with pytest.raises(AcidError, match=r"^predict: warmup 3 s is not a whole number"):
+        acid.predict(ds, None, 1, model=m, warmup=3.0)
