@@ -94,3 +94,18 @@ def test_predict_compare_resid_take_the_warmup_in_seconds_too(record):
     assert np.flatnonzero(np.isfinite(pr.predicted[:, 0]))[0] == 150 + 1
     with pytest.raises(AcidError, match=r"^predict: warmup 3 s is not a whole number"):
         acid.predict(ds, None, 1, model=m, warmup=3.0)
+
+
+def test_the_default_warmup_needs_no_whole_samples_where_nothing_is_latent():
+    from acid.models import Model, Parameter, Signal, State
+
+    m = Model("lag7", states=[State("y", "V")], inputs=[Signal("u", "V")],
+              parameters=[Parameter("a", "1/s", 0.01, 1e-4, 1.0)], Ts=7.0,
+              ode=lambda s: {"y": s.a * (s.u - s.y)})
+    n = 200
+    u = np.repeat(np.random.default_rng(1).uniform(-1, 1, n // 20), 20)
+    ds = acid.Dataset(time=np.arange(n) * 7.0, Ts=7.0, channels={"y": np.cumsum(u) * 0.01,
+                                                                  "u": u},
+                      units={"y": "V", "u": "V"})
+    res = acid.validate_model(m, ds, starts=3, horizon=20, yardsticks=False)   # 300 s default
+    assert res.warmup == 0 and res.starts.size == 3

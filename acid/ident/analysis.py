@@ -622,7 +622,7 @@ def predict_model(ds: Dataset, params=None, k: int | None = 1, *, model=None,
     m, ps, label = resolve(params, model)
     data = ModelData.of(m, ds, min_samples=2)
     latent = any(not s.measured for s in m.states)
-    W = samples_of(warmup, ds.Ts, "predict: warmup")
+    W = samples_of(warmup, ds.Ts, "predict: warmup", used=latent)
     W = W if latent else 0
     n = len(data)
     notes: list[str] = []

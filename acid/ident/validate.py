@@ -135,14 +135,17 @@ def held_out_start(n: int, fraction: float | None) -> int:
     return int(round(n * (1.0 - f)))
 
 
-def samples_of(value_s: float, Ts: float, name: str) -> int:
+def samples_of(value_s: float, Ts: float, name: str, used: bool = True) -> int:
     """A time ``value_s`` (s) as whole samples of ``Ts`` (s); a one-line ``ConfigError``
     naming ``name`` when it is not a whole number of samples (the CLI rounds up and says
-    so; the API takes exactly what it is given)."""
+    so; the API takes exactly what it is given) and ``used`` (a warm-up of a model without
+    latent states is not used: any duration >= 0 passes, rounded up)."""
     v = float(value_s)
     if not math.isfinite(v) or v < 0:
         raise ConfigError(f"{name} must be a duration >= 0 s, got {value_s!r}")
     n = int(round(v / Ts))
+    if not used:
+        return math.ceil(v / Ts - 1e-9)
     if not math.isclose(n * Ts, v, rel_tol=1e-9, abs_tol=1e-9 * Ts):
         lo = math.floor(v / Ts)
         raise ConfigError(f"{name} {v:g} s is not a whole number of samples of {Ts:g} s "
@@ -165,8 +168,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
 
     Units as ``acid validate``'s options: ``horizon`` (and ``horizons``, ``start_index``,
     ``start_range``, ``estimation`` ranges) in samples of the data, ``warmup`` in seconds
-    (a whole number of samples of the data's Ts, else a one-line ``ConfigError``; default
-    300 s).
+    (default 300 s; for a model with latent states a whole number of samples of the data's
+    Ts, else a one-line ``ConfigError``; unused without latent states).
 
     ``params``: a fit (``DeclaredFitResult``), any ``ParameterValues`` or None (the declared
     values).
@@ -221,8 +224,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
         if int(v) < lo:
             raise ConfigError(f"{name} must be at least {lo}, got {v}")
     data = ModelData.of(model, ds, min_samples=2)
-    warmup = samples_of(warmup, ds.Ts, "warmup")
     latent = [i for i, s in enumerate(model.states) if not s.measured]
+    warmup = samples_of(warmup, ds.Ts, "warmup", used=bool(latent))
     need_warm = warmup if latent else 0
     step = _Steps(progress, 3 + bool(latent and need_warm > 0) + bool(yardsticks))
     ranges = [(0, len(data))] if start_range is None else \
