@@ -43,7 +43,7 @@ def warm_start_times(starts: list[int], params: str | None) -> list[dict]:
             def progress(done, total, label, marks=marks):
                 marks.append((label, time.process_time(), time.perf_counter()))
 
-            res = validate_model(model, ds, values, starts=n, horizon=300, warmup=60,
+            res = validate_model(model, ds, values, starts=n, horizon=300, warmup=60 * ds.Ts,
                                  hold=("T_amb",), start_range=(lo, len(ds)),
                                  warm_start=how, progress=progress, yardsticks=False)
             at = next(i for i, m in enumerate(marks) if m[0].startswith("latent states"))

@@ -165,6 +165,7 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``
     (for the paper's model, ``paper``: also the params.json keys the controllers read)."""
     from acid.ident.fit import METHODS, fit_model, provenance
+    from acid.ident.result import unit_squared
     from acid.models import load
 
     if method not in METHODS:
@@ -243,24 +244,24 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     oe = result.output_error
     if oe and result.method == "pem":
         one = ", ".join(f"{c} {v:.2f} %" for c, v in oe["one_step_fit_percent"].items())
-        say(f"prediction error: {oe['records']} records, loss {oe['loss']:.6g}, "
+        say(f"prediction error: {oe['records']} records, objective {oe['loss']:.6g}, "
             f"{oe['nfev']} evaluations, {oe['status']}; one-step fit {one}, normalised "
             f"innovations' std {oe['normalised_innovation_std']:.3f} (1 when the filter's "
             "noises are consistent)")
     elif oe:
         sim = ", ".join(f"{c} {v:.2f} %" for c, v in oe["channel_fit_percent"].items())
-        say(f"output error: {oe['windows']} windows of <= {oe['window']} samples, loss "
+        say(f"output error: {oe['windows']} windows of <= {oe['window']} samples, objective "
             f"{oe['loss']:.6g}, {oe['status']}; simulation fit {sim}")
     if len(result.optima) > 0:
-        print_table(f"Distinct optima of {fit_starts} starts (best first): loss, starts that "
+        print_table(f"Distinct optima of {fit_starts} starts (best first): objective, starts that "
                     "reached it, largest parameter spread among those starts, and the "
                     "parameters farthest from the best optimum (relative)",
-                    ["loss", "starts", "spread", "differs most from the best in"],
+                    ["objective", "starts", "spread", "differs most from the best in"],
                     _optima_rows(result.optima))
     if result.failed_starts:
         print_table(f"Failed starts of {fit_starts} (no optimum reached; not among the optima "
-                    "above): start number (0: the first start), final loss and why",
-                    ["start", "loss", "why"],
+                    "above): start number (0: the first start), final objective and why",
+                    ["start", "objective", "why"],
                     [[str(f.start), _num(f.loss, 3), f.reason] for f in result.failed_starts])
     if result.on_bounds:
         say("on a declared bound (the data push past it; its interval is not reliable): "
@@ -269,9 +270,12 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
         say(f"identified combination: {c}")
     if result.simulation_fit:
         say(f"{oe_window}-step simulation fit from measured states: " + ", ".join(
-            f"{c} {v:.2f} %" for c, v in result.simulation_fit.items()) + "; NMSE (mean "
-            "squared error / the channel's variance, comparable across models): " + ", ".join(
-            f"{c} {v:.4g}" for c, v in result.nmse.items()))
+            f"{c} {v:.2f} %" for c, v in result.simulation_fit.items()))
+    if result.channel_mse:
+        say(f"mean squared error per channel ({result.mse_scored}; comparable across models "
+            "on the same data, unlike the objective), NMSE = MSE / the channel's variance: "
+            + ", ".join(f"{c} {v['mse']:.4g} {unit_squared(v['unit'])} (NMSE {v['nmse']:.4g})"
+                        for c, v in result.channel_mse.items()))
     for line in result.notes:
         note(line)
     for line in result.warnings:
@@ -318,7 +322,7 @@ def _optima_rows(optima, show: int = 3) -> list[list[str]]:
 
 
 def validate_declared(data: Path, model_file: str, params: str, json_path: Path | None, *,
-                      starts: int, horizon: int, warmup: int, placement: str, seed: int,
+                      starts: int, horizon: int, warmup: float, placement: str, seed: int,
                       held_out_fraction: float | None, hold_all: bool = False,
                       non_overlapping: bool = False, yardsticks: bool = True,
                       to_end: bool = False, warm_start: str = "fit", values=None,
@@ -532,7 +536,7 @@ def _say_robust(ivs) -> None:
 
 
 def cross_validate_declared(data: Path, model_file: str, json_path: Path | None, *,
-                            starts: int, horizon: int, warmup: int, seed: int, designs,
+                            starts: int, horizon: int, warmup: float, seed: int, designs,
                             folds: int | None, hold_all: bool, to_end: bool,
                             warm_start: str, resamples: int, method: str,
                             max_evals: int, prior: list[str] | None = None) -> None:

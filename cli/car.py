@@ -308,7 +308,7 @@ def car_select(
     with progress_bar(f"car select ({season})", 2 * folds * len(names)) as update:
         sel = select_structure(ds, names, fit_options=opts, folds=folds,
                                rule_time_s=rule_time, starts=starts, horizon=horizon,
-                               warmup=int(math.ceil(warmup / Ts)), exogenous="measured",
+                               warmup=math.ceil(warmup / Ts - 1e-9) * Ts, exogenous="measured",
                                to_end=True, warm_start=warm_start, n_resamples=resamples,
                                seed=seed, progress=update)
     times = tuple(t for t in sel.times_s() if t in REPORT_TIMES_S)
@@ -327,7 +327,7 @@ def car_select(
         with progress_bar(f"car select: {sel.chosen} + residual ARX", folds) as update:
             emcv = error_model_cv(ref, ds, [f["values"] for f in chosen.cv.folds],
                                   folds=folds, starts=starts, horizon=horizon,
-                                  warmup=int(math.ceil(warmup / Ts)), warm_start=warm_start,
+                                  warmup=math.ceil(warmup / Ts - 1e-9) * Ts, warm_start=warm_start,
                                   channel="T_cab", n_resamples=resamples, seed=seed,
                                   progress=update)
         say(emcv.summary())

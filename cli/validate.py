@@ -167,7 +167,7 @@ def validate(
 
         return cross_validate_declared(
             data, model, json_path, starts=starts, horizon=horizon,
-            warmup=warmup_samples(warmup, _sample_time(data)), seed=seed, designs=designs,
+            warmup=warmup_seconds(warmup, data), seed=seed, designs=designs,
             folds=cv_folds, hold_all=exogenous == "hold", to_end=to_end,
             warm_start=warm_start, resamples=resamples, method=method, max_evals=max_evals,
             prior=prior)
@@ -183,7 +183,7 @@ def validate(
         if beside is not None:
             other = load_any_params(beside, allow_unstable=allow_unstable)
     validate_declared(data, model, params, json_path, starts=starts, horizon=horizon,
-                      warmup=warmup_samples(warmup, _sample_time(data)),
+                      warmup=warmup_seconds(warmup, data),
                       placement=placement, seed=seed,
                       held_out_fraction=held_out_fraction, hold_all=exogenous == "hold",
                       non_overlapping=non_overlapping, yardsticks=yardsticks,
@@ -239,6 +239,13 @@ def warmup_samples(warmup_s: float, Ts: float) -> int:
         note(f"--warmup {warmup_s:g} s is not a whole number of samples of {Ts:g} s: "
              f"{n} samples ({n * Ts:g} s) are used")
     return n
+
+
+def warmup_seconds(warmup_s: float, data: Path) -> float:
+    """``--warmup`` (s) rounded up to whole samples of ``data``'s Ts, in seconds (what the
+    API's ``warmup`` takes)."""
+    Ts = _sample_time(data)
+    return warmup_samples(warmup_s, Ts) * Ts
 
 
 def _sample_time(data: Path) -> float:

@@ -90,10 +90,10 @@ def test_validation_to_the_trips_end_scores_only_reached_horizons_and_yardsticks
         p[m.parameter_names.index(k)] = v
     ps = ParameterValues(p, model=m)
     with pytest.raises(Exception, match="longer than warmup"):
-        validate_model(m, val, ps, starts=10, horizon=300, warmup=30)
+        validate_model(m, val, ps, starts=10, horizon=300, warmup=150.0)
     # the yardsticks fitted on the estimation trips, placed before the validation trip
     both, n_est = Dataset.concatenate([est, val]), len(est)
-    res = validate_model(m, both, ps, starts=10, horizon=300, warmup=30, to_end=True,
+    res = validate_model(m, both, ps, starts=10, horizon=300, warmup=150.0, to_end=True,
                          yardsticks=True, estimation=(0, n_est), hold=(),
                          start_range=(n_est, len(both)))
     assert (res.starts >= n_est + 30).all()
@@ -146,7 +146,7 @@ def test_real_trips_prediction_error_fit_beats_persistence_on_held_out_trips():
         assert p.min <= e.value <= p.max, e.name
     both, n = Dataset.concatenate([est, val]), len(est)
     v = validate_model("car_cabin", both, fitted_parameters(res), starts=24, horizon=300,
-                       warmup=60, to_end=True, yardsticks=True, estimation=(0, n),
+                       warmup=300.0, to_end=True, yardsticks=True, estimation=(0, n),
                        start_range=(n, len(both)), warm_start="ekf-trip")
     model, pers = v.by_time["T_cab"], v.yardsticks["persistence"]["by_time"]["T_cab"]
     assert model["60"]["n"] == pers["60"]["n"] == v.starts.size
@@ -208,7 +208,7 @@ def test_censored_samples_are_neither_fitted_nor_scored(rng):
     for k, v in truth.items():
         p[m.parameter_names.index(k)] = v
     res = validate_model(m, bad, ParameterValues(p, model=m),
-                         starts=5, horizon=40, warmup=30)
+                         starts=5, horizon=40, warmup=150.0)
     e = res.errors["T_cab"]
     scored = ~clipped[res.starts[:, None] + np.arange(1, 41)[None, :]]
     assert np.isnan(e[~scored]).all() and np.nanmax(np.abs(e)) < 0.05

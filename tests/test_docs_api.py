@@ -67,7 +67,7 @@ def test_a_millisecond_validation_prints_the_model_beside_the_yardsticks():
     data = acid.Dataset(time=np.arange(n) * 0.01, channels={"y": y + rng.normal(0, 1e-3, n),
                                                               "u": u},
                         units={"y": "V", "u": "V"}, Ts=0.01)
-    res = acid.validate_model(model, data, starts=8, horizon=30, warmup=5, yardsticks=True,
+    res = acid.validate_model(model, data, starts=8, horizon=30, warmup=0.05, yardsticks=True,
                               estimation=(0, 200), start_range=(200, n))
     text = res.summary()
     rows = {line.split()[0] for line in text.splitlines()[2:] if line.startswith("    ")}

@@ -107,7 +107,7 @@ def test_cross_validation_folds_never_see_their_held_out_experiment():
         seen.append(train)
         return fit_model(model, train, **kw)
 
-    cv = cross_validate(m, ds, fit_options={"method": "ls"}, starts=6, horizon=30, warmup=10,
+    cv = cross_validate(m, ds, fit_options={"method": "ls"}, starts=6, horizon=30, warmup=50.0,
                         n_resamples=50, fit=spy)
     assert len(seen) == 3 and [f["held_out"] for f in cv.folds] == [["0"], ["1"], ["2"]]
     for i, train in enumerate(seen):
@@ -178,7 +178,7 @@ def test_the_json_carries_every_step_of_the_model_and_the_yardsticks():
     from acid.ident.validate import validate_model
 
     m, ds, _ = _three_trips()
-    res = validate_model(m, ds, starts=6, horizon=37, warmup=10, yardsticks=True,
+    res = validate_model(m, ds, starts=6, horizon=37, warmup=50.0, yardsticks=True,
                          estimation=(0, 320))
     d = json.loads(json.dumps(res.to_json_dict()))
     assert set(d["by_step"]) == {"model", *res.yardsticks}

@@ -14,7 +14,7 @@ def _gain():
     return gain_model(), gain_data(n=300)
 
 
-@pytest.mark.parametrize("method, word", [("oe", "loss"), ("pem", "log likelihood")])
+@pytest.mark.parametrize("method, word", [("oe", "objective"), ("pem", "log likelihood")])
 def test_fit_reports_evaluations_and_loss(monkeypatch, method, word):
     monkeypatch.setattr(fit_mod, "PROGRESS_EVERY_S", 0.0)      # every evaluation
     seen = []

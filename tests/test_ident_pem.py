@@ -98,7 +98,7 @@ def test_filter_at_validation_starts_follows_the_unmeasured_load(rng, tmp_path):
     assert np.abs(x[:, 1] - Q[k0]).mean() < 0.3 * np.abs(300.0 - Q[k0]).mean()
     # and the open-loop predictions from those states beat the least-squares warm start
     ps = ParameterValues(p, model=m)
-    kw = dict(start_index=k0[:3], horizon=40, warmup=240)
+    kw = dict(start_index=k0[:3], horizon=40, warmup=1200.0)
     ekf = validate_model(m, ds, ps, warm_start="ekf", **kw)
     assert any("extended Kalman filter" in n for n in ekf.notes)
     assert ekf.metrics["T"]["rmse"] < 0.3

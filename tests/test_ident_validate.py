@@ -44,7 +44,7 @@ def _cabin3_record(p, rng, n=300, T_int0=315.0, noise=0.0, unobserved=()):
 def test_the_true_parameters_predict_their_own_data(rng):
     m = load("cabin3")
     ds = _cabin3_record(m.values, rng)
-    res = validate_model(m, ds, starts=10, horizon=100, warmup=40)
+    res = validate_model(m, ds, starts=10, horizon=100, warmup=200.0)
     assert res.channels == ("T_cab", "T_evap", "T_ain") and res.starts.size == 10
     for c in res.channels:
         assert res.metrics[c]["max_abs"] < 1e-6, c
@@ -55,7 +55,7 @@ def test_the_warm_up_estimate_beats_the_declared_initial_rule(rng):
     # the interior starts 9 K above the cabin: the rule (T_int = T_cab) is wrong early on
     m = load("cabin3")
     ds = _cabin3_record(m.values, rng, n=200, T_int0=320.0)
-    warm = validate_model(m, ds, starts=5, horizon=60, warmup=30)
+    warm = validate_model(m, ds, starts=5, horizon=60, warmup=150.0)
     rule = validate_model(m, ds, starts=5, horizon=60, warmup=0)
     assert "latent states started from their declared initial rule" in rule.notes
     assert warm.metrics["T_cab"]["rmse"] < 1e-6 < rule.metrics["T_cab"]["rmse"]
@@ -88,11 +88,11 @@ def test_per_experiment_values_are_used_per_start(rng):
     p0[i], p1[i] = 100.0, 1200.0
     ds = Dataset.concatenate([_cabin3_record(p0, rng, n=150), _cabin3_record(p1, rng, n=150)])
     ps = ParameterValues(model=m, per_experiment={"Q_sol": {0: 100.0, 1: 1200.0}})
-    good = validate_model(m, ds, ps, starts=6, horizon=50, warmup=30)
+    good = validate_model(m, ds, ps, starts=6, horizon=50, warmup=150.0)
     assert good.metrics["T_cab"]["max_abs"] < 1e-6
     fitted = fitted_parameters(fit_model(m, ds, method="ls"))     # Q_sol kept as declared
     assert fitted.per_experiment == {"Q_sol": {0: 400.0, 1: 400.0}}
-    mean = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=30)
+    mean = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=150.0)
     assert mean.metrics["T_cab"]["max_abs"] > 1e-2
     assert any("no fitted value" in n for n in mean.notes)
 
@@ -106,7 +106,7 @@ def test_a_fit_of_a_model_declared_without_a_file_keeps_its_declaration(rng):
     res = fit_model(m, ds, method="ls")
     ps = fitted_parameters(res)
     assert ps.declaration is m and ps.replace(per_experiment={}).declaration is m
-    val = validate_model(m, ds, ps, starts=4, horizon=40, warmup=30)
+    val = validate_model(m, ds, ps, starts=4, horizon=40, warmup=150.0)
     assert val.metrics["T_cab"]["max_abs"] < 1e-6 and val.settings["params"] == ps.label
     # pickled (a worker process) without the Model, which holds the user's functions
     assert pickle.loads(pickle.dumps(res)).declaration is None
@@ -145,10 +145,10 @@ def test_the_paper_declaration_matches_eqs_1_to_3_written_out(noisy_model_datase
 def test_non_overlapping_starts_and_the_window_design(rng):
     m = load("cabin3")
     ds = _cabin3_record(m.values, rng, n=400)
-    res = validate_model(m, ds, starts=60, horizon=50, warmup=20, non_overlapping=True)
+    res = validate_model(m, ds, starts=60, horizon=50, warmup=100.0, non_overlapping=True)
     assert np.all(np.diff(res.starts) >= 51) and res.starts.size == 7
     assert "no overlap" in res.notes[0] and res.notes[0].startswith("window design: 7 starts")
-    dense = validate_model(m, ds, starts=60, horizon=50, warmup=20)
+    dense = validate_model(m, ds, starts=60, horizon=50, warmup=100.0)
     assert "overlapping" in dense.notes[0]
 
 
@@ -158,7 +158,7 @@ def test_progress_names_each_step_and_changes_no_number(rng, warm_start):
     without it (latent states warm-started, disturbances held, yardsticks)."""
     m = load("cabin3")
     ds = _cabin3_record(m.values, rng, n=400)
-    kw = {"starts": 40, "horizon": 60, "warmup": 20, "hold": ("T_amb",), "yardsticks": True,
+    kw = {"starts": 40, "horizon": 60, "warmup": 100.0, "hold": ("T_amb",), "yardsticks": True,
           "warm_start": warm_start}
     seen = []
     with warnings.catch_warnings():

@@ -13,7 +13,7 @@ from acid.models import load
 def test_the_validation_reads_as_one_table_per_channel_and_a_frame():
     m = load("cabin3")
     ds = _cabin3_record(m.values.copy(), np.random.default_rng(0), n=300)
-    r = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=30,
+    r = validate_model(m, ds, declared_parameters(m), starts=6, horizon=50, warmup=150.0,
                        yardsticks=True)
     text = repr(r)
     assert text.startswith("DeclaredValidation(\ncabin3: 6 windows of 50 steps (250 s)")
@@ -33,7 +33,7 @@ def test_the_horizon_curves_are_a_figure_of_every_step():
     matplotlib.use("Agg")
     m = load("cabin3")
     ds = _cabin3_record(m.values.copy(), np.random.default_rng(0), n=200)
-    r = validate_model(m, ds, declared_parameters(m), starts=4, horizon=30, warmup=20,
+    r = validate_model(m, ds, declared_parameters(m), starts=4, horizon=30, warmup=100.0,
                        yardsticks=True)
     fig = r.plot_horizon()
     assert len(fig.axes) == len(r.channels)
@@ -52,7 +52,7 @@ def test_the_validation_round_trips_through_json_with_every_step():
 
     m = load("cabin3")
     ds = _cabin3_record(m.values.copy(), np.random.default_rng(1), n=200)
-    r = validate_model(m, ds, declared_parameters(m), starts=4, horizon=30, warmup=20,
+    r = validate_model(m, ds, declared_parameters(m), starts=4, horizon=30, warmup=100.0,
                        yardsticks=True, estimation=(0, 100), horizons=(1, 7, 30))
     d = json.loads(json.dumps(r.to_json_dict(), allow_nan=False))   # strict JSON
     back = DeclaredValidation.from_json_dict(d)

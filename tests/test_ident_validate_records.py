@@ -44,7 +44,7 @@ def _validate(record, params, tmp_path, capsys, held_out_fraction=None):
 
     out = tmp_path / "v.json"
     capsys.readouterr()
-    validate_declared(record, "cabin3", str(params), out, starts=4, horizon=20, warmup=20,
+    validate_declared(record, "cabin3", str(params), out, starts=4, horizon=20, warmup=100.0,
                       placement="even", seed=0, held_out_fraction=held_out_fraction,
                       figures=None)
     cap = capsys.readouterr()

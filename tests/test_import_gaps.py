@@ -205,7 +205,7 @@ def test_fit_and_validation_skip_the_flagged_samples(tmp_path):
     for k, v in truth.items():
         p[m.parameter_names.index(k)] = v
     val = validate_model(m, ds, ParameterValues(p, model=m), start_index=[150, 180],
-                         horizon=40, warmup=30)
+                         horizon=40, warmup=150.0)
     e = val.errors["T_cab"]                        # (starts, horizon): steps 1 .. 40
     k = val.starts[:, None] + np.arange(1, 41)[None, :]
     assert np.isnan(e[(k == 200) | (k == 201)]).all()   # not scored
@@ -281,7 +281,7 @@ def test_real_trips_with_injected_faults_predict_as_well_as_clean_ones(tmp_path)
 
     def rmse(ds):
         both, n = Dataset.concatenate([est, ds]), len(est)
-        v = validate_model("car_cabin", both, params, starts=16, horizon=60, warmup=60,
+        v = validate_model("car_cabin", both, params, starts=16, horizon=60, warmup=300.0,
                            to_end=True, start_range=(n, len(both)), warm_start="ekf-trip")
         return np.array([v.by_time["T_cab"][h]["rmse_K"] for h in ("60", "300")])
 

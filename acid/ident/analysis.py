@@ -20,10 +20,10 @@ k-step prediction: sample n is predicted from the state at n - k and the measure
 disturbances in between. Measured states are taken as measured; latent states come from a
 forced run of the model along each experiment (the measured states reset to their
 measurements at every sample, the latent ones propagated by the model's equations), started
-from their declared ``initial`` rule or, with ``warmup`` W > 0, from the state fitted to the
-first W samples (``acid.ident.validate``'s warm start). ``k=None`` simulates each experiment
-from its first predicted sample. Channels: every state and output the dataset measures, in
-their declared units.
+from their declared ``initial`` rule or, with ``warmup`` > 0 s (W samples), from the state
+fitted to the first W samples (``acid.ident.validate``'s warm start). ``k=None`` simulates
+each experiment from its first predicted sample. Channels: every state and output the
+dataset measures, in their declared units.
 """
 
 from __future__ import annotations
@@ -45,6 +45,7 @@ from acid.ident.validate import (
     fitted_parameters,
     parameters_at,
     read_parameters,
+    samples_of,
     warm_start_states,
 )
 from acid.metrics import fit_percent, rmse
@@ -607,21 +608,22 @@ def _state_track(model: Model, data: ModelData, P: np.ndarray, first: np.ndarray
 
 
 def predict_model(ds: Dataset, params=None, k: int | None = 1, *, model=None,
-                  warmup: int = 0) -> PredictionResult:
+                  warmup: float = 0.0) -> PredictionResult:
     """k-step-ahead predictions of every measured channel of a declared model along ``ds``
-    (module docstring). ``params`` as :func:`resolve`; ``k`` >= 1 or None (simulation);
-    ``warmup`` samples at the start of each experiment that fit the latent states (none are
-    predicted there). Returns a ``PredictionResult`` in the declared units."""
+    (module docstring). ``params`` as :func:`resolve`; ``k`` >= 1 steps or None
+    (simulation); ``warmup`` seconds (a whole number of samples, as ``validate_model``'s)
+    at the start of each experiment that fit the latent states (none are predicted there).
+    Returns a ``PredictionResult`` in the declared units."""
     if k is not None and (isinstance(k, bool) or int(k) != k or int(k) < 1):
         raise ConfigError(f"predict: horizon k must be a whole number of samples >= 1 or None, "
                           f"got {k!r}")
-    if isinstance(warmup, bool) or int(warmup) < 0:
-        raise ConfigError(f"predict: warmup must be a whole number of samples >= 0, got "
-                          f"{warmup!r}")
+    if isinstance(warmup, bool):
+        raise ConfigError(f"predict: warmup must be a duration >= 0 s, got {warmup!r}")
     m, ps, label = resolve(params, model)
     data = ModelData.of(m, ds, min_samples=2)
     latent = any(not s.measured for s in m.states)
-    W = int(warmup) if latent else 0
+    W = samples_of(warmup, ds.Ts, "predict: warmup", used=latent)
+    W = W if latent else 0
     n = len(data)
     notes: list[str] = []
     P = parameters_at(m, data, ps, np.arange(n), notes)
@@ -651,14 +653,14 @@ def predict_model(ds: Dataset, params=None, k: int | None = 1, *, model=None,
 
 
 def compare_models(ds: Dataset, *params, k: int | None = None, labels=None, model=None,
-                   warmup: int = 0) -> CompareResult:
+                   warmup: float = 0.0) -> CompareResult:
     """Fit % per channel of one or more declared parameter sets on ``ds`` (MATLAB
     ``compare``; ``k`` None: simulation)."""
     return compare_predictions(
         params, lambda p: predict_model(ds, p, k, model=model, warmup=warmup), k, labels)
 
 def resid_model(ds: Dataset, params=None, max_lag: int = 25, k: int = 1, *, model=None,
-                warmup: int = 0) -> ResidualResult:
+                warmup: float = 0.0) -> ResidualResult:
     """Residual tests of a declared model on ``ds`` (MATLAB ``resid``): autocorrelation of
     every channel's k-step errors and their cross-correlation with every declared input."""
     if int(max_lag) < 1:
@@ -667,12 +669,13 @@ def resid_model(ds: Dataset, params=None, max_lag: int = 25, k: int = 1, *, mode
     m, _, _ = resolve(params, model)
     data = ModelData.of(m, ds, min_samples=2)
     return residual_tests(pr, data.u, tuple(r.name for r in m.inputs), ds.experiment,
-                          int(max_lag), {"max_lag": int(max_lag), "k": k, "warmup": warmup},
+                          int(max_lag), {"max_lag": int(max_lag), "k": k, "warmup_s": warmup},
                           ds.source)
 
 
 #: MATLAB's names: ``predict(data, params, k=1, *, warmup=0)``, ``compare(data, *params,
-#: k=None, labels=None, warmup=0)``, ``resid(data, params, max_lag=25, k=1, *, warmup=0)``.
+#: k=None, labels=None, warmup=0)``, ``resid(data, params, max_lag=25, k=1, *, warmup=0)``
+#: (``k`` in steps, ``warmup`` in seconds).
 predict = predict_model
 compare = compare_models
 resid = resid_model

@@ -439,7 +439,7 @@ def fold_groups(n_experiments: int, folds: int | None) -> list[np.ndarray]:
 
 def cross_validate(model, ds: Dataset, *, fit_options: dict | None = None,
                    folds: int | None = None, designs: Sequence[str] = ("even",),
-                   starts: int = 60, horizon: int = 300, warmup: int = 60,
+                   starts: int = 60, horizon: int = 300, warmup: float = 300.0,
                    exogenous: str = "hold", to_end: bool = False, warm_start: str = "fit",
                    channel: str | None = None, n_resamples: int = DEFAULT_RESAMPLES,
                    seed: int = 0, fit: Callable | None = None,
@@ -451,7 +451,9 @@ def cross_validate(model, ds: Dataset, *, fit_options: dict | None = None,
     fitted on the other experiments only (a held-out experiment's per-experiment
     parameters, never fitted, take the table value: the mean over the training ones); the
     yardsticks are fitted on the same training experiments. ``starts`` per fold, placed by
-    each design in ``designs`` (``STARTS_DESIGNS``; random ones seeded by ``seed``); the
+    each design in ``designs`` (``STARTS_DESIGNS``; random ones seeded by ``seed``),
+    ``horizon`` steps, ``warmup`` seconds (``validate_model``'s units, as ``acid validate
+    --cv``'s options); the
     windows of every fold are pooled into one ``ValidationIntervals`` per design.
     ``fit``: the fitter (default ``acid.ident.fit.fit_model``), called as
     ``fit(model, training_dataset, **fit_options)``."""
@@ -543,7 +545,7 @@ def cross_validate(model, ds: Dataset, *, fit_options: dict | None = None,
                                              int(seed), figs, verdicts, tuple(notes)))
     return CrossValidation(model.name, intervals[0].channel, json_safe(fit_options),
                            tuple(fold_rows), tuple(intervals),
-                           {"starts_per_fold": starts, "horizon": horizon, "warmup": warmup,
+                           {"starts_per_fold": starts, "horizon": horizon, "warmup_s": warmup,
                             "exogenous": exogenous, "to_end": to_end,
                             "warm_start": warm_start, "designs": list(designs),
                             "data_source": ds.source})

@@ -126,7 +126,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         if int(fit_starts) > 1:
             res = _pem_starts(model, ds, res, int(fit_starts), seed, fix, max_nfev, t0,
                               progress)
-        return res
+        return dataclasses.replace(res, channel_mse=_one_step_mse(model, res.output_error))
     data = ModelData.of(model, ds)
     E = data.n_experiments
     names = model.parameter_names
@@ -365,8 +365,10 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
             estimates.append(Estimate(p.name, p.unit, p.value, float(theta[k]), se, ci,
                                       status[k], columns[k].experiment))
     P_fit = _values_at(data, values, per_experiment, names)
+    sim = simulation_errors(model, data, P_fit, oe_window)
     return DeclaredFitResult(
-        simulation_fit=simulation_fit(model, data, P_fit, oe_window),
+        simulation_fit={k: 100.0 * (1.0 - math.sqrt(v["nmse"])) for k, v in sim.items()},
+        channel_mse={k: {**v, "scored": "simulation"} for k, v in sim.items()},
         one_step_fit=one_step_fit(model, data, forms, P_fit),
         loss=loss, model=model.name, model_source=model.source, method=method, declaration=model,
         estimates=tuple(estimates), equations=tuple(reports.values()), values=values,
@@ -380,22 +382,47 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         elapsed_s=time.perf_counter() - t0)
 
 
-def simulation_fit(model: Model, data: ModelData, P: np.ndarray, window: int) -> dict:
-    """{channel: fit %} of ``window``-sample simulations of every experiment from the
-    measured states (latent ones from their declared rule) with the parameters ``P``
-    (N, np) per sample: the multi-step quality a one-step fit does not show."""
+def simulation_errors(model: Model, data: ModelData, P: np.ndarray, window: int) -> dict:
+    """{channel: {"unit", "mse", "variance", "nmse", "n"}} of ``window``-sample simulations
+    of every experiment from the measured states (latent ones from their declared rule) with
+    the parameters ``P`` (N, np) per sample, every measured channel: the mean squared error
+    (the channel's unit squared), the channel's variance over the same samples and their
+    ratio NMSE (0 perfect, 1 no better than the channel's mean); the multi-step quality a
+    one-step fit does not show, on the same footing for every model and method."""
     w = oe.Windows.of(data.segments, window)
     i0 = w.idx[:, 0]
     Y = oe.simulate_windows(model, data, w.idx, data.initial_states(model, i0), P[i0])
     meas = data.observed()[w.idx]
+    unit = {r.name: r.unit for r in model.states + model.outputs}
     out = {}
     for c, name in data.measured_channels(model):
         ok = w.mask & np.isfinite(meas[..., c])
         m, y = meas[..., c][ok], Y[..., c][ok]
-        den = np.linalg.norm(m - m.mean())
-        out[name] = float(100.0 * (1.0 - np.linalg.norm(y - m) / den)) if den > 0 \
-            else math.nan
+        mse = float(np.mean((y - m) ** 2)) if m.size else math.nan
+        var = float(np.var(m)) if m.size else math.nan
+        out[name] = {"unit": unit[name], "mse": mse, "variance": var,
+                     "nmse": mse / var if var > 0 else math.nan, "n": int(m.size)}
     return out
+
+
+def _one_step_mse(model: Model, pem: dict) -> dict:
+    """``channel_mse`` of a prediction-error fit from its one-step innovations (RMS and fit
+    % over the same samples: MSE = RMS^2, NMSE = (1 - fit % / 100)^2, variance their ratio)."""
+    unit = {r.name: r.unit for r in model.states + model.outputs}
+    out = {}
+    for k, rms in pem.get("innovation_rms", {}).items():
+        fit = pem["one_step_fit_percent"].get(k, math.nan)
+        mse, nmse = rms ** 2, (1.0 - fit / 100.0) ** 2
+        out[k] = {"unit": unit.get(k, ""), "mse": mse,
+                  "variance": mse / nmse if nmse > 0 else math.nan, "nmse": nmse,
+                  "scored": "one-step"}
+    return out
+
+
+def simulation_fit(model: Model, data: ModelData, P: np.ndarray, window: int) -> dict:
+    """{channel: fit %} of the simulations of ``simulation_errors``: 100 (1 - sqrt(NMSE))."""
+    return {k: 100.0 * (1.0 - math.sqrt(v["nmse"]))
+            for k, v in simulation_errors(model, data, P, window).items()}
 
 
 def one_step_fit(model: Model, data: ModelData, forms, P: np.ndarray) -> dict:
@@ -632,11 +659,11 @@ def _basins_note(n: int, n_conv: int, optima, failed) -> str:
     for f in failed:
         kind = f.reason.split(" (")[0].split(":")[0].split(";")[0]
         kinds[kind] = kinds.get(kind, 0) + 1
-    shown = ", ".join(f"loss {o.loss:.6g} x {o.n_starts}" for o in optima[:5])
+    shown = ", ".join(f"objective {o.loss:.6g} x {o.n_starts}" for o in optima[:5])
     more = f", {len(optima) - 5} more" if len(optima) > 5 else ""
     why = f" ({', '.join(f'{k} x {v}' for k, v in kinds.items())})" if kinds else ""
     return (f"multi-start: {n} starts, {n_conv} converged into {len(optima)} distinct optima "
-            f"({shown}{more}), {len(failed)} failed{why}; the best (loss {optima[0].loss:.6g},"
+            f"({shown}{more}), {len(failed)} failed{why}; the best (objective {optima[0].loss:.6g},"
             f" {optima[0].n_starts} start(s)) is reported")
 
 

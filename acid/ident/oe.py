@@ -238,7 +238,7 @@ def solve(prob: OEProblem, theta0: np.ndarray, lo: np.ndarray, hi: np.ndarray,
         count["n"] += 1
         if progress is not None:
             progress(count["n"], None, f"pass {count['pass']}, evaluation {count['n']}, "
-                                       f"loss {0.5 * float(r @ r):.6g}")
+                                       f"objective {0.5 * float(r @ r):.6g}")
         return r
 
     robust = loss == "huber"

@@ -74,7 +74,9 @@ class FailedStart:
 @dataclass(frozen=True, repr=False)
 class DeclaredFitResult:
     """What ``fit_model`` found (frozen): ``print(fit)`` or ``fit.summary()`` for the table,
-    ``fit.to_frame()`` for pandas rows, ``fit.nmse`` to compare models on the same data."""
+    ``fit.to_frame()`` for pandas rows, ``fit.mse`` and ``fit.nmse`` to compare models on the
+    same data (``fit.objective`` is what the optimiser minimised: it compares starts of one
+    fit, not models)."""
 
     model: str
     model_source: str
@@ -103,6 +105,7 @@ class DeclaredFitResult:
     #: (measured states, inputs and read outputs substituted; equations reading a latent
     #: state are left out)
     one_step_fit: dict = field(default_factory=dict)
+    #: the loss function minimised, ``--loss``: "squared" or "huber"
     loss: str = "squared"
     #: multi-start runs that reached no optimum (non-finite or diverged loss, solver
     #: failure), kept out of ``optima``
@@ -111,6 +114,13 @@ class DeclaredFitResult:
     on_bounds: tuple[str, ...] = ()
     #: the ``Model`` fitted (``fitted_parameters`` binds the values to it)
     declaration: Model | None = field(default=None, repr=False, compare=False)
+    #: {channel: {"unit", "mse", "variance", "nmse", "n", "scored"}}: the mean squared error
+    #: of each fitted channel in its unit squared, the channel's variance over the same
+    #: samples and their ratio (NMSE), scored as the method scores: "simulation" (least
+    #: squares, output error: the windows of ``simulation_fit``,
+    #: ``acid.ident.fit.simulation_errors``) or "one-step" (prediction error: the filter's
+    #: innovations)
+    channel_mse: dict = field(default_factory=dict)
 
     def to_frame(self):
         """The fitted table as a pandas DataFrame, a row per estimate (per-experiment
@@ -124,14 +134,51 @@ class DeclaredFitResult:
                               "status": e.status} for e in self.estimates])
 
     @property
+    def mse(self) -> dict:
+        """{channel: mean squared error} with the fitted table, in the channel's unit squared
+        (K^2 for a temperature), scored as ``channel_mse`` says (least squares and output
+        error: simulations over ``simulation_fit``'s windows from the measured states;
+        prediction error: one-step innovations): compares models on the same data."""
+        return {k: v["mse"] for k, v in self.channel_mse.items()}
+
+    @property
     def nmse(self) -> dict:
-        """{channel: normalised mean squared error} of the fitted table's simulations
-        (``simulation_fit``): the channel's mean squared error divided by its variance over
-        the same samples, (1 - fit % / 100) ** 2. 0 is perfect, 1 is no better than the
-        channel's mean; unlike the optimiser's cost it compares fits of different models
-        on the same data."""
+        """{channel: normalised mean squared error}: the channel's mean squared error
+        (``mse``) divided by its variance over the same samples, (1 - fit % / 100) ** 2.
+        0 is perfect, 1 is no better than the channel's mean; unlike the optimiser's
+        objective it compares fits of different models on the same data."""
+        if self.channel_mse:
+            return {k: v["nmse"] for k, v in self.channel_mse.items()}
         return {k: (1.0 - v / 100.0) ** 2 if math.isfinite(v) else math.nan
                 for k, v in self.simulation_fit.items()}
+
+    @property
+    def mse_scored(self) -> str:
+        """How ``mse`` and ``nmse`` were scored: "simulation" or "one-step"."""
+        kinds = {v.get("scored", "simulation") for v in self.channel_mse.values()}
+        return kinds.pop() if len(kinds) == 1 else "simulation"
+
+    @property
+    def objective(self) -> float:
+        """What the optimiser minimised, at the optimum (``objective_text`` says what it is
+        for this method; NaN for least squares, one problem per equation). It ranks the
+        starts of one fit; it does not compare models (``mse``, ``nmse`` do)."""
+        v = self.output_error.get("loss") if self.output_error else None
+        return math.nan if v is None else float(v)
+
+    @property
+    def objective_text(self) -> str:
+        """What ``objective`` is for this fit's method."""
+        prior = "; plus the priors' squared standardised distances when declared"
+        if self.method == "pem":
+            return ("prediction error: -2 log-likelihood of the one-step innovations of the "
+                    f"extended Kalman filter, up to a constant{prior}")
+        if self.output_error:
+            return ("output error: half the sum of the squared simulation errors, each "
+                    "channel's divided by its weight (its error scale), over the windows' "
+                    f"samples (about half their number at a good fit){prior}")
+        return ("least squares: one problem per equation, no single objective (each "
+                "equation's residual std is in the equations table)")
 
     def summary(self) -> str:
         """The fit as text: what was fitted how, the parameter table, the per-channel error
@@ -151,9 +198,16 @@ class DeclaredFitResult:
                          f"{e.unit:<{uw}}  {e.status}")
         if rms:
             lines.append("  error RMS: " + ", ".join(f"{k} {v:.4g}" for k, v in rms.items()))
-        if self.simulation_fit:
-            lines.append("  NMSE (simulation, MSE / variance): " + ", ".join(
-                f"{k} {v:.4g}" for k, v in self.nmse.items()))
+        if self.channel_mse:
+            lines.append(f"  MSE ({self.mse_scored}): " + ", ".join(
+                f"{k} {v['mse']:.4g} {unit_squared(v['unit'])}"
+                for k, v in self.channel_mse.items()))
+        if self.nmse:
+            lines.append(f"  NMSE ({self.mse_scored}, MSE / variance): "
+                         + ", ".join(f"{k} {v:.4g}" for k, v in self.nmse.items()))
+        if math.isfinite(self.objective):
+            lines.append(f"  objective {self.objective:.6g} (what the optimiser minimised; "
+                         "not comparable across models)")
         lines += [f"  on a bound: {b}" for b in self.on_bounds]
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
@@ -187,9 +241,12 @@ class DeclaredFitResult:
             "equations": [vars(q) for q in self.equations],
             "combinations": list(self.combinations),
             "output_error": self.output_error, "loss": self.loss,
+            "objective": {"value": self.objective, "what": self.objective_text},
+            "mse_per_channel": self.channel_mse,
             "fit_percent_simulation": self.simulation_fit,
             "fit_percent_one_step": self.one_step_fit,
-            "nmse_simulation": self.nmse,
+            "nmse": self.nmse, "nmse_scored": self.mse_scored,
+            "nmse_simulation": self.nmse if self.mse_scored == "simulation" else {},
             "optima": [vars(o) for o in self.optima],
             "failed_starts": [vars(f) for f in self.failed_starts],
             "on_bounds": list(self.on_bounds),
@@ -230,7 +287,15 @@ class DeclaredFitResult:
             elapsed_s=num(d["elapsed_s"]), simulation_fit=d["fit_percent_simulation"],
             one_step_fit=d["fit_percent_one_step"], loss=d["loss"],
             failed_starts=tuple(FailedStart(**f) for f in d["failed_starts"]),
-            on_bounds=tuple(d["on_bounds"]))
+            on_bounds=tuple(d["on_bounds"]),
+            channel_mse={k: {**v, **{q: num(v[q]) for q in ("mse", "variance", "nmse")}}
+                         for k, v in d.get("mse_per_channel", {}).items()})
+
+    def to_dict(self) -> dict:
+        """The result as plain JSON types (``to_json_dict``): the parameter table, the
+        per-channel ``mse_simulation`` and ``nmse_simulation`` (comparable across models),
+        the ``objective`` with what it is, the covariance, notes and warnings."""
+        return self.to_json_dict()
 
     def __eq__(self, other) -> bool:
         """Equal when their JSON is (arrays compared by value, NaN equal to NaN)."""
@@ -257,3 +322,8 @@ class DeclaredFitResult:
         return write_json(path, json_safe({**d, **(extra or {}), "fit": self.to_json_dict(),
                                            **{k: d[k] for k in ("parameters",
                                                                 "per_experiment")}}))
+
+
+def unit_squared(unit: str) -> str:
+    """A unit squared, as printed beside an MSE: K^2, (kg/s)^2."""
+    return f"{unit}^2" if unit.isalnum() else f"({unit})^2"

@@ -2,7 +2,7 @@
 
 From each start instant k the model predicts ``horizon`` samples open loop with the measured
 inputs and disturbances. The state at k: measured states as measured; latent ones
-estimated from the ``warmup`` samples before k (the whole state at k - warmup fitted to the
+estimated from the ``warmup`` seconds before k (the whole state at k - warmup fitted to the
 measured channels of that stretch with the parameters held, then simulated to k), or their
 declared ``initial`` rule when ``warmup`` is 0. Errors are reported per measured channel,
 overall and at chosen horizons (RMSE, p90 of |e|), with ``acid.metrics``.
@@ -52,6 +52,8 @@ MAX_PREDICTION_SAMPLES = 5_000_000
 WARM_STARTS = ("fit", "ekf", "ekf-trip")
 #: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
 REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
+#: ``warmup``'s default, s (as ``acid validate --warmup``: 60 samples of the paper's 5 s).
+DEFAULT_WARMUP_S = 300.0
 #: Below this standard deviation a measured window counts as constant: fit % undefined.
 CONSTANT_TRUTH_STD = 1e-9
 
@@ -133,8 +135,26 @@ def held_out_start(n: int, fraction: float | None) -> int:
     return int(round(n * (1.0 - f)))
 
 
+def samples_of(value_s: float, Ts: float, name: str, used: bool = True) -> int:
+    """A time ``value_s`` (s) as whole samples of ``Ts`` (s); a one-line ``ConfigError``
+    naming ``name`` when it is not a whole number of samples (the CLI rounds up and says
+    so; the API takes exactly what it is given) and ``used`` (a warm-up of a model without
+    latent states is not used: any duration >= 0 passes, rounded up)."""
+    v = float(value_s)
+    if not math.isfinite(v) or v < 0:
+        raise ConfigError(f"{name} must be a duration >= 0 s, got {value_s!r}")
+    n = int(round(v / Ts))
+    if not used:
+        return math.ceil(v / Ts - 1e-9)
+    if not math.isclose(n * Ts, v, rel_tol=1e-9, abs_tol=1e-9 * Ts):
+        lo = math.floor(v / Ts)
+        raise ConfigError(f"{name} {v:g} s is not a whole number of samples of {Ts:g} s "
+                          f"(e.g. {lo * Ts:g} s or {(lo + 1) * Ts:g} s)")
+    return n
+
+
 def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | None = None, *,
-                   starts: int = 60, horizon: int = 300, warmup: int = 60,
+                   starts: int = 60, horizon: int = 300, warmup: float = DEFAULT_WARMUP_S,
                    placement: str = "even", seed: int = 0,
                    horizons: tuple[int, ...] | None = None,
                    hold: tuple[str, ...] | None = None,
@@ -145,6 +165,11 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                    progress: Callable[[int, int, str], None] | None = None
                    ) -> DeclaredValidation:
     """Predict ``horizon`` samples open loop from ``starts`` instants (module docstring).
+
+    Units as ``acid validate``'s options: ``horizon`` (and ``horizons``, ``start_index``,
+    ``start_range``, ``estimation`` ranges) in samples of the data, ``warmup`` in seconds
+    (default 300 s; for a model with latent states a whole number of samples of the data's
+    Ts, else a one-line ``ConfigError``; unused without latent states).
 
     ``params``: a fit (``DeclaredFitResult``), any ``ParameterValues`` or None (the declared
     values).
@@ -164,9 +189,12 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     ``estimation``. ``estimation``: the samples the parameters were fitted on, as (lo, hi),
     a list of (lo, hi) ranges of ``ds`` (the first half of each record), or the estimation
     ``Dataset`` itself (what was given to ``fit_model``): the yardsticks are fitted on
-    exactly those samples, and with a ``Dataset`` every window that would score a sample of
-    it (in-sample) is left out, with a note. Default: the whole record, in-sample, with a
-    note. ``to_end``: a start may lie less than
+    exactly those samples. With a ``Dataset``, its samples are found in ``ds`` by position
+    (``estimation_samples``: each of its experiments placed as one contiguous stretch of a
+    record, not sample values that merely recur) and every window that would score one of
+    them (in-sample) is left out, with a note; with ranges, the windows that overlap them
+    are marked (``settings["in_sample_starts"]``, a note). Default: the whole record,
+    in-sample, with a note. ``to_end``: a start may lie less than
     ``horizon`` samples before its experiment's end (at least ``horizon // 25`` steps, 60 s
     of 300 x 5 s); its prediction stops there, and the errors per prediction time count only
     the starts that reach it (short trips). Censored samples (a ``<channel>_censored`` mask)
@@ -192,11 +220,12 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     if non_overlapping and placement != "even":
         raise ConfigError(f"--non-overlapping places the starts evenly: it cannot be "
                           f"combined with --placement {placement}")
-    for name, v, lo in (("starts", starts, 1), ("horizon", horizon, 1), ("warmup", warmup, 0)):
+    for name, v, lo in (("starts", starts, 1), ("horizon", horizon, 1)):
         if int(v) < lo:
             raise ConfigError(f"{name} must be at least {lo}, got {v}")
     data = ModelData.of(model, ds, min_samples=2)
     latent = [i for i, s in enumerate(model.states) if not s.measured]
+    warmup = samples_of(warmup, ds.Ts, "warmup", used=bool(latent))
     need_warm = warmup if latent else 0
     step = _Steps(progress, 3 + bool(latent and need_warm > 0) + bool(yardsticks))
     ranges = [(0, len(data))] if start_range is None else \
@@ -209,7 +238,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     est_data, notes_pre = None, []
     if isinstance(estimation, Dataset):
         est_data = ModelData.of(model, estimation, min_samples=2)
-        fitted = _rows_in(data, est_data)
+        fitted, placed = estimation_samples(data, est_data, ds.time, estimation.time)
+        notes_pre += placed
         if fitted.any() and start_index is None:
             # a window scoring a sample the parameters were fitted on is in-sample: left out
             ends = np.array([b for _, b in data.segments])
@@ -219,8 +249,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
             keep = seen[stop + 1] - seen[cand] == 0     # the start's own sample too
             if not keep.all():
                 notes_pre.append(f"{int(fitted.sum())} of {len(data)} samples are the estimation "
-                             f"data's: {int((~keep).sum())} of {cand.size} candidate starts "
-                             "whose windows score them were left out (in-sample)")
+                                 f"data's (placed by position): {int((~keep).sum())} of "
+                                 f"{cand.size} candidate starts whose windows score them were "
+                                 "left out (in-sample)")
             cand = cand[keep]
     elif estimation is not None:
         estimation = estimation_ranges(estimation, len(data))
@@ -252,6 +283,11 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
         raise ConfigError(f"--starts {k0.size} x --horizon {horizon} steps is "
                           f"{k0.size * (horizon + 1):.3g} prediction samples, more than "
                           f"{MAX_PREDICTION_SAMPLES:.0e}: lower --starts or --horizon")
+    in_sample = _windows_over(data, k0, horizon, estimation) \
+        if estimation is not None and est_data is None else np.zeros(k0.size, dtype=bool)
+    if in_sample.any():
+        notes_pre.append(f"{int(in_sample.sum())} of {k0.size} windows score samples of the "
+                         "estimation ranges: in-sample (settings in_sample_starts)")
     step(f"{k0.size} starts placed")
     gaps = np.diff(np.sort(k0))
     notes = [*notes_pre, f"window design: {k0.size} starts, spacing "
@@ -358,6 +394,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
                 "sample_range": [int(lo_r), int(hi_r)], "placement": placement,
                 "seed": seed if placement == "random" else None,
                 "non_overlapping": bool(non_overlapping), "starts_requested": int(starts),
+                "in_sample_starts": [int(k) for k in k0[in_sample]],
                 "data_source": ds.source, "data_samples": len(ds),
                 "yardsticks_fitted_on": _fitted_on(estimation, est_data, len(data0))
                 if yardsticks else None}
@@ -453,14 +490,80 @@ def by_time(errors: dict, Ts: float, times_s=REPORT_TIMES_S) -> dict:
     return out
 
 
-def _rows_in(data: ModelData, other: ModelData) -> np.ndarray:
-    """(N,) bool: the samples of ``data`` whose every value (states, inputs, disturbances,
-    outputs) equals a sample of ``other`` (the same measurement: in-sample)."""
+#: Most placements of one estimation experiment compared sample by sample (beyond: the
+#: placements whose first, middle and last samples agree all count, conservatively).
+MAX_PLACEMENTS = 64
+
+
+def estimation_samples(data: ModelData, est: ModelData, time: np.ndarray | None = None,
+                       est_time: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
+    """(N,) bool, True on the samples of ``data`` the estimation data ``est`` holds, by
+    position, and notes on what could not be placed.
+
+    Each experiment of ``est`` (a stretch of one record: ``Dataset.split``, ``window``, or
+    one part of a ``concatenate``) is placed as one contiguous block inside one experiment
+    of ``data``, where all its samples (states, inputs, disturbances, outputs, in order)
+    are the block's; only the samples of that block are marked. A value that merely recurs
+    (a sensor holding a value across the split, a repeated sample) is not marked. When
+    the block fits several places (a stretch repeated exactly), the one at the same time
+    stamps is taken, else all of them (said in a note); an experiment found nowhere (a
+    resampled or filtered copy) is said in a note and marks nothing."""
     def rows(d):
-        a = np.ascontiguousarray(np.concatenate([d.x, d.u, d.d, d.y], axis=1))
-        return [r.tobytes() for r in a]
-    seen = set(rows(other))
-    return np.array([r in seen for r in rows(data)], dtype=bool)
+        return np.ascontiguousarray(np.concatenate([d.x, d.u, d.d, d.y], axis=1))
+
+    A, B = rows(data), rows(est)
+    first: dict[bytes, list[int]] = {}
+    for i, r in enumerate(A):
+        first.setdefault(r.tobytes(), []).append(i)
+    end_of = np.empty(len(A), dtype=int)
+    for a, b in data.segments:
+        end_of[a:b] = b
+    mark = np.zeros(len(A), dtype=bool)
+    lost, several = [], []
+    for e, (a, b) in enumerate(est.segments):
+        L = b - a
+        cand = np.array([o for o in first.get(B[a].tobytes(), []) if o + L <= end_of[o]],
+                        dtype=int)
+        for k in (L // 2, L - 1):                  # cheap checks before the whole block
+            if cand.size:
+                cand = cand[_same_rows(A[cand + k], B[a + k])]
+        if cand.size <= MAX_PLACEMENTS:
+            cand = cand[[np.array_equal(A[o:o + L], B[a:b], equal_nan=True) for o in cand]]
+        if cand.size > 1 and time is not None and est_time is not None:
+            same = cand[np.isclose(time[cand], est_time[a], rtol=0.0, atol=1e-6 * data.Ts)]
+            cand = same if same.size == 1 else cand
+        if not cand.size:
+            lost.append(f"{e} ({L} samples)")
+        elif cand.size > 1:
+            several.append(f"{e} ({cand.size} places)")
+        for o in cand:
+            mark[o:o + L] = True
+    notes = []
+    if lost:
+        notes.append("estimation experiment(s) " + ", ".join(lost) + " are not a stretch of "
+                     "this record (resampled, filtered or another record?): their samples "
+                     "could not be placed, windows over them are not marked in-sample")
+    if several:
+        notes.append("estimation experiment(s) " + ", ".join(several) + " repeat exactly in "
+                     "this record: every place they fit is counted as in-sample")
+    return mark, notes
+
+
+def _windows_over(data: ModelData, k0: np.ndarray, horizon: int, ranges) -> np.ndarray:
+    """(S,) bool: the window of each start ``k0`` (its start to ``horizon`` steps on, within
+    its experiment) holds a sample of the (lo, hi) ``ranges``."""
+    mark = np.zeros(len(data) + 1, dtype=int)
+    for lo, hi in ranges:
+        mark[lo:hi] = 1
+    seen = np.concatenate([[0], np.cumsum(mark[:-1])])
+    ends = np.array([b for _, b in data.segments])
+    stop = np.minimum(k0 + horizon, ends[np.searchsorted(ends, k0, side="right")] - 1)
+    return seen[stop + 1] - seen[k0] > 0
+
+
+def _same_rows(rows: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """(n,) bool: each of ``rows`` (n, c) equals ``row`` (c,), NaN equal to NaN."""
+    return np.all((rows == row) | (np.isnan(rows) & np.isnan(row)), axis=1)
 
 
 def _fitted_on(estimation, est_data, n: int):

@@ -29,6 +29,8 @@ class DeclaredValidation:
     ``median_abs``, ``p90_abs``, ``p95_abs``, ``max_abs``, ``fit_percent`` (median over
     the starts of each window's fit, %) and ``fit_percent_pooled``, over steps 1..horizon.
     ``energy[channel]`` (outputs in W): |error| of each window's energy, % of the measured.
+    ``horizon`` is in steps of ``Ts`` s (``horizon_s`` the times), ``warmup`` in samples
+    (``warmup_s`` in s, as the ``warmup`` given to ``validate_model``).
     """
 
     model: str
@@ -64,6 +66,11 @@ class DeclaredValidation:
     @property
     def n_starts(self) -> int:
         return int(self.starts.size)
+
+    @property
+    def warmup_s(self) -> float:
+        """The warm-up stretch before each start, s (``warmup`` is in samples)."""
+        return self.warmup * self.Ts
 
     @property
     def horizon_s(self) -> np.ndarray:
@@ -172,6 +179,7 @@ class DeclaredValidation:
         inputs) are left out. ``from_json_dict`` reads it back."""
         return json_safe({
             "model": self.model, "horizon": self.horizon, "warmup": self.warmup,
+            "warmup_s": self.warmup_s,
             "Ts": self.Ts, "n_starts": int(self.starts.size),
             "starts": self.starts.tolist(),
             "start_time_s": None if self.start_time is None else self.start_time.tolist(),

@@ -161,7 +161,7 @@ def choose(candidates: Sequence[CandidateScore], time_s: float) -> tuple[str, st
 
 def select_structure(ds: Dataset, candidates: Sequence, *, fit_options: dict | None = None,
                      folds: int | None = 2, rule_time_s: float = 600.0, starts: int = 60,
-                     horizon: int = 300, warmup: int = 60, exogenous: str = "measured",
+                     horizon: int = 300, warmup: float = 300.0, exogenous: str = "measured",
                      to_end: bool = True, warm_start: str = "fit", n_resamples: int = 1000,
                      seed: int = 0, fit: Callable | None = None, channel: str | None = "T_cab",
                      progress: Callable[[int, int, str], None] | None = None

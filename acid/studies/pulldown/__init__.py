@@ -128,7 +128,7 @@ def validate_pair(models: Models, held_out, settings: PulldownSettings = Pulldow
             warnings.simplefilter("ignore")
             v = validate_model("econ", ds, params, starts=settings.validation_starts,
                                horizon=int(round(settings.validation_horizon_s / ds.Ts)),
-                               warmup=12, start_range=(lo, len(ds)), estimation=(0, lo),
+                               warmup=12 * ds.Ts, start_range=(lo, len(ds)), estimation=(0, lo),
                                yardsticks=True, to_end=True, hold=())
         row = {"model": {t: d["p90_K"] for t, d in v.by_time.get("T_cab", {}).items()}}
         for name, y in v.yardsticks.items():
