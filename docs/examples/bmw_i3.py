@@ -27,6 +27,6 @@ print(fit.summary())
 # filter run from the trip's start; the yardsticks fitted on the two estimation trips
 both, n = acid.Dataset.concatenate([est, val]), len(est)
 res = acid.validate_model("car_cabin", both, fitted_parameters(fit), starts=12, horizon=120,
-                          warmup=60, to_end=True, hold=(), warm_start="ekf-trip",
+                          warmup=300, to_end=True, hold=(), warm_start="ekf-trip",
                           estimation=(0, n), start_range=(n, len(both)))
 print(res.summary())
