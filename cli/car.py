@@ -215,7 +215,8 @@ def car_select(
     candidates: str | None = typer.Option(
         None, "--candidates", help="Comma-separated candidate structures (built-in names or "
         ".py declarations; default: summer car_cabin,car_cabin2,car_cabin1, winter "
-        "heating,car_heat3,car_heat2)."),
+        "heating,car_heat3n,car_heat3,car_heat2; a structure declaring its noises, "
+        "car_heat3n, is fitted by PEM and warm-started by ekf-trip)."),
     trips: str | None = typer.Option(None, "--trips", help="Comma-separated trip names "
                                      "used (default: every trip in LOGS)."),
     folds: int = typer.Option(2, "--folds", help="Folds of trips (the trips taken in turn); "
