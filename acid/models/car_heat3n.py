@@ -10,8 +10,8 @@ doors, passengers, the heater's controller) and each logged state's sensor noise
 (``sigma_ycool``, ``sigma_ycab``, ``sigma_yain``). No published value fixes them for this
 car: they are **fitted** by PEM (declared ``fixed`` so that an output-error fit, which has no
 use for them, leaves them alone; PEM estimates them). Their ranges are wide on purpose: a
-sensor noise of 0.005-2 K (from below the logs' 0.1 K resolution to an outlet sensor in a
-mixed air stream) and a random increment of 1e-4-2 K per sample; the nominal values (0.1 K
+sensor noise of 0.005-2 K (up to an outlet sensor in a mixed, unsteady air stream) and a
+random increment of 1e-4-2 K per sample; the nominal values (0.1 K
 sensor, 0.05 K per sample) are only the starts.
 
 Without them ``car_heat3``'s prediction-error fit runs the filter with no process noise: on
