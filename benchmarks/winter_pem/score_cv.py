@@ -1,10 +1,12 @@
 """Score winter structures on the folds of ``acid car select --season winter`` (T_cab held
 out), from fold parameter files fitted apart (``fold_fit.py``), pooled and per trip.
 
-    python benchmarks/winter_pem/score_cv.py LOGS OUT.npz NAME:WARM:F0.json:F1.json ...
+    python benchmarks/winter_pem/score_cv.py LOGS OUT.npz [--warmup=N] NAME:WARM:F0.json:F1.json ...
 
 Each NAME (a built-in structure) is validated with its fold files on the same folds and
-starts (120 per fold, to the end of each trip, exogenous measured, warm-up 0) by
+starts (120 per fold, to the end of each trip, exogenous measured, warm-up N samples, default
+0 as ``acid car select --season winter``: then no warm start acts and the latent states start
+from their declared rule) by
 ``acid.ident.errmodel.validate_with_error_model``: the structure alone, the structure +
 residual ARX, and persistence/ARX/subspace fitted on the same training trips. The first
 NAME is "model" of the interval tables (its paired RMSE differences against every other).
@@ -26,7 +28,9 @@ TIMES = (60.0, 300.0, 600.0, 1500.0)
 STARTS = 120
 
 logs, out = sys.argv[1], sys.argv[2]
-specs = [a.split(":") for a in sys.argv[3:]]
+args = sys.argv[3:]
+WARMUP = int(args.pop(0).split("=")[1]) if args and args[0].startswith("--warmup=") else 0
+specs = [a.split(":") for a in args]
 parts = load_trips(logs, ChannelMap.from_file(resolve("example:bmw_i3_winter_map.toml")))
 names = [p.experiment_names()[0] for p in parts]
 groups = fold_groups(len(parts), 2)
@@ -45,7 +49,7 @@ for name, warm, *files in specs:
         p = ParameterValues.from_json(files[i])
         r = validate_with_error_model(m, both, p, n_estimation=n_est, channel="T_cab",
                                       starts=STARTS, fit_starts=STARTS, horizon=300,
-                                      warmup=0, to_end=True, warm_start=warm, hold=(),
+                                      warmup=WARMUP, to_end=True, warm_start=warm, hold=(),
                                       n_resamples=10, seed=0)
         exps.append(np.asarray(order)[r.experiment])
         st = r.residual.settings
