@@ -74,14 +74,17 @@ class CandidateScore:
         return {"name": self.name, "free_parameters": self.n_free, "states": self.n_states,
                 "figures": [f.__dict__ for f in self.figures], "verdicts": self.verdicts,
                 "parameters": list(self.parameters), "on_bounds": list(self.on_bounds),
-                "seconds": self.seconds, "folds": list(self.cv.folds)}
+                "seconds": self.seconds, "fit_options": dict(self.cv.fit_options),
+                "warm_start": self.cv.settings.get("warm_start"),
+                "folds": list(self.cv.folds)}
 
 
 @dataclass(frozen=True)
 class StructureSelection:
     """The candidates' cross-validation on the same folds, the yardsticks' pooled figures
     (from the first candidate's run: the same folds, starts and training trips), the rule and
-    the structure it chooses."""
+    the structure it chooses. ``settings``: the first candidate's; each candidate's own fit
+    options and warm start are in its ``to_dict()``."""
 
     candidates: tuple[CandidateScore, ...]
     yardsticks: dict
