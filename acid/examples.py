@@ -31,6 +31,9 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                                  "select` chose, fitted on the 26 BMW i3 summer trips"),
     "bmw_i3_winter_heating.json": ("parameter file", "the winter heating structure `acid car "
                                    "select` chose, fitted on the 22 BMW i3 winter trips"),
+    "bmw_i3_winter_heat3n.json": ("parameter file", "car_heat3n (car_heat3 with its filter's "
+                                  "noises) fitted by PEM on the 11 BMW i3 winter estimation "
+                                  "trips: validate with --warm-start ekf-trip"),
     "coolsim_map.toml": ("import map", "a CoolSim (MATLAB/Simulink) run saved as a .mat"),
     "acid_hifi_fmu_map.toml": ("FMU map", "acid's plant exported with `acid export-fmu`"),
     "sweep_climates.toml": ("sweep spec", "ICM against NMPC across climates and drive cycles"),

@@ -215,7 +215,8 @@ def car_select(
     candidates: str | None = typer.Option(
         None, "--candidates", help="Comma-separated candidate structures (built-in names or "
         ".py declarations; default: summer car_cabin,car_cabin2,car_cabin1, winter "
-        "heating,car_heat3,car_heat2)."),
+        "heating,car_heat3n,car_heat3,car_heat2; a structure declaring its noises, "
+        "car_heat3n, is fitted by PEM and warm-started by ekf-trip)."),
     trips: str | None = typer.Option(None, "--trips", help="Comma-separated trip names "
                                      "used (default: every trip in LOGS)."),
     folds: int = typer.Option(2, "--folds", help="Folds of trips (the trips taken in turn); "
@@ -318,16 +319,19 @@ def car_select(
     say(sel.summary().split("\n", 2 + len(sel.candidates) + len(sel.yardsticks))[-1])
     doc = {"command": "car select", "season": season, "acid_version": __version__,
            "selection": sel.to_dict()}
+    from acid.models import load as load_model
+    from acid.studies.car.select import candidate_options
+
+    ref = next(n for n in names if load_model(n).name == sel.chosen)
+    copts, cwarm = candidate_options(load_model(ref), opts, warm_start)   # PEM if noises
     if error_model is not None:
-        from acid.models import load as load_model
         from acid.studies.car.errcv import error_model_cv
 
         chosen = next(c for c in sel.candidates if c.name == sel.chosen)
-        ref = next(n for n in names if load_model(n).name == sel.chosen)
         with progress_bar(f"car select: {sel.chosen} + residual ARX", folds) as update:
             emcv = error_model_cv(ref, ds, [f["values"] for f in chosen.cv.folds],
                                   folds=folds, starts=starts, horizon=horizon,
-                                  warmup=math.ceil(warmup / Ts - 1e-9) * Ts, warm_start=warm_start,
+                                  warmup=math.ceil(warmup / Ts - 1e-9) * Ts, warm_start=cwarm,
                                   channel="T_cab", n_resamples=resamples, seed=seed,
                                   progress=update)
         say(emcv.summary())
@@ -338,16 +342,17 @@ def car_select(
         write_summary(json_path, doc)      # the selection, before the (long) refit
 
         with progress_bar(f"car select: {sel.chosen} on every trip", None) as update:
-            res = fit_model(sel.chosen, ds, **opts, progress=update)
-        res.write(out, load(sel.chosen),
+            res = fit_model(ref, ds, **copts, progress=update)
+        res.write(out, load(ref),
                   {"command": "acid car select", "season": season, "trips": len(parts),
-                   "data_source": str(logs), "method": method, "max_evals": max_evals,
+                   "data_source": str(logs), "method": copts["method"],
+                   "max_evals": max_evals,
                    "rule": sel.rule, "chosen": sel.chosen})
         say(f"{sel.chosen} fitted on {len(parts)} trips written to {out}; on a bound: "
             f"{', '.join(res.on_bounds) or 'none'}")
         doc["params"] = str(out)
         doc["fit_on_every_trip"] = {"on_bounds": list(res.on_bounds),
-                                    "values": dict(zip(load(sel.chosen).parameter_names,
+                                    "values": dict(zip(load(ref).parameter_names,
                                                        map(float, res.values), strict=True))}
     write_summary(json_path, doc)
 

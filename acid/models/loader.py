@@ -39,7 +39,8 @@ BUILT_IN = {"paper": "acid.models.paper", "econ": "acid.models.econ",
             "cabin3": "acid.models.examples.cabin3", "car_cabin": "acid.models.car_cabin",
             "heating": "acid.models.heating", "car_ac": "acid.models.car_ac",
             "car_cabin2": "acid.models.car_cabin2", "car_cabin1": "acid.models.car_cabin1",
-            "car_heat2": "acid.models.car_heat2", "car_heat3": "acid.models.car_heat3"}
+            "car_heat2": "acid.models.car_heat2", "car_heat3": "acid.models.car_heat3",
+            "car_heat3n": "acid.models.car_heat3n"}
 
 #: Wall-clock bound on loading (importing and tracing) a model file, s; env ACID_MODEL_TIMEOUT.
 LOAD_TIMEOUT_S = 60.0
