@@ -70,3 +70,8 @@ def test_cli_prior_weight_passes_through_and_refuses_a_negative_one(tmp_path):
     r = runner.invoke(app, ["fit", str(tmp_path / "g.h5"), "--model", str(src),
                             "--prior-weight", "-1", "--out", str(tmp_path / "x.json")])
     assert_one_line_error(r, "--prior-weight")
+
+
+def test_car_select_refuses_a_negative_prior_weight(tmp_path):
+    r = CliRunner().invoke(app, ["car", "select", str(tmp_path), "--prior-weight", "-0.5"])
+    assert_one_line_error(r, "--prior-weight")
