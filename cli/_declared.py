@@ -161,7 +161,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                  estimation_fraction: float, more: list[Path] = (), loss: str = "squared",
                  strict: bool = False, oe_estimate_x0: bool = True,
                  paper: PaperOptions | None = None, max_evals: int = 100,
-                 oe_solver: str = "dense", prior: list[str] | None = None) -> None:
+                 oe_solver: str = "dense", prior: list[str] | None = None,
+                 prior_weight: float = 1.0) -> None:
     """Fit the model declared in ``model_file`` to ``data``; print the report, write ``out``
     (for the paper's model, ``paper``: also the params.json keys the controllers read)."""
     from acid.ident.fit import METHODS, fit_model, provenance
@@ -204,9 +205,11 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
                            fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                            covariance=covariance, hac_bandwidth=bandwidth, loss=loss,
                            oe_estimate_x0=oe_estimate_x0, start=start, strict=strict,
-                           max_nfev=max_evals, oe_solver=oe_solver, progress=update)
+                           max_nfev=max_evals, oe_solver=oe_solver,
+                           prior_weight=prior_weight, progress=update)
     prov = provenance(ds, result.method, loss)
     prov.update(estimation_fraction=estimation_fraction, model_file=str(model_file),
+                prior_weight=prior_weight,
                 records=[str(data), *map(str, more)])
     fitted = model.with_parameters(fixes, tuple(free or ()))
     extra, params = _paper_file(result, est, prov, paper) if paper else ({}, None)

@@ -227,6 +227,9 @@ def car_select(
                                   "(optimiser evaluations)."),
     oe_window: int = typer.Option(240, "--oe-window", help="Output error: samples per "
                                   "window (as acid fit)."),
+    prior_weight: float = typer.Option(
+        1.0, "--prior-weight", help="W >= 0: every declared prior's information (1/SD^2) "
+        "times W in each fit (0: no priors, 1: as declared; as acid fit)."),
     rule_time: float = typer.Option(600.0, "--rule-time", help="Prediction time of the "
                                     "rule, s: the fewest free parameters whose pooled RMSE "
                                     "there lies inside the best candidate's 95 % interval."),
@@ -273,6 +276,7 @@ def car_select(
     require_range(folds, "--folds", 2, 10_000)
     require_range(max_evals, "--max-evals", 1, 100_000)
     require_range(oe_window, "--oe-window", 5, 100_000, "samples")
+    require_range(prior_weight, "--prior-weight", 0.0, 1e6)
     require_range(starts, "--starts", 1, 100_000)
     require_range(horizon, "--horizon", 1, 1_000_000, "samples")
     require_range(resamples, "--resamples", 10, 1_000_000)
@@ -304,6 +308,7 @@ def car_select(
     ds.source = str(logs)
     ds.metadata["experiments"] = [{"name": t.experiment_names()[0]} for t in parts]
     opts = {"method": method, "max_nfev": max_evals,
+            **({"prior_weight": prior_weight} if prior_weight != 1.0 else {}),
             **({"oe_window": oe_window} if method in ("oe", "auto") else {})}
     Ts = ds.Ts
     with progress_bar(f"car select ({season})", 2 * folds * len(names)) as update:
@@ -346,7 +351,7 @@ def car_select(
         res.write(out, load(ref),
                   {"command": "acid car select", "season": season, "trips": len(parts),
                    "data_source": str(logs), "method": copts["method"],
-                   "max_evals": max_evals,
+                   "max_evals": max_evals, "prior_weight": prior_weight,
                    "rule": sel.rule, "chosen": sel.chosen})
         say(f"{sel.chosen} fitted on {len(parts)} trips written to {out}; on a bound: "
             f"{', '.join(res.on_bounds) or 'none'}")

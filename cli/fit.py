@@ -97,6 +97,9 @@ def fit(
                               "model, in its unit (repeatable; replaces a declared prior): "
                               "output error and prediction error then maximise the "
                               "posterior."),
+    prior_weight: float = typer.Option(
+        1.0, "--prior-weight", help="W >= 0: every prior's information (1/SD^2) times W "
+                                    "(0: no priors, 1: as declared or given)."),
     free: list[str] | None = typer.Option(
         None, "--free", help="NAME: estimate a parameter the declared model (a model "
                              "file, paper or econ) declares fixed (repeatable)."),
@@ -125,7 +128,8 @@ def fit(
             f"model file FILE.py, got {model!r}")
     # econ keeps its family's fitter unless an option only the declared fitter has is given
     require_range(seed, "--seed", 0, 2**32 - 1, integer=True)
-    if model == "econ" and (fix or free or prior or fit_starts != 1):
+    require_range(prior_weight, "--prior-weight", 0.0, 1e6)
+    if model == "econ" and (fix or free or prior or fit_starts != 1 or prior_weight != 1.0):
         declared = True
     check_paths(inputs={"DATA": data, "--reference": params_input(reference),
                         "--model": model_file_input(model),
@@ -162,7 +166,7 @@ def fit(
                                     for i, p in enumerate(add_record or [])}}
         check_paths(inputs=records, records=list(records))   # each fitted as its own record
         return fit_declared(data, model, out, json_path, method=method, fix=fix, free=free,
-                            prior=prior,
+                            prior=prior, prior_weight=prior_weight,
                             fit_starts=fit_starts, seed=seed, oe_window=oe_window,
                             covariance=covariance, bandwidth=bandwidth,
                             estimation_fraction=estimation_fraction,

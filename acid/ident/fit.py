@@ -37,6 +37,7 @@ from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.ident import hac, linear, oe
 from acid.ident.data import ModelData
+from acid.ident.prior import weighted
 from acid.ident.result import (  # noqa: F401 (the fit's result types, read from here too)
     DeclaredFitResult,
     EquationReport,
@@ -71,16 +72,19 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
               hac_bandwidth="auto", solver: str | None = None,
               max_nfev: int = 100, loss: str = "squared", oe_estimate_x0: bool = True,
               start: dict | None = None, strict: bool = False,
-              oe_solver: str = "dense", progress=None) -> DeclaredFitResult:
+              oe_solver: str = "dense", prior_weight: float = 1.0,
+              progress=None) -> DeclaredFitResult:
     """Fit ``model`` (a ``Model`` or a name/path for :func:`acid.models.load`) to ``ds``.
 
     See the module docstring for the methods. ``fix`` {name: value} and ``free`` (names)
     change the declared table for this fit; ``start`` {name: value} replaces declared
     values (where output error starts, what a collinear set stays closest to) without
     fixing them. ``loss="huber"``: robust to outliers (equation error by CVXPY, output
-    error by scipy's Huber loss). ``oe_estimate_x0=False``: output-error windows start from
-    the measured states (latent ones are still estimated). ``strict``: a parameter the data
-    do not separate from another is an error, not a reported combination. ``progress``:
+    error by scipy's Huber loss). ``prior_weight``: every declared prior's information
+    scaled by it (0: no priors, 1: as declared). ``oe_estimate_x0=False``: output-error
+    windows start from the measured states (latent ones are still estimated). ``strict``:
+    a parameter the data do not separate from another is an error, not a reported
+    combination. ``progress``:
     called as ``progress(evaluations, None, label)`` while the optimiser runs (output error
     and prediction error), the label naming the start, the pass and the loss.
     """
@@ -114,6 +118,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         model = model.with_parameters(fix, tuple(free))
     if start:
         model = _with_values(model, start)
+    model = weighted(model, prior_weight)
     priors = [p.name for p in model.parameters if p.prior is not None and not p.fixed]
     if priors and method in ("ls", "cvx") and loss == "huber":
         raise ConfigError(f"--method {method} --loss huber: the priors on "

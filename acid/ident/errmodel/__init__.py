@@ -153,7 +153,7 @@ def validate_with_error_model(model, ds, params, *, n_estimation: int, channel: 
     from acid.ident.validate import validate_model
 
     opts = {"hold": (), **validate_options}
-    est = validate_model(model, ds, params, **{**opts, "starts": fit_starts},
+    est = validate_model(model, ds, params, **{**opts, "starts": fit_starts, "start_index": None},
                          start_range=(0, n_estimation), yardsticks=False)
     ch = channel or next((c for c, u in zip(est.channels, est.units, strict=True) if u == "K"),
                          est.channels[0])

@@ -1,11 +1,48 @@
-"""Declared priors in least squares: the prior as weighted rows beside the data's, and the
-fit's note on how far each estimate moved from its prior."""
+"""Declared priors in least squares: the prior as weighted rows beside the data's, the
+prior weight (how much every prior counts against the data), and the fit's note on how far
+each estimate moved from its prior."""
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+
 import numpy as np
 
+from acid.errors import ConfigError
 from acid.models.declaration import Model
+
+
+def check_weight(weight) -> float:
+    """The prior weight as a float: finite and >= 0, else one ``ConfigError``."""
+    try:
+        w = float(weight)
+    except (TypeError, ValueError):
+        w = float("nan")
+    if not (np.isfinite(w) and w >= 0.0) or isinstance(weight, bool):
+        raise ConfigError(f"prior weight must be a finite number >= 0, got {weight!r}")
+    return w
+
+
+def weighted(model: Model, weight: float) -> Model:
+    """``model`` with every declared prior's information (1/sd^2) scaled by ``weight``:
+    the standard deviation divided by sqrt(weight); 0 drops every prior (the unregularised
+    fit), 1 keeps the declared priors. A weight below 1 says the data count for more than
+    their prior does at face value (e.g. correlated errors counted as independent samples
+    make the data rows too heavy; a weight above 1 compensates for that)."""
+    w = check_weight(weight)
+    if w == 1.0 or all(p.prior is None for p in model.parameters):
+        return model
+    if w == 0.0:
+        return _without_priors(model)
+    return model.with_priors({p.name: (p.prior[0], p.prior[1] / np.sqrt(w))
+                              for p in model.parameters if p.prior is not None})
+
+
+def _without_priors(model: Model) -> Model:
+    other = copy.copy(model)
+    other.parameters = tuple(dataclasses.replace(p, prior=None) for p in model.parameters)
+    return other
 
 
 def prior_rows(Z: np.ndarray, y: np.ndarray, scale: np.ndarray, rank: int,

@@ -7,6 +7,13 @@ is fitted on windows of the training trips only, and the fold's trips are predic
 grey box alone, the grey box plus the residual ARX, and persistence, ARX and subspace fitted
 on the same training trips, from the same starts. The folds' windows are pooled into one
 table (bootstrap over trips, then starts, paired differences; ``interval_tables``).
+
+``every`` (samples) replaces the even placement of ``starts`` by a start grid: every
+``every``-th sample of a held-out trip that has the whole horizon of trip after it (and the
+warm-up before it), so the longest horizon is scored from every start that reaches it (e.g.
+1500 s from a 15 s grid), not from the few even starts that happen to fall early in a long
+trip. Grid windows overlap: the intervals resample trips first, so they are as wide as the
+trips make them, whatever the number of starts.
 """
 
 from __future__ import annotations
@@ -69,12 +76,13 @@ class ErrorModelCV:
 def error_model_cv(model, ds: Dataset, fold_values: Sequence, *, folds: int | None = 2,
                    starts: int = 60, horizon: int = 300, warmup: int = 0,
                    to_end: bool = True, warm_start: str = "fit", channel: str | None = None,
-                   n_resamples: int = 1000, seed: int = 0,
+                   n_resamples: int = 1000, seed: int = 0, every: int | None = None,
                    progress: Callable[[int, int, str], None] | None = None) -> ErrorModelCV:
     """Cross-validate ``model`` plus a residual ARX over the trips of ``ds`` on the folds of
     ``acid.ident.crossval.fold_groups(n_trips, folds)``; ``fold_values[i]``: fold i's
     parameters (``ParameterValues`` or a {name: value} dict) fitted without its trips.
-    Exogenous signals are measured along each window (as ``acid car select``)."""
+    Exogenous signals are measured along each window (as ``acid car select``); ``every``:
+    the start grid (module docstring) instead of ``starts`` even starts."""
     m = load(model)
     names = ds.experiment_names()
     segs = ds.segments()
@@ -93,10 +101,15 @@ def error_model_cv(model, ds: Dataset, fold_values: Sequence, *, folds: int | No
         n_est = sum(len(parts[j]) for j in order[:len(order) - len(test)])
         p = fold_values[i]
         p = p if isinstance(p, ParameterValues) else ParameterValues(dict(p), model=m)
+        grid = {} if every is None else {"start_index": start_grid(
+            both, n_est, horizon, warmup if _latent(m) else 0, every)}
+        if grid and grid["start_index"].size == 0:
+            raise DataError(f"fold {i + 1}: no held-out trip is longer than the warm-up and "
+                            f"{horizon} samples")
         r = validate_with_error_model(m, both, p, n_estimation=n_est, channel=ch,
                                       starts=starts, fit_starts=starts, horizon=horizon,
                                       warmup=warmup, to_end=to_end, warm_start=warm_start,
-                                      hold=(), n_resamples=10, seed=seed)
+                                      hold=(), n_resamples=10, seed=seed, **grid)
         ch = r.channel
         for k, e in r.errors.items():
             errs.setdefault(k, []).append(e)
@@ -111,6 +124,22 @@ def error_model_cv(model, ds: Dataset, fold_values: Sequence, *, folds: int | No
     figs, verdicts = interval_tables(errors, np.concatenate(exps), names, ds.Ts, TIMES_S,
                                      n_resamples=n_resamples, seed=seed)
     return ErrorModelCV(m.name, ch, tuple(figs), tuple(verdicts), tuple(rows),
-                        {"starts_per_fold": starts, "horizon": horizon, "warmup": warmup,
+                        {"starts_per_fold": starts, "start_every": every,
+                         "horizon": horizon, "warmup": warmup,
                          "to_end": to_end, "warm_start": warm_start,
                          "exogenous": "measured", "resamples": n_resamples, "seed": seed})
+
+
+def start_grid(ds: Dataset, first: int, horizon: int, warmup: int, every: int) -> np.ndarray:
+    """Sample indices of ``ds`` from ``first`` on, every ``every``-th sample of each trip
+    (segment) counted from its warm-up's end, whose window of ``horizon`` steps ends inside
+    the trip."""
+    if int(every) < 1:
+        raise DataError(f"start grid: every must be at least 1 sample, got {every}")
+    out = [np.arange(max(a, first) + warmup, b - horizon, int(every))
+           for a, b in ds.segments() if b > first]
+    return np.concatenate([*out, np.zeros(0, int)]).astype(int)
+
+
+def _latent(model) -> bool:
+    return any(not s.measured for s in model.states)
