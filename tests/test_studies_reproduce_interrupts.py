@@ -18,10 +18,28 @@ def _stage_started(out, stage="*"):
         if (out / "stages").is_dir() else False
 
 
+def _group(pgid: int) -> list[str]:
+    """Live (non-zombie) processes of process group ``pgid`` (children re-parented to init
+    included)."""
+    import os
+
+    import psutil
+
+    out = []
+    for q in psutil.process_iter():
+        try:
+            if os.getpgid(q.pid) == pgid and q.status() != psutil.STATUS_ZOMBIE:
+                out.append(" ".join(q.cmdline())[:120])
+        except (psutil.Error, ProcessLookupError, PermissionError):
+            pass
+    return out
+
+
 def test_ctrl_c_exits_130_with_nothing_half_written(tmp_path):
-    """Ctrl-C once a stage runs on the two workers. (Ctrl-C inside the NMPC checks, where
-    CasADi swallows it, is tested in ``test_studies_reproduce.py`` from the quick run's
-    cache.)"""
+    """Ctrl-C once a stage runs on the two workers (the local cluster starts its workers
+    before any stage): exit 130, nothing half written, and nothing left in the command's
+    process group. (Ctrl-C inside the NMPC checks, where CasADi swallows it, is tested in
+    ``test_studies_reproduce.py`` from the quick run's cache.)"""
     out = tmp_path / "paper"
     p = start("reproduce", "--quick", "--jobs", "2", "--out", str(out))
     assert wait_for(_stage_started(out)), p.communicate()[0]
@@ -33,6 +51,7 @@ def test_ctrl_c_exits_130_with_nothing_half_written(tmp_path):
     assert not (out / "report.html").exists() and not (out / "summary.json").exists()
     assert hidden(out) == []
     assert wait_for(lambda: not alive(kids), 30), alive(kids)
+    assert wait_for(lambda: not _group(p.pid), 15), _group(p.pid)
 
 
 def test_killed_run_takes_its_workers_along_and_the_next_run_cleans_up(tmp_path):
