@@ -66,6 +66,7 @@ def reproduce(
         from acid.executor import check_scheduler_address
 
         check_scheduler_address(scheduler)
+        _refuse_a_closed_port(scheduler)
     opts = ReproduceOptions.quick() if quick else ReproduceOptions()
     stages = build_stages(opts)
     with claim(out, "acid reproduce"):
@@ -75,6 +76,26 @@ def reproduce(
 # --help lists the stages that run, as the pipeline declares them
 reproduce.__doc__ = reproduce.__doc__.replace(
     "{stages}", "; ".join(s.title for s in build_stages(ReproduceOptions())))
+
+
+def _refuse_a_closed_port(address: str) -> None:
+    """One line at once for a TCP scheduler address where nothing listens (the connection is
+    refused), before any work: Dask's client retries a refused address until its 10 s
+    timeout. Other failures (no route, a slow host) are left to the client's own wait."""
+    import socket
+    from urllib.parse import urlsplit
+
+    url = urlsplit(address if "://" in address else f"tcp://{address}")
+    if url.scheme not in ("tcp", "tls", "ws", "wss") or not url.hostname:
+        return
+    try:
+        with socket.create_connection((url.hostname, url.port or 8786), timeout=0.5):
+            pass
+    except ConnectionRefusedError:
+        raise ConfigError(f"--scheduler {address}: cannot connect (connection refused: "
+                          "nothing listens at that port)") from None
+    except OSError:   # no route or no answer within 0.5 s: the client waits and says so
+        pass
 
 
 def _reproduce(out, opts, stages, jobs, scheduler, force, json_path) -> None:

@@ -127,26 +127,28 @@ def econ_hifi_fit(econ_hifi_dataset):
 
 
 # ------------------------------------------------------------------ scheduling
-#: The files that take longest, longest first (seconds of one full run at load 2-7 on 2 cores,
-#: see notes/fastsuite.md). They are collected first so that, with ``--dist loadfile
+#: The files that take longest, longest first (seconds of one quiet full run on 2 cores, see
+#: notes/suiteA.md). They are collected first so that, with ``--dist loadfile
 #: --no-loadscope-reorder`` (pyproject.toml), the two workers start on them and the many short
 #: files fill in behind: a long file handed out last would run alone at the end of the suite.
 #: A file missing here is only scheduled later; renaming one costs time, never a test.
 SLOWEST_FIRST = (
     "test_studies_reproduce.py",
-    "test_studies_reproduce_interrupts.py",
-    "test_processes_left.py",
-    "test_studies_sweep_prediction.py",
     "test_day_cli.py",
     "test_studies_cav_study.py",
-    "test_studies_sweep_econ.py",
-    "test_models_car_power.py",
-    "test_plant_heating_excite.py",
+    "test_reliability_round4.py",
     "test_studies_day.py",
-    "test_studies_heating_control.py",
     "test_studies_compare.py",
+    "test_processes_left.py",
+    "test_studies_reproduce_interrupts.py",
+    "test_studies_sweep_econ.py",
+    "test_studies_sweep_prediction.py",
     "test_docs.py",
+    "test_models_car_power.py",
     "test_cli_interrupts.py",
+    "test_sweep_cli.py",
+    "test_plant_heating_excite.py",
+    "test_studies_heating_control.py",
     "test_control_codegen_export.py",
     "test_validate_cli.py",
 )

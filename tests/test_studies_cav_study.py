@@ -209,9 +209,11 @@ def econ_file(econ_hifi_fit, tmp_path_factory):
 
 @pytest.mark.slow
 def test_cli_writes_json_and_figures(econ_file, tmp_path):
+    # the shortest economic horizon (10 s): the command's wiring, at half the CPU of 30 s; the
+    # study itself is checked on the ``study`` fixture
     out, js = tmp_path / "figs", tmp_path / "cav.json"
     res = runner.invoke(app, ["cav-study", "--cycle", "nycc", "--econ-params", str(econ_file),
-                              "--econ-horizon", "30", "--warmup", "60", "--tail", "60",
+                              "--econ-horizon", "10", "--warmup", "60", "--tail", "60",
                               "--no-compiled",
                               "--out", str(out), "--json", str(js)])
     assert res.exit_code == 0, res.output

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from _procs import alive, descendants, hidden, interrupt, start, wait_for
 from typer.testing import CliRunner
 
 from acid.claims import evaluate, headline_markdown
@@ -155,3 +156,25 @@ def test_second_run_reuses_every_stage(quick_run):
     assert all(v["cached"] for v in s["stages"].values())
     (line,) = [ln for ln in res.output.splitlines() if ln.startswith("note: reused")]
     assert f"reused {len(s['stages'])} of {len(s['stages'])} stages" in line
+
+
+def test_ctrl_c_inside_the_nmpc_checks_exits_130_with_nothing_half_written(quick_run, tmp_path):
+    """Ctrl-C in a one-process run (``--jobs 1``) inside the NMPC checks, where CasADi swallows
+    Ctrl-C: exit 130, no report, no temporaries, no process left. The run starts from the
+    quick run's stage cache without the ``mpc`` stage, so the NMPC checks are the first
+    stage it computes (not after the whole chain before them)."""
+    src, _ = quick_run
+    out = tmp_path / "paper"
+    shutil.copytree(src / "stages", out / "stages")
+    shutil.rmtree(out / "stages" / "mpc")
+    p = start("reproduce", "--quick", "--jobs", "1", "--out", str(out))
+    assert wait_for(lambda: bool(list((out / "stages").glob(".mpc.*.tmp")))), \
+        p.communicate()[0]
+    kids = descendants(p)
+    interrupt(p)
+    text, _ = p.communicate(timeout=120)
+    assert p.returncode == 130, text
+    assert "interrupted" in text and "Traceback" not in text
+    assert not (out / "report.html").exists() and not (out / "summary.json").exists()
+    assert not (out / "stages" / "mpc").exists() and hidden(out) == []
+    assert wait_for(lambda: not alive(kids), 30), alive(kids)

@@ -18,12 +18,31 @@ def _stage_started(out, stage="*"):
         if (out / "stages").is_dir() else False
 
 
-@pytest.mark.parametrize("jobs, stage", [("1", "mpc"), ("2", "*")])
-def test_ctrl_c_exits_130_with_nothing_half_written(tmp_path, jobs, stage):
-    """jobs 1 is interrupted inside the NMPC checks, where CasADi swallows Ctrl-C."""
+def _group(pgid: int) -> list[str]:
+    """Live (non-zombie) processes of process group ``pgid`` (children re-parented to init
+    included)."""
+    import os
+
+    import psutil
+
+    out = []
+    for q in psutil.process_iter():
+        try:
+            if os.getpgid(q.pid) == pgid and q.status() != psutil.STATUS_ZOMBIE:
+                out.append(" ".join(q.cmdline())[:120])
+        except (psutil.Error, ProcessLookupError, PermissionError):
+            pass
+    return out
+
+
+def test_ctrl_c_exits_130_with_nothing_half_written(tmp_path):
+    """Ctrl-C once a stage runs on the two workers (the local cluster starts its workers
+    before any stage): exit 130, nothing half written, and nothing left in the command's
+    process group. (Ctrl-C inside the NMPC checks, where CasADi swallows it, is tested in
+    ``test_studies_reproduce.py`` from the quick run's cache.)"""
     out = tmp_path / "paper"
-    p = start("reproduce", "--quick", "--jobs", jobs, "--out", str(out))
-    assert wait_for(_stage_started(out, stage)), p.communicate()[0]
+    p = start("reproduce", "--quick", "--jobs", "2", "--out", str(out))
+    assert wait_for(_stage_started(out)), p.communicate()[0]
     kids = descendants(p)
     interrupt(p)
     text, _ = p.communicate(timeout=120)
@@ -32,6 +51,7 @@ def test_ctrl_c_exits_130_with_nothing_half_written(tmp_path, jobs, stage):
     assert not (out / "report.html").exists() and not (out / "summary.json").exists()
     assert hidden(out) == []
     assert wait_for(lambda: not alive(kids), 30), alive(kids)
+    assert wait_for(lambda: not _group(p.pid), 15), _group(p.pid)
 
 
 def test_killed_run_takes_its_workers_along_and_the_next_run_cleans_up(tmp_path):
@@ -81,3 +101,29 @@ def test_sigterm_with_two_jobs_is_one_quiet_line(tmp_path, when, group):
     assert lines == ["interrupted: stopped, no partial output was kept"], text
     assert wait_for(lambda: not alive(kids), 30), alive(kids)
     assert not (out / "summary.json").exists()
+
+
+def test_a_scheduler_port_that_refuses_is_one_line_before_any_client(tmp_path, monkeypatch):
+    """A ``--scheduler`` address where nothing listens is refused at once, before any Dask
+    client (which retries a refused address for its whole 10 s timeout) and before OUT."""
+    import socket
+
+    import distributed
+    from _cli import assert_one_line_error
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    def no_client(*args, **kwargs):
+        raise AssertionError("a Dask client was started for a refused address")
+
+    monkeypatch.setattr(distributed, "Client", no_client)
+    with socket.socket() as s:   # a port that was free a moment ago: nothing listens there
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    out = tmp_path / "r"
+    res = CliRunner().invoke(app, ["reproduce", "--quick", "--out", str(out),
+                                   "--scheduler", f"tcp://127.0.0.1:{port}"])
+    assert res.exit_code == 2, res.output
+    assert_one_line_error(res, "--scheduler", f"127.0.0.1:{port}", "connection refused")
+    assert not out.exists()
