@@ -9,17 +9,28 @@
 * A run started as a background job of a non-interactive shell inherits SIGINT *ignored*
   (POSIX job control), so Python would never see Ctrl-C or ``kill -INT``: acid takes SIGINT
   back. This was why ``acid excite`` sometimes finished and exited 0 after Ctrl-C.
+* After the command, the process ends through :func:`finish`, not through the interpreter's
+  own shutdown: that one puts every signal back to its default action before it tears the
+  modules down (most of a second with Dask, pandas and CasADi loaded), so a signal landing
+  then killed the process (return code -2 / -15) instead of exiting 130 / 143.
+  :func:`finish` joins the threads and runs the exit handlers as the interpreter would, with
+  its own handlers still in place, and leaves by ``os._exit``: a signal is an exit code
+  whenever it lands.
 """
 
 from __future__ import annotations
 
+import atexit
 import os
 import signal
 import sys
 import threading
+from typing import NoReturn
 
 HANDLED = (signal.SIGINT, signal.SIGTERM)
 _startup_saved: dict[int, object] = {}
+#: the signal that arrived while :func:`finish` ended the process (None: none did)
+_at_exit: dict[str, int | None] = {"signum": None}
 
 
 def _in_main_thread() -> bool:
@@ -152,3 +163,77 @@ class InterruptGuard:
         if self._hook is not None:
             sys.unraisablehook = self._hook
             self._hook = None
+
+
+# ------------------------------------------------------------------------------ the end
+def _end_children() -> None:
+    """SIGKILL the child processes multiprocessing still tracks (a Dask cluster's workers
+    whose closing was under way), so nothing waits for them and none outlives the exit."""
+    mp = sys.modules.get("multiprocessing")
+    if mp is None:
+        return
+    try:
+        children = mp.active_children()
+    except Exception:  # noqa: BLE001 - the exit must go on
+        return
+    for child in children:
+        try:
+            child.kill()
+        except Exception:  # noqa: BLE001, S110 - already gone
+            pass
+
+
+def _signal_at_exit(signum: int, frame) -> None:
+    """A signal while :func:`finish` runs: the exit code becomes 128 + ``signum`` and the
+    children still tracked are killed, so the joins left return at once; a second signal
+    leaves at once."""
+    if _at_exit["signum"] is not None:
+        _flush()
+        os._exit(128 + signum)
+    _at_exit["signum"] = signum
+    try:
+        os.write(2, b"interrupted (while exiting: the command had ended)\n")
+    except OSError:
+        pass
+    _end_children()
+
+
+def finish(code: object = 0) -> NoReturn:
+    """End this process with ``code`` (a ``SystemExit`` code: None, an int or a message),
+    or with 128 + the number of a SIGINT / SIGTERM landing meanwhile.
+
+    What the interpreter does at exit, in its order, while this module's handler stays
+    installed: the non-daemon threads are joined (and ``threading``'s own exit calls run),
+    then the ``atexit`` handlers (multiprocessing ends its children there, Dask its
+    clusters, acid its temporary folders), the standard streams are flushed, and the
+    process ends by ``os._exit``, skipping the module teardown (nothing of acid's is left
+    to it: every output was written by an atomic rename before the command returned).
+    Only for the ``acid`` process itself (the console script), never in a library call.
+    """
+    if isinstance(code, str):
+        try:
+            sys.stderr.write(code + "\n")
+        except Exception:  # noqa: BLE001, S110 - a closed stream must not stop the exit
+            pass
+        code = 1
+    elif code is None:
+        code = 0
+    elif not isinstance(code, int):
+        code = 1
+    if _in_main_thread():
+        for sig in HANDLED:
+            try:
+                if sig == signal.SIGINT or signal.getsignal(sig) is not signal.SIG_IGN:
+                    signal.signal(sig, _signal_at_exit)
+            except (ValueError, OSError):
+                pass
+        try:
+            stop_threads = getattr(threading, "_shutdown", None)
+            if stop_threads is not None:
+                stop_threads()
+        except Exception:  # noqa: BLE001, S110 - as at the interpreter's exit: go on
+            pass
+        atexit._run_exitfuncs()
+    _flush()
+    signum = _at_exit["signum"]
+    os._exit(128 + signum if signum is not None else code)
