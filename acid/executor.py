@@ -79,6 +79,18 @@ def check_interrupt() -> None:
         raise KeyboardInterrupt
 
 
+def note_interrupt() -> None:
+    """Record that Ctrl-C or SIGTERM arrived (the CLI's handler calls this), so that
+    :func:`check_interrupt` raises from now on, with or without an open executor: a closed
+    loop whose solver swallowed the ``KeyboardInterrupt`` stops at its next step."""
+    _interrupted.set()
+
+
+def clear_interrupt() -> None:
+    """Forget a recorded interrupt (the CLI's guard, when its command has ended)."""
+    _interrupted.clear()
+
+
 def _chained(previous):
     """A handler that remembers the interrupt, then does what ``previous`` did."""
 
@@ -552,7 +564,12 @@ class DaskExecutor(Executor):
         if interrupted:  # the closing under way may wait for the workers: end them now
             _silence_dask_logs()
             self._kill_workers()
-        closer.join()
+        try:
+            closer.join()
+        except BaseException:  # Ctrl-C / SIGTERM while waiting: wait no longer for them
+            _silence_dask_logs()
+            self._kill_workers()
+            raise
         self._kill_workers()
 
     def _close(self, interrupted: bool = False) -> None:
@@ -566,10 +583,15 @@ class DaskExecutor(Executor):
         if interrupted:  # do not wait for running tasks: end our worker processes now
             _silence_dask_logs()  # the comms we break would log tracebacks on stderr
             self._kill_workers()
-        with contextlib.suppress(Exception):
-            self.client.close(timeout=2 if interrupted else 10)
-        with contextlib.suppress(Exception):
-            self.cluster.close(timeout=2 if interrupted else 10)
+        try:
+            with contextlib.suppress(Exception):
+                self.client.close(timeout=2 if interrupted else 10)
+            with contextlib.suppress(Exception):
+                self.cluster.close(timeout=2 if interrupted else 10)
+        except BaseException:  # Ctrl-C / SIGTERM during an orderly close: end them now
+            _silence_dask_logs()
+            self._kill_workers()
+            raise
         self._kill_workers()  # whatever a close that timed out left running
 
     def _abandon(self, before: set[int], clusters: set) -> None:
@@ -681,6 +703,7 @@ def open_executor(workers: int | None = 1, scheduler: str | None = None,
 
 
 __all__ = ["Executor", "InlineExecutor", "DaskExecutor", "open_executor", "check_interrupt",
+           "note_interrupt", "clear_interrupt",
            "check_scheduler_address",
            "interrupt_guard", "ProgressReporter", "dask_available", "usable_cores",
            "workers_skip_main", "start_worker_server", "LOCAL_CLUSTER_CONFIG"]

@@ -45,6 +45,13 @@ def _flush() -> None:
             pass
 
 
+def _note_interrupt() -> None:
+    """Tell acid's closed loops (``acid.executor.check_interrupt``) that a signal arrived."""
+    executor = sys.modules.get("acid.executor")  # not imported: no loop can be waiting on it
+    if executor is not None:
+        executor.note_interrupt()
+
+
 def _exit_now(signum: int, frame=None) -> None:
     _flush()
     try:
@@ -126,6 +133,7 @@ class InterruptGuard:
         self.signum = signum
         if self._count > 1:
             _exit_now(signum)
+        _note_interrupt()  # a solver that swallows the KeyboardInterrupt: its loop's next step
         raise KeyboardInterrupt
 
     def __enter__(self) -> InterruptGuard:
@@ -160,6 +168,9 @@ class InterruptGuard:
             except (ValueError, OSError):
                 pass
         self._saved.clear()
+        executor = sys.modules.get("acid.executor")
+        if self.signum is not None and executor is not None:
+            executor.clear_interrupt()  # the next command (in-process callers) starts afresh
         if self._hook is not None:
             sys.unraisablehook = self._hook
             self._hook = None
