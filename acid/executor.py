@@ -491,12 +491,13 @@ class DaskExecutor(Executor):
                         warnings.catch_warnings():
                     # no dashboard: its port taken by another cluster is no news
                     warnings.filterwarnings("ignore", message="Port .* is already in use")
-                    self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
-                                                processes=True, dashboard_address=None,
-                                                scheduler_kwargs={"dashboard": False},
-                                                memory_limit=0,
-                                                silence_logs=logging.CRITICAL)
-                    self.client = Client(self.cluster)
+                    with _workers_start_without_sigint():
+                        self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
+                                                    processes=True, dashboard_address=None,
+                                                    scheduler_kwargs={"dashboard": False},
+                                                    memory_limit=0,
+                                                    silence_logs=logging.CRITICAL)
+                        self.client = Client(self.cluster)
                 self.address = self.cluster.scheduler_address
                 self.client.register_plugin(_ignore_sigint_plugin())
                 self._pids = set(self.client.run(os.getpid).values())
@@ -638,6 +639,38 @@ class DaskExecutor(Executor):
             if child.pid in self._pids:
                 with contextlib.suppress(Exception):
                     child.kill()
+
+
+@contextlib.contextmanager
+def _workers_start_without_sigint() -> Iterator[None]:
+    """Worker processes spawned meanwhile start with SIGINT blocked, so never see it.
+
+    Ctrl-C goes to the whole process group; a worker spawned as a new interpreter took it
+    while importing, before it ignores SIGINT, and printed a traceback after acid's one
+    line. multiprocessing spawns every such process through ``util.spawnv_passfds`` (from
+    the cluster's event-loop thread); while the cluster starts, that call blocks SIGINT
+    in the calling thread for the moment of the spawn, which the new process inherits (as
+    multiprocessing does itself for its resource tracker). This process's own handling of
+    Ctrl-C is untouched."""
+    from multiprocessing import util
+
+    spawn = util.spawnv_passfds
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+
+    def spawn_without_sigint(path, args, passfds):
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            return spawn(path, args, passfds)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+    util.spawnv_passfds = spawn_without_sigint
+    try:
+        yield
+    finally:
+        util.spawnv_passfds = spawn
 
 
 def _os_children() -> set[int]:
