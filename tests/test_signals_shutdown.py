@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -151,5 +153,102 @@ def test_ctrl_c_after_a_parallel_sweep_wrote_everything(tmp_path):
     assert "Traceback" not in text
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["computed"] == 2, summary
+    time.sleep(0.5)
+    assert _group_left(p.pid) == []
+
+
+# ------------------------------------------------------------- Ctrl-C in the middle of a run
+REAL = Path("/work/shared/real-data/bmw-i3")
+TRIPS = ("TripA04", "TripA05", "TripA07")
+#: the long commands no other test interrupts: (arguments, when to press Ctrl-C: a line of
+#: their progress on stderr, or the CPU seconds their process tree has used: past the
+#: imports, into the work). ``{logs}``: copies of three real trips; ``{h5}``: them imported;
+#: ``{old}``: the JSON an earlier run left, which must stay as it was.
+MID_RUN = {
+    "compare": (["compare", "--quick", "--jobs", "2", "--json", "{old}"], 4.0),
+    "cav-study": (["cav-study", "--no-figures", "--json", "{old}"], 4.0),
+    "day": (["day", "--quick", "--jobs", "2", "--json", "{old}"], 4.0),
+    "pulldown": (["pulldown", "--quick", "--json", "{old}"], 4.0),
+    "car select": (["car", "select", "{logs}", "--folds", "2", "--json", "{old}"], 4.0),
+    "car validate": (["car", "validate", "{logs}", "--json", "{old}"], 3.0),
+    "fit": (["fit", "{h5}", "--model", "car_cabin", "--method", "pem", "--out", "{old}"], 4.0),
+    "validate": (["validate", "{h5}", "--model", "car_cabin", "--cv", "experiments", "--json",
+                  "{old}"], 4.0),
+    # its NMPC's IPOPT swallowed the KeyboardInterrupt and the loop ran on (> 120 s)
+    "heating-control": (["heating-control", "--json", "{old}"], "NMPC"),
+}
+
+
+@pytest.fixture(scope="module")
+def trips(tmp_path_factory):
+    if not REAL.is_dir():
+        pytest.skip(f"the real BMW i3 trips are not at {REAL}")
+    base = tmp_path_factory.mktemp("trips")
+    logs = base / "logs"
+    logs.mkdir()
+    for t in TRIPS:   # copies: a run must never be able to write into the shared folder
+        shutil.copy(REAL / f"{t}.csv.gz", logs / f"{t}.csv.gz")
+    h5 = base / "trips.h5"
+    from typer.testing import CliRunner
+
+    from acid_cli.main import app
+
+    r = CliRunner().invoke(app, ["import", *(str(logs / f"{t}.csv.gz") for t in TRIPS),
+                                 "--map", "example:bmw_i3_map.toml", "--out", str(h5)])
+    assert r.exit_code == 0, r.output
+    return {"logs": str(logs), "h5": str(h5)}
+
+
+def _tree_cpu(proc: psutil.Process) -> float:
+    total = 0.0
+    for q in [proc, *proc.children(recursive=True)]:
+        try:
+            total += sum(q.cpu_times()[:2])
+        except psutil.Error:
+            pass
+    return total
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", list(MID_RUN))
+def test_ctrl_c_mid_run_is_130_and_leaves_nothing(tmp_path, trips, command):
+    args, when = MID_RUN[command]
+    old = tmp_path / "old.json"
+    old.write_text('{"earlier": "run"}\n')
+    args = [a.format(old=old, **trips) for a in args]
+    exe = os.path.join(os.path.dirname(sys.executable), "acid")
+    p = subprocess.Popen([exe, *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         text=True, cwd=tmp_path, start_new_session=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    err: list[str] = []
+    reader = threading.Thread(target=lambda: err.extend(p.stderr), daemon=True)
+    reader.start()
+    proc = psutil.Process(p.pid)
+    deadline = time.monotonic() + 300
+    while p.poll() is None and time.monotonic() < deadline:
+        if (any(when in line for line in err) if isinstance(when, str)
+                else _tree_cpu(proc) >= when):
+            break
+        time.sleep(0.05)
+    if p.poll() is not None:
+        pytest.skip(f"{command} ended before it was interrupted (rc {p.returncode})")
+    t0 = time.monotonic()
+    os.killpg(p.pid, signal.SIGINT)
+    try:
+        p.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+        pytest.fail(f"{command} still ran 60 s after Ctrl-C")
+    reader.join(10)
+    took = time.monotonic() - t0
+    said = [ln for ln in err if ln.strip() and "%" not in ln and not ln.startswith(
+        (f"{command}:", "heating-control:", "compare:"))]
+    assert p.returncode == 130, "".join(err)
+    assert not any("Traceback" in ln for ln in err), "".join(err)
+    assert said[-1].startswith("interrupted"), "".join(err)
+    assert took < 30, took
+    assert old.read_text() == '{"earlier": "run"}\n'           # the earlier output is kept
+    assert sorted(f.name for f in tmp_path.rglob("*")) == ["old.json"]   # and nothing else
     time.sleep(0.5)
     assert _group_left(p.pid) == []
