@@ -111,6 +111,8 @@ class AcidTyper(typer.Typer):
         # KeyboardInterrupt outside every command: the same quiet exit as during start-up
         # (130, one line), nothing having been written yet. However the command ends, the
         # process ends through _signals.finish (a signal during the exit is 130 / 143 too)
+        if kwargs.get("standalone_mode") is False:  # a caller in Python: its process, its end
+            return super().__call__(*args, **kwargs)
         code: object = 0
         try:
             try:
