@@ -61,9 +61,17 @@ def _exit_now(signum: int, frame=None) -> None:
     os._exit(128 + signum)
 
 
-def exit_interrupted() -> None:
-    """Leave quietly after a Ctrl-C that no command's guard received: 130, one line."""
-    _exit_now(signal.SIGINT)
+def exit_interrupted() -> NoReturn:
+    """Leave quietly after a Ctrl-C that no command's guard received: 130, one line (the
+    exit handlers still run, see :func:`finish`; another signal leaves at once)."""
+    _install_exit_handlers()
+    _at_exit["signum"] = signal.SIGINT
+    _flush()
+    try:
+        os.write(2, b"interrupted\n")
+    except OSError:
+        pass
+    finish(128 + signal.SIGINT)
 
 
 def _in_worker_process() -> bool:
@@ -209,6 +217,19 @@ def _signal_at_exit(signum: int, frame) -> None:
     _end_children()
 
 
+def _install_exit_handlers() -> None:
+    """SIGINT / SIGTERM from now on: :func:`_signal_at_exit` (a SIGTERM the caller ignores
+    stays ignored). The first thing the process does once its command is over."""
+    if not _in_main_thread():
+        return
+    for sig in HANDLED:
+        try:
+            if sig == signal.SIGINT or signal.getsignal(sig) is not signal.SIG_IGN:
+                signal.signal(sig, _signal_at_exit)
+        except (ValueError, OSError):
+            pass
+
+
 def finish(code: object = 0) -> NoReturn:
     """End this process with ``code`` (a ``SystemExit`` code: None, an int or a message),
     or with 128 + the number of a SIGINT / SIGTERM landing meanwhile.
@@ -221,6 +242,7 @@ def finish(code: object = 0) -> NoReturn:
     to it: every output was written by an atomic rename before the command returned).
     Only for the ``acid`` process itself (the console script), never in a library call.
     """
+    _install_exit_handlers()
     if isinstance(code, str):
         try:
             sys.stderr.write(code + "\n")
@@ -232,12 +254,6 @@ def finish(code: object = 0) -> NoReturn:
     elif not isinstance(code, int):
         code = 1
     if _in_main_thread():
-        for sig in HANDLED:
-            try:
-                if sig == signal.SIGINT or signal.getsignal(sig) is not signal.SIG_IGN:
-                    signal.signal(sig, _signal_at_exit)
-            except (ValueError, OSError):
-                pass
         try:
             stop_threads = getattr(threading, "_shutdown", None)
             if stop_threads is not None:
