@@ -29,6 +29,8 @@ from typing import NoReturn
 
 HANDLED = (signal.SIGINT, signal.SIGTERM)
 _startup_saved: dict[int, object] = {}
+#: the signal the running command's guard received (None: none yet)
+_pending: dict[str, int | None] = {"signum": None}
 #: the signal that arrived while :func:`finish` ended the process (None: none did)
 _at_exit: dict[str, int | None] = {"signum": None}
 
@@ -43,6 +45,15 @@ def _flush() -> None:
             stream.flush()
         except Exception:  # noqa: BLE001 - a closed pipe must not stop the exit
             pass
+
+
+def raise_if_interrupted() -> None:
+    """``KeyboardInterrupt`` if the running command's guard received SIGINT / SIGTERM. The
+    CLI's progress reports call it: a library that swallowed the first ``KeyboardInterrupt``
+    (CasADi evaluated inside SciPy's ``least_squares``: ``acid car validate`` ran on to the
+    end and exited 0) stops at its next report."""
+    if _pending["signum"] is not None:
+        raise KeyboardInterrupt
 
 
 def _note_interrupt() -> None:
@@ -138,7 +149,7 @@ class InterruptGuard:
             os.kill(os.getpid(), signum)
             return
         self._count += 1
-        self.signum = signum
+        self.signum = _pending["signum"] = signum
         if self._count > 1:
             _exit_now(signum)
         _note_interrupt()  # a solver that swallows the KeyboardInterrupt: its loop's next step
@@ -175,6 +186,8 @@ class InterruptGuard:
                 signal.signal(sig, previous)
             except (ValueError, OSError):
                 pass
+        if self._saved:
+            _pending["signum"] = None
         self._saved.clear()
         executor = sys.modules.get("acid.executor")
         if self.signum is not None and executor is not None:
