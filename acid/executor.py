@@ -79,6 +79,18 @@ def check_interrupt() -> None:
         raise KeyboardInterrupt
 
 
+def note_interrupt() -> None:
+    """Record that Ctrl-C or SIGTERM arrived (the CLI's handler calls this), so that
+    :func:`check_interrupt` raises from now on, with or without an open executor: a closed
+    loop whose solver swallowed the ``KeyboardInterrupt`` stops at its next step."""
+    _interrupted.set()
+
+
+def clear_interrupt() -> None:
+    """Forget a recorded interrupt (the CLI's guard, when its command has ended)."""
+    _interrupted.clear()
+
+
 def _chained(previous):
     """A handler that remembers the interrupt, then does what ``previous`` did."""
 
@@ -479,12 +491,13 @@ class DaskExecutor(Executor):
                         warnings.catch_warnings():
                     # no dashboard: its port taken by another cluster is no news
                     warnings.filterwarnings("ignore", message="Port .* is already in use")
-                    self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
-                                                processes=True, dashboard_address=None,
-                                                scheduler_kwargs={"dashboard": False},
-                                                memory_limit=0,
-                                                silence_logs=logging.CRITICAL)
-                    self.client = Client(self.cluster)
+                    with _workers_start_without_sigint():
+                        self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
+                                                    processes=True, dashboard_address=None,
+                                                    scheduler_kwargs={"dashboard": False},
+                                                    memory_limit=0,
+                                                    silence_logs=logging.CRITICAL)
+                        self.client = Client(self.cluster)
                 self.address = self.cluster.scheduler_address
                 self.client.register_plugin(_ignore_sigint_plugin())
                 self._pids = set(self.client.run(os.getpid).values())
@@ -552,7 +565,12 @@ class DaskExecutor(Executor):
         if interrupted:  # the closing under way may wait for the workers: end them now
             _silence_dask_logs()
             self._kill_workers()
-        closer.join()
+        try:
+            closer.join()
+        except BaseException:  # Ctrl-C / SIGTERM while waiting: wait no longer for them
+            _silence_dask_logs()
+            self._kill_workers()
+            raise
         self._kill_workers()
 
     def _close(self, interrupted: bool = False) -> None:
@@ -566,10 +584,15 @@ class DaskExecutor(Executor):
         if interrupted:  # do not wait for running tasks: end our worker processes now
             _silence_dask_logs()  # the comms we break would log tracebacks on stderr
             self._kill_workers()
-        with contextlib.suppress(Exception):
-            self.client.close(timeout=2 if interrupted else 10)
-        with contextlib.suppress(Exception):
-            self.cluster.close(timeout=2 if interrupted else 10)
+        try:
+            with contextlib.suppress(Exception):
+                self.client.close(timeout=2 if interrupted else 10)
+            with contextlib.suppress(Exception):
+                self.cluster.close(timeout=2 if interrupted else 10)
+        except BaseException:  # Ctrl-C / SIGTERM during an orderly close: end them now
+            _silence_dask_logs()
+            self._kill_workers()
+            raise
         self._kill_workers()  # whatever a close that timed out left running
 
     def _abandon(self, before: set[int], clusters: set) -> None:
@@ -616,6 +639,38 @@ class DaskExecutor(Executor):
             if child.pid in self._pids:
                 with contextlib.suppress(Exception):
                     child.kill()
+
+
+@contextlib.contextmanager
+def _workers_start_without_sigint() -> Iterator[None]:
+    """Worker processes spawned meanwhile start with SIGINT blocked, so never see it.
+
+    Ctrl-C goes to the whole process group; a worker spawned as a new interpreter took it
+    while importing, before it ignores SIGINT, and printed a traceback after acid's one
+    line. multiprocessing spawns every such process through ``util.spawnv_passfds`` (from
+    the cluster's event-loop thread); while the cluster starts, that call blocks SIGINT
+    in the calling thread for the moment of the spawn, which the new process inherits (as
+    multiprocessing does itself for its resource tracker). This process's own handling of
+    Ctrl-C is untouched."""
+    from multiprocessing import util
+
+    spawn = util.spawnv_passfds
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+
+    def spawn_without_sigint(path, args, passfds):
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            return spawn(path, args, passfds)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+    util.spawnv_passfds = spawn_without_sigint
+    try:
+        yield
+    finally:
+        util.spawnv_passfds = spawn
 
 
 def _os_children() -> set[int]:
@@ -681,6 +736,7 @@ def open_executor(workers: int | None = 1, scheduler: str | None = None,
 
 
 __all__ = ["Executor", "InlineExecutor", "DaskExecutor", "open_executor", "check_interrupt",
+           "note_interrupt", "clear_interrupt",
            "check_scheduler_address",
            "interrupt_guard", "ProgressReporter", "dask_available", "usable_cores",
            "workers_skip_main", "start_worker_server", "LOCAL_CLUSTER_CONFIG"]

@@ -104,6 +104,7 @@ def claim(folder: str | os.PathLike, command: str) -> Iterator[Path]:
     if folder.exists() and not folder.is_dir():
         raise AcidError(f"{folder}: output folder is a file")
     created = not folder.exists()   # made by this run: removed again if it stays empty
+    made_parents = [a for a in folder.absolute().parents if not a.exists()]  # so are these
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -137,6 +138,9 @@ def claim(folder: str | os.PathLike, command: str) -> Iterator[Path]:
         fh.close()  # releases the lock
         if created:
             _remove_if_only_the_lock(folder)
+            for parent in made_parents:   # deepest first; one still holding anything stays
+                with contextlib.suppress(OSError):
+                    parent.rmdir()
 
 
 def _remove_if_only_the_lock(folder: Path) -> None:

@@ -39,7 +39,7 @@ from rich.text import Text
 from acid._io import check_writable_file, write_json
 from acid.errors import AcidError, ConfigError, DataError, OutputError
 from acid.units import json_in_degC
-from acid_cli._signals import InterruptGuard
+from acid_cli._signals import InterruptGuard, raise_if_interrupted
 
 try:  # typer >= 0.2x vendors click
     from typer._click.exceptions import ClickException
@@ -368,6 +368,7 @@ class ProgressLines:
         self._last_done, self._last_tenth = None, -1
 
     def __call__(self, done: int, total: int | None = None, label: str | None = None) -> None:
+        raise_if_interrupted()   # a Ctrl-C the library swallowed stops at its next report
         if total is not None:
             self.total = total
         if done == self._last_done:
@@ -414,6 +415,7 @@ def progress_bar(description: str, total: int | None,
         task = prog.add_task(escape(description), total=total, label="")
 
         def update(done: int, total_: int | None = None, label: str | None = None) -> None:
+            raise_if_interrupted()
             prog.update(task, completed=done, total=total_ if total_ is not None else total,
                         **({"label": one_line(label)} if label else {}))
 

@@ -63,10 +63,13 @@ def heating_control(
     require_range(pull_up, "--pull-up", 0.0, 3600.0, "s")
     png = out / "heating_control.png"
     check_paths(outputs={"--json": json_path, "--out": png})
-    out.mkdir(parents=True, exist_ok=True)
-    result = heating_study(cycles, tuple(t_amb), HeatingControlConfig(N=horizon, pull_up_s=pull_up),
-                           png_path=png, progress=timed_lines("heating-control"), tail_s=tail,
-                           warmup_s=warmup)
+    from acid.outdir import claim
+
+    with claim(out, "acid heating-control"):  # a folder it made goes again if left empty
+        result = heating_study(cycles, tuple(t_amb),
+                               HeatingControlConfig(N=horizon, pull_up_s=pull_up),
+                               png_path=png, progress=timed_lines("heating-control"),
+                               tail_s=tail, warmup_s=warmup)
     rows = []
     for case in result["cases"]:
         for name in CONTROLLERS:

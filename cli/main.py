@@ -109,9 +109,22 @@ class AcidTyper(typer.Typer):
         # Ctrl-C after start-up but before a command's InterruptGuard (typer building the
         # command tree: a fraction of a second, seconds on a busy machine) arrives as a
         # KeyboardInterrupt outside every command: the same quiet exit as during start-up
-        # (130, one line), nothing having been written yet
-        try:
+        # (130, one line), nothing having been written yet. However the command ends, the
+        # process ends through _signals.finish (a signal during the exit is 130 / 143 too)
+        if kwargs.get("standalone_mode") is False:  # a caller in Python: its process, its end
             return super().__call__(*args, **kwargs)
+        code: object = 0
+        try:
+            try:
+                super().__call__(*args, **kwargs)
+            except SystemExit as exc:
+                code = exc.code
+            except KeyboardInterrupt:
+                raise
+            except Exception:  # a bug outside every command: its trace, exit 1
+                sys.excepthook(*sys.exc_info())
+                code = 1
+            _signals.finish(code)  # its first act installs the handlers of the exit
         except KeyboardInterrupt:
             _signals.exit_interrupted()
 

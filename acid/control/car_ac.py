@@ -33,6 +33,7 @@ import numpy as np
 from acid.control.codegen.solver import NLPSolver
 from acid.control.ocp import OCP, OCPSpec, SoftBound
 from acid.errors import ConfigError, SolverWarning
+from acid.executor import check_interrupt
 from acid.models.declaration import Model
 from acid.units import C2K
 
@@ -140,6 +141,7 @@ class CarEconNMPC:
         previewed disturbances ``d_preview`` (N, nd) in the declaration's order (past the
         trip's end the caller repeats its last row). A failed solve applies the last plan's
         next move (counted in ``fallbacks``, one :class:`SolverWarning`)."""
+        check_interrupt()  # a Ctrl-C its last solve swallowed stops here
         ocp = self.ocp
         d = np.asarray(d_preview, dtype=float).reshape(ocp.N, self.model.nd)
         par = ocp.parameters(self._par.copy(), x0=x, d=d)
@@ -150,6 +152,7 @@ class CarEconNMPC:
             self.plans.append(plan)
             return float(np.clip(plan[0], self.config.T_evap_min, self.config.T_evap_max))
         self.fallbacks += 1
+        check_interrupt()  # the failure was the interrupt: say only that
         warnings.warn(f"car A/C NMPC solve failed ({res.status}); the last plan continues",
                       SolverWarning, stacklevel=2)
         self._w = None

@@ -43,6 +43,7 @@ import numpy as np
 from acid.control.codegen.solver import NLPSolver
 from acid.control.ocp import OCP, OCPSpec, SoftBound
 from acid.errors import SolverWarning
+from acid.executor import check_interrupt
 from acid.models.declaration import Model
 from acid.models.heating_control import W_BL_HOLD, declare
 from acid.plant.config import PlantConfig
@@ -206,6 +207,7 @@ class HeatingNMPC:
         self._w = None
 
     def make_step(self, x, d_preview) -> dict:
+        check_interrupt()  # a Ctrl-C its last solve swallowed stops here
         ocp = self.ocp
         d = np.asarray(d_preview, dtype=float).reshape(ocp.N, self.model.nd)
         par = ocp.parameters(self._par.copy(), x0=x, d=d)
@@ -224,6 +226,7 @@ class HeatingNMPC:
         else:
             self.fallbacks += 1
             self._w = None
+            check_interrupt()  # the failure was the interrupt: say only that
             warnings.warn(f"heating NMPC solve failed ({res.status}); the last move holds",
                           SolverWarning, stacklevel=2)
         return dict(zip(("Q_hp", "P_heater", "recirc"), map(float, self._last), strict=True))

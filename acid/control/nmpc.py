@@ -116,6 +116,7 @@ from acid.control.estimator import (
 )
 from acid.control.ocp import OCP, OCPSpec, SoftBound, disturbed_dynamics, stage_shift
 from acid.errors import ConfigError, DataError, SolverWarning
+from acid.executor import check_interrupt
 from acid.paper import TABLE_II
 
 __all__ = ["BackoffConfig", "MPCSolution", "NMPC", "NMPCConfig", "StepLog", "predict"]
@@ -968,6 +969,7 @@ class NMPC:
         the input it applies; without ``disturbance``: the controller estimates it when
         ``config.offset_free``). Returns ``[W_bl kg/s, T_evap_set K]``.
         """
+        check_interrupt()  # a Ctrl-C its last solve swallowed stops here
         t0 = time.perf_counter()
         cfg = self.config
         pinned = cfg.first_move == "pinned"
@@ -1032,6 +1034,7 @@ class NMPC:
     def _fallback(self, status: str, pinned: bool) -> np.ndarray:
         """The input when the solve failed: the shifted last plan, else ``u_safe``."""
         self.fallbacks += 1
+        check_interrupt()  # the failure was the interrupt: say only that
         warnings.warn(f"NMPC solve failed ({status}); fallback applied", SolverWarning,
                       stacklevel=3)
         self._w_prev = self._lam_g_prev = self._lam_x_prev = None  # cold start next

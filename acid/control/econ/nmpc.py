@@ -119,6 +119,7 @@ from acid.control.estimator import OffsetFreeEstimator
 from acid.control.nmpc import SQP_ACCEPT, SQP_TOL, sqp_options
 from acid.control.ocp import OCP
 from acid.errors import ConfigError, ExtrapolationWarning, SolverWarning
+from acid.executor import check_interrupt
 from acid.models import econ
 from acid.models.econ import model as ECON_MODEL
 from acid.models.econ_params import EconParams
@@ -659,6 +660,7 @@ class EconNMPC:
         ``config.offset_free`` the state and disturbances are estimated from ``x`` (and
         ``dist``, if given, is ignored); the estimate is in ``log.disturbance``.
         """
+        check_interrupt()  # a Ctrl-C its last solve swallowed stops here
         t0 = time.perf_counter()
         cfg = self.config
         v = np.atleast_1d(np.asarray(v_preview, dtype=float))
@@ -680,6 +682,7 @@ class EconNMPC:
             u = sol.u.copy()
         else:
             self.fallbacks += 1
+            check_interrupt()  # the failure was the interrupt: say only that
             warnings.warn(f"econ NMPC solve failed ({status}); fallback applied",
                           SolverWarning, stacklevel=2)
             self._w_prev = self._lam_prev = None
