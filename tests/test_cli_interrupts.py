@@ -151,14 +151,25 @@ def _signal_at_temporary(args, folder, prefix: str, sig) -> int | None:
     return p.returncode if caught else None
 
 
+@pytest.fixture(scope="module")
+def year_output(tmp_path_factory):
+    """One earlier ``acid year-sweep`` output (in-process), copied by each writer's test."""
+    out = tmp_path_factory.mktemp("year") / "year"
+    first = CliRunner().invoke(app, [*YEAR, "--out", str(out)])
+    assert first.exit_code == 0, first.output
+    return out
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name,sig", WRITERS, ids=[w[0] for w in WRITERS])
-def test_a_signal_at_each_writers_temporary_keeps_the_old_output(tmp_path, name, sig):
+def test_a_signal_at_each_writers_temporary_keeps_the_old_output(tmp_path, name, sig,
+                                                                  year_output):
+    import shutil
+
     from _procs import hidden
 
     out = tmp_path / "year"
-    first = CliRunner().invoke(app, [*YEAR, "--out", str(out)])
-    assert first.exit_code == 0, first.output
+    shutil.copytree(year_output, out)
     before = {f: (out / f).read_bytes() for f in ("year.csv", "year.json")}
     for _attempt in range(3):
         code = _signal_at_temporary([*YEAR, "--out", str(out)], out, name, sig)
