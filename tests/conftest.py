@@ -14,13 +14,20 @@ from __future__ import annotations
 
 import os
 
-import numpy as np
-import pytest
-from hypothesis import HealthCheck, settings
+# One BLAS thread per test process (set before numpy loads OpenBLAS; the CLI processes and
+# Dask workers the tests start inherit it). Two xdist workers on two cores, each with an
+# OpenBLAS pool spinning on every core, spend most of their CPU waiting on each other: at load
+# 17, tests/test_validate.py took 116 CPU-s with the default pool and 11 CPU-s with one thread
+# (the yardsticks' least squares). A user's own setting is kept.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from acid.excite import ExcitationSpec, excite
-from acid.plant import make_plant
-from acid.plant.declared import econ_plant
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from hypothesis import HealthCheck, settings  # noqa: E402
+
+from acid.excite import ExcitationSpec, excite  # noqa: E402
+from acid.plant import make_plant  # noqa: E402
+from acid.plant.declared import econ_plant  # noqa: E402
 
 # Property-based tests: modest in the suite, thorough on demand
 # (pytest --hypothesis-profile=acid-thorough tests/test_readers_property.py).

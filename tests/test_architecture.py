@@ -9,6 +9,7 @@ only closes at run time is still a circle here.
 from __future__ import annotations
 
 import ast
+import functools
 import subprocess
 import sys
 from pathlib import Path
@@ -62,7 +63,8 @@ def _resolve(name: str) -> str | None:
     return name or None
 
 
-def _imports(path: Path) -> list[tuple[str, str, int]]:
+@functools.cache  # three tests read every file: parsed once
+def _imports(path: Path) -> tuple[tuple[str, str, int], ...]:
     """(module imported, name imported or '', line) of every ``acid`` import in ``path``."""
     out = []
     for node in ast.walk(ast.parse(path.read_text())):
@@ -72,7 +74,7 @@ def _imports(path: Path) -> list[tuple[str, str, int]]:
         elif isinstance(node, ast.ImportFrom) and node.module and not node.level \
                 and node.module.split(".")[0] in ("acid", "acid_cli"):
             out += [(node.module, a.name, node.lineno) for a in node.names]
-    return out
+    return tuple(out)
 
 
 def _graph() -> dict[str, dict[str, int]]:

@@ -151,14 +151,23 @@ def _signal_at_temporary(args, folder, prefix: str, sig) -> int | None:
     return p.returncode if caught else None
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("name,sig", WRITERS, ids=[w[0] for w in WRITERS])
-def test_a_signal_at_each_writers_temporary_keeps_the_old_output(tmp_path, name, sig):
-    from _procs import hidden
-
-    out = tmp_path / "year"
+@pytest.fixture(scope="module")
+def year_output(tmp_path_factory):
+    """One earlier ``acid year-sweep`` output (in-process), the folder every writer's test
+    runs into in turn (its JSON names the folder: one folder, the same bytes each run)."""
+    out = tmp_path_factory.mktemp("year") / "year"
     first = CliRunner().invoke(app, [*YEAR, "--out", str(out)])
     assert first.exit_code == 0, first.output
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,sig", WRITERS, ids=[w[0] for w in WRITERS])
+def test_a_signal_at_each_writers_temporary_keeps_the_old_output(name, sig, year_output):
+    from _procs import hidden
+
+    out = year_output   # the earlier output: left as it was by the previous test
+    assert hidden(out.parent) == []
     before = {f: (out / f).read_bytes() for f in ("year.csv", "year.json")}
     for _attempt in range(3):
         code = _signal_at_temporary([*YEAR, "--out", str(out)], out, name, sig)
@@ -167,7 +176,7 @@ def test_a_signal_at_each_writers_temporary_keeps_the_old_output(tmp_path, name,
     else:
         pytest.skip("the write never got caught in progress (machine too busy)")
     assert code in (128 + sig, 0), code   # stopped, or the signal came after the rename
-    assert hidden(tmp_path) == []
+    assert hidden(out.parent) == []
     for f, data in before.items():       # deterministic: old or new, the same bytes
         assert (out / f).read_bytes() == data
     assert (out / "year_share.png").stat().st_size > 0

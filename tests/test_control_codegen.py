@@ -99,6 +99,7 @@ def test_nmpc_falls_back_to_casadi_with_one_notice_and_the_same_answer(tmp_path,
         NMPC(paper())
     assert fallback.backend == "casadi"
     monkeypatch.delenv("CC")
+    monkeypatch.delenv("ACID_CACHE_DIR")  # the per-user cache: built once, like every NMPC's
     compiled = NMPC(paper())
     assert compiled.backend == "compiled"
     a = fallback.solve(x, ub, C2K(30.0), C2K(33.0))

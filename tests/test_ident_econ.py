@@ -140,7 +140,8 @@ def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
     vj = tmp_path / "val.json"
     res = runner.invoke(app, ["validate", str(econ_file), "--params", str(out), "--beside",
                               "paper", "--starts", "8", "--horizon", "60", "--out",
-                              str(tmp_path / "figs"), "--json", str(vj), "--no-figures"])
+                              str(tmp_path / "figs"), "--json", str(vj), "--no-figures",
+                              "--no-yardsticks"])
     assert res.exit_code == 0, res.output
     v = json.loads(vj.read_text())
     assert v["settings"]["model"] == "econ" and "w_cab" in v["channels"]
@@ -154,7 +155,7 @@ def test_cli_fit_model_econ_then_validate_beside_the_paper(econ_file, tmp_path):
     res = runner.invoke(app, ["validate", str(econ_file), "--model", "econ", "--params",
                               str(out), "--starts", "8", "--horizon", "60", "--out",
                               str(tmp_path / "figs2"), "--json", str(vm),
-                              "--no-figures"])
+                              "--no-figures", "--no-yardsticks"])
     assert res.exit_code == 0, res.output
     assert json.loads(vm.read_text())["channels"] == v["channels"]
 

@@ -54,7 +54,7 @@ def test_the_record_feeds_the_declared_heating_model_and_it_fits(record):
     data = ModelData.of(m, record)
     assert np.isfinite(data.u).all() and np.isfinite(data.y).all()
     fix = {n: m.parameter(n).value for n in ("C_int", "C_shell", "UA_out", "UA_out_v")}
-    res = fit_model(m, record.window(0, 720), "oe", fix=fix, oe_window=120, max_nfev=15)
+    res = fit_model(m, record.window(0, 360), "oe", fix=fix, oe_window=120, max_nfev=15)
     fit = res.output_error["channel_fit_percent"]
     assert fit["T_cab"] > 80.0 and fit["T_cool"] > 80.0, fit
 

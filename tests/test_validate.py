@@ -56,9 +56,16 @@ def _max_error(r) -> float:
     return max(float(np.nanmax(np.abs(r.errors[c]))) for c in r.channels)
 
 
+def _validate(ds, params, **kw):
+    """``validate`` without the yardsticks: their ARX and subspace fits are 90 % of a call's
+    CPU and leave the model's numbers unchanged (checked below, where the yardstick tests
+    call ``validate`` itself)."""
+    return validate(ds, params, **{"yardsticks": False, **kw})
+
+
 def test_preset_predicts_its_own_data_to_numerical_noise(varying, constant):
     for ds, mode in ((varying, "measured"), (constant, "hold"), (constant, "measured")):
-        r = validate(ds, paper(), starts=60, horizon=300, exogenous=mode)
+        r = _validate(ds, paper(), starts=60, horizon=300, exogenous=mode)
         assert r.predicted.shape == (60, 301, 4) == r.measured.shape
         assert r.errors["T_cab"].shape == (60, 300)
         assert _max_error(r) <= 1e-9, mode
@@ -73,7 +80,7 @@ def test_perturbed_model_errors_grow_with_horizon(constant):
     truth = p.replace(gamma=(p.gamma[0] * 1.2,) + p.gamma[1:4] + (p.gamma[4] * 1.05,)
                       + p.gamma[5:], tau=(p.tau[0] + 0.05,) + p.tau[1:], name="truth")
     ds = model_data(vary_exogenous=False, params=truth)
-    r = validate(ds, p, starts=60, horizon=300)
+    r = _validate(ds, p, starts=60, horizon=300)
     # eqs. 1-2 are contractive (time constants of a few steps): the error rises from the
     # measured initial state and settles at the mismatch's steady-state offset
     e = np.abs(r.errors["T_cab"]).mean(axis=0)        # step 1 .. 300
@@ -87,8 +94,8 @@ def test_perturbed_model_errors_grow_with_horizon(constant):
 
 
 def test_hold_and_measured_exogenous_differ_when_T_int_varies(varying, constant):
-    held = validate(varying, paper(), starts=20, horizon=200, exogenous="hold")
-    meas = validate(varying, paper(), starts=20, horizon=200, exogenous="measured")
+    held = _validate(varying, paper(), starts=20, horizon=200, exogenous="hold")
+    meas = _validate(varying, paper(), starts=20, horizon=200, exogenous="measured")
     assert held.metrics["T_cab"]["max_abs"] > 0.1
     assert meas.metrics["T_cab"]["max_abs"] <= 1e-9
     e = np.abs(held.errors["T_cab"]).mean(axis=0)  # holding a drifting T_int: error grows
@@ -97,15 +104,15 @@ def test_hold_and_measured_exogenous_differ_when_T_int_varies(varying, constant)
     np.testing.assert_array_equal(held.predicted[..., 1], meas.predicted[..., 1])
     assert held.settings["hold"] == ("T_int", "T_shell") and meas.settings["hold"] == ()
     # with constant disturbances both modes are the same
-    a = validate(constant, paper(), starts=10, horizon=100, exogenous="hold")
-    b = validate(constant, paper(), starts=10, horizon=100, exogenous="measured")
+    a = _validate(constant, paper(), starts=10, horizon=100, exogenous="hold")
+    b = _validate(constant, paper(), starts=10, horizon=100, exogenous="measured")
     np.testing.assert_array_equal(a.predicted, b.predicted)
 
 
 def test_windows_never_cross_an_experiment_boundary():
     parts = [model_data(n, seed=s) for s, n in enumerate((400, 150, 520, 320))]
     ds = Dataset.concatenate(parts)
-    r = validate(ds, paper(), starts=60, horizon=300, exogenous="measured")
+    r = _validate(ds, paper(), starts=60, horizon=300, exogenous="measured")
     idx = r.starts[:, None] + np.arange(301)[None, :]
     assert np.all(ds.experiment[idx] == ds.experiment[r.starts][:, None])
     assert 1 not in set(ds.experiment[r.starts])  # 150 samples: no window fits
@@ -115,30 +122,30 @@ def test_windows_never_cross_an_experiment_boundary():
 
 def test_start_placement_even_random_and_held_out(varying):
     n = len(varying)
-    even = validate(varying, paper(), starts=60, horizon=300)
+    even = _validate(varying, paper(), starts=60, horizon=300)
     assert even.starts[0] == 0 and even.starts[-1] == n - 301
-    np.testing.assert_array_equal(even.starts, validate(varying, paper()).starts)
+    np.testing.assert_array_equal(even.starts, _validate(varying, paper()).starts)
     np.testing.assert_allclose(even.start_time, varying.time[even.starts])
-    r1 = validate(varying, paper(), placement="random", seed=3)
-    r2 = validate(varying, paper(), placement="random", seed=3)
-    r3 = validate(varying, paper(), placement="random", seed=4)
+    r1 = _validate(varying, paper(), placement="random", seed=3)
+    r2 = _validate(varying, paper(), placement="random", seed=3)
+    r3 = _validate(varying, paper(), placement="random", seed=4)
     np.testing.assert_array_equal(r1.starts, r2.starts)
     assert not np.array_equal(r1.starts, r3.starts)
-    held = validate(varying, paper(), starts=30, horizon=200, held_out_fraction=0.5)
+    held = _validate(varying, paper(), starts=30, horizon=200, held_out_fraction=0.5)
     assert held.starts.min() >= n // 2
     assert held.settings["sample_range"] == [n // 2, n]
-    ranged = validate(varying, paper(), starts=5, horizon=100, start_range=(100, 400))
+    ranged = _validate(varying, paper(), starts=5, horizon=100, start_range=(100, 400))
     assert ranged.starts.min() >= 100 and ranged.starts.max() + 100 < 400
 
 
 def test_few_admissible_starts_are_used_once_with_a_warning(varying):
     short = varying.window(0, 310)  # 10 admissible starts for 300 steps
     with pytest.warns(UserWarning, match="only 10 distinct start"):
-        r = validate(short, paper(), starts=60, horizon=300)
+        r = _validate(short, paper(), starts=60, horizon=300)
     assert r.n_starts == 10 and r.settings["starts_requested"] == 60
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        overlapping = validate(varying.window(0, 1000), paper(), starts=60, horizon=300)
+        overlapping = _validate(varying.window(0, 1000), paper(), starts=60, horizon=300)
     assert overlapping.n_starts == 60
 
 
@@ -164,7 +171,7 @@ def test_record_too_short_and_bad_options_are_one_line_errors(varying):
 
 
 def test_metrics_and_json(varying):
-    r = validate(varying, paper().replace(tau=(0.05, 0.0, 0.0)), starts=12, horizon=60)
+    r = _validate(varying, paper().replace(tau=(0.05, 0.0, 0.0)), starts=12, horizon=60)
     np.testing.assert_allclose(r.horizon_s, np.arange(61) * 5.0)
     e = r.predicted[:, 1:, 0] - r.measured[:, 1:, 0]
     np.testing.assert_allclose(r.errors["T_cab"], e)
@@ -193,7 +200,7 @@ def test_constant_truth_gives_null_fit_not_nan():
     x_evap = float(p.tau[1] - p.gamma[4] * T_set[0]) / (1 - p.gamma[3] - p.gamma[4])
     sched = InputSchedule(np.full(n, 0.1), T_set, 0.0)
     ds = ModelPlant(p).simulate(sched, initial={"T_evap": x_evap})
-    d = validate(ds, p, starts=5, horizon=100).to_json_dict()
+    d = _validate(ds, p, starts=5, horizon=100).to_json_dict()
     json.dumps(d, allow_nan=False)
     assert d["channels"]["T_evap"]["fit_percent"] is None
 
@@ -201,7 +208,7 @@ def test_constant_truth_gives_null_fit_not_nan():
 def test_figures_have_the_papers_panels_and_units(varying):
     from acid.report.validation import error_figure, prediction_figure
 
-    r = validate(varying, paper(), starts=8, horizon=100)
+    r = _validate(varying, paper(), starts=8, horizon=100)
     fig5 = prediction_figure(r)
     labels = [ax.get_ylabel() for ax in fig5.axes]
     assert sum("(°C)" in lab for lab in labels) == 4 and any("(kg/s)" in lab for lab in labels)
@@ -214,9 +221,9 @@ def test_figures_have_the_papers_panels_and_units(varying):
 
 
 def test_shared_fixtures_noise_free_and_noisy(model_dataset, noisy_model_dataset):
-    exact = validate(model_dataset, paper(), exogenous="measured")
+    exact = _validate(model_dataset, paper(), exogenous="measured")
     assert _max_error(exact) <= 1e-9
-    noisy = validate(noisy_model_dataset, paper(), exogenous="measured")
+    noisy = _validate(noisy_model_dataset, paper(), exogenous="measured")
     for name in PAPER_CHANNELS:  # 0.05 K measurement noise, a contractive model
         assert 0.03 < noisy.metrics[name]["rmse"] < 0.08, name
 
@@ -247,13 +254,13 @@ def test_diverging_predictions_are_an_error_not_nan(varying):
     g = list(paper().gamma)
     g[0] = 1e300  # cabin pole -1e300: overflows within a few steps
     with pytest.raises(DataError, match="diverge"):
-        validate(varying, paper().replace(gamma=tuple(g)), starts=3, horizon=50)
+        _validate(varying, paper().replace(gamma=tuple(g)), starts=3, horizon=50)
 
 
 def test_more_starts_than_admissible_allocates_nothing_large(varying):
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
-        res = validate(varying, paper(), starts=10**9, horizon=50)
+        res = _validate(varying, paper(), starts=10**9, horizon=50)
     assert res.n_starts <= len(varying)
 
 
@@ -276,7 +283,7 @@ def test_yardsticks_leave_the_models_numbers_unchanged_and_join_the_json(varying
 
 
 def test_window_design_of_the_default_study_says_the_windows_overlap(varying):
-    r = validate(varying, paper(), starts=60, horizon=300, held_out_fraction=0.5)
+    r = _validate(varying, paper(), starts=60, horizon=300, held_out_fraction=0.5)
     w = r.to_json_dict()["window_design"]
     assert w["starts"] == 60 and w["horizon_s"] == 1500.0 and not w["non_overlapping"]
     gaps = np.diff(r.starts) * 5.0
@@ -285,14 +292,14 @@ def test_window_design_of_the_default_study_says_the_windows_overlap(varying):
     assert w["overlap_fraction"] == pytest.approx(np.mean(1 - np.diff(r.starts) / 301))
     assert w["overlap_fraction"] > 0.9 and w["max_windows_per_sample"] > 30
     assert "held at their value at each start" in w["held_disturbances"]
-    measured = validate(varying, paper(), starts=5, horizon=100, exogenous="measured")
+    measured = _validate(varying, paper(), starts=5, horizon=100, exogenous="measured")
     assert "follows its measurement" in measured.window_design["held_disturbances"]
 
 
 def test_non_overlapping_starts_share_no_sample(varying):
     n = len(varying)
     with pytest.warns(UserWarning, match=r"windows of 100 steps .* fit without overlap"):
-        r = validate(varying, paper(), starts=60, horizon=100, non_overlapping=True)
+        r = _validate(varying, paper(), starts=60, horizon=100, non_overlapping=True)
     k0 = r.starts
     assert k0.size == (n - 101) // 101 + 1  # as many as fit
     assert np.all(np.diff(k0) >= 101)
@@ -303,16 +310,16 @@ def test_non_overlapping_starts_share_no_sample(varying):
     assert w["non_overlapping"] and r.settings["non_overlapping"]
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # enough room: no warning, spread evenly
-        few = validate(varying, paper(), starts=3, horizon=100, non_overlapping=True)
+        few = _validate(varying, paper(), starts=3, horizon=100, non_overlapping=True)
     assert few.starts[0] == 0 and few.starts[-1] == n - 101
     with pytest.raises(ConfigError, match="--non-overlapping"):
-        validate(varying, paper(), non_overlapping=True, placement="random")
+        _validate(varying, paper(), non_overlapping=True, placement="random")
 
 
 def test_non_overlapping_starts_respect_experiment_boundaries(varying):
     ds = Dataset.concatenate([varying.window(0, 700), varying.window(700, 1500)])
     with pytest.warns(UserWarning):
-        r = validate(ds, paper(), starts=100, horizon=100, non_overlapping=True)
+        r = _validate(ds, paper(), starts=100, horizon=100, non_overlapping=True)
     exp = ds.experiment
     for k in r.starts:
         assert exp[k] == exp[k + 100]
