@@ -13,6 +13,7 @@ map, built once per session (~0.1 s).
 from __future__ import annotations
 
 import os
+import sys
 
 # One BLAS thread per test process (set before numpy loads OpenBLAS; the CLI processes and
 # Dask workers the tests start inherit it). Two xdist workers on two cores, each with an
@@ -20,6 +21,12 @@ import os
 # 17, tests/test_validate.py took 116 CPU-s with the default pool and 11 CPU-s with one thread
 # (the yardsticks' least squares). A user's own setting is kept.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# Bytecode kept between the processes the suite starts: where PYTHONDONTWRITEBYTECODE is set
+# (this machine sets it), every xdist worker and every `acid` subprocess compiled acid's
+# modules again (about 0.2 CPU-s per command started, 4-5 CPU-s per worker). The compiled
+# files go to __pycache__ beside the sources, as a plain install would put them.
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+sys.dont_write_bytecode = False
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402

@@ -168,15 +168,15 @@ TRIPS = ("TripA04", "TripA05", "TripA07")
 #: ``{all}``: copies of every trip;
 #: ``{old}``: the JSON an earlier run left, which must stay as it was.
 MID_RUN = {
-    "compare": (["compare", "--quick", "--jobs", "2", "--json", "{old}"], 4.0),
-    "cav-study": (["cav-study", "--no-figures", "--json", "{old}"], 4.0),
-    "day": (["day", "--quick", "--jobs", "2", "--json", "{old}"], 4.0),
-    "pulldown": (["pulldown", "--quick", "--json", "{old}"], 4.0),
-    "car select": (["car", "select", "{logs}", "--folds", "2", "--json", "{old}"], 4.0),
+    "compare": (["compare", "--quick", "--jobs", "2", "--json", "{old}"], 3.0),
+    "cav-study": (["cav-study", "--no-figures", "--json", "{old}"], 3.0),
+    "day": (["day", "--quick", "--jobs", "2", "--json", "{old}"], 3.0),
+    "pulldown": (["pulldown", "--quick", "--json", "{old}"], 3.0),
+    "car select": (["car", "select", "{logs}", "--folds", "2", "--json", "{old}"], 3.0),
     "car validate": (["car", "validate", "{all}", "--json", "{old}"], "car validate: 1/"),
-    "fit": (["fit", "{h5}", "--model", "car_cabin", "--method", "pem", "--out", "{old}"], 4.0),
+    "fit": (["fit", "{h5}", "--model", "car_cabin", "--method", "pem", "--out", "{old}"], 3.0),
     "validate": (["validate", "{h5}", "--model", "car_cabin", "--cv", "experiments", "--json",
-                  "{old}"], 4.0),
+                  "{old}"], 3.0),
     # its NMPC's IPOPT swallowed the KeyboardInterrupt and the loop ran on (> 120 s)
     "heating-control": (["heating-control", "--json", "{old}"], "NMPC"),
 }
