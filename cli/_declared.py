@@ -272,7 +272,11 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     for c in result.combinations:
         say(f"identified combination: {c}")
     if result.simulation_fit:
-        say(f"{oe_window}-step simulation fit from measured states: " + ", ".join(
+        latent = [s.name for s in result.declaration.states if not s.measured] \
+            if result.declaration is not None else []
+        say(f"{oe_window}-step simulation fit from measured states"
+            + (f" ({', '.join(latent)} as the output-error fit estimated them)"
+               if latent and result.output_error else "") + ": " + ", ".join(
             f"{c} {v:.2f} %" for c, v in result.simulation_fit.items()))
     if result.channel_mse:
         say(f"mean squared error per channel ({result.mse_scored}; comparable across models "

@@ -21,8 +21,8 @@ from acid_cli._common import (
 FIGURES = ("fig5_prediction.png", "fig6_errors.png", "fig6b_yardsticks.png")
 #: Largest --starts and --horizon accepted.
 MAX_STARTS, MAX_HORIZON = 100_000, 1_000_000
-#: --warmup's default and largest value, s (the default: 60 samples of the paper's 5 s).
-DEFAULT_WARMUP_S, MAX_WARMUP_S = 300.0, 7 * 86400.0
+#: --warmup's largest value, s (its default: ``acid.ident.validate.default_warmup``).
+MAX_WARMUP_S = 7 * 86400.0
 
 
 @handle_errors
@@ -71,11 +71,12 @@ def validate(
         help="A model file FILE.py or a built-in declaration (paper, econ, cabin3; "
              "acid.models): validate that declared model, with --params from `acid fit "
              "--model ...` (default: its declared values)."),
-    warmup: float = typer.Option(
-        DEFAULT_WARMUP_S, "--warmup",
+    warmup: float | None = typer.Option(
+        None, "--warmup", show_default=False,
         help="A model with latent states: the stretch before each start from which they are "
              "estimated, s (whole samples of the data's Ts, rounded up; default 300 s = 60 "
-             "samples of 5 s)."),
+             "samples of 5 s, or 60 samples where 300 s is not whole samples of the data's "
+             "Ts or no record holds 300 s + --horizon)."),
     to_end: bool = typer.Option(
         False, "--to-end", help="Also start where fewer than --horizon samples "
                                 "remain (short trips); those predictions stop at the "
@@ -148,7 +149,8 @@ def validate(
                 folders={"--out": (out, FIGURES)} if figures else {})
     _check_windows(starts, horizon, seed, exogenous, placement, non_overlapping,
                    held_out_fraction)
-    require_range(warmup, "--warmup", 0.0, MAX_WARMUP_S, "s")
+    if warmup is not None:
+        require_range(warmup, "--warmup", 0.0, MAX_WARMUP_S, "s")
     require(warm_start in WARM_STARTS, "--warm-start",
             f"must be one of {', '.join(WARM_STARTS)}, got {warm_start!r}")
     designs = _designs(starts_design, placement, non_overlapping)
@@ -241,9 +243,11 @@ def warmup_samples(warmup_s: float, Ts: float) -> int:
     return n
 
 
-def warmup_seconds(warmup_s: float, data: Path) -> float:
+def warmup_seconds(warmup_s: float | None, data: Path) -> float | None:
     """``--warmup`` (s) rounded up to whole samples of ``data``'s Ts, in seconds (what the
-    API's ``warmup`` takes)."""
+    API's ``warmup`` takes); None (not given): the API's default."""
+    if warmup_s is None:
+        return None
     Ts = _sample_time(data)
     return warmup_samples(warmup_s, Ts) * Ts
 

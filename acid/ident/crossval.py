@@ -439,7 +439,7 @@ def fold_groups(n_experiments: int, folds: int | None) -> list[np.ndarray]:
 
 def cross_validate(model, ds: Dataset, *, fit_options: dict | None = None,
                    folds: int | None = None, designs: Sequence[str] = ("even",),
-                   starts: int = 60, horizon: int = 300, warmup: float = 300.0,
+                   starts: int = 60, horizon: int = 300, warmup: float | None = None,
                    exogenous: str = "hold", to_end: bool = False, warm_start: str = "fit",
                    channel: str | None = None, n_resamples: int = DEFAULT_RESAMPLES,
                    seed: int = 0, fit: Callable | None = None,
@@ -452,16 +452,23 @@ def cross_validate(model, ds: Dataset, *, fit_options: dict | None = None,
     parameters, never fitted, take the table value: the mean over the training ones); the
     yardsticks are fitted on the same training experiments. ``starts`` per fold, placed by
     each design in ``designs`` (``STARTS_DESIGNS``; random ones seeded by ``seed``),
-    ``horizon`` steps, ``warmup`` seconds (``validate_model``'s units, as ``acid validate
-    --cv``'s options); the
+    ``horizon`` steps, ``warmup`` seconds (``validate_model``'s units and default, as ``acid
+    validate --cv``'s options); the
     windows of every fold are pooled into one ``ValidationIntervals`` per design.
     ``fit``: the fitter (default ``acid.ident.fit.fit_model``), called as
     ``fit(model, training_dataset, **fit_options)``."""
     from acid.ident.fit import fit_model
-    from acid.ident.validate import EXOGENOUS_MODES, fitted_parameters, validate_model
+    from acid.ident.validate import (
+        EXOGENOUS_MODES,
+        default_warmup,
+        fitted_parameters,
+        validate_model,
+    )
     from acid.models.loader import load
 
     model = load(model)
+    if warmup is None:
+        warmup = default_warmup(ds, horizon)[0]
     if exogenous not in EXOGENOUS_MODES:
         raise ConfigError(f"--exogenous must be one of {', '.join(EXOGENOUS_MODES)}, got "
                           f"{exogenous!r}")

@@ -238,6 +238,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         if method in ("ls", "cvx") and linear.prior_note(model, columns, theta):
             notes.append(linear.prior_note(model, columns, theta))
     oe_summary: dict = {}
+    oe_x0 = None     # (windows, nx) initial states the output-error fit estimated
     optima: list[Optimum] = []
     failed: list[FailedStart] = []
     if method == "oe" and columns:
@@ -289,7 +290,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
             else:
                 warn.append(f"multi-start: none of the {fit_starts} starts converged; the "
                             "first start's result is reported")
-        theta = res.theta
+        theta, oe_x0 = res.theta, res.x0
         stderr, cov = res.stderr, res.cov
         dof[:] = res.dof
         ident, oe_combos = linear.combinations(
@@ -370,7 +371,7 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
             estimates.append(Estimate(p.name, p.unit, p.value, float(theta[k]), se, ci,
                                       status[k], columns[k].experiment))
     P_fit = _values_at(data, values, per_experiment, names)
-    sim = simulation_errors(model, data, P_fit, oe_window)
+    sim = simulation_errors(model, data, P_fit, oe_window, latent_x0=oe_x0)
     return DeclaredFitResult(
         simulation_fit={k: 100.0 * (1.0 - math.sqrt(v["nmse"])) for k, v in sim.items()},
         channel_mse={k: {**v, "scored": "simulation"} for k, v in sim.items()},
@@ -387,16 +388,24 @@ def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
         elapsed_s=time.perf_counter() - t0)
 
 
-def simulation_errors(model: Model, data: ModelData, P: np.ndarray, window: int) -> dict:
+def simulation_errors(model: Model, data: ModelData, P: np.ndarray, window: int,
+                      latent_x0: np.ndarray | None = None) -> dict:
     """{channel: {"unit", "mse", "variance", "nmse", "n"}} of ``window``-sample simulations
-    of every experiment from the measured states (latent ones from their declared rule) with
-    the parameters ``P`` (N, np) per sample, every measured channel: the mean squared error
+    of every experiment from the measured states with the parameters ``P`` (N, np) per
+    sample; latent states from ``latent_x0`` (windows, nx: the states an output-error fit over
+    the same windows estimated at each start) or, without it, their declared rule (a wrong
+    start of an unmeasured velocity or wall would be scored as model error). Every measured
+    channel: the mean squared error
     (the channel's unit squared), the channel's variance over the same samples and their
     ratio NMSE (0 perfect, 1 no better than the channel's mean); the multi-step quality a
     one-step fit does not show, on the same footing for every model and method."""
     w = oe.Windows.of(data.segments, window)
     i0 = w.idx[:, 0]
-    Y = oe.simulate_windows(model, data, w.idx, data.initial_states(model, i0), P[i0])
+    x0 = data.initial_states(model, i0)
+    latent = [i for i, s in enumerate(model.states) if not s.measured]
+    if latent_x0 is not None and latent and latent_x0.shape == x0.shape:
+        x0[:, latent] = latent_x0[:, latent]
+    Y = oe.simulate_windows(model, data, w.idx, x0, P[i0])
     meas = data.observed()[w.idx]
     unit = {r.name: r.unit for r in model.states + model.outputs}
     out = {}

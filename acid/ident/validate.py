@@ -52,8 +52,10 @@ MAX_PREDICTION_SAMPLES = 5_000_000
 WARM_STARTS = ("fit", "ekf", "ekf-trip")
 #: Prediction times (s) of ``by_time`` (the model's and each yardstick's errors).
 REPORT_TIMES_S = (60.0, 300.0, 600.0, 1500.0)
-#: ``warmup``'s default, s (as ``acid validate --warmup``: 60 samples of the paper's 5 s).
+#: ``warmup``'s default, s (as ``acid validate --warmup``: 60 samples of the paper's 5 s),
+#: or ``DEFAULT_WARMUP_SAMPLES`` samples where it does not fit the data (``default_warmup``).
 DEFAULT_WARMUP_S = 300.0
+DEFAULT_WARMUP_SAMPLES = 60
 #: Below this standard deviation a measured window counts as constant: fit % undefined.
 CONSTANT_TRUTH_STD = 1e-9
 
@@ -153,8 +155,27 @@ def samples_of(value_s: float, Ts: float, name: str, used: bool = True) -> int:
     return n
 
 
+def default_warmup(ds: Dataset, horizon: int) -> tuple[float, str | None]:
+    """The default warm-up (s) for ``ds`` and ``horizon`` steps, and a note when it is not
+    ``DEFAULT_WARMUP_S``: 300 s where that is a whole number of samples of ``ds.Ts`` and some
+    experiment holds 300 s + ``horizon`` steps; otherwise ``DEFAULT_WARMUP_SAMPLES`` samples
+    (a record at another time scale: a 600 Hz oscillator, a 1 kHz drive)."""
+    n = DEFAULT_WARMUP_S / ds.Ts
+    whole = math.isclose(round(n) * ds.Ts, DEFAULT_WARMUP_S, rel_tol=1e-9)
+    longest = max(int(np.sum(ds.experiment == e)) for e in np.unique(ds.experiment)) \
+        if len(ds) else 0
+    if whole and longest > round(n) + int(horizon):
+        return DEFAULT_WARMUP_S, None
+    why = (f"{DEFAULT_WARMUP_S:g} s is not a whole number of samples of {ds.Ts:g} s"
+           if not whole else f"no experiment holds {DEFAULT_WARMUP_S:g} s + {int(horizon)} "
+           "steps")
+    s = DEFAULT_WARMUP_SAMPLES * ds.Ts
+    return s, (f"warm-up: {DEFAULT_WARMUP_SAMPLES} samples ({s:g} s), the default where {why} "
+               "(set it with --warmup / warmup=)")
+
+
 def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | None = None, *,
-                   starts: int = 60, horizon: int = 300, warmup: float = DEFAULT_WARMUP_S,
+                   starts: int = 60, horizon: int = 300, warmup: float | None = None,
                    placement: str = "even", seed: int = 0,
                    horizons: tuple[int, ...] | None = None,
                    hold: tuple[str, ...] | None = None,
@@ -168,8 +189,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
 
     Units as ``acid validate``'s options: ``horizon`` (and ``horizons``, ``start_index``,
     ``start_range``, ``estimation`` ranges) in samples of the data, ``warmup`` in seconds
-    (default 300 s; for a model with latent states a whole number of samples of the data's
-    Ts, else a one-line ``ConfigError``; unused without latent states).
+    (default ``default_warmup``: 300 s, or 60 samples where 300 s does not fit the data; for
+    a model with latent states a whole number of samples of the data's Ts, else a one-line
+    ``ConfigError``; unused without latent states).
 
     ``params``: a fit (``DeclaredFitResult``), any ``ParameterValues`` or None (the declared
     values).
@@ -225,6 +247,9 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
             raise ConfigError(f"{name} must be at least {lo}, got {v}")
     data = ModelData.of(model, ds, min_samples=2)
     latent = [i for i, s in enumerate(model.states) if not s.measured]
+    warmup_note = None
+    if warmup is None:
+        warmup, warmup_note = default_warmup(ds, horizon)
     warmup = samples_of(warmup, ds.Ts, "warmup", used=bool(latent))
     need_warm = warmup if latent else 0
     step = _Steps(progress, 3 + bool(latent and need_warm > 0) + bool(yardsticks))
@@ -235,7 +260,7 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     cand = np.concatenate([np.arange(max(a, lo) + need_warm, min(b, hi) - reach)
                            for a, b in data.segments for lo, hi in ranges]
                           + [np.zeros(0, int)]).astype(int)
-    est_data, notes_pre = None, []
+    est_data, notes_pre = None, [warmup_note] if warmup_note and latent else []
     if isinstance(estimation, Dataset):
         est_data = ModelData.of(model, estimation, min_samples=2)
         fitted, placed = estimation_samples(data, est_data, ds.time, estimation.time)
@@ -258,7 +283,8 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     if cand.size == 0:
         raise DataError(f"{ds.source}: record too short: no experiment is longer than "
                         f"warmup + horizon "
-                        f"({need_warm} + {reach} + 1 samples)")
+                        f"({need_warm} + {reach} + 1 samples of {ds.Ts:g} s; shorten the "
+                        "warm-up or the horizon)")
     if start_index is not None:
         k0 = np.asarray(start_index, dtype=int)
         bad = k0[~np.isin(k0, cand)]
