@@ -141,11 +141,13 @@ class DeclaredValidation:
             times = list(table.get("model", {}))
             if times:
                 width = max(len(w) for w in table)
+                heads = [f"{float(t):.4g} s" for t in times]
+                cw = max(9, *(len(h) for h in heads))
                 lines.append(f"    {'RMSE at':<{width}} " + " ".join(
-                    f"{float(t):>8g}s" for t in times))
+                    f"{h:>{cw}}" for h in heads))
                 for who, row in table.items():
                     lines.append(f"    {who:<{width}} " + " ".join(
-                        f"{row.get(t, {}).get('rmse_K', math.nan):>9.4g}" for t in times))
+                        f"{row.get(t, {}).get('rmse_K', math.nan):>{cw}.4g}" for t in times))
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
 
