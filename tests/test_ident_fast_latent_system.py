@@ -94,3 +94,13 @@ def test_the_default_stays_300_s_where_it_fits():
                        channels={"y": np.zeros(400)}, units={"y": "V"})
     seconds, why = default_warmup(odd, horizon=10)      # 183105.47 samples in 300 s
     assert seconds == pytest.approx(60 * 0.0016384) and "not a whole number" in why
+
+
+def test_compare_gives_the_rmse_benchmark_papers_quote(record, fit):
+    _, val = record.split(0.5)
+    c = acid.compare(val, fit)
+    (label,) = c.rmse
+    err = c.predictions[label].errors[:, 0]
+    assert c.rmse[label]["y"] == pytest.approx(float(np.sqrt(np.nanmean(err ** 2))))
+    assert c.to_frame("rmse").loc[label, "y"] == c.rmse[label]["y"]
+    assert "y [V]" in c.summary() and c.rmse[label]["y"] < 1e-3

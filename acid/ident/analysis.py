@@ -195,14 +195,28 @@ class CompareResult:
         """{model: {channel: fit %}}."""
         return {label: p.fit_percent for label, p in self.predictions.items()}
 
-    def to_frame(self):
-        """DataFrame of fit % (rows: models, columns: the channels)."""
+    @property
+    def rmse(self) -> dict[str, dict[str, float]]:
+        """{model: {channel: root-mean-square error}}, in each channel's unit (the figure
+        benchmark papers quote)."""
+        return {label: p.rmse for label, p in self.predictions.items()}
+
+    def to_frame(self, metric: str = "fit_percent"):
+        """DataFrame of fit % (``metric="fit_percent"``) or of the RMSE in each channel's unit
+        (``metric="rmse"``); rows: models, columns: the channels."""
         import pandas as pd
 
-        df = pd.DataFrame(self.fit_percent).T
+        if metric not in ("fit_percent", "rmse"):
+            raise ValueError(f"metric must be 'fit_percent' or 'rmse', got {metric!r}")
+        df = pd.DataFrame(getattr(self, metric)).T
         df.index.name = "model"
-        df.attrs.update(unit="%", definition="100 (1 - ||y - y_hat|| / ||y - mean(y)||)",
-                        horizon="simulation" if self.horizon is None else self.horizon)
+        first = next(iter(self.predictions.values()))
+        df.attrs.update(
+            unit="%" if metric == "fit_percent" else dict(zip(first.channels, first.units,
+                                                               strict=True)),
+            definition="100 (1 - ||y - y_hat|| / ||y - mean(y)||)" if metric == "fit_percent"
+            else "sqrt(mean((y - y_hat)^2))",
+            horizon="simulation" if self.horizon is None else self.horizon)
         return df
 
     def plot(self, title: str | None = None):
@@ -222,6 +236,11 @@ class CompareResult:
                  f"  {'model':{w}s}" + "".join(f"{c:>12s}" for c in first.channels)]
         lines += [f"  {k:{w}s}" + "".join(f"{v.get(c, math.nan):12.2f}" for c in first.channels)
                   for k, v in self.fit_percent.items()]
+        lines.append(f"  {'RMSE':{w}s}" + "".join(f"{f'{c} [{u}]':>12s}" for c, u in
+                                                   zip(first.channels, first.units,
+                                                       strict=True)))
+        lines += [f"  {k:{w}s}" + "".join(f"{v.get(c, math.nan):12.4g}" for c in first.channels)
+                  for k, v in self.rmse.items()]
         return "\n".join(lines)
 
     def __repr__(self) -> str:
