@@ -96,6 +96,7 @@ UNIT_SCALES: dict[str, tuple[str, float, float]] = {
     "Nm": ("Nm", 1.0, 0.0),
     # fractions and humidity
     "1": ("1", 1.0, 0.0),
+    "-": ("1", 1.0, 0.0),      # dimensionless, as engineering tables write it
     "%": ("1", 0.01, 0.0),
     "%RH": ("1", 0.01, 0.0),
     "kg/kg": ("kg/kg", 1.0, 0.0),
@@ -298,8 +299,11 @@ def _unit_product(tokens, pos, text):
             f, d = _atom(tok)
             pos += 1
         else:
-            raise ValueError(f"unit {text!r}: unknown unit {tok!r} (known: the units of "
-                             "acid.units.UNIT_SCALES, kg, g, mm, min, h, N; degC alone)")
+            raise ValueError(f"unit {text!r}: unknown unit {tok!r} (known: "
+                             f"{', '.join(u for u in UNIT_SCALES if u not in ('1', '-'))}, "
+                             "kg, g, mm, min, h, N, and their products, quotients and powers "
+                             "such as 'W/(m^2 K)' or '1/s^2'; degC alone; '1' or '-' for a "
+                             "dimensionless quantity)")
         power = 1.0
         if pos < len(tokens) and tokens[pos] == "^":
             sign = 1.0

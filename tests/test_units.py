@@ -94,7 +94,8 @@ W = {"kg": 1, "m": 2, "s": -3}
     ("J/(kg K)", 1.0, {"m": 2, "s": -2, "K": -1}),
     ("W s^2/kg^2", 1.0, {"kg": -1, "m": 2, "s": -1}),
     ("W/K/(m/s)^0.8", 1.0, {"kg": 1, "m": 1.2, "s": -2.2, "K": -1}),
-    ("kg/kg", 1.0, {}), ("1", 1.0, {}), ("%", 0.01, {}), ("1/K", 1.0, {"K": -1}),
+    ("kg/kg", 1.0, {}), ("1", 1.0, {}), ("-", 1.0, {}), ("%", 0.01, {}),
+    ("1/K", 1.0, {"K": -1}),
     ("kg m^-3", 1.0, {"kg": 1, "m": -3}), ("g/s", 1e-3, {"kg": 1, "s": -1}),
     ("degC", 1.0, {"K": 1}),
 ])
@@ -111,6 +112,14 @@ def test_compound_units(text, factor, dims):
 def test_unreadable_units_say_why(text, fragment):
     with pytest.raises(ValueError, match=fragment.replace("^", "\\^").replace("(", "\\(")):
         parse_unit(text)
+
+
+def test_an_unknown_unit_lists_the_known_ones_in_the_message():
+    # a user reads the list in the error, not in acid's source
+    with pytest.raises(ValueError) as err:
+        parse_unit("furlong/s")
+    assert "kW" in str(err.value) and "km/h" in str(err.value) and "'-'" in str(err.value)
+    assert "UNIT_SCALES" not in str(err.value)
 
 
 def test_json_in_degC_converts_absolute_temperatures_and_keeps_differences():
