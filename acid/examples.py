@@ -96,6 +96,12 @@ def resolve(ref: str | Path) -> Path:
     return found[name]
 
 
+def reference_of(path: str | Path) -> str:
+    """``example:NAME`` for a bundled example's path, else the path as given: how a command
+    names a file the user gave as a reference (not the installed package's folder)."""
+    return f"{PREFIX}{Path(path).name}" if is_bundled(path) else str(path)
+
+
 def is_bundled(path: str | Path) -> bool:
     """Whether ``path`` is one of the bundled examples (never to be overwritten)."""
     try:

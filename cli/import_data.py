@@ -10,6 +10,7 @@ from pathlib import Path
 
 import typer
 
+from acid import examples
 from acid._io import file_sha256
 from acid.data import CHANNEL_NAME, ChannelMap, PlausibilityWarning, import_logs, log_kind
 from acid.errors import DataError
@@ -97,7 +98,7 @@ def import_data(
              "assumed" if n in ds.assumed else ("mask" if n.endswith("_censored")
                                                 else "measured")]
             for n, v in ds.channels.items()]
-    source = srcs[0] if len(srcs) == 1 else f"{len(srcs)} files"
+    source = examples.reference_of(srcs[0]) if len(srcs) == 1 else f"{len(srcs)} files"
     print_table(f"{out}: {len(ds)} samples, {ds.duration:g} s at Ts = {ds.Ts:g} s, "
                 f"{len(srcs)} experiment{'s' if len(srcs) > 1 else ''}, from {source}",
                 ["channel", "unit", "min", "mean", "max", "_what"], rows)
