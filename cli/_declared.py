@@ -254,7 +254,8 @@ def fit_declared(data: Path, model_file: str, out: Path, json_path: Path | None,
     elif oe:
         sim = ", ".join(f"{c} {v:.2f} %" for c, v in oe["channel_fit_percent"].items())
         say(f"output error: {oe['windows']} windows of <= {oe['window']} samples, objective "
-            f"{oe['loss']:.6g}, {oe['status']}; simulation fit {sim}")
+            f"{oe['loss']:.6g} (each channel weighted by its error scale), "
+            f"{str(oe['status']).rstrip('. ')}; simulation fit {sim}")
     if len(result.optima) > 0:
         print_table(f"Distinct optima of {fit_starts} starts (best first): objective, starts that "
                     "reached it, largest parameter spread among those starts, and the "
