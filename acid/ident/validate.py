@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import scipy.optimize
 
+from acid._blas import fixed_blas
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.ident.data import ModelData
@@ -153,6 +154,7 @@ def samples_of(value_s: float, Ts: float, name: str, used: bool = True) -> int:
     return n
 
 
+@fixed_blas
 def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: float = DEFAULT_WARMUP_S,
                    placement: str = "even", seed: int = 0,
