@@ -13,9 +13,12 @@ import os
 import subprocess
 import sys
 
+import numpy as np
+import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from acid._blas import BLAS_THREADS, fixed_blas, fixed_threads
+from acid.ident.yardsticks import evaluate
 
 # a fixed record of a 4-state system with 4 outputs and 3 inputs (piecewise-constant random
 # inputs, white output noise): large enough that OpenBLAS splits the QR of PO-MOESP's Hankel
@@ -92,3 +95,13 @@ def test_the_acid_command_sets_one_thread_for_its_process_and_its_children():
                          text=True, env=env, timeout=60, check=True)
     assert out.stdout.split(None, 1)[0] == "1"
     assert set(json.loads(out.stdout.split(None, 1)[1])) == {1}
+
+
+def test_a_warning_of_a_wrapped_entry_point_names_its_caller():
+    """The wrapper is one more frame: the yardsticks' and the validation's warnings still point
+    at the line that called them, not into acid/_blas.py."""
+    y, u = np.zeros((200, 1)), np.ones((200, 1))
+    with pytest.warns(UserWarning, match="left out") as rec:
+        evaluate(y, u, np.zeros(200, dtype=int), np.array([100]), 10, np.zeros(1, bool),
+                 (0, 20))
+    assert [w.filename for w in rec] == [__file__]

@@ -275,12 +275,12 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     else:
         k0 = np.sort(np.random.default_rng(seed).choice(cand, min(starts, cand.size),
                                                         replace=False))
-    if start_index is None and k0.size < starts:
+    if start_index is None and k0.size < starts:  # stacklevel 3: the caller, past fixed_blas
         warnings.warn(f"{ds.source}: only {k0.size} "
                       + (f"windows of {horizon} steps ({horizon * model.Ts:g} s) fit without "
                          "overlap (--non-overlapping)" if non_overlapping else
                          f"distinct start instants fit a {horizon}-step window")
-                      + f"; using {k0.size} instead of {starts}", UserWarning, stacklevel=2)
+                      + f"; using {k0.size} instead of {starts}", UserWarning, stacklevel=3)
     if k0.size * (horizon + 1) > MAX_PREDICTION_SAMPLES:
         raise ConfigError(f"--starts {k0.size} x --horizon {horizon} steps is "
                           f"{k0.size * (horizon + 1):.3g} prediction samples, more than "

@@ -397,7 +397,7 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
         text = ", ".join(f"{lo}..{hi - 1}" for lo, hi in ranges)
         warnings.warn(f"yardsticks ARX and subspace left out: the estimation part (samples "
                       f"{text}) has no experiment of {MIN_ESTIMATION_SAMPLES} samples",
-                      UserWarning, stacklevel=2)
+                      UserWarning, stacklevel=3)  # the caller, past fixed_blas
         return out
     est = np.concatenate([np.arange(a, b) for a, b in seg])
     keep = u[est].std(axis=0) > CONSTANT_STD
@@ -446,7 +446,8 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
         try:
             m, scores = fit_subspace(yz, uz, (a, b), select)
         except ValueError as exc:
-            warnings.warn(f"yardstick subspace left out: {exc}", UserWarning, stacklevel=2)
+            warnings.warn(f"yardstick subspace left out: {exc}", UserWarning,
+                          stacklevel=3)  # the caller, past fixed_blas
         else:
             out["subspace"] = YardstickPrediction(
                 "subspace", run(m),
