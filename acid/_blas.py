@@ -12,8 +12,9 @@ caller's setting back afterwards: ``import acid`` changes nothing in the caller'
 The ``acid`` command is acid's own process: :func:`fix_process` sets the count once at start
 for the whole run (and, through the environment, for the BLAS libraries loaded later and the
 processes it starts, e.g. Dask workers). On a busy machine the idle threads of a
-multi-threaded BLAS spin; ``acid validate`` took 2.4-2.8 CPU-s with two threads against
-1.6-1.7 CPU-s with one.
+multi-threaded BLAS spin: on 2 cores at load 5, ``acid validate`` of the walk-through took
+5.0-5.5 CPU-s with two threads against 3.9-4.1 CPU-s with one (6.1-7.4 against 3.9-4.2 beside
+a CPU hog).
 """
 
 from __future__ import annotations
