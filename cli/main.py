@@ -19,6 +19,7 @@ import typer  # noqa: E402
 from typer.core import TyperCommand, TyperGroup  # noqa: E402
 
 from acid import __version__  # noqa: E402
+from acid._blas import fix_process  # noqa: E402
 from acid_cli._common import ClickException, error_line  # noqa: E402
 from acid_cli._options import (  # noqa: E402
     canonical_args,
@@ -113,6 +114,7 @@ class AcidTyper(typer.Typer):
         # process ends through _signals.finish (a signal during the exit is 130 / 143 too)
         if kwargs.get("standalone_mode") is False:  # a caller in Python: its process, its end
             return super().__call__(*args, **kwargs)
+        fix_process()  # acid's own process: one BLAS thread for the run (acid._blas)
         code: object = 0
         try:
             try:

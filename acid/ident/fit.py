@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from acid import __version__
+from acid._blas import fixed_blas
 from acid._io import file_sha256
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
@@ -66,6 +67,7 @@ DIVERGED_ERROR_RATIO = 100.0
 
 # -------------------------------------------------------------------------- fitter
 @hac.warnings_as_note
+@fixed_blas
 def fit_model(model: Model | str, ds: Dataset, method: str = "auto", *,
               fix: dict | None = None, free: tuple[str, ...] = (), fit_starts: int = 1,
               seed: int = 0, oe_window: int = 300, covariance: str = "hac",

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import scipy.optimize
 
+from acid._blas import fixed_blas
 from acid.data import Dataset
 from acid.errors import ConfigError, DataError
 from acid.ident.data import ModelData
@@ -174,6 +175,7 @@ def default_warmup(ds: Dataset, horizon: int) -> tuple[float, str | None]:
                "(set it with --warmup / warmup=)")
 
 
+@fixed_blas
 def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | None = None, *,
                    starts: int = 60, horizon: int = 300, warmup: float | None = None,
                    placement: str = "even", seed: int = 0,
@@ -299,12 +301,12 @@ def validate_model(model: Model | str, ds: Dataset, params: ParameterValues | No
     else:
         k0 = np.sort(np.random.default_rng(seed).choice(cand, min(starts, cand.size),
                                                         replace=False))
-    if start_index is None and k0.size < starts:
+    if start_index is None and k0.size < starts:  # stacklevel 3: the caller, past fixed_blas
         warnings.warn(f"{ds.source}: only {k0.size} "
                       + (f"windows of {horizon} steps ({horizon * model.Ts:g} s) fit without "
                          "overlap (--non-overlapping)" if non_overlapping else
                          f"distinct start instants fit a {horizon}-step window")
-                      + f"; using {k0.size} instead of {starts}", UserWarning, stacklevel=2)
+                      + f"; using {k0.size} instead of {starts}", UserWarning, stacklevel=3)
     if k0.size * (horizon + 1) > MAX_PREDICTION_SAMPLES:
         raise ConfigError(f"--starts {k0.size} x --horizon {horizon} steps is "
                           f"{k0.size * (horizon + 1):.3g} prediction samples, more than "

@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acid._blas import fixed_blas
 from acid.errors import ConfigError
 
 #: The yardsticks, in the order they are reported.
@@ -171,6 +172,7 @@ def _arx_rows(segments, lag: int) -> np.ndarray:
                           or [np.empty(0, dtype=int)])
 
 
+@fixed_blas
 def fit_arx(y: np.ndarray, u: np.ndarray, segments, orders=ARX_ORDERS,
             select: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[ARX, dict]:
     """Least-squares ARX for every ``na, nb`` in ``orders``; among the stable candidates the
@@ -279,6 +281,7 @@ def _hankel(x: np.ndarray, first: int, rows: int, cols: int) -> np.ndarray:
     return np.concatenate([x[first + r:first + r + cols].T for r in range(rows)], axis=0)
 
 
+@fixed_blas
 def moesp_observability(y: np.ndarray, u: np.ndarray, s: int = BLOCK_ROWS
                         ) -> tuple[np.ndarray, np.ndarray]:
     """PO-MOESP (Verhaegen and Verdult 2007, sec. 9.6): from one stretch of ``y`` (N, ny)
@@ -295,6 +298,7 @@ def moesp_observability(y: np.ndarray, u: np.ndarray, s: int = BLOCK_ROWS
     return U, sv
 
 
+@fixed_blas
 def moesp_model(U: np.ndarray, sv: np.ndarray, n: int, y: np.ndarray,
                 u: np.ndarray) -> Subspace:
     """Order-``n`` model: A, C from the observability matrix ``U[:, :n] sqrt(sv[:n])``;
@@ -323,6 +327,7 @@ def moesp_model(U: np.ndarray, sv: np.ndarray, n: int, y: np.ndarray,
     return Subspace(A, B, C, D, theta[-ny:], stable)
 
 
+@fixed_blas
 def fit_subspace(y: np.ndarray, u: np.ndarray, segment: tuple[int, int],
                  select: tuple[np.ndarray, np.ndarray], orders=SUBSPACE_ORDERS
                  ) -> tuple[Subspace, dict[str, float]]:
@@ -350,6 +355,7 @@ def fit_subspace(y: np.ndarray, u: np.ndarray, segment: tuple[int, int],
 
 
 # ----------------------------------------------------------------------- evaluate
+@fixed_blas
 def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarray,
              horizon: int, held: np.ndarray, estimation,
              names=YARDSTICKS, input_names: tuple[str, ...] | None = None
@@ -391,7 +397,7 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
         text = ", ".join(f"{lo}..{hi - 1}" for lo, hi in ranges)
         warnings.warn(f"yardsticks ARX and subspace left out: the estimation part (samples "
                       f"{text}) has no experiment of {MIN_ESTIMATION_SAMPLES} samples",
-                      UserWarning, stacklevel=2)
+                      UserWarning, stacklevel=3)  # the caller, past fixed_blas
         return out
     est = np.concatenate([np.arange(a, b) for a, b in seg])
     keep = u[est].std(axis=0) > CONSTANT_STD
@@ -440,7 +446,8 @@ def evaluate(y: np.ndarray, u: np.ndarray, experiment: np.ndarray, k0: np.ndarra
         try:
             m, scores = fit_subspace(yz, uz, (a, b), select)
         except ValueError as exc:
-            warnings.warn(f"yardstick subspace left out: {exc}", UserWarning, stacklevel=2)
+            warnings.warn(f"yardstick subspace left out: {exc}", UserWarning,
+                          stacklevel=3)  # the caller, past fixed_blas
         else:
             out["subspace"] = YardstickPrediction(
                 "subspace", run(m),
