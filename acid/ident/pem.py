@@ -54,6 +54,10 @@ DEFAULT_SPREAD_LATENT = 5.0
 DEFAULT_SPREAD_MEASURED = 0.1
 #: A measured state's sensor noise when the declaration gives no ``sensor``.
 DEFAULT_SENSOR = 0.05
+#: The normalised innovations' standard deviation within which a filter's noises count as
+#: matching the data (1 when they do); outside it, with noises left at their defaults, the
+#: fit warns.
+NIS_CONSISTENT = (0.5, 2.0)
 
 
 # ------------------------------------------------------------------ the filter's noises
@@ -488,6 +492,19 @@ def fit_pem(model: Model, ds, *, fix: dict | None = None, max_nfev: int = 100,
     if loose:
         warn.append("prediction error: on a bound or not fixed by the data (no standard "
                     f"error): {', '.join(loose)}")
+    nis = float(np.std(res.innovations)) if res.innovations.size else math.nan
+    undeclared = [s.name for s in model.states
+                  if (s.measured and s.sensor is None) or s.noise is None]
+    if undeclared and math.isfinite(nis) and not (NIS_CONSISTENT[0] <= nis <= NIS_CONSISTENT[1]):
+        unit = {s.name: s.unit for s in model.states + model.outputs}
+        warn.append(
+            f"prediction error: the filter's noises do not match the data (normalised "
+            f"innovations' std {nis:.3g}, 1 when they do); the states {', '.join(undeclared)} "
+            f"take the defaults (sensor {DEFAULT_SENSOR:g} in a measured state's unit, no "
+            "process noise): declare State(..., sensor=..., noise=...) in the model's units "
+            "(the one-step errors' RMS: " + ", ".join(
+                f"{k} {v:.3g} {unit.get(k, '')}".rstrip() for k, v in res.channel_rms.items())
+            + ") or fit by output error (--method oe)")
     summary = {"records": res.n_records, "loss": res.loss, "status": res.status,
                "converged": res.success, "nfev": res.nfev,
                "innovation_rms": res.channel_rms, "one_step_fit_percent": res.channel_fit,
