@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -55,19 +56,36 @@ def test_the_package_of_a_declared_model_is_plain_c_and_says_what_it_is(car):
     assert f"#define ACID_OCP_NX {ctrl.model.nx}" in (out / "acid_ocp.h").read_text()
 
 
+@pytest.fixture(scope="module")
+def exe(car, tmp_path_factory):
+    """The package's example compiled once (the C compiler is most of these tests' time)."""
+    _, out = car
+    return build_c(out, tmp_path_factory.mktemp("build"),
+                   ("main.c", "acid_ocp.c", "acid_ocp_solver.c"))
+
+
 @needs_cc
-def test_the_exported_move_is_the_nlps_optimum(car):
+def test_the_exported_move_is_the_nlps_optimum(car, exe, monkeypatch):
+    import acid.control.codegen.export as export
+
     ctrl, out = car
+    built = []
+
+    def the_module_build(package, build_dir, sources):   # the same package, compiled above
+        built.append((Path(package), tuple(sources)))
+        return exe
+
+    monkeypatch.setattr(export, "build_c", the_module_build)
     res = check_model_export(out, ctrl, n_states=6, seed=2)
+    assert built == [(out, ("main.c", "acid_ocp.c", "acid_ocp_solver.c"))]
     assert res["c_status_ok"] == 6
     assert res["max_diff_vs_sqp"] <= 1e-9      # the same algorithm inside CasADi
     assert res["max_diff_vs_ipopt"] <= 1e-6    # an independent interior-point solve
 
 
 @needs_cc
-def test_a_non_finite_input_gives_its_status_and_the_mid_range_input(car, tmp_path):
-    ctrl, out = car
-    exe = build_c(out, tmp_path, ("main.c", "acid_ocp.c", "acid_ocp_solver.c"))
+def test_a_non_finite_input_gives_its_status_and_the_mid_range_input(car, exe):
+    ctrl, _ = car
     (x, d, r), = sample_problems(ctrl, 1)
     bad = x.copy()
     bad[0] = np.nan

@@ -209,17 +209,24 @@ def econ_file(econ_hifi_fit, tmp_path_factory):
 
 @pytest.mark.slow
 def test_cli_writes_json_and_figures(econ_file, tmp_path):
-    # the shortest economic horizon (10 s): the command's wiring, at half the CPU of 30 s; the
-    # study itself is checked on the ``study`` fixture
+    # the shortest economic horizon (10 s), the coldest coil limit (4 degC: F's coil search
+    # over 1 K, 4 tuned runs instead of 8 over 7 K) and no coil modifier (its steady holds and
+    # the plan variant on its model): the command's wiring; the study itself, modifier
+    # included, is checked on the ``study`` fixture
     out, js = tmp_path / "figs", tmp_path / "cav.json"
     res = runner.invoke(app, ["cav-study", "--cycle", "nycc", "--econ-params", str(econ_file),
                               "--econ-horizon", "10", "--warmup", "60", "--tail", "60",
-                              "--no-compiled",
+                              "--coil-max", "4", "--no-econ-modifier", "--no-compiled",
                               "--out", str(out), "--json", str(js)])
     assert res.exit_code == 0, res.output
     d = json.loads(js.read_text())
     assert d["command"] == "cav-study" and set(d["cycles"]) == {"nycc"}
-    assert set(d["cycles"]["nycc"]["controllers"]) == set(CONTROLLERS)
+    controllers = d["cycles"]["nycc"]["controllers"]
+    assert set(controllers) == set(CONTROLLERS)
+    assert controllers["F"]["coil_range_C"] == pytest.approx([3.0, 4.0])   # --coil-max in degC
+    plan = controllers["plan"]   # no modifier: no variant on its model (one may fail, named)
+    tried = set(plan["variants"]) | set(plan.get("failed_variants", {}))
+    assert tried == set(PLAN_VARIANTS) - {"cyclic_corrected_model"}, plan.get("failed_variants")
     assert (out / "cav_nycc.png").stat().st_size > 10_000
     assert (out / "energy_nycc.png").stat().st_size > 5_000
 

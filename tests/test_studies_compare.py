@@ -15,8 +15,10 @@ from acid.units import C2K
 SG = 160.0  # a two-period stop-and-go (80 s alternation): cheap passes
 
 
-#: looser periodic tolerances than the default, to keep the tests fast
-S = cmp.RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30)
+#: looser periodic tolerances and a shorter charge-back tail (600 s, not 2400 s) than the
+#: default, to keep the tests fast (``--quick``'s settings; the full size runs in the README's
+#: ``acid reproduce``)
+S = cmp.RunSettings(tol_K=0.05, tol_w=1e-4, tol_E=2e-3, max_passes=30, tail_s=600.0)
 
 
 def _sc(t_amb_c: float, **kw) -> cmp.Scenario:
@@ -200,21 +202,38 @@ def test_a_shared_start_carries_no_other_controller_loop_memory():
     assert own.energy_J > 1.01 * F.energy_J
 
 
-def test_the_engine_pieces_in_any_order_give_the_same_verdicts():
+def test_the_engine_pieces_in_any_order_give_the_same_verdicts(monkeypatch):
     """``acid reproduce`` runs the engine as one task per scenario and hands the runs over in
-    its own order: tuning and verdicts must not depend on it."""
+    its own order: tuning and verdicts must not depend on it. The runs are the direct
+    comparison's own (recorded as they ran; that a run is deterministic is checked above):
+    the pieces get them again, the task lists made afresh and reversed."""
+    ran: list[tuple] = []
+
+    def recorded(*task):
+        ran.append((task, cmp.periodic_run(*task)))
+        return ran[-1][1]
+
+    monkeypatch.setattr(cmp, "_task", recorded)
     sset = cmp.default_set(("stopgo",), (30.0, 31.0, 32.0, 33.0), stopgo_s=SG)
     fams = tuple(f for f in cmp.families(quick=True, econ=False) if f.key in ("F", "own"))
     direct = cmp.compare(sset, fams, S, min_scenarios=2, n_boot=200)
+
+    def runs_of(tasks):   # each task's recorded run, the task made again by the pieces
+        out = []
+        for t in tasks:
+            (run,) = [r for task, r in ran if task == t]
+            out.append(run)
+        return out
+
     allsc = sset.training + sset.held_out
-    starts = {sc.name: cmp.periodic_run(*t).end
-              for sc, t in zip(allsc, cmp.warm_tasks(allsc, fams, S), strict=True)}
+    starts = {sc.name: r.end for sc, r in zip(allsc, runs_of(cmp.warm_tasks(allsc, fams, S)),
+                                              strict=True)}
     tasks = cmp.training_tasks(sset.training, fams, S, None, starts)[::-1]
-    tuning = cmp.tune(fams, tasks, [cmp.periodic_run(*t) for t in tasks], S)
+    tuning = cmp.tune(fams, tasks, runs_of(tasks), S)
     assert tuning.tuned == direct.tuned and tuning.fronts == direct.fronts
     held = cmp.held_out_tasks(sset.held_out, fams, tuning, S, None, starts)[::-1]
-    again = cmp.assemble(sset, fams, S, tuning, held, [cmp.periodic_run(*t) for t in held],
-                         min_scenarios=2, n_boot=200)
+    again = cmp.assemble(sset, fams, S, tuning, held, runs_of(held), min_scenarios=2,
+                         n_boot=200)
     assert again.verdicts == direct.verdicts
 
 

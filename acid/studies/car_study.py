@@ -99,7 +99,15 @@ def _logged(ds: Dataset, model: Model):
 
 
 def _predict_power(fn, X, U, D, values) -> np.ndarray:
-    return np.asarray(fn.map(len(X))(X.T, U.T, D.T, values)).ravel()
+    return _power_on(fn, X, U, D)(values)
+
+
+def _power_on(fn, X, U, D) -> Callable[[np.ndarray], np.ndarray]:
+    """``values -> P_comp`` on fixed logged channels: the map and the channels converted to
+    CasADi once (a least-squares fit calls it hundreds of times; the same numbers)."""
+    mapped = fn.map(len(X))
+    args = [ca.DM(X.T), ca.DM(U.T), ca.DM(D.T)]
+    return lambda values: np.asarray(mapped(*args, values)).ravel()
 
 
 def _score(ds: Dataset, P: np.ndarray, Ph: np.ndarray) -> PowerScore:
@@ -126,17 +134,18 @@ def fit_power(est: Dataset, held_out: Dataset, cabin_values, model: Model = CAR_
     lo = [model.parameters[i].min for i in idx]
     hi = [model.parameters[i].max for i in idx]
     Xe, Ue, De, Pe = _logged(est, model)
+    power_e = _power_on(fn, Xe, Ue, De)
 
     def residual(z):
         v = values.copy()
         v[idx] = z
-        return _predict_power(fn, Xe, Ue, De, v) - Pe
+        return power_e(v) - Pe
 
     res = least_squares(residual, values[idx], bounds=(lo, hi))
     values[idx] = res.x
     Xv, Uv, Dv, Pv = _logged(held_out, model)
     return PowerFit(values={n: float(v) for n, v in zip(POWER_NAMES, res.x, strict=True)},
-                    estimation=_score(est, Pe, _predict_power(fn, Xe, Ue, De, values)),
+                    estimation=_score(est, Pe, power_e(values)),
                     held_out=_score(held_out, Pv, _predict_power(fn, Xv, Uv, Dv, values)),
                     status=str(res.message))
 

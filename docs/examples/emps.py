@@ -38,7 +38,7 @@ model = Model(
 PUBLISHED = {"M": 95.1089, "Fv": 203.5034, "Fc": 20.3935, "OFF": -3.1648}
 OFFSETS = (PUBLISHED["OFF"], 2.0)        # N: record 1's offset is ours (a moved cable)
 rng = np.random.default_rng(7)
-Ts, n = 0.01, 1200                       # 12 s per record at 100 Hz
+Ts, n = 0.01, 800                        # 8 s per record at 100 Hz
 
 def reference(n):                        # point-to-point moves with a cosine profile
     qg, k = np.full(n, 0.1), 0

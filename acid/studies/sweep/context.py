@@ -104,7 +104,8 @@ class ScenarioContext:
     tick : called once per closed-loop step (interrupt checks, progress).
     tail_s : the scenario's common continuation that charges back an end state, s (0: none).
     shared : objects a controller leaves for the later ones of the same scenario, by name
-        (``"econ_model"``: the econ model with the coil modifier that ``econ`` ran on).
+        (``"econ_model"``: the econ model with the coil modifier that ``econ`` ran on; the
+        coil modifier itself, by its inputs, so two econ controllers run its holds once).
     """
 
     conditions: Conditions

@@ -157,10 +157,16 @@ class EconController:
             from acid.control.econ.modifier import coil_modifier
             from acid.control.pi_baselines import COIL_RANGE
 
-            plant = ctx.make_plant()
-            mod = coil_modifier(econ, ctx.make_plant, plant.cfg, float(np.mean(ctx.v_step)),
-                                cond.T_amb, target, start=ctx.start,
-                                coil_range=(COIL_RANGE[0], C2K(c.coil_max_C)))
+            # the same model, target and coil range on this scenario (D and E beside each
+            # other, or with a comfort price): the same steady holds, run once
+            key = ("coil_modifier", c.econ_params, float(c.identify_hours), int(c.seed),
+                   float(target), float(c.coil_max_C))
+            mod = ctx.shared.get(key)
+            if mod is None:
+                plant = ctx.make_plant()
+                mod = ctx.shared[key] = coil_modifier(
+                    econ, ctx.make_plant, plant.cfg, float(np.mean(ctx.v_step)), cond.T_amb,
+                    target, start=ctx.start, coil_range=(COIL_RANGE[0], C2K(c.coil_max_C)))
             econ, info = mod.params, {"modifier_optimal_coil_K": [
                 s["T_star_K"] for s in mod.steps]}
             ctx.shared["econ_model"] = econ
