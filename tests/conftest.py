@@ -156,7 +156,6 @@ SLOWEST_FIRST = (
     "test_processes_left.py",
     "test_studies_reproduce_interrupts.py",
     "test_studies_sweep_econ.py",
-    "test_studies_sweep_prediction.py",
     "test_docs.py",
     "test_models_car_power.py",
     "test_cli_interrupts.py",
