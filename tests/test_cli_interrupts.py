@@ -57,32 +57,50 @@ def test_a_signal_stops_excite_without_output(tmp_path, sig, ignore, code):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.slow
+#: ``acid`` whose atomic writes stop (SIGSTOP) halfway through writing their temporary file:
+#: a run that is observably mid-write, whatever the machine's load
+PAUSED_MID_WRITE = """
+import os, pathlib, signal
+_write = pathlib.Path.write_bytes
+def write_bytes(self, data):
+    if self.name.endswith(".part"):
+        with open(self, "wb") as fh:
+            fh.write(data[: len(data) // 2])
+            fh.flush()
+        os.kill(os.getpid(), signal.SIGSTOP)
+    return _write(self, data)
+pathlib.Path.write_bytes = write_bytes
+from acid_cli.main import app
+app()
+"""
+
+
 def test_sigkill_mid_write_damages_nothing_and_the_next_run_cleans_up(tmp_path):
+    """SIGKILL while the temporary file is half written (the run stops itself there, so the
+    moment is a state to wait on, not a race): the earlier output is untouched, and the next
+    run removes the stale temporary."""
+    from _procs import wait_for
+
     out = tmp_path / "x.h5"
-    earlier = CliRunner().invoke(app, ["excite", "--plant", "model", "--duration", "600",
-                                       "--out", str(out)])
+    cmd = ["excite", "--plant", "model", "--duration", "600", "--out", str(out)]
+    earlier = CliRunner().invoke(app, cmd)
     assert earlier.exit_code == 0, earlier.output
     before = out.read_bytes()
-    for _attempt in range(3):
-        p = _start(out)
-        caught = False
-        while p.poll() is None:
-            if any(f.endswith(".part") for f in os.listdir(tmp_path)):
-                p.send_signal(signal.SIGKILL)
-                caught = True
-                break
-            time.sleep(0.0005)
-        p.communicate()
-        if caught and p.returncode == -signal.SIGKILL and out.read_bytes() == before:
-            break
-        out.write_bytes(before)  # the run finished before we saw it writing: try again
-    else:
-        pytest.skip("the write never got caught in progress (machine too busy)")
+    p = subprocess.Popen([sys.executable, "-c", PAUSED_MID_WRITE, *cmd[:-2], "--seed", "1",
+                          "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    child = psutil.Process(p.pid)
+    assert wait_for(lambda: p.poll() is not None
+                    or child.status() == psutil.STATUS_STOPPED, 120), "never stopped"
+    assert p.poll() is None, p.communicate()
+    (part,) = [f for f in tmp_path.iterdir() if f.name.endswith(".part")]
+    assert 0 < part.stat().st_size < len(before)   # half written
+    p.send_signal(signal.SIGKILL)
+    p.communicate(timeout=60)
+    assert p.returncode == -signal.SIGKILL
     assert out.read_bytes() == before  # the earlier output is untouched
-    assert [f for f in os.listdir(tmp_path) if f.endswith(".part")]  # the stale temporary
-    again = CliRunner().invoke(app, ["excite", "--plant", "model", "--duration", "600",
-                                     "--out", str(out)])
+    assert part.exists()  # the stale temporary
+    again = CliRunner().invoke(app, cmd)
     assert again.exit_code == 0, again.output
     assert sorted(os.listdir(tmp_path)) == ["x.h5"]
     assert len(Dataset.from_hdf5(out)) == 120
@@ -138,21 +156,48 @@ WRITERS = [("year.csv", signal.SIGINT), ("year.json", signal.SIGTERM),
            ("year_share.png", signal.SIGINT)]
 
 
-def _signal_at_temporary(args, folder, prefix: str, sig) -> int | None:
-    """Run ``acid ARGS``; send ``sig`` to its group when ``.PREFIX.*.part`` appears in
-    ``folder``. The exit code, or None when the write was never caught in progress."""
-    from _procs import start
+#: ``acid`` (arguments after PREFIX) that stops itself (SIGSTOP) as soon as it has created and
+#: named the temporary file ``.PREFIX.*.part`` of an atomic write: a run observably inside
+#: that write, whatever the machine's load
+PAUSED_AT_TEMPORARY = """
+import os, signal, sys, tempfile
+prefix = "." + sys.argv.pop(1) + "."
+_mkstemp, _close, mine = tempfile.mkstemp, os.close, set()
+def mkstemp(*args, **kwargs):
+    fd, name = _mkstemp(*args, **kwargs)
+    if os.path.basename(name).startswith(prefix):
+        mine.add(fd)
+    return fd, name
+def close(fd):
+    _close(fd)
+    if fd in mine:
+        mine.discard(fd)
+        os.kill(os.getpid(), signal.SIGSTOP)
+tempfile.mkstemp, os.close = mkstemp, close
+from acid_cli.main import app
+app()
+"""
 
-    p = start(*args)
-    caught = False
-    while p.poll() is None:
-        if any(f.startswith(f".{prefix}.") and f.endswith(".part") for f in os.listdir(folder)):
-            os.killpg(p.pid, sig)
-            caught = True
-            break
-        time.sleep(0.0002)
-    p.communicate(timeout=300)
-    return p.returncode if caught else None
+
+def _signal_at_temporary(args, folder, prefix: str, sig) -> tuple[int, str]:
+    """Run ``acid ARGS`` until it has created ``.PREFIX.*.part`` in ``folder``, send ``sig``
+    to its group there, let it go on. Its exit code and output."""
+    from _procs import wait_for
+
+    p = subprocess.Popen([sys.executable, "-c", PAUSED_AT_TEMPORARY, prefix, *args],
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                         start_new_session=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    child = psutil.Process(p.pid)
+    assert wait_for(lambda: p.poll() is not None
+                    or child.status() == psutil.STATUS_STOPPED, 300), "never stopped"
+    assert p.poll() is None, p.communicate()[0]   # it stopped inside the write
+    assert [f for f in os.listdir(folder) if f.startswith(f".{prefix}.")
+            and f.endswith(".part")]
+    os.killpg(p.pid, sig)
+    os.killpg(p.pid, signal.SIGCONT)
+    text, _ = p.communicate(timeout=300)
+    return p.returncode, text
 
 
 @pytest.fixture(scope="module")
@@ -173,13 +218,9 @@ def test_a_signal_at_each_writers_temporary_keeps_the_old_output(name, sig, year
     out = year_output   # the earlier output: left as it was by the previous test
     assert hidden(out.parent) == []
     before = {f: (out / f).read_bytes() for f in ("year.csv", "year.json")}
-    for _attempt in range(3):
-        code = _signal_at_temporary([*YEAR, "--out", str(out)], out, name, sig)
-        if code is not None:
-            break
-    else:
-        pytest.skip("the write never got caught in progress (machine too busy)")
-    assert code in (128 + sig, 0), code   # stopped, or the signal came after the rename
+    code, text = _signal_at_temporary([*YEAR, "--out", str(out)], out, name, sig)
+    assert code == 128 + sig, text   # stopped inside the write
+    assert "Traceback" not in text
     assert hidden(out.parent) == []
     for f, data in before.items():       # deterministic: old or new, the same bytes
         assert (out / f).read_bytes() == data

@@ -136,6 +136,47 @@ def test_verdicts_come_from_the_registry_and_do_not_contradict(quick_run):
     assert md.count("\n|") >= 10 and "| CAV saving |" in md
 
 
+def test_heating_stage_reads_back_with_credentials_and_the_year(quick_run):
+    """The heating stage (not shortened in a quick run): its typed result read back from
+    JSON, its progress to the end, its figure."""
+    from acid.claims.results import HeatingStage
+
+    out, res = quick_run
+    folder = out / "stages" / "heating"
+    summary = json.loads((folder / "stage.json").read_text())["summary"]
+    r = StudyResults.from_summaries({"heating": summary}).get(HeatingStage)
+    assert r is not None and "winter: heating credentials and the year: 3/3" in res.output
+    groups = {c.group for c in r.checks}
+    assert {"h", "i", "j", "l", "m"} <= groups and "k" not in groups  # no logs: not run
+    assert r.passed == all(c.passed is not False for c in r.checks)
+    # three ambients: heat pump and heater alone below the switch-over, the A/C above
+    by = {(p.T_amb_C, p.heating): p for p in r.year}
+    assert set(by) == {(-10.0, "heat pump"), (-10.0, "heater only"), (5.0, "heat pump"),
+                       (5.0, "heater only"), (30.0, "-")}
+    for t in (-10.0, 5.0):  # the heat pump spends less than the heater alone
+        assert by[(t, "heat pump")].E_climate_kWh < by[(t, "heater only")].E_climate_kWh
+        assert 0.0 < by[(t, "heat pump")].share < by[(t, "heater only")].share < 1.0
+    assert (folder / "year_share.png").is_file()
+    assert json.loads((folder / "figures.json").read_text())[0]["file"] == "year_share.png"
+
+
+def test_heating_section_gives_verdicts_only_where_a_criterion_is_stated(quick_run):
+    from acid.report.sections import sections_for
+
+    out, _ = quick_run
+    summary = json.loads((out / "stages" / "heating" / "stage.json").read_text())["summary"]
+    results = StudyResults.from_summaries({"heating": summary})
+    (sec,) = [s for s in sections_for(results) if s.title.startswith("Winter")]
+    verdicts = {row[4] for row in sec.rows}
+    year = [row for row in sec.rows if row[0] == "year"]
+    assert len(year) == 5 and {row[4] for row in year} == {"information"}
+    assert {row[4] for row in sec.rows if row[0] != "year"} <= {"pass", "FAIL"}
+    assert verdicts <= {"pass", "FAIL", "information"}
+    # a quick run does not shorten this stage: it is judged there too
+    (quick,) = [s for s in sections_for(results, quick=True) if s.title.startswith("Winter")]
+    assert not quick.paragraphs[0].startswith("Not judged")
+
+
 @pytest.mark.skipif(shutil.which("chromium") is None and shutil.which("chromium-browser") is None,
                     reason="Debian's chromium is not installed")
 def test_report_in_headless_chromium(quick_run):

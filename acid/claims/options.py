@@ -43,15 +43,22 @@ class ReproduceOptions:
     #: the engine's drive cycles (each at 30 and 38 degC, one trains, one is held out);
     #: empty: ``acid compare``'s default set
     engine_cycles: tuple[str, ...] = ()
+    #: the engine's families again at F's mean cabin temperature on the held-out scenarios
+    #: (the matched comparison, e.g. E at F's T_cab)
+    engine_match_mean: bool = True
 
     @classmethod
     def quick(cls) -> ReproduceOptions:
+        # the economic NMPC compiled as in the study (built once per user and cached; a cav
+        # cycle then costs two thirds of its CPU inside CasADi), the cav study's controllers
+        # matched to 0.05 K, the engine without its runs at F's mean cabin temperature (its
+        # results are not judged)
         return cls(sweep_duration_s=300.0, excite_duration_s=2 * 3600.0, starts=12,
                    horizon=120, timing_repeats=1, cav_warmup_s=300.0,
                    cav_tail_s=120.0, econ_duration_s=3 * 3600.0, econ_horizon_s=30.0,
-                   econ_compiled=False, cav_tol_K=0.02,
+                   cav_tol_K=0.05,
                    cav_plan_variants=("cyclic_corrected_model",),
-                   engine_quick=True,
+                   engine_quick=True, engine_match_mean=False,
                    engine_cycles=("hwfet", "stopgo"))
 
 

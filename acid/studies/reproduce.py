@@ -427,7 +427,8 @@ def stage_engine_held(workdir: Path, inputs: dict, config: dict, progress) -> di
     tuning = _engine_tuning(inputs, config, sset, fams, settings)
     sc = next(s for s in sset.held_out if s.name == config["scenario"])
     warm = _runs_on(cmp.warm_tasks([sc], fams, settings), lambda i, n: None)[0]
-    tasks = cmp.held_out_tasks([sc], fams, tuning, settings, econ, {sc.name: warm.end})
+    tasks = cmp.held_out_tasks([sc], fams, tuning, settings, econ, {sc.name: warm.end},
+                               match_mean=config.get("match_mean", True))
     runs = _runs_on(tasks, progress)
     _pickle(workdir / ENGINE_RUNS_FILE, [(len(t) == 7, r) for t, r in zip(tasks, runs,
                                                                           strict=True)])
@@ -475,7 +476,8 @@ def stage_engine(workdir: Path, inputs: dict, config: dict, progress) -> dict:
         for charged, r in _unpickle(inputs[engine_stage("held", sc.name)] / ENGINE_RUNS_FILE):
             tasks.append((None,) * (7 if charged else 6))
             runs.append(r)
-    res = cmp.assemble(sset, fams, settings, tuning, tasks, runs, seed=config["seed"])
+    res = cmp.assemble(sset, fams, settings, tuning, tasks, runs, seed=config["seed"],
+                       match_mean=config.get("match_mean", True))
     write_json(workdir / "compare.json", res.to_dict())
     plans = {c: json.loads((inputs[plan_stage(c)] / PLANS_FILE).read_text())
              for c in config.get("plan_cycles", ())}
@@ -550,6 +552,8 @@ def engine_stages(opts: ReproduceOptions) -> list[Stage]:
 
     config = {"quick": opts.engine_quick, "cycles": list(opts.engine_cycles or DEFAULT_CYCLES),
               "ambients_C": list(DEFAULT_AMBIENTS_C), "seed": opts.excite_seed}
+    if not opts.engine_match_mean:   # (the study's keep their cache keys)
+        config["match_mean"] = False
     training, held = engine_scenarios(config)
     train = [Stage(engine_stage("train", n), f"comparison engine, training on {n}",
                    stage_engine_train, {**config, "scenario": n}, depends=("econ",))
