@@ -912,9 +912,10 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
               progress: Callable[[int, int, str], None] | None = None,
               soc_start: float = SOC_START) -> DayStudy:
     """Tune the timer over ``leads_min`` on ``n_train`` days per season (departures known),
-    then to the minute below the coarse optimum (:func:`fine_leads`); identify the parked
-    cabin on the same days' parked records under the timer at ``FIT_LEAD_MIN``
-    (:func:`parked_records`, :func:`acid.studies.dayplan.identify`); judge none, the timer
+    then to the minute below the coarse optimum (:func:`fine_leads`, bisected for the
+    shortest lead meeting the comfort target); identify the parked cabin on the same days'
+    parked records under the timer at ``FIT_LEAD_MIN`` (:func:`parked_records`,
+    :func:`acid.studies.dayplan.identify`); judge none, the timer
     and the ``planners`` (``planner``: the declared-model plan; ``plant-search``: the start
     searched on the plant, leads up to the longest of ``leads_min``; both with a margin of
     the forecast's standard deviation) on ``n_test`` other days for each forecast error;
@@ -963,14 +964,18 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
             train = make_days(s, n_train, seed, 0.0, first_index=0, soc_start=soc_start)
             res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in leads])
             by_lead = {L: [res[(d, "timer", L, leads, 0.0)] for d in train] for L in leads}
-            # to the minute: every whole minute between the coarse optimum and the coarse
+            # to the minute: the whole minutes between the coarse optimum and the coarse
             # lead below it (comfort is monotone in the lead, and so is the energy: a
-            # cheaper feasible lead can only be shorter)
-            fine = fine_leads(by_lead, leads)
-            total[0] += len(fine) * n_train
-            res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in fine])
-            by_lead.update({L: [res[(d, "timer", L, leads, 0.0)] for d in train]
-                            for L in fine})
+            # cheaper feasible lead can only be shorter), bisected for the shortest one
+            # that meets the comfort target (log2 of the minutes' runs instead of all)
+            fine = list(fine_leads(by_lead, leads))
+            while fine:
+                L = fine[len(fine) // 2]
+                total[0] += n_train
+                res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train])
+                by_lead[L] = [res[(d, "timer", L, leads, 0.0)] for d in train]
+                ok = plugged_Kmin(by_lead[L]) <= COMFORT_TARGET_KMIN
+                fine = fine[:len(fine) // 2] if ok else fine[len(fine) // 2 + 1:]
             by_lead = dict(sorted(by_lead.items()))
             tuned[s] = tune_timer(by_lead)
             scan[s] = {f"{L:g}": (float(np.mean([o.cost_USD for o in v])), plugged_Kmin(v))
