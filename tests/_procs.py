@@ -70,6 +70,20 @@ def dead_pid() -> int:
     return p.pid
 
 
+def group_left(pgid: int) -> list[str]:
+    """Command lines of the live (non-zombie) processes of process group ``pgid`` (a command
+    started by :func:`start` leads its own group: its pid), children re-parented to init
+    when their parent ended included."""
+    left = []
+    for p in psutil.process_iter():
+        try:
+            if os.getpgid(p.pid) == pgid and p.status() != psutil.STATUS_ZOMBIE:
+                left.append(" ".join(p.cmdline())[:120])
+        except (psutil.Error, ProcessLookupError, PermissionError):
+            pass
+    return left
+
+
 def interrupt(proc: subprocess.Popen) -> None:
     """Ctrl-C: SIGINT to the command's whole process group."""
     os.killpg(proc.pid, signal.SIGINT)
