@@ -19,7 +19,7 @@ from pathlib import Path
 
 import psutil
 import pytest
-from _procs import PROGRESS_TIMEOUT_S, wait_for
+from _procs import output_until_exit, wait_for
 
 from acid.pipeline import Stage, run_pipeline
 
@@ -81,7 +81,7 @@ def test_acid_sweep_leaves_no_process(tmp_path, how):
     spec.write_text(SPEC.format(hot=41.0 if how == "failure" else 35.0, duration=60.0))
     p = _start("sweep", str(spec), "--out", str(tmp_path / "out"), "--jobs", "2",
                "--no-figures")
-    text, _ = p.communicate(timeout=PROGRESS_TIMEOUT_S)
+    text = output_until_exit(p)
     assert p.returncode == 0, text
     assert "2 worker processes (local cluster)" in text, text
     if how == "failure":

@@ -7,7 +7,16 @@ import json
 
 import pytest
 from _cli import assert_one_line_error
-from _procs import alive, descendants, group_left, hidden, interrupt, start, wait_for
+from _procs import (
+    alive,
+    descendants,
+    group_left,
+    hidden,
+    interrupt,
+    output_until_exit,
+    start,
+    wait_for,
+)
 from typer.testing import CliRunner
 
 import acid.executor
@@ -94,7 +103,7 @@ def test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes(tmp_path):
     assert wait_for(lambda: finished() >= 1), p.communicate()[0]
     kids = descendants(p)
     interrupt(p)
-    text, _ = p.communicate(timeout=120)
+    text = output_until_exit(p, 120)
     assert p.returncode == 130, text
     assert "interrupted" in text and "Traceback" not in text
     assert wait_for(lambda: not alive(kids), 30), alive(kids)
