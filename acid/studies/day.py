@@ -41,6 +41,7 @@ degC and kWh at the edges.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -105,7 +106,11 @@ class Climate:
     def T_amb_K(self, t_s: float, dT_max: float = 0.0) -> float:
         """Ambient at clock time ``t_s`` (s after midnight), K: ASHRAE's hourly fractions of
         the daily range (hour h at h:00, linear between), the maximum shifted by
-        ``dT_max``."""
+        ``dT_max``. Remembered (:func:`_ambient_K`): the runs of one day under different
+        controllers step through the same clock times."""
+        return _ambient_K(self, float(t_s), float(dT_max))
+
+    def _T_amb_K(self, t_s: float, dT_max: float) -> float:
         h = (t_s / 3600.0) % 24.0
         f = np.interp(h, np.arange(1, 26), list(self.fraction) + [self.fraction[0]],
                       period=24.0)
@@ -123,6 +128,18 @@ class Climate:
         if cz <= 0.01:
             return 0.0
         return clouds * 1098.0 * cz * math.exp(-0.057 / cz)
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _ambient_K(climate: Climate, t_s: float, dT_max: float) -> float:
+    return climate._T_amb_K(t_s, dT_max)
+
+
+@functools.lru_cache(maxsize=1024)
+def _with_sun(config, G_solar: float):
+    """``config`` with the irradiance ``G_solar`` (a frozen plant configuration: the same
+    object for the same pair; building and validating one costs more than a plant step)."""
+    return config.replace(G_solar=G_solar)
 
 
 @dataclass(frozen=True)
@@ -271,7 +288,7 @@ class _Car:
     def _set_sun(self, plant, mode: str, t: float) -> None:
         G = round(self.clim.G_solar(t, self.day.clouds), 1)
         if plant.cfg.G_solar != G or plant.cfg.Q_pass != self.cfg[mode].Q_pass:
-            plant.cfg = self.cfg[mode].replace(G_solar=G)
+            plant.cfg = _with_sun(self.cfg[mode], G)
 
     def run(self, until: float, mode: str, v: np.ndarray | None = None) -> list[dict]:
         """Advance to ``until`` (s): ``mode`` "off" (parked, switched off), "on" (parked,
