@@ -12,6 +12,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import psutil
@@ -68,6 +69,33 @@ def dead_pid() -> int:
     p = subprocess.Popen([sys.executable, "-c", "pass"])
     p.wait()
     return p.pid
+
+
+def output_until_exit(proc: subprocess.Popen, timeout: float = PROGRESS_TIMEOUT_S) -> str:
+    """Wait for ``proc`` itself to exit (not for its output pipe to close) and return what
+    it wrote. ``communicate()`` waits for the pipe's end, which a process the command left
+    behind holds open: the wait would last as long as that process, which then ends before
+    any check of what was left."""
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True)
+    reader.start()
+    proc.wait(timeout=timeout)
+    reader.join(2.0)   # the rest of the output, unless a leftover holds the pipe
+    return "".join(lines)
+
+
+def group_left(pgid: int) -> list[str]:
+    """Command lines of the live (non-zombie) processes of process group ``pgid`` (a command
+    started by :func:`start` leads its own group: its pid), children re-parented to init
+    when their parent ended included."""
+    left = []
+    for p in psutil.process_iter():
+        try:
+            if os.getpgid(p.pid) == pgid and p.status() != psutil.STATUS_ZOMBIE:
+                left.append(" ".join(p.cmdline())[:120])
+        except (psutil.Error, ProcessLookupError, PermissionError):
+            pass
+    return left
 
 
 def interrupt(proc: subprocess.Popen) -> None:

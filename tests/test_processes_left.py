@@ -1,6 +1,6 @@
 """No child process outlives its command: Dask workers and whatever they start are gone after
-a sweep or a pipeline ends, whether it succeeded, a scenario or stage raised, or Ctrl-C
-stopped it.
+a sweep or a pipeline ends, whether it succeeded or a scenario or stage raised (stopped
+sweeps: ``test_sweep_cli.py`` and ``test_reliability_round4.py``).
 
 The commands run in their own session (as a terminal's foreground job), so every process they
 start is in their process group unless it leaves it on purpose; after the command exits the
@@ -15,12 +15,11 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import psutil
 import pytest
-from _procs import wait_for
+from _procs import output_until_exit, wait_for
 
 from acid.pipeline import Stage, run_pipeline
 
@@ -69,59 +68,25 @@ def _left(pgid: int, timeout: float = 15.0) -> list[str]:
     return left
 
 
-def _wait_for_workers(p: subprocess.Popen, n: int = 2, timeout: float = 120.0) -> int:
-    """Wait until the command has at least ``n`` worker processes (Python children beside
-    multiprocessing's resource tracker) or has ended; the most seen. In the full suite (beside
-    the reproduce fixture) the reproduce test's workers were not seen within 120 s twice, and
-    with a 900 s bound not before its run ended (172 s at load 3): a longer wait only buys a
-    whole reproduce run before the same skip."""
-    seen = [0]
-
-    def workers():
-        try:
-            kids = psutil.Process(p.pid).children(recursive=True)
-        except psutil.NoSuchProcess:
-            return True
-        k = 0
-        for c in kids:   # a child may end (or be a zombie) between listing and reading it
-            try:
-                if c.status() != psutil.STATUS_ZOMBIE \
-                        and "resource_tracker" not in " ".join(c.cmdline()):
-                    k += 1
-            except psutil.Error:
-                pass
-        seen[0] = max(seen[0], k)
-        return k >= n or p.poll() is not None
-
-    wait_for(workers, timeout)
-    return seen[0]
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("how", ["success", "failure", "ctrl-c"])
+@pytest.mark.parametrize("how", ["success", "failure"])
 def test_acid_sweep_leaves_no_process(tmp_path, how):
+    """A sweep on two worker processes that succeeds, or in which a scenario raises, leaves
+    no process of its group. That the workers ran is read from the command's own report
+    ("2 worker processes (local cluster)"), not from catching them alive: the scenarios
+    take a fraction of a second, and on a busy machine a poll may miss them. (Stopped by
+    Ctrl-C: ``test_sweep_cli.py::test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes``;
+    by SIGTERM or SIGINT to the command alone: ``test_reliability_round4.py``.)"""
     spec = tmp_path / "procs.toml"
-    # a run long enough to be interrupted while it works (60 s scenarios end within 2 s)
-    spec.write_text(SPEC.format(hot=41.0 if how == "failure" else 35.0,
-                                duration=30000.0 if how == "ctrl-c" else 60.0))
+    spec.write_text(SPEC.format(hot=41.0 if how == "failure" else 35.0, duration=60.0))
     p = _start("sweep", str(spec), "--out", str(tmp_path / "out"), "--jobs", "2",
                "--no-figures")
-    seen = _wait_for_workers(p)
-    if how == "ctrl-c":
-        if seen < 2:
-            p.kill()
-            p.communicate()
-            pytest.skip("the workers were never seen before the run ended (machine too busy)")
-        time.sleep(0.5)
-        os.killpg(p.pid, signal.SIGINT)
-    text, _ = p.communicate(timeout=180)
-    expected = {"success": 0, "failure": 0, "ctrl-c": 130}[how]
-    assert p.returncode == expected, text
+    text = output_until_exit(p)
+    assert p.returncode == 0, text
+    assert "2 worker processes (local cluster)" in text, text
     if how == "failure":
         assert "too hot for this controller" in text
     assert _left(p.pid) == []
-    if seen < 2:   # the count above still holds; whether workers ran is not shown
-        pytest.skip("the workers were never seen while the run lasted (machine too busy)")
 
 
 # ``acid reproduce`` interrupted by Ctrl-C with two workers: the same group check is in

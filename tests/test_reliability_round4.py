@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -117,12 +118,13 @@ def test_contradicting_options_are_refused_while_parsing(tmp_path, command, pair
 
 # ----------------------------------------------------- processes left by stopped commands
 TESTS = Path(__file__).resolve().parent
-#: long scenarios (30000 s) so that the signal lands while the sweep works: 60 s scenarios end
-#: within 2 s, and a signal during the interpreter's shutdown ends it by the signal itself
+#: a short scenario (60 s: its result file shows the cluster computing) beside a long one
+#: (30000 s) that is still running on the other worker when the signal lands: a signal during
+#: the interpreter's shutdown ends it by the signal itself, not mid-run
 SPEC = ('title = "procs"\nplugins = ["_sweep_plugin"]\n'
-        '[defaults]\ncycle = 12.0\nduration_s = 30000.0\nwarmup_s = 30.0\ntail_s = 0.0\n'
-        '[grid]\nambient_C = [30.0, 35.0]\n[controllers.nmpc]\n[controllers.fragile]\n'
-        'above_C = 40.0\n')
+        '[defaults]\ncycle = 12.0\nduration_s = 60.0\nwarmup_s = 30.0\ntail_s = 0.0\n'
+        '[grid]\nambient_C = [30.0]\n[controllers.nmpc]\n[controllers.fragile]\n'
+        'above_C = 40.0\n[[scenarios]]\nambient_C = 35.0\nduration_s = 30000.0\n')
 
 
 def _group(pgid: int) -> list[str]:
@@ -150,60 +152,50 @@ def _children() -> set[int]:
 
 @pytest.mark.slow
 def test_stopped_sweeps_reproduces_and_studies_leave_no_process(tmp_path):
-    """Several multi-worker runs, each stopped by SIGINT or SIGTERM sent to the command's
-    process alone (``kill PID``) or to its group (Ctrl-C) once its workers run: each exits
-    130/143, and afterwards neither its process group nor this test has a process left."""
+    """Multi-worker runs, each stopped by SIGTERM or SIGINT sent to the command's process
+    alone (``kill PID``: the workers do not get it, the command must end them) once it is
+    observably mid-run (a sweep's first scenario result written while the other scenario
+    runs, a reproduce stage's temporary folder, the year sweep's first progress line): each
+    exits 143/130, and afterwards neither its process group nor this test has a process left.
+    The waits end on those states, not on a time: on a busy machine they take longer, and
+    the runs last until they are stopped. (SIGINT to a sweep's whole group, as Ctrl-C:
+    ``test_sweep_cli.py::test_ctrl_c_keeps_finished_scenarios_and_the_rerun_resumes``.)"""
     spec = tmp_path / "procs.toml"
     spec.write_text(SPEC)
+
+    def stage_started(out: Path, lines) -> bool:
+        return (out / "stages").is_dir() and any((out / "stages").glob(".*.tmp"))
+
     runs = [(("sweep", str(spec), "--out", str(tmp_path / "s1"), "--jobs", "2", "--no-figures"),
-             signal.SIGTERM, "pid"),
+             signal.SIGTERM,
+             lambda out, lines: any((out / "scenarios").glob("*.json"))
+             if (out / "scenarios").is_dir() else False),
             (("reproduce", "--quick", "--out", str(tmp_path / "r1"), "--jobs", "2"),
-             signal.SIGTERM, "pid"),
-            (("sweep", str(spec), "--out", str(tmp_path / "s2"), "--jobs", "2", "--no-figures"),
-             signal.SIGINT, "group"),
+             signal.SIGTERM, stage_started),
             (("year-sweep", "--quick", "--out", str(tmp_path / "y"), "--jobs", "2"),
-             signal.SIGINT, "pid")]
+             signal.SIGINT, lambda out, lines: any(ln.startswith("year sweep: 1/")
+                                                   for ln in list(lines)))]
     before = _children()
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(TESTS), *filter(None, [os.environ.get("PYTHONPATH")])])}
     exe = os.path.join(os.path.dirname(sys.executable), "acid")
-    stopped = 0
-    for args, sig, target in runs:
+    for args, sig, mid_run in runs:
         p = subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                              text=True, start_new_session=True, env=env,
                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-
-        def workers(p=p):
-            if p.poll() is not None:
-                return True
-            k = 0
-            try:
-                kids = psutil.Process(p.pid).children(recursive=True)
-            except psutil.Error:
-                return True
-            for c in kids:   # a child may end (or be a zombie) between listing and reading
-                try:
-                    k += "resource_tracker" not in " ".join(c.cmdline())
-                except psutil.Error:
-                    pass
-            return k >= 2
-
-        # reproduce: a stage being computed (its temporary folder) means the cluster, which
-        # starts its workers first, is up; in full-suite runs its workers were sometimes not
-        # counted and the wait lasted its whole 120 s
-        out = Path(args[args.index("--out") + 1]) / "stages"
-        staged = args[0] == "reproduce"
-        wait_for(lambda w=workers, o=out, s=staged: w() or (s and o.is_dir()
-                                                             and any(o.glob(".*.tmp"))), 120.0)
-        if p.poll() is None:
-            time.sleep(0.5)
-            (os.kill if target == "pid" else os.killpg)(p.pid, sig)
-            stopped += 1
-        text, _ = p.communicate(timeout=180)
+        lines: list[str] = []
+        reader = threading.Thread(target=lambda p=p, lines=lines: lines.extend(p.stdout),
+                                  daemon=True)
+        reader.start()
+        out = Path(args[args.index("--out") + 1])
+        assert wait_for(lambda p=p, o=out, ln=lines, m=mid_run: m(o, ln) or p.poll() is not None)
+        assert p.poll() is None, (args[0], "ended before it was seen mid-run", "".join(lines))
+        os.kill(p.pid, sig)
+        p.wait(timeout=180)
+        reader.join(30)
+        text = "".join(lines)
         assert p.returncode in (128 + sig, 0), text   # 0: it ended before the signal
         assert "Traceback" not in text, text
         assert wait_for(lambda p=p: not _group(p.pid), 15.0), (args[0], _group(p.pid))
         assert not any(f.name.endswith(".part") for f in tmp_path.rglob(".*")), args[0]
     assert wait_for(lambda: _children() <= before, 15.0), _children() - before
-    if stopped < 2:
-        pytest.skip("the runs ended before the signals (machine too fast or too busy)")

@@ -41,6 +41,7 @@ degC and kWh at the edges.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -105,7 +106,11 @@ class Climate:
     def T_amb_K(self, t_s: float, dT_max: float = 0.0) -> float:
         """Ambient at clock time ``t_s`` (s after midnight), K: ASHRAE's hourly fractions of
         the daily range (hour h at h:00, linear between), the maximum shifted by
-        ``dT_max``."""
+        ``dT_max``. Remembered (:func:`_ambient_K`): the runs of one day under different
+        controllers step through the same clock times."""
+        return _ambient_K(self, float(t_s), float(dT_max))
+
+    def _T_amb_K(self, t_s: float, dT_max: float) -> float:
         h = (t_s / 3600.0) % 24.0
         f = np.interp(h, np.arange(1, 26), list(self.fraction) + [self.fraction[0]],
                       period=24.0)
@@ -123,6 +128,18 @@ class Climate:
         if cz <= 0.01:
             return 0.0
         return clouds * 1098.0 * cz * math.exp(-0.057 / cz)
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _ambient_K(climate: Climate, t_s: float, dT_max: float) -> float:
+    return climate._T_amb_K(t_s, dT_max)
+
+
+@functools.lru_cache(maxsize=1024)
+def _with_sun(config, G_solar: float):
+    """``config`` with the irradiance ``G_solar`` (a frozen plant configuration: the same
+    object for the same pair; building and validating one costs more than a plant step)."""
+    return config.replace(G_solar=G_solar)
 
 
 @dataclass(frozen=True)
@@ -271,7 +288,7 @@ class _Car:
     def _set_sun(self, plant, mode: str, t: float) -> None:
         G = round(self.clim.G_solar(t, self.day.clouds), 1)
         if plant.cfg.G_solar != G or plant.cfg.Q_pass != self.cfg[mode].Q_pass:
-            plant.cfg = self.cfg[mode].replace(G_solar=G)
+            plant.cfg = _with_sun(self.cfg[mode], G)
 
     def run(self, until: float, mode: str, v: np.ndarray | None = None) -> list[dict]:
         """Advance to ``until`` (s): ``mode`` "off" (parked, switched off), "on" (parked,
@@ -912,9 +929,10 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
               progress: Callable[[int, int, str], None] | None = None,
               soc_start: float = SOC_START) -> DayStudy:
     """Tune the timer over ``leads_min`` on ``n_train`` days per season (departures known),
-    then to the minute below the coarse optimum (:func:`fine_leads`); identify the parked
-    cabin on the same days' parked records under the timer at ``FIT_LEAD_MIN``
-    (:func:`parked_records`, :func:`acid.studies.dayplan.identify`); judge none, the timer
+    then to the minute below the coarse optimum (:func:`fine_leads`, bisected for the
+    shortest lead meeting the comfort target); identify the parked cabin on the same days'
+    parked records under the timer at ``FIT_LEAD_MIN`` (:func:`parked_records`,
+    :func:`acid.studies.dayplan.identify`); judge none, the timer
     and the ``planners`` (``planner``: the declared-model plan; ``plant-search``: the start
     searched on the plant, leads up to the longest of ``leads_min``; both with a margin of
     the forecast's standard deviation) on ``n_test`` other days for each forecast error;
@@ -963,14 +981,18 @@ def day_study(seasons: Sequence[str] = SEASONS, n_train: int = 6, n_test: int = 
             train = make_days(s, n_train, seed, 0.0, first_index=0, soc_start=soc_start)
             res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in leads])
             by_lead = {L: [res[(d, "timer", L, leads, 0.0)] for d in train] for L in leads}
-            # to the minute: every whole minute between the coarse optimum and the coarse
+            # to the minute: the whole minutes between the coarse optimum and the coarse
             # lead below it (comfort is monotone in the lead, and so is the energy: a
-            # cheaper feasible lead can only be shorter)
-            fine = fine_leads(by_lead, leads)
-            total[0] += len(fine) * n_train
-            res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train for L in fine])
-            by_lead.update({L: [res[(d, "timer", L, leads, 0.0)] for d in train]
-                            for L in fine})
+            # cheaper feasible lead can only be shorter), bisected for the shortest one
+            # that meets the comfort target (log2 of the minutes' runs instead of all)
+            fine = list(fine_leads(by_lead, leads))
+            while fine:
+                L = fine[len(fine) // 2]
+                total[0] += n_train
+                res = run_all(ex, [(d, "timer", L, leads, 0.0) for d in train])
+                by_lead[L] = [res[(d, "timer", L, leads, 0.0)] for d in train]
+                ok = plugged_Kmin(by_lead[L]) <= COMFORT_TARGET_KMIN
+                fine = fine[:len(fine) // 2] if ok else fine[len(fine) // 2 + 1:]
             by_lead = dict(sorted(by_lead.items()))
             tuned[s] = tune_timer(by_lead)
             scan[s] = {f"{L:g}": (float(np.mean([o.cost_USD for o in v])), plugged_Kmin(v))
