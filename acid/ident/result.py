@@ -138,7 +138,8 @@ class DeclaredFitResult:
         """{channel: mean squared error} with the fitted table, in the channel's unit squared
         (K^2 for a temperature), scored as ``channel_mse`` says (least squares and output
         error: simulations over ``simulation_fit``'s windows from the measured states, latent
-        ones as the output-error fit estimated them; prediction error: one-step innovations): compares models on the same data."""
+        ones as the output-error fit estimated them; prediction error: one-step innovations):
+        compares models on the same data."""
         return {k: v["mse"] for k, v in self.channel_mse.items()}
 
     @property
