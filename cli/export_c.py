@@ -180,8 +180,9 @@ def _export_declared(model_spec: str, params: str, out: Path, horizon: int, chec
         f"written to {out}/: " + ", ".join(files))
     if checked is not None:
         print_table("exported first move vs the same NLP in CasADi (max, share of input range)",
-                    ["states", "C solves OK", "vs SQP (same guess)", "vs IPOPT"],
-                    [[checked["states"], checked["c_status_ok"],
+                    ["states", "C solves OK", "inside the bounds", "vs SQP (same guess)",
+                     "vs IPOPT"],
+                    [[checked["states"], checked["c_status_ok"], checked["interior_moves"],
                       f"{checked['max_diff_vs_sqp']:.1e}",
                       f"{checked['max_diff_vs_ipopt']:.1e}"]])
         for solver, n in checked["reference_failed"].items():

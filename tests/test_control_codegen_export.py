@@ -79,6 +79,7 @@ def test_the_exported_move_is_the_nlps_optimum(car, exe, monkeypatch):
     res = check_model_export(out, ctrl, n_states=6, seed=2)
     assert built == [(out, ("main.c", "acid_ocp.c", "acid_ocp_solver.c"))]
     assert res["c_status_ok"] == 6
+    assert res["interior_moves"] >= 2          # moves inside the bounds test the optimum
     assert res["max_diff_vs_sqp"] <= 1e-9      # the same algorithm inside CasADi
     assert res["max_diff_vs_ipopt"] <= 1e-6    # an independent interior-point solve
 

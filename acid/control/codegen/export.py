@@ -327,16 +327,27 @@ def _sample(unit: str, rng: np.random.Generator, name: str) -> float:
     return 0.0
 
 
+#: A tracked temperature's reference is drawn this close to its sampled state, K: far
+#: references only saturate the first move at an input bound, where it checks nothing.
+REF_NEAR_K = 0.3
+
+
 def sample_problems(ctrl: TrackingController, n: int, seed: int = 0) -> list[tuple]:
-    """``n`` seeded problems (x, d, ref) for the check (stage-major previews)."""
+    """``n`` seeded problems (x, d, ref) for the check (stage-major previews); a tracked
+    temperature state's reference within ``REF_NEAR_K`` of its sampled value, so that many
+    first moves lie inside their bounds, where the optimum is tested."""
     rng = np.random.default_rng(seed)
     m, N = ctrl.model, int(ctrl.N)
     units = {r.name: r.unit for r in (*m.states, *m.inputs, *m.outputs)}
+    near = {t: m.state_names.index(t) for t in ctrl.track
+            if t in m.state_names and units[t] == "K"}
     out = []
     for _ in range(n):
         x = np.array([_sample(s.unit, rng, s.name) for s in m.states])
         d = np.array([_sample(s.unit, rng, s.name) for _ in range(N) for s in m.disturbances])
-        r = np.array([_sample(units[t], rng, t) for _ in range(N) for t in ctrl.track])
+        ref = {t: x[i] + rng.uniform(-REF_NEAR_K, REF_NEAR_K) for t, i in near.items()}
+        r = np.array([ref[t] if t in ref else _sample(units[t], rng, t)
+                      for _ in range(N) for t in ctrl.track])
         out.append((x, d, r))
     return out
 
@@ -371,7 +382,10 @@ def check_model_export(package: str | Path, ctrl: TrackingController, n_states: 
             d_sqp.append(float(np.max(np.abs(c[1:] - u_sqp) / span)))
         if u_ip is not None:
             d_ipopt.append(float(np.max(np.abs(c[1:] - u_ip) / span)))
+    lo = np.array([ctrl.input_bounds[i.name][0] for i in ctrl.model.inputs])
+    inside = np.all((C[:, 1:] > lo + 0.01 * span) & (C[:, 1:] < lo + 0.99 * span), axis=1)
     return {"states": len(problems), "seed": seed, "c_status_ok": int(np.sum(C[:, 0] == 0)),
+            "interior_moves": int(np.sum(inside & (C[:, 0] == 0))),
             "max_diff_vs_sqp": max(d_sqp, default=math.nan),
             "max_diff_vs_ipopt": max(d_ipopt, default=math.nan),
             "reference_failed": failed}
